@@ -1,0 +1,133 @@
+// Axis-aligned boxes and dense voxel grids in the world frame (metres).
+#pragma once
+
+#include <Eigen/Core>
+#include <cmath>
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace go_feap::common {
+
+using Vec3 = Eigen::Vector3d;
+using Index3 = Eigen::Vector3i;
+
+/// Axis-aligned box [min, max] in metres.
+struct Aabb {
+  Vec3 min = Vec3::Zero();
+  Vec3 max = Vec3::Zero();
+
+  bool valid() const { return (max.array() > min.array()).all(); }
+  Vec3 size() const { return max - min; }
+  Vec3 center() const { return 0.5 * (min + max); }
+  bool contains(const Vec3& p) const {
+    return (p.array() >= min.array()).all() && (p.array() <= max.array()).all();
+  }
+  Aabb expanded(double margin) const {
+    return {min - Vec3::Constant(margin), max + Vec3::Constant(margin)};
+  }
+  /// Smallest box holding this and `p`.
+  void extend(const Vec3& p) {
+    min = min.cwiseMin(p);
+    max = max.cwiseMax(p);
+  }
+};
+
+/// Geometry of a regular voxel grid: voxel (i, j, k) covers
+/// [origin + (i, j, k) * resolution, origin + (i + 1, j + 1, k + 1) * resolution).
+class GridGeometry {
+ public:
+  GridGeometry() = default;
+  GridGeometry(const Vec3& origin, double resolution, const Index3& dims)
+      : origin_(origin), resolution_(resolution), dims_(dims) {}
+
+  /// Smallest grid with voxels of `resolution` covering `box`; the origin is snapped to
+  /// a multiple of the resolution so that grids built from different boxes align.
+  static GridGeometry covering(const Aabb& box, double resolution) {
+    const double eps = 1e-6 * resolution;
+    Vec3 lo, hi;
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::floor(box.min[a] / resolution + eps) * resolution;
+      hi[a] = std::ceil(box.max[a] / resolution - eps) * resolution;
+    }
+    Index3 dims;
+    for (int a = 0; a < 3; ++a) dims[a] = std::max(1, static_cast<int>(std::lround((hi[a] - lo[a]) / resolution)));
+    return GridGeometry(lo, resolution, dims);
+  }
+
+  const Vec3& origin() const { return origin_; }
+  double resolution() const { return resolution_; }
+  const Index3& dims() const { return dims_; }
+  std::size_t size() const {
+    return static_cast<std::size_t>(dims_.x()) * dims_.y() * dims_.z();
+  }
+  Aabb bounds() const { return {origin_, origin_ + dims_.cast<double>() * resolution_}; }
+
+  /// Index of the voxel containing `p` (may be outside the grid).
+  Index3 coordToIndex(const Vec3& p) const {
+    return ((p - origin_) / resolution_).array().floor().cast<int>();
+  }
+  /// Centre of voxel `idx`.
+  Vec3 indexToCoord(const Index3& idx) const {
+    return origin_ + (idx.cast<double>().array() + 0.5).matrix() * resolution_;
+  }
+  bool inside(const Index3& idx) const {
+    return (idx.array() >= 0).all() && (idx.array() < dims_.array()).all();
+  }
+  /// Index range [lo, hi) of the grid voxels whose centres lie inside `box` (empty when
+  /// hi <= lo on some axis).
+  void centreRange(const Aabb& box, Index3& lo, Index3& hi) const {
+    for (int a = 0; a < 3; ++a) {
+      const double fl = (box.min[a] - origin_[a]) / resolution_ - 0.5;
+      const double fh = (box.max[a] - origin_[a]) / resolution_ - 0.5;
+      lo[a] = std::max(0, static_cast<int>(std::ceil(fl - 1e-9)));
+      hi[a] = std::min(dims_[a], static_cast<int>(std::floor(fh + 1e-9)) + 1);
+    }
+  }
+  std::size_t linear(const Index3& idx) const {
+    return (static_cast<std::size_t>(idx.z()) * dims_.y() + idx.y()) * dims_.x() + idx.x();
+  }
+  Index3 unlinear(std::size_t l) const {
+    const std::size_t nx = dims_.x(), ny = dims_.y();
+    return Index3(static_cast<int>(l % nx), static_cast<int>((l / nx) % ny),
+                  static_cast<int>(l / (nx * ny)));
+  }
+
+ private:
+  Vec3 origin_ = Vec3::Zero();
+  double resolution_ = 0.1;
+  Index3 dims_ = Index3::Zero();
+};
+
+/// Dense grid of values of type T over a GridGeometry.
+template <typename T>
+class DenseGrid {
+ public:
+  DenseGrid() = default;
+  explicit DenseGrid(const GridGeometry& geometry, T fill = T())
+      : geometry_(geometry), data_(geometry.size(), fill) {}
+
+  const GridGeometry& geometry() const { return geometry_; }
+  T& at(const Index3& idx) { return data_[geometry_.linear(idx)]; }
+  const T& at(const Index3& idx) const { return data_[geometry_.linear(idx)]; }
+  T& operator[](std::size_t l) { return data_[l]; }
+  const T& operator[](std::size_t l) const { return data_[l]; }
+  std::size_t size() const { return data_.size(); }
+  const std::vector<T>& data() const { return data_; }
+  std::vector<T>& data() { return data_; }
+
+ private:
+  GridGeometry geometry_;
+  std::vector<T> data_;
+};
+
+/// Offsets of the six face neighbours.
+inline const std::array<Index3, 6>& faceNeighbours() {
+  static const std::array<Index3, 6> kOffsets = {Index3(1, 0, 0),  Index3(-1, 0, 0),
+                                                 Index3(0, 1, 0),  Index3(0, -1, 0),
+                                                 Index3(0, 0, 1),  Index3(0, 0, -1)};
+  return kOffsets;
+}
+
+}  // namespace go_feap::common

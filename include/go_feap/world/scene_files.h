@@ -1,0 +1,72 @@
+// File-based scenes: point clouds (.pcd/.ply), meshes (.stl), OctoMaps (.bt) and the scene
+// YAML that places them in the world. Every loader returns an error naming the file and
+// what is wrong instead of throwing.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <string>
+#include <vector>
+
+#include "go_feap/world/scene.h"
+
+namespace go_feap::world {
+
+/// Triangles as consecutive vertex triples (file frame).
+struct TriangleMesh {
+  std::vector<Vec3> vertices;
+  std::size_t triangleCount() const { return vertices.size() / 3; }
+};
+
+/// Occupied cubes of an OctoMap (leaf centre and edge length, file frame).
+struct OccupiedCube {
+  Vec3 centre;
+  double size;
+};
+
+/// Reads x, y, z of every point of a .pcd or .ply file (PCL readers). Fails on missing,
+/// truncated or corrupt files, NaN/Inf points, and empty clouds.
+common::Result<std::vector<Vec3>> loadPointCloud(const std::string& path);
+
+/// Reads a binary or ASCII STL. A file is binary when its size equals 84 + 50 n for the
+/// triangle count n in its header (binary files may start with "solid" too).
+common::Result<TriangleMesh> loadStl(const std::string& path);
+
+/// Reads the occupied leaves of an OctoMap binary (.bt) file.
+common::Result<std::vector<OccupiedCube>> loadOctomap(const std::string& path);
+
+/// A file-based scene as described by a scene YAML (see README, "Scene files").
+struct SceneFileSpec {
+  std::string name;
+  std::string file;                                        ///< absolute, or relative to the YAML
+  Eigen::Matrix4d T_world_file = Eigen::Matrix4d::Identity();  ///< p_world = T p_file
+  double resolution = 0.1;                                 ///< voxel size (m)
+  Aabb box;                                                ///< exploration box (world, m)
+  StartPose start;
+  bool ground_plane = false;  ///< optional: fill the voxel layer at the box's min z
+  double margin = 1.0;        ///< optional: grid margin around the box (m)
+};
+
+/// Parses a scene YAML; `file` is resolved against the YAML's folder.
+common::Result<SceneFileSpec> parseSceneYaml(const std::string& yaml_path);
+
+/// Loads the geometry named by `spec` and voxelises it in the world frame: points mark
+/// their voxel, triangles every voxel they overlap, octree leaves every voxel they cover.
+/// Geometry outside the grid (box + margin) is dropped.
+common::Result<Scene> loadSceneFile(const SceneFileSpec& spec);
+
+/// parseSceneYaml + loadSceneFile.
+common::Result<Scene> loadSceneYaml(const std::string& yaml_path);
+
+/// Marks every voxel of `scene` that triangle (a, b, c) overlaps (world frame).
+void voxelizeTriangle(Scene& scene, const Vec3& a, const Vec3& b, const Vec3& c);
+
+/// Writes the occupied voxel centres as a binary PCD (world frame).
+common::Status saveScenePcd(const Scene& scene, const std::string& path);
+
+/// Writes the occupied voxels as an OctoMap .bt at the scene's resolution.
+common::Status saveSceneBt(const Scene& scene, const std::string& path);
+
+/// Builds a scene from "maze", "powerplant" (with `seed`) or the path of a scene YAML.
+common::Result<Scene> makeScene(const std::string& spec, std::uint64_t seed);
+
+}  // namespace go_feap::world

@@ -1,0 +1,64 @@
+# Shared by scripts/run and scripts/test: install what is missing, then build.
+# Sourced, not run. Works as root on a fresh Debian 12 (bookworm) machine.
+
+GO_FEAP_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+GO_FEAP_BUILD="${GO_FEAP_BUILD:-$GO_FEAP_ROOT/build}"
+# ROS tools need Debian's python3 (with catkin_pkg), not a pyenv/venv one found first.
+export PATH="/usr/bin:/bin:/usr/sbin:/sbin:$PATH"
+
+GO_FEAP_APT_PACKAGES=(
+  build-essential cmake
+  ros-core-dev catkin libnodeletlib-dev libnodeletlib-tools pluginlib-dev
+  librostest-dev python3-rostest python3-roslaunch librosbag-dev python3-rosbag
+  libtf2-ros-dev libtf2-eigen-dev libcv-bridge-dev libimage-transport-dev
+  libmessage-filters-dev libpcl-conversions-dev
+  ros-geometry-msgs ros-nav-msgs ros-sensor-msgs ros-visualization-msgs ros-std-msgs ros-std-srvs
+  libpcl-dev libopencv-dev libnlopt-cxx-dev liboctomap-dev libeigen3-dev libgtest-dev
+  libyaml-cpp-dev nlohmann-json3-dev
+  rviz librviz-dev xvfb python3-matplotlib
+)
+
+log() { printf '[go_feap] %s\n' "$*" >&2; }
+
+# Installs the Debian packages that are missing; a second run installs nothing.
+install_dependencies() {
+  local missing=() p
+  for p in "${GO_FEAP_APT_PACKAGES[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+  done
+  if [ ${#missing[@]} -eq 0 ]; then
+    log "dependencies: all ${#GO_FEAP_APT_PACKAGES[@]} packages present"
+    return 0
+  fi
+  local sudo=()
+  if [ "$(id -u)" -ne 0 ]; then
+    command -v sudo >/dev/null || { log "need root (or sudo) to install: ${missing[*]}"; return 1; }
+    sudo=(sudo)
+  fi
+  log "installing ${#missing[@]} missing packages with apt (a few minutes on a fresh machine): ${missing[*]}"
+  export DEBIAN_FRONTEND=noninteractive
+  "${sudo[@]}" apt-get update -q >/dev/null || { log "apt-get update failed"; return 1; }
+  "${sudo[@]}" apt-get install -y -q --no-install-recommends "${missing[@]}" >/dev/null ||
+    { log "apt-get install failed for: ${missing[*]}"; return 1; }
+  log "dependencies installed"
+}
+
+# Configures and builds the package standalone (devel space in build/devel).
+build_package() {
+  local shared="${GO_FEAP_SHARED_DIR:-$GO_FEAP_ROOT/../shared}"
+  log "building in $GO_FEAP_BUILD"
+  cmake -S "$GO_FEAP_ROOT" -B "$GO_FEAP_BUILD" -DCMAKE_BUILD_TYPE=Release \
+    -DPYTHON_EXECUTABLE=/usr/bin/python3 -DGO_FEAP_SHARED_DIR="$shared" \
+    >"$GO_FEAP_BUILD.configure.log" 2>&1 ||
+    { tail -40 "$GO_FEAP_BUILD.configure.log" >&2; log "configure failed (log: $GO_FEAP_BUILD.configure.log)"; return 1; }
+  cmake --build "$GO_FEAP_BUILD" -j"${GO_FEAP_JOBS:-2}" >"$GO_FEAP_BUILD.build.log" 2>&1 ||
+    { grep -E "error|Error" "$GO_FEAP_BUILD.build.log" | head -40 >&2; log "build failed (log: $GO_FEAP_BUILD.build.log)"; return 1; }
+  # The catkin setup scripts read unset variables: source them without `set -u`.
+  local nounset=0
+  [[ $- == *u* ]] && nounset=1
+  set +u
+  # shellcheck disable=SC1091
+  source "$GO_FEAP_BUILD/devel/setup.bash"
+  [ "$nounset" = 1 ] && set -u
+  log "build ok"
+}

@@ -1,0 +1,41 @@
+#!/usr/bin/env python3
+"""Counts gtest/rostest JUnit XML results under a folder; prints failures and a final
+'N passed, N failed[, N skipped]' line; exits 1 on any failure or when nothing ran."""
+import sys
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+
+def main(root: Path) -> int:
+    passed, failed, skipped, failures = 0, 0, 0, []
+    files = sorted(root.rglob("*.xml")) if root.is_dir() else []
+    for f in files:
+        try:
+            tree = ET.parse(f)
+        except ET.ParseError as e:
+            failed += 1
+            failures.append(f"{f.name}: unreadable result ({e})")
+            continue
+        for case in tree.iter("testcase"):
+            name = f"{case.get('classname', '')}.{case.get('name', '')}"
+            bad = case.find("failure") is not None or case.find("error") is not None
+            if bad:
+                failed += 1
+                node = case.find("failure") if case.find("failure") is not None else case.find("error")
+                msg = (node.get("message") or node.text or "").strip().splitlines()
+                failures.append(f"{name}: {msg[0] if msg else 'failed'}")
+            elif case.find("skipped") is not None or case.get("status") == "notrun":
+                skipped += 1
+            else:
+                passed += 1
+    for line in failures:
+        print(f"FAILED {line}")
+    if passed + failed == 0:
+        print("no test results found under", root)
+        failed = 1
+    print(f"{passed} passed, {failed} failed" + (f", {skipped} skipped" if skipped else ""))
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(Path(sys.argv[1])))

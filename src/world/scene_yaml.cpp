@@ -1,0 +1,187 @@
+#include <yaml-cpp/yaml.h>
+
+#include <filesystem>
+#include <sstream>
+
+#include "go_feap/world/generators.h"
+#include "go_feap/world/scene_files.h"
+
+namespace go_feap::world {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// Thrown inside the parser only; converted to a Result at its boundary.
+struct KeyError {
+  std::string message;
+};
+
+YAML::Node require(const YAML::Node& parent, const std::string& key, const std::string& where) {
+  const YAML::Node n = parent[key];
+  if (!n) throw KeyError{"missing key '" + where + key + "'"};
+  return n;
+}
+
+double number(const YAML::Node& n, const std::string& key) {
+  if (!n.IsScalar()) throw KeyError{"key '" + key + "' must be a number"};
+  try {
+    const double v = n.as<double>();
+    if (!std::isfinite(v)) throw KeyError{"key '" + key + "' must be finite"};
+    return v;
+  } catch (const YAML::Exception&) {
+    throw KeyError{"key '" + key + "' must be a number, got '" + n.Scalar() + "'"};
+  }
+}
+
+std::vector<double> numbers(const YAML::Node& n, const std::string& key, std::size_t count) {
+  if (!n.IsSequence() || n.size() != count)
+    throw KeyError{"key '" + key + "' must be a list of " + std::to_string(count) + " numbers"};
+  std::vector<double> out;
+  for (std::size_t i = 0; i < count; ++i) out.push_back(number(n[i], key + "[" + std::to_string(i) + "]"));
+  return out;
+}
+
+Vec3 vec3(const YAML::Node& n, const std::string& key) {
+  const auto v = numbers(n, key, 3);
+  return Vec3(v[0], v[1], v[2]);
+}
+
+bool boolean(const YAML::Node& n, const std::string& key) {
+  try {
+    if (!n.IsScalar()) throw YAML::Exception(YAML::Mark(), "");
+    return n.as<bool>();
+  } catch (const YAML::Exception&) {
+    throw KeyError{"key '" + key + "' must be true or false"};
+  }
+}
+
+std::string lower(std::string s) {
+  for (auto& ch : s) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  return s;
+}
+
+}  // namespace
+
+common::Result<SceneFileSpec> parseSceneYaml(const std::string& yaml_path) {
+  using R = common::Result<SceneFileSpec>;
+  std::error_code ec;
+  if (!fs::is_regular_file(yaml_path, ec)) return R::Error(yaml_path + ": file not found");
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(yaml_path);
+  } catch (const YAML::Exception& e) {
+    return R::Error(yaml_path + ": not valid YAML (" + e.what() + ")");
+  }
+  SceneFileSpec spec;
+  try {
+    if (!root.IsMap()) throw KeyError{"missing key 'scene'"};
+    const YAML::Node s = require(root, "scene", "");
+    if (!s.IsMap()) throw KeyError{"key 'scene' must be a mapping"};
+    const YAML::Node name = require(s, "name", "scene.");
+    if (!name.IsScalar() || name.Scalar().empty()) throw KeyError{"key 'scene.name' must be a non-empty string"};
+    spec.name = name.Scalar();
+    const YAML::Node file = require(s, "file", "scene.");
+    if (!file.IsScalar() || file.Scalar().empty()) throw KeyError{"key 'scene.file' must be a file name"};
+    fs::path fp(file.Scalar());
+    if (fp.is_relative()) fp = fs::path(yaml_path).parent_path() / fp;
+    spec.file = fp.lexically_normal().string();
+
+    const auto t = numbers(require(s, "T_world_file", "scene."), "scene.T_world_file", 16);
+    for (int r = 0; r < 4; ++r)
+      for (int c = 0; c < 4; ++c) spec.T_world_file(r, c) = t[4 * r + c];
+    if (spec.T_world_file.row(3) != Eigen::RowVector4d(0, 0, 0, 1))
+      throw KeyError{"key 'scene.T_world_file' must end with the row 0 0 0 1 (row-major 4x4)"};
+    if (std::abs(spec.T_world_file.topLeftCorner<3, 3>().determinant()) < 1e-9)
+      throw KeyError{"key 'scene.T_world_file' has a singular rotation/scale part"};
+
+    spec.resolution = number(require(s, "resolution", "scene."), "scene.resolution");
+    if (!(spec.resolution > 0.0)) throw KeyError{"key 'scene.resolution' must be > 0"};
+
+    const YAML::Node box = require(s, "box", "scene.");
+    spec.box.min = vec3(require(box, "min", "scene.box."), "scene.box.min");
+    spec.box.max = vec3(require(box, "max", "scene.box."), "scene.box.max");
+    if (!spec.box.valid()) throw KeyError{"key 'scene.box' needs min < max on every axis"};
+
+    const YAML::Node start = require(s, "start", "scene.");
+    spec.start.position = vec3(require(start, "position", "scene.start."), "scene.start.position");
+    spec.start.yaw = number(require(start, "yaw", "scene.start."), "scene.start.yaw");
+
+    if (s["ground_plane"]) spec.ground_plane = boolean(s["ground_plane"], "scene.ground_plane");
+    if (s["margin"]) {
+      spec.margin = number(s["margin"], "scene.margin");
+      if (!(spec.margin >= 0.0)) throw KeyError{"key 'scene.margin' must be >= 0"};
+    }
+  } catch (const KeyError& e) {
+    return R::Error(yaml_path + ": " + e.message);
+  } catch (const YAML::Exception& e) {
+    return R::Error(yaml_path + ": malformed scene description (" + e.what() + ")");
+  }
+  return spec;
+}
+
+common::Result<Scene> loadSceneFile(const SceneFileSpec& spec) {
+  using R = common::Result<Scene>;
+  Scene scene = makeEmptyScene(spec.name, spec.box, spec.resolution, spec.margin);
+  scene.start = spec.start;
+  const Eigen::Affine3d T(spec.T_world_file);
+  const std::string ext = lower(fs::path(spec.file).extension().string());
+  if (ext == ".pcd" || ext == ".ply") {
+    auto points = loadPointCloud(spec.file);
+    if (!points) return points.status();
+    for (const Vec3& p : *points) markOccupied(scene, T * p);
+  } else if (ext == ".stl") {
+    auto mesh = loadStl(spec.file);
+    if (!mesh) return mesh.status();
+    const auto& v = mesh->vertices;
+    for (std::size_t i = 0; i + 2 < v.size(); i += 3) voxelizeTriangle(scene, T * v[i], T * v[i + 1], T * v[i + 2]);
+  } else if (ext == ".bt") {
+    auto cubes = loadOctomap(spec.file);
+    if (!cubes) return cubes.status();
+    // A pruned leaf may span many voxels: mark every voxel whose centre it covers. For a
+    // rotated frame, sample the cube at the scene resolution.
+    const double step = spec.resolution * 0.5;
+    for (const OccupiedCube& cube : *cubes) {
+      const int n = std::max(1, static_cast<int>(std::ceil(cube.size / step)));
+      const double d = cube.size / n;
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j)
+          for (int k = 0; k < n; ++k) {
+            const Vec3 p = cube.centre - Vec3::Constant(0.5 * cube.size) + Vec3(i + 0.5, j + 0.5, k + 0.5) * d;
+            markOccupied(scene, T * p);
+          }
+    }
+  } else {
+    return R::Error(spec.file + ": unknown scene file extension '" + ext + "' (expected .pcd, .ply, .stl or .bt)");
+  }
+  if (spec.ground_plane) {
+    const auto& geo = scene.geometry();
+    const int kz = geo.coordToIndex(spec.box.min + Vec3::Constant(1e-6 * spec.resolution)).z();
+    if (kz >= 0 && kz < geo.dims().z())
+      for (int y = 0; y < geo.dims().y(); ++y)
+        for (int x = 0; x < geo.dims().x(); ++x) scene.occupied.at(Index3(x, y, kz)) = 1;
+  }
+  if (scene.occupiedCount() == 0)
+    return R::Error(spec.file + ": no geometry falls inside the exploration box (check T_world_file and box)");
+  if (auto st = validateScene(scene); !st) return st;
+  return scene;
+}
+
+common::Result<Scene> loadSceneYaml(const std::string& yaml_path) {
+  auto spec = parseSceneYaml(yaml_path);
+  if (!spec) return spec.status();
+  auto scene = loadSceneFile(*spec);
+  if (!scene) return common::Result<Scene>::Error(yaml_path + ": " + scene.message());
+  return scene;
+}
+
+common::Result<Scene> makeScene(const std::string& spec, std::uint64_t seed) {
+  if (spec == "maze") return generateMaze(MazeConfig(), seed);
+  if (spec == "powerplant") return generatePowerplant(PowerplantConfig(), seed);
+  const std::string ext = lower(fs::path(spec).extension().string());
+  if (ext == ".yaml" || ext == ".yml") return loadSceneYaml(spec);
+  return common::Result<Scene>::Error("unknown scene '" + spec +
+                                      "': expected maze, powerplant or the path of a scene .yaml");
+}
+
+}  // namespace go_feap::world

@@ -1,0 +1,223 @@
+// Properties of the procedural scenes: determinism, connectivity, corridor width,
+// dead ends and loops (maze); height span and overhangs (powerplant).
+#include <gtest/gtest.h>
+
+#include <set>
+
+#include "go_feap/world/generators.h"
+
+using namespace go_feap::world;
+using go_feap::common::Index3;
+
+namespace {
+
+// Free voxels of the box that are 6-connected to the start (flood fill, own oracle).
+std::size_t reachableFree(const Scene& s, std::vector<char>* mask = nullptr) {
+  const auto& g = s.geometry();
+  Index3 lo, hi;
+  g.centreRange(s.box, lo, hi);
+  std::vector<char> seen(g.size(), 0);
+  std::vector<Index3> stack{g.coordToIndex(s.start.position)};
+  seen[g.linear(stack[0])] = 1;
+  std::size_t n = 0;
+  while (!stack.empty()) {
+    const Index3 c = stack.back();
+    stack.pop_back();
+    ++n;
+    for (const Index3& o : go_feap::common::faceNeighbours()) {
+      const Index3 nb = c + o;
+      if ((nb.array() < lo.array()).any() || (nb.array() >= hi.array()).any()) continue;
+      if (seen[g.linear(nb)] || s.occupied.at(nb)) continue;
+      seen[g.linear(nb)] = 1;
+      stack.push_back(nb);
+    }
+  }
+  if (mask) *mask = std::move(seen);
+  return n;
+}
+
+}  // namespace
+
+TEST(Maze, SameSeedSameGridDifferentSeedDifferentLayout) {
+  auto a = generateMaze(MazeConfig(), 7), b = generateMaze(MazeConfig(), 7), c = generateMaze(MazeConfig(), 8);
+  ASSERT_TRUE(a && b && c) << a.message();
+  EXPECT_EQ(a->occupied.data(), b->occupied.data());
+  EXPECT_NE(a->occupied.data(), c->occupied.data());
+}
+
+TEST(Maze, BoxAndFloorAsSpecified) {
+  auto s = generateMaze(MazeConfig(), 0);
+  ASSERT_TRUE(s) << s.message();
+  EXPECT_NEAR(s->box.size().x(), 20.0, 1e-9);
+  EXPECT_NEAR(s->box.size().y(), 10.0, 1e-9);
+  EXPECT_NEAR(s->box.size().z(), 3.0, 1e-9);
+  EXPECT_NEAR(s->box.min.z(), 0.0, 1e-9);
+  EXPECT_NEAR(s->resolution(), 0.1, 1e-12);
+  // Floor: the voxel layer at z = 0 is occupied everywhere in the box, the next is not.
+  for (double x = -9.95; x < 10.0; x += 0.5)
+    for (double y = -4.95; y < 5.0; y += 0.5) EXPECT_TRUE(s->isOccupied(go_feap::common::Vec3(x, y, 0.05)));
+  EXPECT_FALSE(s->isOccupied(s->start.position));
+}
+
+class MazeSeeds : public ::testing::TestWithParam<int> {};
+
+TEST_P(MazeSeeds, EveryFreeCellReachesTheStart) {
+  auto s = generateMaze(MazeConfig(), GetParam());
+  ASSERT_TRUE(s) << s.message();
+  const auto& g = s->geometry();
+  Index3 lo, hi;
+  g.centreRange(s->box, lo, hi);
+  std::size_t free_in_box = 0;
+  for (int z = lo.z(); z < hi.z(); ++z)
+    for (int y = lo.y(); y < hi.y(); ++y)
+      for (int x = lo.x(); x < hi.x(); ++x) free_in_box += !s->occupied.at({x, y, z});
+  EXPECT_EQ(reachableFree(*s), free_in_box);
+}
+
+TEST_P(MazeSeeds, WallsAreFullHeight) {
+  auto s = generateMaze(MazeConfig(), GetParam());
+  ASSERT_TRUE(s);
+  const auto& g = s->geometry();
+  Index3 lo, hi;
+  g.centreRange(s->box, lo, hi);
+  for (int y = lo.y(); y < hi.y(); ++y)
+    for (int x = lo.x(); x < hi.x(); ++x) {
+      const bool wall = s->occupied.at({x, y, lo.z() + 1});
+      for (int z = lo.z() + 1; z < hi.z(); ++z) ASSERT_EQ(s->occupied.at({x, y, z}) != 0, wall);
+    }
+}
+
+// Corridor width: every free voxel of a horizontal slice lies in some fully free
+// 1.5 m x 1.5 m square (morphological opening with that square leaves free space intact).
+TEST_P(MazeSeeds, CorridorsAtLeast1p5MetresWide) {
+  auto s = generateMaze(MazeConfig(), GetParam());
+  ASSERT_TRUE(s);
+  const auto& g = s->geometry();
+  Index3 lo, hi;
+  g.centreRange(s->box, lo, hi);
+  const int k = hi.z() / 2, w = static_cast<int>(std::lround(1.5 / s->resolution()));
+  const int nx = hi.x() - lo.x(), ny = hi.y() - lo.y();
+  std::vector<int> sat((nx + 1) * (ny + 1), 0);  // summed-area table of occupied voxels
+  auto S = [&](int x, int y) -> int& { return sat[y * (nx + 1) + x]; };
+  for (int y = 0; y < ny; ++y)
+    for (int x = 0; x < nx; ++x)
+      S(x + 1, y + 1) = S(x, y + 1) + S(x + 1, y) - S(x, y) + (s->occupied.at({lo.x() + x, lo.y() + y, k}) != 0);
+  std::vector<char> covered(nx * ny, 0);
+  for (int y = 0; y + w <= ny; ++y)
+    for (int x = 0; x + w <= nx; ++x)
+      if (S(x + w, y + w) - S(x, y + w) - S(x + w, y) + S(x, y) == 0) {
+        for (int yy = y; yy < y + w; ++yy)
+          for (int xx = x; xx < x + w; ++xx) covered[yy * nx + xx] = 1;
+      }
+  for (int y = 0; y < ny; ++y)
+    for (int x = 0; x < nx; ++x)
+      if (!s->occupied.at({lo.x() + x, lo.y() + y, k})) {
+        ASSERT_TRUE(covered[y * nx + x]) << "free voxel (" << x << ", " << y << ") lies in a passage under 1.5 m";
+      }
+}
+
+TEST_P(MazeSeeds, HasADeadEndAndALoopMatchingTheVoxels) {
+  MazeLayout layout;
+  const MazeConfig cfg;
+  auto s = generateMaze(cfg, GetParam(), &layout);
+  ASSERT_TRUE(s);
+  const int n = layout.cells_x * layout.cells_y;
+  int dead_ends = 0;
+  for (int c = 0; c < n; ++c) dead_ends += layout.degree(c) == 1;
+  EXPECT_GE(dead_ends, 1);
+  // A connected graph has a cycle iff it has at least as many edges as vertices.
+  EXPECT_GE(static_cast<int>(layout.passages.size()), n);
+  // The voxels agree with the layout: the wall midpoint between two neighbouring cells is
+  // free exactly when the layout has a passage there.
+  std::set<std::pair<int, int>> open(layout.passages.begin(), layout.passages.end());
+  for (int c = 0; c < n; ++c) {
+    for (int nb : {c + 1, c + layout.cells_x}) {
+      if (nb >= n || (nb == c + 1 && (c + 1) % layout.cells_x == 0)) continue;
+      const Vec3 mid = 0.5 * (layout.cellCentre(cfg, c, 1.5) + layout.cellCentre(cfg, nb, 1.5));
+      EXPECT_EQ(!s->isOccupied(mid), open.count({c, nb}) == 1) << "cells " << c << " / " << nb;
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Seeds, MazeSeeds, ::testing::Values(0, 1, 2, 3, 4, 17));
+
+TEST(Maze, SmallMazeForEndToEndTests) {
+  MazeConfig cfg;
+  cfg.size_x = 10.0;
+  cfg.size_y = 6.0;
+  auto s = generateMaze(cfg, 3);
+  ASSERT_TRUE(s) << s.message();
+  EXPECT_NEAR(s->box.size().x(), 10.0, 1e-9);
+}
+
+TEST(Maze, InvalidConfigNamesTheKey) {
+  MazeConfig cfg;
+  cfg.cell_size = 1.2;
+  auto s = generateMaze(cfg, 0);
+  ASSERT_FALSE(s);
+  EXPECT_NE(s.message().find("cell_size"), std::string::npos) << s.message();
+}
+
+class PowerplantTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    auto s = generatePowerplant(PowerplantConfig(), 0);
+    ASSERT_TRUE(s) << s.message();
+    scene_ = new Scene(std::move(s).value());
+  }
+  static void TearDownTestSuite() { delete scene_; }
+  static Scene* scene_;
+};
+Scene* PowerplantTest::scene_ = nullptr;
+
+TEST_F(PowerplantTest, BoxAsSpecified) {
+  EXPECT_NEAR(scene_->box.size().x(), 33.0, 1e-9);
+  EXPECT_NEAR(scene_->box.size().y(), 31.0, 1e-9);
+  EXPECT_NEAR(scene_->box.size().z(), 26.0, 1e-9);
+}
+
+TEST_F(PowerplantTest, StructureSpansAtLeast80PercentOfTheHeight) {
+  const auto& g = scene_->geometry();
+  Index3 lo, hi;
+  g.centreRange(scene_->box, lo, hi);
+  int top = -1;
+  for (int z = lo.z() + 1; z < hi.z(); ++z)
+    for (int y = lo.y(); y < hi.y() && top < z; ++y)
+      for (int x = lo.x(); x < hi.x(); ++x)
+        if (scene_->occupied.at({x, y, z})) {
+          top = z;
+          break;
+        }
+  ASSERT_GE(top, 0);
+  const double span = g.indexToCoord({0, 0, top}).z() - scene_->box.min.z();
+  EXPECT_GE(span, 0.8 * scene_->box.size().z());
+}
+
+TEST_F(PowerplantTest, ReachableFreeSpaceUnderOverhangs) {
+  std::vector<char> reach;
+  const std::size_t n = reachableFree(*scene_, &reach);
+  EXPECT_GT(n, 1000000u);
+  // Columns where a reachable free voxel at least 2 m above the floor has structure
+  // above it, with open space below it down to the floor: standing under an overhang.
+  const auto& g = scene_->geometry();
+  Index3 lo, hi;
+  g.centreRange(scene_->box, lo, hi);
+  const int k = lo.z() + static_cast<int>(2.0 / scene_->resolution());
+  std::size_t under = 0;
+  for (int y = lo.y(); y < hi.y(); ++y)
+    for (int x = lo.x(); x < hi.x(); ++x) {
+      if (!reach[g.linear({x, y, k})]) continue;
+      bool roof = false;
+      for (int z = k + 1; z < hi.z() && !roof; ++z) roof = scene_->occupied.at({x, y, z}) != 0;
+      under += roof;
+    }
+  EXPECT_GT(under * scene_->resolution() * scene_->resolution(), 50.0) << "m^2 of reachable ground under structure";
+}
+
+TEST(Powerplant, Deterministic) {
+  auto a = generatePowerplant(PowerplantConfig(), 3), b = generatePowerplant(PowerplantConfig(), 3);
+  auto c = generatePowerplant(PowerplantConfig(), 4);
+  ASSERT_TRUE(a && b && c);
+  EXPECT_EQ(a->occupied.data(), b->occupied.data());
+  EXPECT_NE(a->occupied.data(), c->occupied.data());
+}

@@ -1,0 +1,87 @@
+// Observable set and coverage on a hand-built room with a sealed cavity.
+#include <gtest/gtest.h>
+
+#include "go_feap/world/scene.h"
+#include "go_feap/world/shapes.h"
+
+using namespace go_feap::world;
+using go_feap::common::Index3;
+
+namespace {
+
+// Box [0, 2]^3 at 0.1 m (20^3 voxels); its outermost voxel layer is wall, floor and
+// ceiling; inside, a hollow 6^3-voxel cube (voxels 5..10) seals a 4^3 cavity.
+Scene sealedCavityRoom() {
+  Scene s = makeEmptyScene("room", {Vec3::Zero(), Vec3::Constant(2.0)}, 0.1, 0.0);
+  const auto& g = s.geometry();
+  for (std::size_t l = 0; l < g.size(); ++l) {
+    const Index3 i = g.unlinear(l);
+    const bool shell = (i.array() == 0).any() || (i.array() == 19).any();
+    const bool cube = (i.array() >= 5).all() && (i.array() <= 10).all();
+    const bool cavity = (i.array() >= 6).all() && (i.array() <= 9).all();
+    s.occupied[l] = shell || (cube && !cavity);
+  }
+  s.start.position = Vec3(0.35, 0.35, 1.55);
+  return s;
+}
+
+}  // namespace
+
+TEST(ObservableSet, SealedCavityIsExcluded) {
+  const Scene s = sealedCavityRoom();
+  ASSERT_TRUE(validateScene(s)) << validateScene(s).message();
+  const ObservableSet o = computeObservableSet(s);
+  // Free: 18^3 interior minus the 6^3 cube. Occupied: the 6 inner faces of the shell
+  // (18 x 18 each; shell edges touch no interior voxel) plus the cube's whole surface.
+  EXPECT_EQ(o.free_count, 18u * 18 * 18 - 6 * 6 * 6);
+  EXPECT_EQ(o.occupied_count, 6u * 18 * 18 + (6 * 6 * 6 - 4 * 4 * 4));
+  EXPECT_EQ(o.total(), o.free_count + o.occupied_count);
+  // The cavity's inside is free but not observable.
+  EXPECT_FALSE(o.mask.at(Index3(7, 7, 7)));
+  EXPECT_FALSE(s.occupied.at(Index3(7, 7, 7)));
+  // Shell corners touch no free voxel through a face.
+  EXPECT_FALSE(o.mask.at(Index3(0, 0, 0)));
+  EXPECT_TRUE(o.mask.at(Index3(0, 5, 5)));
+}
+
+TEST(ObservableSet, FloodFillStaysInsideTheBox) {
+  // An open-sided room: with the grid margin, free space outside the box is not counted.
+  Scene s = makeEmptyScene("open", {Vec3::Zero(), Vec3(1.0, 1.0, 1.0)}, 0.1, 0.5);
+  s.start.position = Vec3(0.55, 0.55, 0.55);
+  const ObservableSet o = computeObservableSet(s);
+  EXPECT_EQ(o.free_count, 1000u);
+  EXPECT_EQ(o.occupied_count, 0u);
+}
+
+TEST(Coverage, CountsKnownObservableVoxels) {
+  const Scene s = sealedCavityRoom();
+  const ObservableSet o = computeObservableSet(s);
+  EXPECT_DOUBLE_EQ(coverage(o, [](const Vec3&) { return true; }), 1.0);
+  EXPECT_DOUBLE_EQ(coverage(o, [](const Vec3&) { return false; }), 0.0);
+  // Knowing only the lower half (z < 1 m) of the room.
+  std::size_t expect = 0;
+  for (std::size_t l = 0; l < o.mask.size(); ++l)
+    expect += o.mask[l] && s.geometry().unlinear(l).z() < 10;
+  EXPECT_DOUBLE_EQ(coverage(o, [](const Vec3& p) { return p.z() < 1.0; }),
+                   static_cast<double>(expect) / o.total());
+}
+
+TEST(ValidateScene, RejectsStartInObstacleOrOutsideBox) {
+  Scene s = sealedCavityRoom();
+  s.start.position = Vec3(0.55, 0.55, 0.55);  // in the cube's shell (voxel 5)
+  auto st = validateScene(s);
+  ASSERT_FALSE(st);
+  EXPECT_NE(st.message().find("inside an obstacle"), std::string::npos) << st.message();
+  s.start.position = Vec3(3.0, 0.5, 0.5);
+  st = validateScene(s);
+  ASSERT_FALSE(st);
+  EXPECT_NE(st.message().find("outside the exploration box"), std::string::npos) << st.message();
+}
+
+TEST(Shapes, HollowCylinderLeavesTheAxisFree) {
+  Scene s = makeEmptyScene("tube", {Vec3(-2, -2, 0), Vec3(2, 2, 2)}, 0.1, 0.0);
+  fillVerticalCylinder(s, 0.0, 0.0, 1.0, 0.0, 2.0, 0.3);
+  EXPECT_FALSE(s.isOccupied(Vec3(0.05, 0.05, 1.0)));
+  EXPECT_TRUE(s.isOccupied(Vec3(0.85, 0.05, 1.0)));
+  EXPECT_FALSE(s.isOccupied(Vec3(1.15, 0.05, 1.0)));
+}

@@ -1,0 +1,514 @@
+// Loaders (PCD, PLY, STL binary/ASCII, OctoMap .bt, scene YAML), round trips, the real
+// scenes in ../shared/scenes, and every kind of bad input.
+#include <gtest/gtest.h>
+#include <octomap/OcTree.h>
+#include <pcl/io/pcd_io.h>
+#include <pcl/point_types.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+#include "go_feap/world/generators.h"
+#include "go_feap/world/scene_files.h"
+
+using namespace go_feap::world;
+using go_feap::common::Index3;
+namespace fs = std::filesystem;
+
+namespace {
+
+class TempDir {
+ public:
+  TempDir() {
+    path_ = fs::temp_directory_path() / ("go_feap_test_" + std::to_string(::getpid()) + "_" +
+                                         ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(path_);
+  }
+  ~TempDir() { fs::remove_all(path_); }
+  std::string file(const std::string& name) const { return (path_ / name).string(); }
+
+ private:
+  fs::path path_;
+};
+
+void writeText(const std::string& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
+
+// Closed cube [lo, hi]^3 as 12 triangles.
+std::vector<Vec3> cubeTriangles(double lo, double hi) {
+  std::vector<Vec3> c;
+  for (int i = 0; i < 8; ++i) c.emplace_back(i & 1 ? hi : lo, i & 2 ? hi : lo, i & 4 ? hi : lo);
+  const int f[12][3] = {{0, 1, 3}, {0, 3, 2}, {4, 6, 7}, {4, 7, 5}, {0, 4, 5}, {0, 5, 1},
+                        {2, 3, 7}, {2, 7, 6}, {0, 2, 6}, {0, 6, 4}, {1, 5, 7}, {1, 7, 3}};
+  std::vector<Vec3> v;
+  for (const auto& t : f)
+    for (int k : t) v.push_back(c[k]);
+  return v;
+}
+
+void writeBinaryStl(const std::string& path, const std::vector<Vec3>& v, const std::string& header = "solid cube") {
+  std::string bytes(80, '\0');
+  std::memcpy(bytes.data(), header.data(), std::min<std::size_t>(80, header.size()));
+  const std::uint32_t n = v.size() / 3;
+  bytes.append(reinterpret_cast<const char*>(&n), 4);
+  for (std::size_t t = 0; t < n; ++t) {
+    float rec[12] = {0, 0, 0};
+    for (int k = 0; k < 3; ++k)
+      for (int a = 0; a < 3; ++a) rec[3 + 3 * k + a] = static_cast<float>(v[3 * t + k][a]);
+    bytes.append(reinterpret_cast<const char*>(rec), sizeof(rec));
+    bytes.append(2, '\0');
+  }
+  writeText(path, bytes);
+}
+
+std::string asciiStl(const std::vector<Vec3>& v) {
+  std::ostringstream os;
+  os << "solid cube\n";
+  for (std::size_t t = 0; t < v.size() / 3; ++t) {
+    os << " facet normal 0 0 0\n  outer loop\n";
+    for (int k = 0; k < 3; ++k) os << "   vertex " << v[3 * t + k].x() << " " << v[3 * t + k].y() << " " << v[3 * t + k].z() << "\n";
+    os << "  endloop\n endfacet\n";
+  }
+  os << "endsolid cube\n";
+  return os.str();
+}
+
+std::string sceneYaml(const std::string& file, const std::string& extra = "ground_plane: false",
+                      const std::string& start = "[0.05, 0.05, 0.05]") {
+  return "scene:\n  name: t\n  file: " + file +
+         "\n  T_world_file: [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]\n  resolution: 0.1\n"
+         "  box: {min: [-1, -1, -1], max: [2, 2, 2]}\n  start: {position: " + start + ", yaw: 0}\n  " + extra + "\n";
+}
+
+// True when no 6-connected path of free voxels links the grid's outside layer to `inside`.
+bool sealed(const Scene& s, const Index3& inside) {
+  const auto& g = s.geometry();
+  std::vector<char> seen(g.size(), 0);
+  std::vector<Index3> st{Index3::Zero()};
+  seen[0] = 1;
+  while (!st.empty()) {
+    const Index3 c = st.back();
+    st.pop_back();
+    if (c == inside) return false;
+    for (const Index3& o : go_feap::common::faceNeighbours()) {
+      const Index3 nb = c + o;
+      if (!g.inside(nb) || seen[g.linear(nb)] || s.occupied.at(nb)) continue;
+      seen[g.linear(nb)] = 1;
+      st.push_back(nb);
+    }
+  }
+  return true;
+}
+
+std::vector<std::size_t> occupiedSet(const Scene& s) {
+  std::vector<std::size_t> v;
+  for (std::size_t l = 0; l < s.occupied.size(); ++l)
+    if (s.occupied[l]) v.push_back(l);
+  return v;
+}
+
+void expectErrorMentions(const std::string& message, const std::vector<std::string>& words) {
+  for (const auto& w : words) EXPECT_NE(message.find(w), std::string::npos) << "'" << w << "' not in: " << message;
+}
+
+}  // namespace
+
+TEST(PointCloud, PcdBinaryAndAsciiAndPly) {
+  TempDir d;
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  for (int i = 0; i < 50; ++i) cloud.push_back(pcl::PointXYZ(0.1f * i, -0.05f * i, 1.0f));
+  pcl::io::savePCDFileBinary(d.file("a.pcd"), cloud);
+  pcl::io::savePCDFileASCII(d.file("b.pcd"), cloud);
+  std::ostringstream ply;
+  ply << "ply\nformat ascii 1.0\nelement vertex " << cloud.size()
+      << "\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
+  for (const auto& p : cloud) ply << p.x << " " << p.y << " " << p.z << "\n";
+  writeText(d.file("c.ply"), ply.str());
+  for (const char* f : {"a.pcd", "b.pcd", "c.ply"}) {
+    auto pts = loadPointCloud(d.file(f));
+    ASSERT_TRUE(pts) << pts.message();
+    ASSERT_EQ(pts->size(), cloud.size()) << f;
+    for (std::size_t i = 0; i < cloud.size(); ++i)
+      EXPECT_LT(((*pts)[i] - Vec3(cloud[i].x, cloud[i].y, cloud[i].z)).norm(), 1e-5) << f;
+  }
+}
+
+TEST(Stl, BinaryStartingWithSolidAndAsciiGiveTheSameWatertightShell) {
+  TempDir d;
+  const auto tri = cubeTriangles(0.23, 1.37);
+  writeBinaryStl(d.file("bin.stl"), tri, "solid but binary");
+  writeText(d.file("ascii.stl"), asciiStl(tri));
+  auto b = loadStl(d.file("bin.stl"));
+  auto a = loadStl(d.file("ascii.stl"));
+  ASSERT_TRUE(b) << b.message();
+  ASSERT_TRUE(a) << a.message();
+  EXPECT_EQ(b->triangleCount(), 12u);
+  EXPECT_EQ(a->triangleCount(), 12u);
+
+  writeText(d.file("bin.yaml"), sceneYaml("bin.stl", "ground_plane: false", "[-0.55, -0.55, -0.55]"));
+  writeText(d.file("ascii.yaml"), sceneYaml("ascii.stl", "ground_plane: false", "[-0.55, -0.55, -0.55]"));
+  auto sb = loadSceneYaml(d.file("bin.yaml"));
+  auto sa = loadSceneYaml(d.file("ascii.yaml"));
+  ASSERT_TRUE(sb) << sb.message();
+  ASSERT_TRUE(sa) << sa.message();
+  EXPECT_EQ(occupiedSet(*sb), occupiedSet(*sa));
+  // Surface voxels only: the centre is free but cannot be reached from outside.
+  const Index3 centre = sb->geometry().coordToIndex(Vec3::Constant(0.8));
+  EXPECT_FALSE(sb->occupied.at(centre));
+  EXPECT_TRUE(sealed(*sb, centre));
+  // Every voxel the surface passes through is marked; voxels well away from it are not.
+  EXPECT_TRUE(sb->isOccupied(Vec3(0.25, 0.8, 0.8)));
+  EXPECT_TRUE(sb->isOccupied(Vec3(1.35, 0.8, 0.8)));
+  EXPECT_FALSE(sb->isOccupied(Vec3(0.05, 0.8, 0.8)));
+  EXPECT_FALSE(sb->isOccupied(Vec3(0.45, 0.8, 0.8)));
+}
+
+TEST(Stl, ThinTiltedWallHasNoHoles) {
+  TempDir d;
+  // A single-sided quad, tilted about two axes, spanning the whole grid cross-section.
+  const Vec3 p0(-1.5, -1.5, -0.8), p1(2.5, -1.5, 0.0), p2(2.5, 2.5, 1.5), p3(-1.5, 2.5, 0.7);
+  writeBinaryStl(d.file("wall.stl"), {p0, p1, p2, p0, p2, p3});
+  writeText(d.file("wall.yaml"), sceneYaml("wall.stl", "margin: 0.0", "[0.55, 0.55, 1.85]"));
+  auto s = loadSceneYaml(d.file("wall.yaml"));
+  ASSERT_TRUE(s) << s.message();
+  // Every column of the grid is cut by the wall: no free path leads from above to below.
+  const auto& g = s->geometry();
+  for (int y = 0; y < g.dims().y(); ++y)
+    for (int x = 0; x < g.dims().x(); ++x) {
+      int hits = 0;
+      for (int z = 0; z < g.dims().z(); ++z) hits += s->occupied.at({x, y, z});
+      ASSERT_GE(hits, 1) << "column " << x << ", " << y;
+    }
+  std::vector<char> seen(g.size(), 0);
+  std::vector<Index3> st{Index3(0, 0, g.dims().z() - 1)};
+  bool leaked = false;
+  while (!st.empty() && !leaked) {
+    const Index3 c = st.back();
+    st.pop_back();
+    leaked = c.z() == 0;
+    for (const Index3& o : go_feap::common::faceNeighbours()) {
+      const Index3 nb = c + o;
+      if (!g.inside(nb) || seen[g.linear(nb)] || s->occupied.at(nb)) continue;
+      seen[g.linear(nb)] = 1;
+      st.push_back(nb);
+    }
+  }
+  EXPECT_FALSE(leaked);
+}
+
+TEST(Stl, FaceOnAVoxelBoundaryMarksOneLayer) {
+  TempDir d;
+  // Square at z = 0.5 exactly (a voxel boundary): one voxel layer, the one above.
+  writeBinaryStl(d.file("q.stl"), {Vec3(0, 0, 0.5), Vec3(1, 0, 0.5), Vec3(1, 1, 0.5), Vec3(0, 0, 0.5),
+                                   Vec3(1, 1, 0.5), Vec3(0, 1, 0.5)});
+  writeText(d.file("q.yaml"), sceneYaml("q.stl"));
+  auto s = loadSceneYaml(d.file("q.yaml"));
+  ASSERT_TRUE(s) << s.message();
+  EXPECT_TRUE(s->isOccupied(Vec3(0.45, 0.45, 0.55)));
+  EXPECT_FALSE(s->isOccupied(Vec3(0.45, 0.45, 0.45)));
+}
+
+TEST(Octomap, LoadsOccupiedLeavesIncludingPrunedOnes) {
+  TempDir d;
+  octomap::OcTree tree(0.1);
+  // A 0.8 m cube of occupied voxels aligned to the octree prunes into bigger leaves.
+  for (double x = 0.05; x < 0.8; x += 0.1)
+    for (double y = 0.05; y < 0.8; y += 0.1)
+      for (double z = 0.05; z < 0.8; z += 0.1) tree.updateNode(octomap::point3d(x, y, z), true);
+  tree.updateNode(octomap::point3d(-0.55, 1.45, 0.05), true);
+  tree.updateNode(octomap::point3d(1.55, 1.55, 1.55), false);  // free: must stay free
+  tree.prune();
+  ASSERT_TRUE(tree.writeBinary(d.file("t.bt")));
+  writeText(d.file("t.yaml"), sceneYaml("t.bt", "ground_plane: false", "[1.55, 1.55, 1.55]"));
+  auto s = loadSceneYaml(d.file("t.yaml"));
+  ASSERT_TRUE(s) << s.message();
+  EXPECT_EQ(s->occupiedCount(), 8u * 8 * 8 + 1);
+  EXPECT_TRUE(s->isOccupied(Vec3(0.75, 0.05, 0.45)));
+  EXPECT_TRUE(s->isOccupied(Vec3(-0.55, 1.45, 0.05)));
+  EXPECT_FALSE(s->isOccupied(Vec3(0.85, 0.05, 0.45)));
+}
+
+TEST(RoundTrip, MazeThroughPcdAndBtKeepsTheOccupiedSet) {
+  TempDir d;
+  auto maze = generateMaze(MazeConfig(), 1);
+  ASSERT_TRUE(maze) << maze.message();
+  ASSERT_TRUE(saveScenePcd(*maze, d.file("m.pcd")));
+  ASSERT_TRUE(saveSceneBt(*maze, d.file("m.bt")));
+  for (const char* f : {"m.pcd", "m.bt"}) {
+    SceneFileSpec spec;
+    spec.name = "maze";
+    spec.file = d.file(f);
+    spec.resolution = maze->resolution();
+    spec.box = maze->box;
+    spec.start = maze->start;
+    spec.margin = 0.5;
+    auto back = loadSceneFile(spec);
+    ASSERT_TRUE(back) << back.message();
+    EXPECT_EQ(back->geometry().dims(), maze->geometry().dims());
+    EXPECT_EQ(occupiedSet(*back), occupiedSet(*maze)) << f;
+  }
+}
+
+TEST(SceneYaml, GroundPlaneFillsTheBoxFloorLayer) {
+  TempDir d;
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  cloud.push_back(pcl::PointXYZ(0.5f, 0.5f, 1.0f));
+  pcl::io::savePCDFileBinary(d.file("p.pcd"), cloud);
+  writeText(d.file("p.yaml"), sceneYaml("p.pcd", "ground_plane: true", "[0.05, 0.05, 0.05]"));
+  auto s = loadSceneYaml(d.file("p.yaml"));
+  ASSERT_TRUE(s) << s.message();
+  EXPECT_TRUE(s->isOccupied(Vec3(1.95, -0.95, -0.95)));
+  EXPECT_FALSE(s->isOccupied(Vec3(1.95, -0.95, -0.85)));
+  EXPECT_TRUE(s->isOccupied(Vec3(0.55, 0.55, 1.05)));
+}
+
+// ---- Real scenes from other projects ---------------------------------------------------
+
+namespace {
+std::string configScene(const std::string& name) {
+  return (fs::path(__FILE__).parent_path().parent_path().parent_path() / "config/scenes" / (name + ".yaml")).string();
+}
+bool sharedScene(const std::string& file) {
+  const std::string p = std::string(GO_FEAP_SHARED_DIR) + "/scenes/" + file;
+  if (fs::exists(p)) return true;
+  std::cout << "[ SKIPPED  ] " << p << " is absent; the shared scenes live beside the repository\n";
+  return false;
+}
+void occupiedExtent(const Scene& s, Vec3& lo, Vec3& hi, bool skip_floor_layer) {
+  const auto& g = s.geometry();
+  lo = Vec3::Constant(1e9);
+  hi = Vec3::Constant(-1e9);
+  const int floor_k = g.coordToIndex(s.box.min + Vec3::Constant(1e-6)).z();
+  for (std::size_t l = 0; l < s.occupied.size(); ++l) {
+    if (!s.occupied[l]) continue;
+    const Index3 i = g.unlinear(l);
+    if (skip_floor_layer && i.z() == floor_k) continue;
+    const Vec3 c = g.indexToCoord(i);
+    lo = lo.cwiseMin(c);
+    hi = hi.cwiseMax(c);
+  }
+}
+}  // namespace
+
+TEST(SharedScenes, PillarPcd) {
+  if (!sharedScene("pillar.pcd")) GTEST_SKIP() << "pillar.pcd absent";
+  auto pts = loadPointCloud(std::string(GO_FEAP_SHARED_DIR) + "/scenes/pillar.pcd");
+  ASSERT_TRUE(pts) << pts.message();
+  EXPECT_EQ(pts->size(), 144640u);
+  auto s = loadSceneYaml(configScene("pillar"));
+  ASSERT_TRUE(s) << s.message();
+  // File frame = world: extents x -7.24..7.26, y -13.74..13.66, z -0.94..2.96 (README);
+  // the grid spans the box + 1 m, so z is cut to [-1, 3]: it all fits.
+  Vec3 lo, hi;
+  occupiedExtent(*s, lo, hi, true);
+  const double r = s->resolution();
+  EXPECT_NEAR(lo.x(), -7.24, r);
+  EXPECT_NEAR(hi.x(), 7.26, r);
+  EXPECT_NEAR(lo.y(), -13.74, r);
+  EXPECT_NEAR(hi.y(), 13.66, r);
+  EXPECT_NEAR(lo.z(), -0.94, r);
+  EXPECT_NEAR(hi.z(), 2.96, r);
+  EXPECT_TRUE(s->isOccupied(Vec3(9.95, 14.95, 0.05))) << "ground plane";
+  EXPECT_FALSE(s->isOccupied(s->start.position));
+}
+
+TEST(SharedScenes, ComplexOfficeBinaryStlStartingWithSolid) {
+  if (!sharedScene("complex_office.stl")) GTEST_SKIP() << "complex_office.stl absent";
+  std::ifstream in(std::string(GO_FEAP_SHARED_DIR) + "/scenes/complex_office.stl", std::ios::binary);
+  char head[5];
+  in.read(head, 5);
+  ASSERT_EQ(std::string(head, 5), "solid");
+  auto mesh = loadStl(std::string(GO_FEAP_SHARED_DIR) + "/scenes/complex_office.stl");
+  ASSERT_TRUE(mesh) << mesh.message();
+  EXPECT_EQ(mesh->triangleCount(), 572u);
+  auto s = loadSceneYaml(configScene("complex_office"));
+  ASSERT_TRUE(s) << s.message();
+  // File x 0..31, y 0..3.5 (up), z 0..31 -> world x = 15.5 - z_f, y = 15.5 - x_f,
+  // z = y_f - 0.5: x, y in -15.5..15.5, z in -0.5..3.0. Voxel centres lie within half a
+  // voxel inside those faces.
+  Vec3 lo, hi;
+  occupiedExtent(*s, lo, hi, false);
+  const double r = s->resolution();
+  EXPECT_NEAR(lo.x(), -15.5, r);
+  EXPECT_NEAR(hi.x(), 15.5, r);
+  EXPECT_NEAR(lo.y(), -15.5, r);
+  EXPECT_NEAR(hi.y(), 15.5, r);
+  EXPECT_NEAR(lo.z(), -0.5, r);
+  EXPECT_NEAR(hi.z(), 3.0, r);
+  // The start is about 0.2 m from a wall at the origin, and free.
+  EXPECT_FALSE(s->isOccupied(s->start.position));
+  const auto obs = computeObservableSet(*s);
+  EXPECT_GT(obs.free_count, 10000u);
+}
+
+// ---- Bad input -------------------------------------------------------------------------
+
+TEST(BadInput, MissingFileAndUnknownExtension) {
+  TempDir d;
+  auto a = loadPointCloud(d.file("nope.pcd"));
+  ASSERT_FALSE(a);
+  expectErrorMentions(a.message(), {"nope.pcd", "not found"});
+  writeText(d.file("x.obj"), "v 0 0 0\n");
+  auto b = loadPointCloud(d.file("x.obj"));
+  ASSERT_FALSE(b);
+  expectErrorMentions(b.message(), {"x.obj", "extension"});
+  writeText(d.file("x.yaml"), sceneYaml("x.obj"));
+  auto c = loadSceneYaml(d.file("x.yaml"));
+  ASSERT_FALSE(c);
+  expectErrorMentions(c.message(), {"x.obj", "extension"});
+  auto e = makeScene("city", 0);
+  ASSERT_FALSE(e);
+  expectErrorMentions(e.message(), {"city"});
+}
+
+TEST(BadInput, TruncatedAndCorruptStl) {
+  TempDir d;
+  writeBinaryStl(d.file("full.stl"), cubeTriangles(0, 1), "binary header");
+  std::string bytes;
+  {
+    std::ifstream in(d.file("full.stl"), std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  writeText(d.file("trunc.stl"), bytes.substr(0, bytes.size() - 30));
+  auto a = loadStl(d.file("trunc.stl"));
+  ASSERT_FALSE(a);
+  expectErrorMentions(a.message(), {"trunc.stl", "binary STL", "12 triangles"});
+  writeText(d.file("short.stl"), "abc");
+  auto b = loadStl(d.file("short.stl"));
+  ASSERT_FALSE(b);
+  expectErrorMentions(b.message(), {"short.stl", "too short"});
+  const std::string ascii = asciiStl(cubeTriangles(0, 1));
+  writeText(d.file("atrunc.stl"), ascii.substr(0, ascii.size() / 2));
+  auto c = loadStl(d.file("atrunc.stl"));
+  ASSERT_FALSE(c);
+  expectErrorMentions(c.message(), {"atrunc.stl", "truncated ASCII STL"});
+  std::string bad = ascii;
+  bad.replace(bad.find("vertex 0 0 0") + 7, 1, "x");
+  writeText(d.file("abad.stl"), bad);
+  auto e = loadStl(d.file("abad.stl"));
+  ASSERT_FALSE(e);
+  expectErrorMentions(e.message(), {"abad.stl", "non-numeric"});
+  auto tri = cubeTriangles(0, 1);
+  tri[4].y() = std::numeric_limits<double>::quiet_NaN();
+  writeBinaryStl(d.file("nan.stl"), tri);
+  auto f = loadStl(d.file("nan.stl"));
+  ASSERT_FALSE(f);
+  expectErrorMentions(f.message(), {"nan.stl", "NaN"});
+}
+
+TEST(BadInput, TruncatedCorruptNanAndEmptyClouds) {
+  TempDir d;
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  for (int i = 0; i < 100; ++i) cloud.push_back(pcl::PointXYZ(0.1f * i, 0.f, 1.f));
+  pcl::io::savePCDFileBinary(d.file("ok.pcd"), cloud);
+  std::string bytes;
+  {
+    std::ifstream in(d.file("ok.pcd"), std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  writeText(d.file("trunc.pcd"), bytes.substr(0, bytes.size() - 200));
+  auto a = loadPointCloud(d.file("trunc.pcd"));
+  ASSERT_FALSE(a);
+  expectErrorMentions(a.message(), {"trunc.pcd"});
+  writeText(d.file("garbage.pcd"), "this is not a point cloud\n\x01\x02\x03");
+  auto b = loadPointCloud(d.file("garbage.pcd"));
+  ASSERT_FALSE(b);
+  expectErrorMentions(b.message(), {"garbage.pcd", "corrupt"});
+  writeText(d.file("nan.pcd"),
+            "VERSION .7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2\nHEIGHT 1\n"
+            "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA ascii\n1 2 3\nnan 0 0\n");
+  auto c = loadPointCloud(d.file("nan.pcd"));
+  ASSERT_FALSE(c);
+  expectErrorMentions(c.message(), {"nan.pcd", "NaN"});
+  writeText(d.file("inf.ply"),
+            "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+            "end_header\n1 2 3\ninf 0 0\n");
+  auto c2 = loadPointCloud(d.file("inf.ply"));
+  ASSERT_FALSE(c2);
+  expectErrorMentions(c2.message(), {"inf.ply"});
+  writeText(d.file("empty.pcd"),
+            "VERSION .7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 0\nHEIGHT 1\n"
+            "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 0\nDATA ascii\n");
+  auto e = loadPointCloud(d.file("empty.pcd"));
+  ASSERT_FALSE(e);
+  expectErrorMentions(e.message(), {"empty.pcd", "empty"});
+  writeText(d.file("trunc.ply"),
+            "ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\n"
+            "end_header\n1 2 3\n");
+  auto f = loadPointCloud(d.file("trunc.ply"));
+  ASSERT_FALSE(f);
+  expectErrorMentions(f.message(), {"trunc.ply"});
+}
+
+TEST(BadInput, CorruptAndTruncatedOctomap) {
+  TempDir d;
+  octomap::OcTree tree(0.1);
+  for (double x = 0.05; x < 2.0; x += 0.1) tree.updateNode(octomap::point3d(x, 0.37, 0.71), true);
+  ASSERT_TRUE(tree.writeBinary(d.file("ok.bt")));
+  std::string bytes;
+  {
+    std::ifstream in(d.file("ok.bt"), std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  writeText(d.file("trunc.bt"), bytes.substr(0, bytes.size() - 20));
+  auto a = loadOctomap(d.file("trunc.bt"));
+  ASSERT_FALSE(a);
+  expectErrorMentions(a.message(), {"trunc.bt"});
+  writeText(d.file("garbage.bt"), "# not an octomap\nabc");
+  auto b = loadOctomap(d.file("garbage.bt"));
+  ASSERT_FALSE(b);
+  expectErrorMentions(b.message(), {"garbage.bt", "OctoMap"});
+}
+
+TEST(BadInput, SceneYamlMissingOrWronglyTypedKeys) {
+  TempDir d;
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  cloud.push_back(pcl::PointXYZ(0.5f, 0.5f, 1.0f));
+  pcl::io::savePCDFileBinary(d.file("p.pcd"), cloud);
+  const std::string good = sceneYaml("p.pcd");
+  ASSERT_TRUE(loadSceneYaml((writeText(d.file("good.yaml"), good), d.file("good.yaml"))));
+  struct Case {
+    std::string from, to, expect;
+  };
+  const std::vector<Case> cases = {
+      {"  resolution: 0.1\n", "", "scene.resolution"},
+      {"resolution: 0.1", "resolution: fine", "scene.resolution"},
+      {"resolution: 0.1", "resolution: -0.1", "scene.resolution"},
+      {"max: [2, 2, 2]", "max: [2, 2]", "scene.box.max"},
+      {"min: [-1, -1, -1]", "min: [3, -1, -1]", "scene.box"},
+      {"  T_world_file: [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]\n", "", "scene.T_world_file"},
+      {"0,0,0,1]", "0,0,1,1]", "scene.T_world_file"},
+      {"yaw: 0", "yaw: north", "scene.start.yaw"},
+      {"  name: t\n", "", "scene.name"},
+      {"ground_plane: false", "ground_plane: maybe", "scene.ground_plane"},
+  };
+  for (const Case& c : cases) {
+    std::string y = good;
+    const auto pos = y.find(c.from);
+    ASSERT_NE(pos, std::string::npos) << c.from;
+    y.replace(pos, c.from.size(), c.to);
+    writeText(d.file("bad.yaml"), y);
+    auto s = loadSceneYaml(d.file("bad.yaml"));
+    ASSERT_FALSE(s) << "accepted: " << y;
+    expectErrorMentions(s.message(), {"bad.yaml", c.expect});
+  }
+  writeText(d.file("broken.yaml"), "scene: [unclosed\n");
+  auto s = loadSceneYaml(d.file("broken.yaml"));
+  ASSERT_FALSE(s);
+  expectErrorMentions(s.message(), {"broken.yaml", "YAML"});
+}
+
+TEST(BadInput, StartInsideObstacleOrOutsideBox) {
+  TempDir d;
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  cloud.push_back(pcl::PointXYZ(0.55f, 0.55f, 0.55f));
+  pcl::io::savePCDFileBinary(d.file("p.pcd"), cloud);
+  writeText(d.file("in.yaml"), sceneYaml("p.pcd", "ground_plane: false", "[0.52, 0.58, 0.51]"));
+  auto a = loadSceneYaml(d.file("in.yaml"));
+  ASSERT_FALSE(a);
+  expectErrorMentions(a.message(), {"in.yaml", "inside an obstacle"});
+  writeText(d.file("out.yaml"), sceneYaml("p.pcd", "ground_plane: false", "[5, 0, 0]"));
+  auto b = loadSceneYaml(d.file("out.yaml"));
+  ASSERT_FALSE(b);
+  expectErrorMentions(b.message(), {"out.yaml", "outside the exploration box"});
+}
