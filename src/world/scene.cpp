@@ -1,5 +1,6 @@
 #include "go_feap/world/scene.h"
 
+#include <limits>
 #include <sstream>
 #include <vector>
 
@@ -71,8 +72,11 @@ ObservableSet computeObservableSet(const Scene& scene) {
 
   // Breadth-first flood fill through free voxels of the box.
   constexpr std::uint8_t kFree = 1, kOccupied = 2;
-  std::vector<std::size_t> queue;
-  queue.push_back(geo.linear(start));
+  // 32-bit indices halve the queue's memory (the powerplant has ~26 M free voxels).
+  std::vector<std::uint32_t> queue;
+  if (geo.size() > std::numeric_limits<std::uint32_t>::max()) return result;
+  queue.reserve(geo.size() / 4);
+  queue.push_back(static_cast<std::uint32_t>(geo.linear(start)));
   result.mask[queue.front()] = kFree;
   for (std::size_t head = 0; head < queue.size(); ++head) {
     const Index3 cur = geo.unlinear(queue[head]);
@@ -86,7 +90,7 @@ ObservableSet computeObservableSet(const Scene& scene) {
         ++result.occupied_count;
       } else {
         result.mask[l] = kFree;
-        queue.push_back(l);
+        queue.push_back(static_cast<std::uint32_t>(l));
       }
     }
   }

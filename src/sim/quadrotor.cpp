@@ -1,0 +1,93 @@
+#include "go_feap/sim/quadrotor.h"
+
+#include <string>
+
+namespace go_feap::sim {
+
+common::Status QuadrotorParams::validate() const {
+  auto bad = [](const std::string& key, const std::string& why) {
+    return common::Status::Error("quadrotor: " + key + " " + why);
+  };
+  if (!(mass > 0.0)) return bad("mass", "must be > 0");
+  if (!(inertia.array() > 0.0).all() || !inertia.allFinite()) return bad("inertia", "must be three values > 0");
+  if (!(arm_length > 0.0)) return bad("arm_length", "must be > 0");
+  if (!(torque_coefficient > 0.0)) return bad("torque_coefficient", "must be > 0");
+  if (!(motor_min_thrust >= 0.0)) return bad("motor_min_thrust", "must be >= 0");
+  if (!(motor_max_thrust > motor_min_thrust)) return bad("motor_max_thrust", "must be > motor_min_thrust");
+  if (!(4.0 * motor_max_thrust > mass * gravity)) return bad("motor_max_thrust", "cannot lift the vehicle (4 x max < m g)");
+  if (!(linear_drag >= 0.0)) return bad("linear_drag", "must be >= 0");
+  if (!(gravity > 0.0)) return bad("gravity", "must be > 0");
+  if (!(dynamics_rate >= 500.0)) return bad("dynamics_rate", "must be >= 500 Hz");
+  return common::Status::Ok();
+}
+
+Quadrotor::Quadrotor(const QuadrotorParams& params) : params_(params) {
+  // X configuration, rotors at 45 deg: FL (+x+y, CCW), FR (+x-y, CW), RR (-x-y, CCW), RL (-x+y, CW).
+  const double d = params.arm_length / std::sqrt(2.0), k = params.torque_coefficient;
+  allocation_ << 1, 1, 1, 1,     //
+      d, -d, -d, d,              // roll moment: +y rotors push up
+      -d, -d, d, d,              // pitch moment: -x rotors push up
+      -k, k, -k, k;              // CCW rotors react CW
+  allocation_inv_ = allocation_.inverse();
+}
+
+Eigen::Vector4d Quadrotor::rotorThrusts(const Wrench& w) const {
+  Eigen::Vector4d u;
+  u << w.thrust, w.moment;
+  return allocation_inv_ * u;
+}
+
+Wrench Quadrotor::saturate(const Wrench& wanted) const {
+  const Eigen::Vector4d f =
+      rotorThrusts(wanted).cwiseMax(params_.motor_min_thrust).cwiseMin(params_.motor_max_thrust);
+  const Eigen::Vector4d u = allocation_ * f;
+  return {u[0], u.tail<3>()};
+}
+
+struct Quadrotor::Derivative {
+  Eigen::Vector3d dp, dv;
+  Eigen::Vector4d dq;  // quaternion derivative (w, x, y, z)
+  Eigen::Vector3d dw;
+};
+
+Quadrotor::Derivative Quadrotor::derivative(const QuadrotorState& s, const Wrench& w) const {
+  Derivative d;
+  const Eigen::Matrix3d R = s.attitude.normalized().toRotationMatrix();
+  d.dp = s.velocity;
+  d.dv = (w.thrust * R.col(2) - params_.linear_drag * s.velocity) / params_.mass -
+         Eigen::Vector3d(0, 0, params_.gravity);
+  // q_dot = 0.5 q ⊗ (0, w_body)
+  const Eigen::Quaterniond omega(0.0, s.angular_velocity.x(), s.angular_velocity.y(), s.angular_velocity.z());
+  const Eigen::Quaterniond qd = s.attitude * omega;
+  d.dq << 0.5 * qd.w(), 0.5 * qd.x(), 0.5 * qd.y(), 0.5 * qd.z();
+  const Eigen::Vector3d Jw = params_.inertia.cwiseProduct(s.angular_velocity);
+  d.dw = (w.moment - s.angular_velocity.cross(Jw)).cwiseQuotient(params_.inertia);
+  return d;
+}
+
+Wrench Quadrotor::step(const Wrench& wanted, double dt) {
+  const Wrench w = saturate(wanted);
+  auto advance = [](const QuadrotorState& s, const Derivative& d, double h) {
+    QuadrotorState n = s;
+    n.position += h * d.dp;
+    n.velocity += h * d.dv;
+    n.attitude.coeffs() += h * Eigen::Vector4d(d.dq[1], d.dq[2], d.dq[3], d.dq[0]);  // coeffs: x y z w
+    n.angular_velocity += h * d.dw;
+    return n;
+  };
+  const Derivative k1 = derivative(state_, w);
+  const Derivative k2 = derivative(advance(state_, k1, 0.5 * dt), w);
+  const Derivative k3 = derivative(advance(state_, k2, 0.5 * dt), w);
+  const Derivative k4 = derivative(advance(state_, k3, dt), w);
+  Derivative sum;
+  sum.dp = (k1.dp + 2 * k2.dp + 2 * k3.dp + k4.dp) / 6.0;
+  sum.dv = (k1.dv + 2 * k2.dv + 2 * k3.dv + k4.dv) / 6.0;
+  sum.dq = (k1.dq + 2 * k2.dq + 2 * k3.dq + k4.dq) / 6.0;
+  sum.dw = (k1.dw + 2 * k2.dw + 2 * k3.dw + k4.dw) / 6.0;
+  state_ = advance(state_, sum, dt);
+  state_.attitude.normalize();
+  state_.acceleration = sum.dv;
+  return w;
+}
+
+}  // namespace go_feap::sim

@@ -1,0 +1,198 @@
+// Geometric controller + rigid-body dynamics in closed loop.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+
+#include "go_feap/sim/vehicle.h"
+
+using namespace go_feap::sim;
+
+namespace {
+
+constexpr double kDt = 0.01;  // reference update period (s); the dynamics step inside is 2 ms
+
+struct Flight {
+  std::vector<double> t;
+  std::vector<Eigen::Vector3d> p, p_ref;
+  std::vector<double> yaw, yaw_ref;
+  double max_rotor = 0.0, min_rotor = 1e9, max_wanted = 0.0, min_wanted = 1e9;
+};
+
+double yawOf(const QuadrotorState& s) {
+  const Eigen::Vector3d x = s.attitude * Eigen::Vector3d::UnitX();
+  return std::atan2(x.y(), x.x());
+}
+
+double wrap(double a) { return std::atan2(std::sin(a), std::cos(a)); }
+
+Flight fly(SimulatedVehicle& v, double duration, const std::function<PositionReference(double)>& ref) {
+  Flight r;
+  for (double t = 0.0; t < duration - 1e-9; t += kDt) {
+    const PositionReference pr = ref(v.time());
+    v.advance(kDt, pr);
+    r.t.push_back(v.time());
+    r.p.push_back(v.state().position);
+    r.p_ref.push_back(ref(v.time()).position);
+    r.yaw.push_back(yawOf(v.state()));
+    r.yaw_ref.push_back(ref(v.time()).yaw);
+    r.max_rotor = std::max(r.max_rotor, v.lastRotorThrusts().maxCoeff());
+    r.min_rotor = std::min(r.min_rotor, v.lastRotorThrusts().minCoeff());
+    r.max_wanted = std::max(r.max_wanted, v.lastWantedRotorThrusts().maxCoeff());
+    r.min_wanted = std::min(r.min_wanted, v.lastWantedRotorThrusts().minCoeff());
+  }
+  return r;
+}
+
+void expectWithinMotorLimits(const Flight& r, const QuadrotorParams& p) {
+  EXPECT_LE(r.max_rotor, p.motor_max_thrust + 1e-9);
+  EXPECT_GE(r.min_rotor, p.motor_min_thrust - 1e-9);
+}
+
+}  // namespace
+
+TEST(Vehicle, HoverStaysWithinTwoCentimetres) {
+  SimulatedVehicle v{QuadrotorParams(), So3ControllerConfig()};
+  v.reset(Eigen::Vector3d(1, 2, 1), 0.3);
+  PositionReference ref;
+  ref.position = Eigen::Vector3d(1, 2, 1);
+  ref.yaw = 0.3;
+  const Flight r = fly(v, 10.0, [&](double) { return ref; });
+  for (const auto& p : r.p) ASSERT_LT((p - ref.position).norm(), 0.02);
+  // Hovering needs m g / 4 per rotor, nowhere near the limits.
+  EXPECT_NEAR(r.max_wanted, QuadrotorParams().mass * 9.81 / 4, 0.05);
+  expectWithinMotorLimits(r, QuadrotorParams());
+}
+
+TEST(Vehicle, OneMetreStepSettlesWithinThreeSecondsWithSmallOvershoot) {
+  for (int axis = 0; axis < 3; ++axis) {
+    SimulatedVehicle v{QuadrotorParams(), So3ControllerConfig()};
+    v.reset(Eigen::Vector3d(0, 0, 1), 0.0);
+    PositionReference ref;
+    ref.position = Eigen::Vector3d(0, 0, 1) + Eigen::Vector3d::Unit(axis);
+    const Flight r = fly(v, 6.0, [&](double) { return ref; });
+    double overshoot = 0.0;
+    for (std::size_t i = 0; i < r.t.size(); ++i) {
+      const double progress = r.p[i][axis] - (axis == 2 ? 1.0 : 0.0);
+      overshoot = std::max(overshoot, progress - 1.0);
+      if (r.t[i] >= 3.0) {
+        ASSERT_LT((r.p[i] - ref.position).norm(), 0.05) << "axis " << axis << " t " << r.t[i];
+      }
+    }
+    EXPECT_LT(overshoot, 0.10) << "axis " << axis;
+    expectWithinMotorLimits(r, QuadrotorParams());
+  }
+}
+
+TEST(Vehicle, TracksA2MetrePerSecondCircle) {
+  const double radius = 2.0, speed = 2.0, w = speed / radius;
+  auto circle = [&](double t) {
+    PositionReference ref;
+    ref.position = Eigen::Vector3d(radius * std::cos(w * t), radius * std::sin(w * t), 1.5);
+    ref.velocity = Eigen::Vector3d(-speed * std::sin(w * t), speed * std::cos(w * t), 0);
+    ref.acceleration = -w * w * Eigen::Vector3d(ref.position.x(), ref.position.y(), 0);
+    ref.yaw = wrap(w * t + M_PI / 2);
+    ref.yaw_dot = w;
+    return ref;
+  };
+  SimulatedVehicle v{QuadrotorParams(), So3ControllerConfig()};
+  // Start on the circle, already moving with it, tilted to hold the centripetal force.
+  QuadrotorState start;
+  start.position = circle(0).position;
+  start.velocity = circle(0).velocity;
+  const Eigen::Vector3d thrust_dir = (circle(0).acceleration + Eigen::Vector3d(0, 0, 9.81)).normalized();
+  start.attitude = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), thrust_dir) *
+                   Eigen::Quaterniond(Eigen::AngleAxisd(circle(0).yaw, Eigen::Vector3d::UnitZ()));
+  start.angular_velocity = start.attitude.inverse() * Eigen::Vector3d(0, 0, w);
+  v.setState(start);
+  const Flight r = fly(v, 2.0 * (2 * M_PI / w), circle);
+  double sq = 0.0;
+  for (std::size_t i = 0; i < r.p.size(); ++i) sq += (r.p[i] - r.p_ref[i]).squaredNorm();
+  const double rms = std::sqrt(sq / r.p.size());
+  EXPECT_LT(rms, 0.10);
+  std::cout << "circle RMS position error " << rms << " m\n";
+  // Steady turning needs no saturation.
+  EXPECT_LT(r.max_wanted, QuadrotorParams().motor_max_thrust);
+  EXPECT_GT(r.min_wanted, QuadrotorParams().motor_min_thrust);
+  expectWithinMotorLimits(r, QuadrotorParams());
+}
+
+TEST(Vehicle, YawFollowsAOneRadianPerSecondRamp) {
+  SimulatedVehicle v{QuadrotorParams(), So3ControllerConfig()};
+  v.reset(Eigen::Vector3d(0, 0, 1), 0.0);
+  auto ramp = [](double t) {
+    PositionReference ref;
+    ref.position = Eigen::Vector3d(0, 0, 1);
+    ref.yaw = wrap(t);
+    ref.yaw_dot = 1.0;
+    return ref;
+  };
+  const Flight r = fly(v, 8.0, ramp);
+  for (std::size_t i = 0; i < r.t.size(); ++i) {
+    if (r.t[i] > 2.0) {
+      ASSERT_LT(std::abs(wrap(r.yaw[i] - r.yaw_ref[i])), 0.05) << "t " << r.t[i];
+    }
+    ASSERT_LT((r.p[i] - Eigen::Vector3d(0, 0, 1)).norm(), 0.02);
+  }
+  expectWithinMotorLimits(r, QuadrotorParams());
+}
+
+TEST(Quadrotor, SaturationClampsEachRotorAndFreeFallWithoutThrust) {
+  Quadrotor q{QuadrotorParams()};
+  const Wrench huge{100.0, Eigen::Vector3d(5, -5, 1)};
+  const Eigen::Vector4d applied = q.rotorThrusts(q.saturate(huge));
+  EXPECT_LE(applied.maxCoeff(), q.params().motor_max_thrust + 1e-9);
+  EXPECT_GE(applied.minCoeff(), q.params().motor_min_thrust - 1e-9);
+  // Within limits the allocation is exact.
+  const Wrench ok{10.0, Eigen::Vector3d(0.05, -0.02, 0.01)};
+  const Wrench back = q.saturate(ok);
+  EXPECT_NEAR(back.thrust, ok.thrust, 1e-9);
+  EXPECT_LT((back.moment - ok.moment).norm(), 1e-9);
+  // No thrust: free fall, z = -g t^2 / 2 (RK4 is exact for constant acceleration).
+  for (int i = 0; i < 500; ++i) q.step(Wrench{0.0, Eigen::Vector3d::Zero()}, 0.002);
+  EXPECT_NEAR(q.state().position.z(), -0.5 * 9.81 * 1.0, 1e-9);
+}
+
+TEST(Quadrotor, TorqueFreeSpinConservesAngularMomentum) {
+  Quadrotor q{QuadrotorParams()};
+  QuadrotorState s;
+  s.angular_velocity = Eigen::Vector3d(0.3, 2.0, 0.1);
+  q.setState(s);
+  auto momentum = [&] {
+    const auto& st = q.state();
+    return (st.attitude * q.params().inertia.cwiseProduct(st.angular_velocity)).eval();
+  };
+  const Eigen::Vector3d L0 = momentum();
+  for (int i = 0; i < 1000; ++i) q.step(Wrench{0.0, Eigen::Vector3d::Zero()}, 0.002);
+  EXPECT_LT((momentum() - L0).norm(), 1e-6 * L0.norm() + 1e-9);
+}
+
+TEST(Reference, BadCommandsAreRefusedWithAReason) {
+  const go_feap::common::Aabb bounds{Eigen::Vector3d(-10, -5, 0), Eigen::Vector3d(10, 5, 3)};
+  PositionReference ok;
+  ok.position = Eigen::Vector3d(1, 1, 1);
+  EXPECT_TRUE(checkReference(ok, bounds));
+  PositionReference nan = ok;
+  nan.velocity.x() = std::nan("");
+  EXPECT_NE(checkReference(nan, bounds).message().find("NaN"), std::string::npos);
+  PositionReference acc = ok;
+  acc.acceleration = Eigen::Vector3d(0, 0, 60);
+  EXPECT_NE(checkReference(acc, bounds).message().find("acceleration"), std::string::npos);
+  PositionReference far = ok;
+  far.position = Eigen::Vector3d(25, 0, 1);
+  EXPECT_NE(checkReference(far, bounds).message().find("outside"), std::string::npos);
+  far.position = Eigen::Vector3d(19, 0, 1);  // 9 m outside: still accepted
+  EXPECT_TRUE(checkReference(far, bounds));
+}
+
+TEST(Config, InvalidValuesNameTheKey) {
+  QuadrotorParams p;
+  p.motor_max_thrust = 2.0;
+  EXPECT_NE(p.validate().message().find("motor_max_thrust"), std::string::npos);
+  p = QuadrotorParams();
+  p.dynamics_rate = 100;
+  EXPECT_NE(p.validate().message().find("dynamics_rate"), std::string::npos);
+  So3ControllerConfig c;
+  c.kv.y() = -1;
+  EXPECT_NE(c.validate().message().find("kv"), std::string::npos);
+}
