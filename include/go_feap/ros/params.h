@@ -1,0 +1,62 @@
+// Reading required ROS parameters: every key must be present and of the right type; the
+// first problem is remembered with the key's full name.
+#pragma once
+
+#include <ros/node_handle.h>
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+namespace go_feap::ros_params {
+
+class ParamReader {
+ public:
+  explicit ParamReader(const ros::NodeHandle& nh) : nh_(nh) {}
+
+  /// Reads `key` into `out`; on a missing or wrongly typed key records an error.
+  template <typename T>
+  ParamReader& get(const std::string& key, T& out) {
+    T value{};
+    if (!nh_.hasParam(key)) {
+      fail(key, "is missing");
+    } else if (!nh_.getParam(key, value)) {
+      fail(key, "has the wrong type");
+    } else {
+      out = value;
+    }
+    return *this;
+  }
+  ParamReader& getVec3(const std::string& key, Eigen::Vector3d& out);
+  ParamReader& getMatrix4(const std::string& key, Eigen::Matrix4d& out);
+
+  bool ok() const { return error_.empty(); }
+  /// "parameter '/ns/key' is missing" (the first problem found), or empty.
+  const std::string& error() const { return error_; }
+  std::string fullName(const std::string& key) const { return nh_.resolveName(key); }
+
+ private:
+  void fail(const std::string& key, const std::string& why) {
+    if (error_.empty()) error_ = "parameter '" + fullName(key) + "' " + why;
+  }
+  ros::NodeHandle nh_;
+  std::string error_;
+};
+
+/// Throws std::runtime_error with `what` (after logging it as fatal) when `ok` is false:
+/// a nodelet whose parameters are wrong does not start.
+void requireOrThrow(bool ok, const std::string& nodelet, const std::string& what);
+
+}  // namespace go_feap::ros_params
+
+namespace go_feap::world {
+struct Scene;
+}
+
+namespace go_feap::ros_params {
+
+/// Builds the scene named by the private parameters `scene` (maze, powerplant or the path
+/// of a scene YAML) and `seed`; throws (after logging) when they are wrong.
+world::Scene loadScene(const ros::NodeHandle& private_nh, const std::string& nodelet);
+
+}  // namespace go_feap::ros_params

@@ -1,0 +1,132 @@
+// DepthCamera: renders the ground-truth scene from the vehicle's pose. odom in; depth
+// (32FC1 metres, 0 = no return), camera_info, camera_pose (same stamp as the image) and
+// the static TF body->camera out, at `rate` Hz of simulated time.
+#include <cv_bridge/cv_bridge.h>
+#include <geometry_msgs/PoseStamped.h>
+#include <nav_msgs/Odometry.h>
+#include <nodelet/nodelet.h>
+#include <pluginlib/class_list_macros.hpp>
+#include <ros/ros.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/image_encodings.h>
+#include <tf2_eigen/tf2_eigen.h>
+#include <tf2_ros/static_transform_broadcaster.h>
+
+#include <random>
+
+#include "go_feap/ros/params.h"
+#include "go_feap/sim/depth_camera.h"
+#include "go_feap/world/scene.h"
+
+namespace go_feap {
+
+class DepthCamera : public nodelet::Nodelet {
+ private:
+  void onInit() override {
+    ros::NodeHandle& nh = getNodeHandle();
+    ros::NodeHandle& pnh = getPrivateNodeHandle();
+    const std::string me = getName();
+    ros_params::ParamReader p(pnh);
+    sim::DepthCameraConfig c;
+    p.get("depth_camera/width", c.width).get("depth_camera/height", c.height);
+    p.get("depth_camera/hfov_deg", c.hfov_deg).get("depth_camera/vfov_deg", c.vfov_deg);
+    p.get("depth_camera/fx", c.fx).get("depth_camera/fy", c.fy).get("depth_camera/cx", c.cx).get("depth_camera/cy", c.cy);
+    p.get("depth_camera/min_range", c.min_range).get("depth_camera/max_range", c.max_range);
+    p.get("depth_camera/noise_stddev_per_m", c.noise_stddev_per_m);
+    p.get("depth_camera/dropout_probability", c.dropout_probability);
+    int seed = 0;
+    Eigen::Matrix4d T_B_C;
+    p.get("depth_camera/noise_seed", seed).get("depth_camera/rate", rate_);
+    p.get("depth_camera/camera_frame", camera_frame_).getMatrix4("depth_camera/T_B_C", T_B_C);
+    p.get("simulation/world_frame", world_frame_).get("simulation/body_frame", body_frame_);
+    ros_params::requireOrThrow(p.ok(), me, p.error());
+    ros_params::requireOrThrow(c.validate().ok(), me, c.validate().message());
+    ros_params::requireOrThrow(rate_ > 0.0 && rate_ <= 100.0, me,
+                               "parameter '" + p.fullName("depth_camera/rate") + "' must be in (0, 100] Hz");
+    const Eigen::Matrix3d R = T_B_C.topLeftCorner<3, 3>();
+    ros_params::requireOrThrow(T_B_C.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1)) &&
+                                   (R.transpose() * R).isApprox(Eigen::Matrix3d::Identity(), 1e-6) &&
+                                   R.determinant() > 0.0,
+                               me, "parameter '" + p.fullName("depth_camera/T_B_C") + "' must be a rigid transform");
+    T_B_C_.matrix() = T_B_C;
+    rng_.seed(static_cast<std::uint64_t>(seed));
+    config_ = c;
+    intrinsics_ = c.intrinsics();
+
+    scene_ = std::make_unique<world::Scene>(ros_params::loadScene(pnh, me));
+    renderer_ = std::make_unique<sim::DepthRenderer>(c, *scene_);
+
+    depth_pub_ = nh.advertise<sensor_msgs::Image>("depth", 2);
+    info_pub_ = nh.advertise<sensor_msgs::CameraInfo>("camera_info", 2);
+    pose_pub_ = nh.advertise<geometry_msgs::PoseStamped>("camera_pose", 2);
+    odom_sub_ = nh.subscribe("odom", 10, &DepthCamera::onOdom, this, ros::TransportHints().tcpNoDelay());
+
+    geometry_msgs::TransformStamped tf = tf2::eigenToTransform(T_B_C_);
+    tf.header.stamp = ros::Time::now();
+    tf.header.frame_id = body_frame_;
+    tf.child_frame_id = camera_frame_;
+    static_tf_.sendTransform(tf);
+    NODELET_INFO_STREAM(me << ": " << c.width << "x" << c.height << " depth at " << rate_ << " Hz, range "
+                           << c.min_range << "-" << c.max_range << " m");
+  }
+
+  // Renders when the odometry stamp reaches the next frame time, so that the image, its
+  // camera pose and the odometry share one exact stamp.
+  void onOdom(const nav_msgs::Odometry::ConstPtr& odom) {
+    const ros::Time stamp = odom->header.stamp;
+    if (!next_frame_.isZero() && stamp < next_frame_) return;
+    const double period = 1.0 / rate_;
+    next_frame_ = (next_frame_.isZero() || stamp - next_frame_ > ros::Duration(period)) ? stamp + ros::Duration(period)
+                                                                                        : next_frame_ + ros::Duration(period);
+    Eigen::Isometry3d T_W_B;
+    tf2::fromMsg(odom->pose.pose, T_W_B);
+    if (!T_W_B.matrix().allFinite()) {
+      NODELET_WARN_THROTTLE(1.0, "%s: odometry pose is not finite; frame skipped", getName().c_str());
+      return;
+    }
+    const Eigen::Isometry3d T_W_C = T_W_B * T_B_C_;
+
+    cv_bridge::CvImage image;
+    image.header.stamp = stamp;
+    image.header.frame_id = camera_frame_;
+    image.encoding = sensor_msgs::image_encodings::TYPE_32FC1;
+    renderer_->render(T_W_C, image.image);
+    if (config_.noise_stddev_per_m > 0.0 || config_.dropout_probability > 0.0) renderer_->addNoise(image.image, rng_);
+
+    sensor_msgs::CameraInfo info;
+    info.header = image.header;
+    info.width = intrinsics_.width;
+    info.height = intrinsics_.height;
+    info.distortion_model = "plumb_bob";
+    info.D.assign(5, 0.0);
+    info.K = {intrinsics_.fx, 0, intrinsics_.cx, 0, intrinsics_.fy, intrinsics_.cy, 0, 0, 1};
+    info.R = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    info.P = {intrinsics_.fx, 0, intrinsics_.cx, 0, 0, intrinsics_.fy, intrinsics_.cy, 0, 0, 0, 1, 0};
+
+    geometry_msgs::PoseStamped pose;
+    pose.header.stamp = stamp;
+    pose.header.frame_id = world_frame_;
+    pose.pose = tf2::toMsg(T_W_C);
+
+    pose_pub_.publish(pose);
+    info_pub_.publish(info);
+    depth_pub_.publish(image.toImageMsg());
+  }
+
+  sim::DepthCameraConfig config_;
+  sim::CameraIntrinsics intrinsics_;
+  double rate_ = 15.0;
+  std::string world_frame_, body_frame_, camera_frame_;
+  Eigen::Isometry3d T_B_C_ = Eigen::Isometry3d::Identity();
+  std::unique_ptr<world::Scene> scene_;
+  std::unique_ptr<sim::DepthRenderer> renderer_;
+  std::mt19937_64 rng_;
+  ros::Time next_frame_;
+  ros::Publisher depth_pub_, info_pub_, pose_pub_;
+  ros::Subscriber odom_sub_;
+  tf2_ros::StaticTransformBroadcaster static_tf_;
+};
+
+}  // namespace go_feap
+
+PLUGINLIB_EXPORT_CLASS(go_feap::DepthCamera, nodelet::Nodelet)

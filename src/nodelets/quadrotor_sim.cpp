@@ -1,0 +1,215 @@
+// QuadrotorSim: flies the simulated vehicle. position_cmd in; odom, TF world->body and
+// /clock out, at a configurable real-time factor.
+#include <geometry_msgs/TransformStamped.h>
+#include <nav_msgs/Odometry.h>
+#include <nodelet/nodelet.h>
+#include <pluginlib/class_list_macros.hpp>
+#include <ros/ros.h>
+#include <rosgraph_msgs/Clock.h>
+#include <tf2_ros/transform_broadcaster.h>
+
+#include <atomic>
+#include <chrono>
+#include <mutex>
+#include <thread>
+
+#include "go_feap/PositionCommand.h"
+#include "go_feap/ros/params.h"
+#include "go_feap/sim/vehicle.h"
+#include "go_feap/world/scene.h"
+
+namespace go_feap {
+
+class QuadrotorSim : public nodelet::Nodelet {
+ public:
+  ~QuadrotorSim() override {
+    running_ = false;
+    if (thread_.joinable()) thread_.join();
+  }
+
+ private:
+  void onInit() override {
+    ros::NodeHandle& nh = getNodeHandle();
+    ros::NodeHandle& pnh = getPrivateNodeHandle();
+    const std::string me = getName();
+    ros_params::ParamReader p(pnh);
+    sim::QuadrotorParams q;
+    p.get("quadrotor/mass", q.mass).getVec3("quadrotor/inertia", q.inertia);
+    p.get("quadrotor/arm_length", q.arm_length).get("quadrotor/torque_coefficient", q.torque_coefficient);
+    p.get("quadrotor/motor_min_thrust", q.motor_min_thrust).get("quadrotor/motor_max_thrust", q.motor_max_thrust);
+    p.get("quadrotor/linear_drag", q.linear_drag).get("quadrotor/gravity", q.gravity);
+    p.get("quadrotor/dynamics_rate", q.dynamics_rate);
+    sim::So3ControllerConfig c;
+    p.getVec3("controller/kx", c.kx).getVec3("controller/kv", c.kv).getVec3("controller/kR", c.kR);
+    p.getVec3("controller/kw", c.kw).get("controller/max_tilt", c.max_tilt);
+    p.get("simulation/rate_factor", rate_factor_).get("simulation/odom_rate", odom_rate_);
+    p.get("simulation/command_timeout", command_timeout_).get("simulation/publish_clock", publish_clock_);
+    p.get("simulation/max_command_acceleration", max_cmd_acc_).get("simulation/max_command_outside", max_cmd_out_);
+    p.get("simulation/world_frame", world_frame_).get("simulation/body_frame", body_frame_);
+    bool use_scene_start = true;
+    Eigen::Vector3d start;
+    double start_yaw = 0.0;
+    p.get("use_scene_start", use_scene_start).getVec3("start", start).get("start_yaw", start_yaw);
+    ros_params::requireOrThrow(p.ok(), me, p.error());
+    for (const common::Status& st : {q.validate(), c.validate()}) ros_params::requireOrThrow(st.ok(), me, st.message());
+    ros_params::requireOrThrow(rate_factor_ > 0.0, me, "parameter '" + p.fullName("simulation/rate_factor") + "' must be > 0");
+    ros_params::requireOrThrow(odom_rate_ >= 10.0 && odom_rate_ <= q.dynamics_rate, me,
+                               "parameter '" + p.fullName("simulation/odom_rate") + "' must be in [10, dynamics_rate]");
+    ros_params::requireOrThrow(command_timeout_ > 0.0, me,
+                               "parameter '" + p.fullName("simulation/command_timeout") + "' must be > 0");
+    ros_params::requireOrThrow(publish_clock_ || rate_factor_ == 1.0, me,
+                               "parameter '" + p.fullName("simulation/rate_factor") +
+                                   "' must be 1 unless simulation/publish_clock is true");
+
+    const world::Scene scene = ros_params::loadScene(pnh, me);
+    bounds_ = scene.box;
+    if (use_scene_start) {
+      start = scene.start.position;
+      start_yaw = scene.start.yaw;
+    }
+    vehicle_ = std::make_unique<sim::SimulatedVehicle>(q, c);
+    vehicle_->reset(start, start_yaw);
+    hold_.position = start;
+    hold_.yaw = start_yaw;
+    command_ = hold_;
+
+    odom_pub_ = nh.advertise<nav_msgs::Odometry>("odom", 10);
+    if (publish_clock_) clock_pub_ = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
+    cmd_sub_ = nh.subscribe("position_cmd", 10, &QuadrotorSim::onCommand, this, ros::TransportHints().tcpNoDelay());
+    NODELET_INFO_STREAM(me << ": vehicle at (" << start.transpose() << "), yaw " << start_yaw << ", scene '"
+                           << scene.name << "', rate factor " << rate_factor_);
+    running_ = true;
+    thread_ = std::thread(&QuadrotorSim::loop, this);
+  }
+
+  void onCommand(const PositionCommand::ConstPtr& msg) {
+    sim::PositionReference ref;
+    ref.position = Eigen::Vector3d(msg->position.x, msg->position.y, msg->position.z);
+    ref.velocity = Eigen::Vector3d(msg->velocity.x, msg->velocity.y, msg->velocity.z);
+    ref.acceleration = Eigen::Vector3d(msg->acceleration.x, msg->acceleration.y, msg->acceleration.z);
+    ref.yaw = msg->yaw;
+    ref.yaw_dot = msg->yaw_dot;
+    const common::Status st = sim::checkReference(ref, bounds_, max_cmd_acc_, max_cmd_out_);
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!st.ok()) {
+      ++refused_;
+      NODELET_WARN_STREAM_THROTTLE(1.0, getName() << ": refused " << refused_ << " position_cmd so far (latest: "
+                                                  << st.message() << "); holding the last valid command");
+      return;
+    }
+    command_ = ref;
+    last_command_time_ = sim_time_;
+    have_command_ = true;
+    timed_out_ = false;
+  }
+
+  // Simulation thread: advances in odom periods, then waits for wall time to catch up.
+  void loop() {
+    const double period = 1.0 / odom_rate_;
+    const ros::Time origin = publish_clock_ ? ros::Time(1.0) : ros::Time::now();
+    const auto wall_start = std::chrono::steady_clock::now();
+    double t = 0.0, report_t = 0.0;
+    auto report_wall = wall_start;
+    publishClock(origin);
+    while (running_ && ros::ok()) {
+      sim::PositionReference ref;
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (have_command_ && t - last_command_time_ > command_timeout_ && !timed_out_) {
+          timed_out_ = true;
+          hold_ = sim::PositionReference();
+          hold_.position = vehicle_->state().position;
+          const Eigen::Vector3d x = vehicle_->state().attitude * Eigen::Vector3d::UnitX();
+          hold_.yaw = std::atan2(x.y(), x.x());
+          NODELET_WARN_STREAM(getName() << ": no position_cmd for " << command_timeout_
+                                        << " s; hovering in place until one arrives");
+        }
+        ref = (!have_command_ || timed_out_) ? hold_ : command_;
+      }
+      vehicle_->advance(period, ref);
+      t += period;
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        sim_time_ = t;
+      }
+      const ros::Time stamp = origin + ros::Duration(t);
+      publishClock(stamp);
+      publishState(stamp);
+
+      const auto target = wall_start + std::chrono::duration<double>(t / rate_factor_);
+      std::this_thread::sleep_until(target);
+      const auto now = std::chrono::steady_clock::now();
+      const double wall = std::chrono::duration<double>(now - report_wall).count();
+      if (wall >= 10.0) {
+        NODELET_INFO_STREAM(getName() << ": achieved real-time factor " << (t - report_t) / wall << " (wanted "
+                                      << rate_factor_ << ")");
+        report_t = t;
+        report_wall = now;
+      }
+    }
+  }
+
+  void publishClock(const ros::Time& stamp) {
+    if (!publish_clock_) return;
+    rosgraph_msgs::Clock clock;
+    clock.clock = stamp;
+    clock_pub_.publish(clock);
+  }
+
+  void publishState(const ros::Time& stamp) {
+    const sim::QuadrotorState& s = vehicle_->state();
+    nav_msgs::Odometry odom;
+    odom.header.stamp = stamp;
+    odom.header.frame_id = world_frame_;
+    odom.child_frame_id = body_frame_;
+    odom.pose.pose.position.x = s.position.x();
+    odom.pose.pose.position.y = s.position.y();
+    odom.pose.pose.position.z = s.position.z();
+    odom.pose.pose.orientation.w = s.attitude.w();
+    odom.pose.pose.orientation.x = s.attitude.x();
+    odom.pose.pose.orientation.y = s.attitude.y();
+    odom.pose.pose.orientation.z = s.attitude.z();
+    // nav_msgs/Odometry: twist in the child (body) frame.
+    const Eigen::Vector3d v_body = s.attitude.inverse() * s.velocity;
+    odom.twist.twist.linear.x = v_body.x();
+    odom.twist.twist.linear.y = v_body.y();
+    odom.twist.twist.linear.z = v_body.z();
+    odom.twist.twist.angular.x = s.angular_velocity.x();
+    odom.twist.twist.angular.y = s.angular_velocity.y();
+    odom.twist.twist.angular.z = s.angular_velocity.z();
+    odom_pub_.publish(odom);
+
+    geometry_msgs::TransformStamped tf;
+    tf.header = odom.header;
+    tf.child_frame_id = body_frame_;
+    tf.transform.translation.x = s.position.x();
+    tf.transform.translation.y = s.position.y();
+    tf.transform.translation.z = s.position.z();
+    tf.transform.rotation = odom.pose.pose.orientation;
+    tf_broadcaster_.sendTransform(tf);
+  }
+
+  // Configuration.
+  double rate_factor_ = 1.0, odom_rate_ = 100.0, command_timeout_ = 0.5;
+  double max_cmd_acc_ = 50.0, max_cmd_out_ = 10.0;
+  bool publish_clock_ = true;
+  std::string world_frame_, body_frame_;
+  common::Aabb bounds_;
+  // State shared between the command callback and the simulation thread.
+  std::mutex mutex_;
+  sim::PositionReference command_, hold_;
+  bool have_command_ = false, timed_out_ = false;
+  double last_command_time_ = 0.0, sim_time_ = 0.0;
+  std::size_t refused_ = 0;
+  // Simulation thread only.
+  std::unique_ptr<sim::SimulatedVehicle> vehicle_;
+  tf2_ros::TransformBroadcaster tf_broadcaster_;
+  ros::Publisher odom_pub_, clock_pub_;
+  ros::Subscriber cmd_sub_;
+  std::atomic<bool> running_{false};
+  std::thread thread_;
+};
+
+}  // namespace go_feap
+
+PLUGINLIB_EXPORT_CLASS(go_feap::QuadrotorSim, nodelet::Nodelet)

@@ -1,0 +1,144 @@
+// go_feap_sim_perf: times the simulator on a procedural scene: the depth camera (one thread)
+// from poses along a fixed path through the free space of the box, then dynamics + controller.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <iostream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "go_feap/sim/depth_camera.h"
+#include "go_feap/sim/vehicle.h"
+#include "go_feap/world/scene_files.h"
+
+namespace {
+
+using go_feap::common::Index3;
+using go_feap::common::Vec3;
+
+int usage(const char* why) {
+  if (why) std::cerr << "go_feap_sim_perf: " << why << "\n";
+  std::cerr << "usage: go_feap_sim_perf --scene maze|powerplant [--frames N]\n"
+               "Renders N (default 200) 640x480 depth frames and prints frames per second and the\n"
+               "mean / max time per frame.\n";
+  return 2;
+}
+
+// True when no occupied voxel lies within `clearance` of p (a camera a vehicle could carry).
+bool isClear(const go_feap::world::Scene& scene, const Vec3& p, double clearance) {
+  const auto& geo = scene.geometry();
+  const Index3 lo = geo.coordToIndex(p - Vec3::Constant(clearance));
+  const Index3 hi = geo.coordToIndex(p + Vec3::Constant(clearance));
+  for (int z = lo.z(); z <= hi.z(); ++z)
+    for (int y = lo.y(); y <= hi.y(); ++y)
+      for (int x = lo.x(); x <= hi.x(); ++x)
+        if (scene.isOccupied(Index3(x, y, z))) return false;
+  return true;
+}
+
+// Camera poses along a Lissajous curve through the box at 1-2 m height, looking
+// horizontally with a turning yaw; points too close to obstacles are skipped.
+std::vector<Eigen::Isometry3d> cameraPath(const go_feap::world::Scene& scene, int frames) {
+  const Vec3 c = scene.box.center();
+  const Vec3 half = 0.5 * scene.box.size() - Vec3::Constant(1.0);
+  // Optical frame (z forward, x right, y down) in a body frame (x forward, z up).
+  Eigen::Matrix3d R_B_C;
+  R_B_C << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+  std::vector<Eigen::Isometry3d> poses;
+  const int samples = 4 * frames;
+  for (int i = 0; poses.size() < static_cast<std::size_t>(frames) && i < 100 * samples; ++i) {
+    const double s = 2.0 * M_PI * i / samples;
+    const Vec3 p(c.x() + half.x() * std::sin(3.0 * s + 0.3), c.y() + half.y() * std::sin(2.0 * s),
+                 1.5 + 0.5 * std::sin(7.0 * s));
+    if (!isClear(scene, p, 0.3)) continue;
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = Eigen::AngleAxisd(6.0 * s, Vec3::UnitZ()).toRotationMatrix() * R_B_C;
+    T.translation() = p;
+    poses.push_back(T);
+  }
+  return poses;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace go_feap;
+  std::string scene_spec;
+  int frames = 200;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto value = [&]() -> const char* { return i + 1 < argc ? argv[++i] : nullptr; };
+    if (a == "--scene") {
+      const char* v = value();
+      if (!v) return usage("--scene needs a value");
+      scene_spec = v;
+    } else if (a == "--frames") {
+      const char* v = value();
+      if (!v) return usage("--frames needs a value");
+      try {
+        std::size_t pos = 0;
+        frames = std::stoi(v, &pos);
+        if (pos != std::string(v).size() || frames <= 0) throw std::invalid_argument(v);
+      } catch (const std::exception&) {
+        return usage("--frames must be a positive integer");
+      }
+    } else if (a == "-h" || a == "--help") {
+      return usage(nullptr), 0;
+    } else {
+      return usage(("unknown argument '" + a + "'").c_str());
+    }
+  }
+  if (scene_spec != "maze" && scene_spec != "powerplant") return usage("--scene must be maze or powerplant");
+
+  auto scene = world::makeScene(scene_spec, 0);
+  if (!scene) {
+    std::cerr << "go_feap_sim_perf: " << scene.message() << "\n";
+    return 1;
+  }
+  using Clock = std::chrono::steady_clock;
+  const sim::DepthCameraConfig config;
+  const auto t_build = Clock::now();
+  const sim::DepthRenderer renderer(config, *scene);
+  const double build_ms = std::chrono::duration<double, std::milli>(Clock::now() - t_build).count();
+  const std::vector<Eigen::Isometry3d> poses = cameraPath(*scene, frames);
+  if (poses.empty()) {
+    std::cerr << "go_feap_sim_perf: found no free camera pose in the box\n";
+    return 1;
+  }
+
+  cv::Mat depth;
+  double total_ms = 0.0, max_ms = 0.0, valid = 0.0;
+  for (int f = 0; f < frames; ++f) {
+    const auto t0 = Clock::now();
+    renderer.render(poses[f % poses.size()], depth);
+    const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    total_ms += ms;
+    max_ms = std::max(max_ms, ms);
+    valid += static_cast<double>(cv::countNonZero(depth)) / static_cast<double>(depth.total());
+  }
+  const Index3 n = scene->geometry().dims();
+  std::cout << "scene " << scene_spec << ": grid " << n.x() << " x " << n.y() << " x " << n.z() << " at "
+            << scene->resolution() << " m, " << renderer.rectangleCount() << " surface rectangles (built in "
+            << build_ms << " ms)\n"
+            << frames << " frames " << config.width << "x" << config.height
+            << ", 1 thread: " << 1000.0 * frames / total_ms << " fps, mean " << total_ms / frames
+            << " ms, max " << max_ms << " ms per frame, " << 100.0 * valid / frames << " % valid pixels\n";
+
+  // Dynamics + controller: fly 60 simulated seconds of a 2 m/s circle, 10 ms references.
+  sim::SimulatedVehicle vehicle{sim::QuadrotorParams(), sim::So3ControllerConfig()};
+  vehicle.reset(scene->start.position, 0.0);
+  const double sim_seconds = 60.0, dt = 0.01;
+  const auto t_dyn = Clock::now();
+  for (double t = 0.0; t < sim_seconds; t += dt) {
+    sim::PositionReference ref;
+    ref.position = scene->start.position + Eigen::Vector3d(std::cos(t) - 1.0, std::sin(t), 0.0);
+    ref.velocity = Eigen::Vector3d(-std::sin(t), std::cos(t), 0.0);
+    ref.acceleration = Eigen::Vector3d(-std::cos(t), -std::sin(t), 0.0);
+    vehicle.advance(dt, ref);
+  }
+  const double dyn_s = std::chrono::duration<double>(Clock::now() - t_dyn).count();
+  std::cout << "dynamics + controller at " << sim::QuadrotorParams().dynamics_rate << " Hz: " << sim_seconds / dyn_s
+            << " simulated seconds per wall second\n";
+  return 0;
+}

@@ -1,0 +1,551 @@
+// Depth camera renderer against analytic depth (planes and boxes whose faces lie on voxel
+// boundaries, so the voxel world equals the analytic one) and against a brute-force
+// per-pixel voxel traversal.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "go_feap/sim/depth_camera.h"
+#include "go_feap/world/shapes.h"
+
+using namespace go_feap;
+using common::Aabb;
+using common::Index3;
+using common::Vec3;
+using sim::CameraIntrinsics;
+using sim::DepthCameraConfig;
+using sim::DepthRenderer;
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kDepthTol = 0.01;  // m
+
+double deg(double d) { return d * M_PI / 180.0; }
+
+/// Camera at `p`, body yawed by `yaw` about +z and pitched by `pitch` (positive = nose down),
+/// optical frame rolled by `roll` about its z axis.
+Eigen::Isometry3d cameraPose(const Vec3& p, double yaw, double pitch = 0.0, double roll = 0.0) {
+  Eigen::Matrix3d R_B_C;  // optical (z forward, x right, y down) in body (x forward, z up)
+  R_B_C << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() =
+      (Eigen::AngleAxisd(yaw, Vec3::UnitZ()) * Eigen::AngleAxisd(pitch, Vec3::UnitY())).toRotationMatrix() *
+      R_B_C * Eigen::AngleAxisd(roll, Vec3::UnitZ()).toRotationMatrix();
+  T.translation() = p;
+  return T;
+}
+
+/// World direction of the ray through pixel (u, v), scaled to optical z = 1 so that the ray
+/// parameter is the depth.
+Vec3 pixelRay(const CameraIntrinsics& K, const Eigen::Isometry3d& T, int u, int v) {
+  return T.linear() * Vec3((u - K.cx) / K.fx, (v - K.cy) / K.fy, 1.0);
+}
+
+/// Ray parameter where o + t d enters `box` (slab method); 0 when o is inside, inf on a miss.
+double boxEntry(const Vec3& o, const Vec3& d, const Aabb& box) {
+  double t0 = 0.0, t1 = kInf;
+  for (int a = 0; a < 3; ++a) {
+    if (d[a] == 0.0) {
+      if (o[a] < box.min[a] || o[a] > box.max[a]) return kInf;
+      continue;
+    }
+    const double ta = (box.min[a] - o[a]) / d[a], tb = (box.max[a] - o[a]) / d[a];
+    t0 = std::max(t0, std::min(ta, tb));
+    t1 = std::min(t1, std::max(ta, tb));
+  }
+  return t0 <= t1 ? t0 : kInf;
+}
+
+/// Analytic depth image of a union of boxes, with the renderer's range rules.
+cv::Mat analyticDepth(const std::vector<Aabb>& boxes, const DepthCameraConfig& config,
+                      const Eigen::Isometry3d& T) {
+  const CameraIntrinsics K = config.intrinsics();
+  cv::Mat depth(K.height, K.width, CV_32FC1, cv::Scalar(0.0));
+  for (int v = 0; v < K.height; ++v)
+    for (int u = 0; u < K.width; ++u) {
+      const Vec3 d = pixelRay(K, T, u, v);
+      double t = kInf;
+      for (const Aabb& b : boxes) t = std::min(t, boxEntry(T.translation(), d, b));
+      if (t >= config.min_range && t <= config.max_range) depth.at<float>(v, u) = static_cast<float>(t);
+    }
+  return depth;
+}
+
+/// Brute-force reference: per-pixel 3D DDA through every voxel of the grid, depth where the
+/// ray enters the first occupied one. The camera must lie inside the grid.
+double traverseDepth(const world::Scene& scene, const Vec3& o, const Vec3& d, double t_max) {
+  const auto& geo = scene.geometry();
+  const Vec3 q = (o - geo.origin()) / geo.resolution();
+  const Vec3 dir = d / geo.resolution();
+  Index3 i = geo.coordToIndex(o);
+  if (scene.isOccupied(i)) return 0.0;
+  Vec3 t_next, t_delta;
+  Index3 step;
+  for (int a = 0; a < 3; ++a) {
+    step[a] = dir[a] > 0 ? 1 : -1;
+    t_delta[a] = dir[a] != 0.0 ? std::abs(1.0 / dir[a]) : kInf;
+    t_next[a] = dir[a] > 0 ? (i[a] + 1 - q[a]) / dir[a] : dir[a] < 0 ? (i[a] - q[a]) / dir[a] : kInf;
+  }
+  for (;;) {
+    int a = 0;
+    if (t_next[1] < t_next[a]) a = 1;
+    if (t_next[2] < t_next[a]) a = 2;
+    const double t = t_next[a];
+    if (t > t_max) return kInf;
+    i[a] += step[a];
+    t_next[a] += t_delta[a];
+    if (i[a] < 0 || i[a] >= geo.dims()[a]) return kInf;  // left the grid for good
+    if (scene.occupied.at(i)) return t;
+  }
+}
+
+cv::Mat traversedDepth(const world::Scene& scene, const DepthCameraConfig& config,
+                       const Eigen::Isometry3d& T) {
+  const CameraIntrinsics K = config.intrinsics();
+  cv::Mat depth(K.height, K.width, CV_32FC1, cv::Scalar(0.0));
+  for (int v = 0; v < K.height; ++v)
+    for (int u = 0; u < K.width; ++u) {
+      const double t = traverseDepth(scene, T.translation(), pixelRay(K, T, u, v), config.max_range + 1.0);
+      if (t >= config.min_range && t <= config.max_range) depth.at<float>(v, u) = static_cast<float>(t);
+    }
+  return depth;
+}
+
+struct Comparison {
+  int differing = 0;               ///< pixels whose depth differs from the reference by > kDepthTol
+  int beyond_one_pixel = 0;        ///< ... and from every reference pixel within one pixel too
+  double max_matched_error = 0.0;  ///< largest |error| over the pixels that agree
+};
+
+/// Pixel-wise comparison; a pixel that differs still lands within one pixel of the
+/// reference when some 8-neighbour of the reference holds its value (a shifted edge).
+Comparison compare(const cv::Mat& rendered, const cv::Mat& reference) {
+  Comparison c;
+  auto close = [](float a, float b) { return (a == 0.0f) == (b == 0.0f) && std::abs(a - b) <= kDepthTol; };
+  for (int v = 0; v < rendered.rows; ++v)
+    for (int u = 0; u < rendered.cols; ++u) {
+      const float r = rendered.at<float>(v, u);
+      if (close(r, reference.at<float>(v, u))) {
+        c.max_matched_error = std::max(c.max_matched_error, std::abs(double(r) - reference.at<float>(v, u)));
+        continue;
+      }
+      ++c.differing;
+      bool near = false;
+      for (int dv = -1; dv <= 1 && !near; ++dv)
+        for (int du = -1; du <= 1 && !near; ++du) {
+          const int uu = u + du, vv = v + dv;
+          near = uu >= 0 && vv >= 0 && uu < rendered.cols && vv < rendered.rows &&
+                 close(r, reference.at<float>(vv, uu));
+        }
+      c.beyond_one_pixel += !near;
+    }
+  return c;
+}
+
+/// Box faces must lie on multiples of the resolution (all test boxes use multiples of 0.2 m)
+/// so that the voxels fill exactly the analytic boxes.
+world::Scene sceneWithBoxes(const std::vector<Aabb>& boxes, double resolution) {
+  world::Scene s =
+      world::makeEmptyScene("test", {Vec3(-1.0, -6.0, -3.0), Vec3(9.0, 6.0, 5.0)}, resolution, 0.5);
+  for (const Aabb& b : boxes) world::fillBox(s, b);
+  return s;
+}
+
+/// Renders the boxes' scene and checks it pixel-wise against their analytic depth.
+void expectMatchesBoxes(const std::vector<Aabb>& boxes, double resolution, const DepthCameraConfig& config,
+                        const Eigen::Isometry3d& T, int max_differing = 0) {
+  const world::Scene scene = sceneWithBoxes(boxes, resolution);
+  const DepthRenderer renderer(config, scene);
+  cv::Mat depth;
+  renderer.render(T, depth);
+  EXPECT_GT(cv::countNonZero(depth), config.width * config.height / 20) << "too little in view to compare";
+  const Comparison c = compare(depth, analyticDepth(boxes, config, T));
+  EXPECT_EQ(c.beyond_one_pixel, 0);
+  EXPECT_LE(c.differing, max_differing);
+  EXPECT_LT(c.max_matched_error, 1e-3);
+}
+
+class DepthRendererTest : public ::testing::TestWithParam<double> {};
+
+}  // namespace
+
+TEST(CameraIntrinsics, FromFov) {
+  const CameraIntrinsics k = CameraIntrinsics::fromFov(640, 480, deg(80.0), deg(60.0));
+  EXPECT_EQ(k.width, 640);
+  EXPECT_EQ(k.height, 480);
+  EXPECT_NEAR(k.fx, 320.0 / std::tan(deg(40.0)), 1e-9);
+  EXPECT_NEAR(k.fx, 381.3612, 1e-4);
+  EXPECT_NEAR(k.fy, 240.0 / std::tan(deg(30.0)), 1e-9);
+  EXPECT_NEAR(k.fy, 415.6922, 1e-4);
+  EXPECT_DOUBLE_EQ(k.cx, 319.5);
+  EXPECT_DOUBLE_EQ(k.cy, 239.5);
+}
+
+TEST(DepthCameraConfig, IntrinsicsFromFovOrGiven) {
+  DepthCameraConfig c;
+  const CameraIntrinsics derived = c.intrinsics();
+  EXPECT_NEAR(derived.fx, 381.3612, 1e-4);
+  EXPECT_DOUBLE_EQ(derived.cy, 239.5);
+  c.fx = 500.0;
+  c.fy = 510.0;
+  c.cx = 300.0;
+  c.cy = 200.0;
+  const CameraIntrinsics given = c.intrinsics();
+  EXPECT_EQ(given.width, 640);
+  EXPECT_DOUBLE_EQ(given.fx, 500.0);
+  EXPECT_DOUBLE_EQ(given.fy, 510.0);
+  EXPECT_DOUBLE_EQ(given.cx, 300.0);
+  EXPECT_DOUBLE_EQ(given.cy, 200.0);
+}
+
+TEST(DepthCameraConfig, ValidateNamesTheBadKey) {
+  EXPECT_TRUE(DepthCameraConfig().validate().ok());
+  struct Case {
+    std::function<void(DepthCameraConfig&)> spoil;
+    std::string key;
+  };
+  const std::vector<Case> cases = {
+      {[](DepthCameraConfig& c) { c.width = 0; }, "width"},
+      {[](DepthCameraConfig& c) { c.height = -1; }, "height"},
+      {[](DepthCameraConfig& c) { c.hfov_deg = 180.0; }, "hfov_deg"},
+      {[](DepthCameraConfig& c) { c.vfov_deg = 0.0; }, "vfov_deg"},
+      {[](DepthCameraConfig& c) { c.cx = 320.0; }, "fx"},
+      {[](DepthCameraConfig& c) { c.fx = 300.0; }, "fy"},
+      {[](DepthCameraConfig& c) {
+         c.fx = c.fy = 300.0;
+         c.cx = NAN;
+       },
+       "cx"},
+      {[](DepthCameraConfig& c) { c.min_range = -0.1; }, "min_range"},
+      {[](DepthCameraConfig& c) { c.max_range = 0.1; }, "max_range"},
+      {[](DepthCameraConfig& c) { c.noise_stddev_per_m = -0.01; }, "noise_stddev_per_m"},
+      {[](DepthCameraConfig& c) { c.dropout_probability = 1.5; }, "dropout_probability"},
+  };
+  for (const Case& k : cases) {
+    DepthCameraConfig c;
+    k.spoil(c);
+    const common::Status st = c.validate();
+    ASSERT_FALSE(st.ok()) << k.key;
+    EXPECT_NE(st.message().find("depth_camera: " + k.key + " "), std::string::npos) << st.message();
+  }
+  DepthCameraConfig bad;
+  bad.max_range = 0.05;
+  EXPECT_EQ(bad.validate().message(), "depth_camera: max_range must be > min_range");
+}
+
+TEST_P(DepthRendererTest, WallFacingTheCameraHasThePlaneDepthEverywhere) {
+  // Wall face at x = 3.0 (a voxel boundary), wide and tall enough to fill the view.
+  const world::Scene scene = sceneWithBoxes({{Vec3(3.0, -4.0, -2.0), Vec3(3.2, 4.0, 4.0)}}, GetParam());
+  const DepthCameraConfig config;
+  const DepthRenderer renderer(config, scene);
+  for (const Vec3& p : {Vec3(0.03, 0.02, 1.01), Vec3(0.0, 0.0, 1.0), Vec3(-0.37, 0.41, 0.66)}) {
+    cv::Mat depth;
+    renderer.render(cameraPose(p, 0.0), depth);
+    ASSERT_EQ(depth.type(), CV_32FC1);
+    ASSERT_EQ(depth.rows, 480);
+    ASSERT_EQ(depth.cols, 640);
+    double max_err = 0.0;
+    for (int v = 0; v < depth.rows; ++v)
+      for (int u = 0; u < depth.cols; ++u)
+        max_err = std::max(max_err, std::abs(depth.at<float>(v, u) - (3.0 - p.x())));
+    EXPECT_LT(max_err, kDepthTol) << "camera at " << p.transpose();
+    EXPECT_LT(max_err, 1e-5);
+  }
+}
+
+TEST_P(DepthRendererTest, BoxSilhouetteLandsOnItsProjectedEdges) {
+  // Front face x = 2.0, y in [-0.4, 0.4], z in [0.6, 1.4]; camera on the box's axis, so the
+  // silhouette is the front face: u in cx -+ fx 0.4 / 2, v in cy -+ fy 0.4 / 2.
+  const Aabb box{Vec3(2.0, -0.4, 0.6), Vec3(2.4, 0.4, 1.4)};
+  const world::Scene scene = sceneWithBoxes({box}, GetParam());
+  const DepthCameraConfig config;
+  const CameraIntrinsics K = config.intrinsics();
+  const DepthRenderer renderer(config, scene);
+  cv::Mat depth;
+  renderer.render(cameraPose(Vec3(0.0, 0.0, 1.0), 0.0), depth);
+  const double u_left = K.cx - K.fx * 0.4 / 2.0, u_right = K.cx + K.fx * 0.4 / 2.0;
+  const double v_top = K.cy - K.fy * 0.4 / 2.0, v_bottom = K.cy + K.fy * 0.4 / 2.0;
+  int rows_seen = 0, first_row = -1, last_row = -1;
+  for (int v = 0; v < depth.rows; ++v) {
+    int first = -1, last = -1;
+    for (int u = 0; u < depth.cols; ++u) {
+      const float d = depth.at<float>(v, u);
+      if (d == 0.0f) continue;
+      EXPECT_NEAR(d, 2.0, 1e-4);
+      if (first < 0) first = u;
+      last = u;
+    }
+    if (first < 0) continue;
+    ++rows_seen;
+    if (first_row < 0) first_row = v;
+    last_row = v;
+    EXPECT_NEAR(first, u_left, 1.0) << "row " << v;
+    EXPECT_NEAR(last, u_right, 1.0) << "row " << v;
+    EXPECT_EQ(last - first + 1, cv::countNonZero(depth.row(v))) << "row " << v << " has a hole";
+  }
+  EXPECT_NEAR(first_row, v_top, 1.0);
+  EXPECT_NEAR(last_row, v_bottom, 1.0);
+  EXPECT_EQ(rows_seen, last_row - first_row + 1);
+
+  // Seen obliquely (side and top faces visible), pixel-wise against the analytic box.
+  DepthCameraConfig cfg;
+  expectMatchesBoxes({box}, GetParam(), cfg,
+                     cameraPose(Vec3(0.13, -0.77, 1.61), deg(17.0), deg(12.0), deg(8.0)));
+  expectMatchesBoxes({box}, GetParam(), cfg, cameraPose(Vec3(1.1, 1.37, 0.44), deg(-71.0), deg(-20.0)));
+}
+
+TEST_P(DepthRendererTest, PixelsOutsideTheRangeAreZero) {
+  const DepthCameraConfig config;  // 0.1 .. 4.5 m
+  const Vec3 p(0.0, 0.0, 1.0);
+  cv::Mat depth;
+  {  // Wall beyond max_range.
+    const world::Scene scene = sceneWithBoxes({{Vec3(4.6, -4.0, -2.0), Vec3(5.0, 4.0, 4.0)}}, GetParam());
+    DepthRenderer(config, scene).render(cameraPose(p, 0.0), depth);
+    EXPECT_EQ(cv::countNonZero(depth), 0);
+  }
+  {  // The same wall just within range.
+    const world::Scene scene = sceneWithBoxes({{Vec3(4.4, -4.0, -2.0), Vec3(5.0, 4.0, 4.0)}}, GetParam());
+    DepthRenderer(config, scene).render(cameraPose(p, 0.0), depth);
+    EXPECT_EQ(cv::countNonZero(depth), 640 * 480);
+  }
+  {  // Nothing in view.
+    const world::Scene scene = sceneWithBoxes({{Vec3(-1.0, -4.0, -2.0), Vec3(-0.6, 4.0, 4.0)}}, GetParam());
+    DepthRenderer(config, scene).render(cameraPose(p, 0.0), depth);
+    EXPECT_EQ(cv::countNonZero(depth), 0);
+  }
+  {  // Wall closer than min_range occludes everything behind it.
+    const world::Scene scene = sceneWithBoxes(
+        {{Vec3(0.0, -4.0, -2.0), Vec3(0.2, 4.0, 4.0)}, {Vec3(2.0, -4.0, -2.0), Vec3(2.2, 4.0, 4.0)}},
+        GetParam());
+    DepthRenderer(config, scene).render(cameraPose(Vec3(-0.05, 0.0, 1.0), 0.0), depth);
+    EXPECT_EQ(cv::countNonZero(depth), 0);
+  }
+  // A floor seen from 0.5 m looking down: near rows fall below min_range after pitching,
+  // far ones beyond max_range; compared pixel-wise with the analytic floor.
+  const std::vector<Aabb> floor = {{Vec3(-1.0, -6.0, -0.6), Vec3(9.0, 6.0, 0.0)}};
+  expectMatchesBoxes(floor, GetParam(), config, cameraPose(Vec3(0.02, 0.01, 0.5), 0.0));
+  DepthCameraConfig near_config;
+  near_config.min_range = 0.6;
+  expectMatchesBoxes(floor, GetParam(), near_config, cameraPose(Vec3(0.02, 0.01, 0.5), deg(30.0), deg(40.0)));
+}
+
+TEST_P(DepthRendererTest, YawingTheCameraTurnsTheView) {
+  // Wall face at y = 2.0 facing -y, spanning x in [-1, 8].
+  const std::vector<Aabb> wall = {{Vec3(-1.0, 2.0, -2.0), Vec3(8.0, 2.2, 4.0)}};
+  const world::Scene scene = sceneWithBoxes(wall, GetParam());
+  const DepthCameraConfig config;
+  const CameraIntrinsics K = config.intrinsics();
+  const DepthRenderer renderer(config, scene);
+  const Vec3 p(1.03, 0.07, 1.02);
+  cv::Mat ahead, left;
+  // Looking along +x the wall lies to the left: pixel u sees it at depth (2 - y) / ((cx - u) / fx).
+  renderer.render(cameraPose(p, 0.0), ahead);
+  // Yawed 90 deg to the left the wall fills the view at 2 - y.
+  renderer.render(cameraPose(p, deg(90.0)), left);
+  EXPECT_EQ(cv::countNonZero(left), 640 * 480);
+  for (int v = 0; v < K.height; ++v)
+    for (int u = 0; u < K.width; ++u) {
+      EXPECT_NEAR(left.at<float>(v, u), 2.0 - p.y(), 1e-4);
+      const double slope = (K.cx - u) / K.fx;
+      const double expected = slope > 0.0 ? (2.0 - p.y()) / slope : 0.0;
+      if (std::abs(expected - config.max_range) < 1e-3) continue;  // on the range edge
+      EXPECT_NEAR(ahead.at<float>(v, u), expected <= config.max_range ? expected : 0.0, 1e-3)
+          << "u " << u << " v " << v;
+    }
+  EXPECT_GT(cv::countNonZero(ahead), 0);
+  EXPECT_LT(cv::countNonZero(ahead), 640 * 480 / 2);
+  for (double yaw : {30.0, 45.0, 120.0, 160.0})
+    expectMatchesBoxes(wall, GetParam(), config, cameraPose(p, deg(yaw)));
+}
+
+TEST_P(DepthRendererTest, RollingAboutTheOpticalAxisRotatesTheImage) {
+  // Square image, fx = fy, centred principal point: a 90 deg roll maps pixel centres onto
+  // pixel centres, (u, v) -> (u' = v, v' = W - 1 - u).
+  DepthCameraConfig config;
+  config.width = config.height = 201;
+  config.fx = config.fy = 150.0;
+  config.cx = config.cy = 100.0;
+  const std::vector<Aabb> boxes = {{Vec3(-1.0, -6.0, -0.6), Vec3(9.0, 6.0, 0.0)},
+                                   {Vec3(2.0, 0.4, 0.0), Vec3(2.6, 1.2, 1.8)},
+                                   {Vec3(3.2, -1.4, 0.6), Vec3(3.4, -0.2, 1.0)}};
+  const world::Scene scene = sceneWithBoxes(boxes, GetParam());
+  const DepthRenderer renderer(config, scene);
+  const Vec3 p(0.11, 0.03, 0.95);
+  cv::Mat upright, rolled;
+  renderer.render(cameraPose(p, deg(5.0)), upright);
+  renderer.render(cameraPose(p, deg(5.0), 0.0, deg(90.0)), rolled);
+  int differing = 0;
+  for (int v = 0; v < 201; ++v)
+    for (int u = 0; u < 201; ++u)
+      differing += std::abs(rolled.at<float>(200 - u, v) - upright.at<float>(v, u)) > 1e-4f;
+  EXPECT_EQ(differing, 0);
+  EXPECT_GT(cv::countNonZero(upright), 201 * 100);
+  expectMatchesBoxes(boxes, GetParam(), config, cameraPose(p, deg(5.0)));
+  expectMatchesBoxes(boxes, GetParam(), config, cameraPose(p, deg(5.0), 0.0, deg(90.0)));
+  expectMatchesBoxes(boxes, GetParam(), config, cameraPose(p, deg(-40.0), deg(10.0), deg(33.0)));
+}
+
+TEST_P(DepthRendererTest, SlantedWallsSeenAtGrazingAnglesHaveNoHoles) {
+  const double res = GetParam();
+  world::Scene scene =
+      world::makeEmptyScene("slanted", {Vec3(-1.0, -3.0, -1.0), Vec3(8.0, 3.0, 4.0)}, res, 0.5);
+  // A wall y = 1 + 0.15 x (0.3 m thick along y: a staircase whose steps are face-adjacent)
+  // and a ramp z = -0.2 + 0.08 x + 0.05 y, 0.25 m thick.
+  const auto& geo = scene.geometry();
+  for (std::size_t l = 0; l < geo.size(); ++l) {
+    const Vec3 c = geo.indexToCoord(geo.unlinear(l));
+    const double wall = c.y() - (1.0 + 0.15 * c.x());
+    const double ramp = c.z() - (-0.2 + 0.08 * c.x() + 0.05 * c.y());
+    const bool in_wall =
+        wall >= 0.0 && wall <= 0.3 && c.x() >= -0.5 && c.x() <= 7.5 && c.z() >= -0.8 && c.z() <= 3.5;
+    const bool in_ramp = ramp <= 0.0 && ramp >= -0.25;
+    scene.occupied[l] = in_wall || in_ramp;
+  }
+  const DepthCameraConfig config;
+  const CameraIntrinsics K = config.intrinsics();
+  const DepthRenderer renderer(config, scene);
+  const Vec3 p(0.01, -0.23, 0.45);
+  for (double yaw : {0.0, 3.0, 8.0, 15.0, -10.0}) {
+    const Eigen::Isometry3d T = cameraPose(p, deg(yaw), deg(4.0));
+    cv::Mat depth;
+    renderer.render(T, depth);
+    // Where the ray meets the wall's or the ramp's surface plane well inside the range (and the
+    // wall's extent), the staircase of voxels lies within a voxel of it: a depth must show.
+    int covered = 0, holes = 0;
+    for (int v = 0; v < K.height; ++v)
+      for (int u = 0; u < K.width; ++u) {
+        const Vec3 d = pixelRay(K, T, u, v);
+        const double dw = d.y() - 0.15 * d.x(), dr = d.z() - 0.08 * d.x() - 0.05 * d.y();
+        const double tw = dw > 0.0 ? (1.0 + 0.15 * p.x() - p.y()) / dw : kInf;
+        const double tr = dr < 0.0 ? (-0.2 + 0.08 * p.x() + 0.05 * p.y() - p.z()) / dr : kInf;
+        const double t = std::min(tw, tr);
+        if (!(t > 0.5 && t < 3.0)) continue;
+        const Vec3 hit = p + t * d;
+        if (std::abs(hit.y()) > 3.2 || hit.x() < -1.0 || hit.x() > 8.0) continue;
+        if (t == tw && !(hit.x() > 0.0 && hit.x() < 7.0 && hit.z() > -0.3 && hit.z() < 3.0)) continue;
+        ++covered;
+        holes += depth.at<float>(v, u) == 0.0f;
+      }
+    EXPECT_GT(covered, 640 * 480 / 3) << "yaw " << yaw;
+    EXPECT_EQ(holes, 0) << "yaw " << yaw;
+    // And pixel-wise the same image as the brute-force voxel traversal.
+    const Comparison c = compare(depth, traversedDepth(scene, config, T));
+    EXPECT_EQ(c.beyond_one_pixel, 0) << "yaw " << yaw;
+    EXPECT_EQ(c.differing, 0) << "yaw " << yaw;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Resolutions, DepthRendererTest, ::testing::Values(0.1, 0.05, 0.2));
+
+TEST(DepthRenderer, MatchesBruteForceTraversalInClutter) {
+  // Random voxels and small boxes: many edges, corners and thin gaps.
+  world::Scene scene =
+      world::makeEmptyScene("clutter", {Vec3(-3.0, -3.0, 0.0), Vec3(3.0, 3.0, 3.0)}, 0.1, 0.3);
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> ux(-3.0, 3.0), uz(0.0, 3.0), size(0.05, 0.6);
+  for (int i = 0; i < 300; ++i) {
+    const Vec3 c(ux(rng), ux(rng), uz(rng));
+    world::fillBox(scene, {c, c + Vec3(size(rng), size(rng), size(rng))});
+  }
+  for (int i = 0; i < 3000; ++i) world::markOccupied(scene, Vec3(ux(rng), ux(rng), uz(rng)));
+  DepthCameraConfig config;
+  config.max_range = 6.0;
+  const DepthRenderer renderer(config, scene);
+  std::uniform_real_distribution<double> angle(-M_PI, M_PI);
+  int poses = 0;
+  while (poses < 6) {
+    const Vec3 p(0.8 * ux(rng), 0.8 * ux(rng), 0.3 + 0.8 * uz(rng));
+    if (scene.isOccupied(p)) continue;
+    const Eigen::Isometry3d T = cameraPose(p, angle(rng), 0.4 * angle(rng), 0.2 * angle(rng));
+    cv::Mat depth;
+    renderer.render(T, depth);
+    const Comparison c = compare(depth, traversedDepth(scene, config, T));
+    EXPECT_EQ(c.beyond_one_pixel, 0) << "pose " << poses;
+    EXPECT_EQ(c.differing, 0) << "pose " << poses;
+    EXPECT_LT(c.max_matched_error, 1e-3);
+    ++poses;
+  }
+}
+
+TEST(DepthRenderer, CameraOutsideTheGridSeesTheScene) {
+  // The grid spans x >= -1.6, z <= 5.6: faces on the grid's border are drawn too.
+  const std::vector<Aabb> boxes = {{Vec3(-1.0, -6.0, -0.6), Vec3(9.0, 6.0, 0.0)},
+                                   {Vec3(2.0, -0.4, 0.6), Vec3(2.4, 0.4, 1.4)}};
+  DepthCameraConfig config;
+  config.max_range = 8.0;
+  expectMatchesBoxes(boxes, 0.1, config, cameraPose(Vec3(-2.1, 0.13, 1.07), deg(3.0)));
+  expectMatchesBoxes(boxes, 0.1, config, cameraPose(Vec3(1.3, 0.21, 5.9), deg(-10.0), deg(75.0)));
+}
+
+TEST(DepthRenderer, CameraInsideAnOccupiedVoxelSeesNothing) {
+  const world::Scene scene = sceneWithBoxes({{Vec3(0.0, -1.0, 0.0), Vec3(3.0, 1.0, 2.0)}}, 0.1);
+  const DepthRenderer renderer(DepthCameraConfig(), scene);
+  cv::Mat depth;
+  renderer.render(cameraPose(Vec3(1.0, 0.0, 1.0), 0.0), depth);
+  EXPECT_EQ(cv::countNonZero(depth), 0);
+}
+
+TEST(DepthRendererNoise, ZeroConfigChangesNothing) {
+  const world::Scene scene = sceneWithBoxes({{Vec3(2.0, -4.0, -2.0), Vec3(2.2, 4.0, 4.0)}}, 0.1);
+  const DepthRenderer renderer(DepthCameraConfig(), scene);
+  cv::Mat clean, noisy;
+  renderer.render(cameraPose(Vec3(0.0, 0.0, 1.0), deg(30.0)), clean);
+  noisy = clean.clone();
+  std::mt19937_64 rng(1), untouched(1);
+  renderer.addNoise(noisy, rng);
+  EXPECT_EQ(cv::norm(noisy, clean, cv::NORM_INF), 0.0);
+  EXPECT_EQ(rng(), untouched());
+}
+
+TEST(DepthRendererNoise, FullDropoutZeroesEverything) {
+  const world::Scene scene = sceneWithBoxes({{Vec3(2.0, -4.0, -2.0), Vec3(2.2, 4.0, 4.0)}}, 0.1);
+  DepthCameraConfig config;
+  config.dropout_probability = 1.0;
+  const DepthRenderer renderer(config, scene);
+  cv::Mat depth;
+  renderer.render(cameraPose(Vec3(0.0, 0.0, 1.0), 0.0), depth);
+  ASSERT_EQ(cv::countNonZero(depth), 640 * 480);
+  std::mt19937_64 rng(3);
+  renderer.addNoise(depth, rng);
+  EXPECT_EQ(cv::countNonZero(depth), 0);
+}
+
+TEST(DepthRendererNoise, StatisticsMatchTheModelOnAFlatWall) {
+  const world::Scene scene = sceneWithBoxes({{Vec3(2.0, -4.0, -2.0), Vec3(2.2, 4.0, 4.0)}}, 0.1);
+  DepthCameraConfig config;
+  config.noise_stddev_per_m = 0.01;  // sigma = 2 cm at 2 m
+  config.dropout_probability = 0.2;
+  const DepthRenderer renderer(config, scene);
+  cv::Mat clean;
+  renderer.render(cameraPose(Vec3(0.0, 0.0, 1.0), 0.0), clean);
+  cv::Mat noisy = clean.clone();
+  std::mt19937_64 rng(42);
+  renderer.addNoise(noisy, rng);
+  double sum = 0.0, sum_sq = 0.0;
+  int valid = 0;
+  for (int v = 0; v < noisy.rows; ++v)
+    for (int u = 0; u < noisy.cols; ++u) {
+      if (noisy.at<float>(v, u) == 0.0f) continue;
+      const double e = noisy.at<float>(v, u) - clean.at<float>(v, u);
+      sum += e;
+      sum_sq += e * e;
+      ++valid;
+    }
+  const double n = static_cast<double>(noisy.total());
+  EXPECT_NEAR(valid / n, 0.8, 0.01);
+  const double mean = sum / valid, sigma = std::sqrt(sum_sq / valid - mean * mean);
+  EXPECT_NEAR(mean, 0.0, 0.001);
+  EXPECT_NEAR(sigma, 0.02, 0.001);
+
+  // The same rng state gives the same image.
+  cv::Mat again = clean.clone();
+  std::mt19937_64 rng2(42);
+  renderer.addNoise(again, rng2);
+  EXPECT_EQ(cv::norm(again, noisy, cv::NORM_INF), 0.0);
+}
