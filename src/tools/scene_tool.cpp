@@ -6,9 +6,11 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "cli_args.h"
 #include "go_feap/world/scene_files.h"
 #include "go_feap/world/scene_image.h"
 
@@ -25,35 +27,15 @@ int usage(const char* why) {
 
 int main(int argc, char** argv) {
   using namespace go_feap;
-  std::string scene_spec, out_dir;
-  std::uint64_t seed = 0;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&]() -> const char* { return i + 1 < argc ? argv[++i] : nullptr; };
-    if (a == "--scene") {
-      const char* v = value();
-      if (!v) return usage("--scene needs a value");
-      scene_spec = v;
-    } else if (a == "--seed") {
-      const char* v = value();
-      if (!v) return usage("--seed needs a value");
-      try {
-        std::size_t pos = 0;
-        seed = std::stoull(v, &pos);
-        if (pos != std::string(v).size()) throw std::invalid_argument(v);
-      } catch (const std::exception&) {
-        return usage("--seed must be a non-negative integer");
-      }
-    } else if (a == "--out") {
-      const char* v = value();
-      if (!v) return usage("--out needs a value");
-      out_dir = v;
-    } else if (a == "-h" || a == "--help") {
-      return usage(nullptr), 0;
-    } else {
-      return usage(("unknown argument '" + a + "'").c_str());
-    }
-  }
+  std::map<std::string, std::string> args;
+  bool help = false;
+  const std::string error = tools::parseArgs(argc, argv, {{"--scene", true}, {"--seed", true}, {"--out", true}}, args, help);
+  if (help) return usage(nullptr), 0;
+  if (!error.empty()) return usage(error.c_str());
+  const std::string scene_spec = args["--scene"], out_dir = args["--out"];
+  unsigned long long seed = 0;
+  if (args.count("--seed") && !tools::parseCount(args["--seed"], seed))
+    return usage("--seed must be a non-negative integer");
   if (scene_spec.empty()) return usage("--scene is required");
   if (out_dir.empty()) return usage("--out is required");
 

@@ -4,10 +4,12 @@
 #include <chrono>
 #include <cmath>
 #include <iostream>
+#include <map>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "cli_args.h"
 #include "go_feap/sim/depth_camera.h"
 #include "go_feap/sim/vehicle.h"
 #include "go_feap/world/scene_files.h"
@@ -21,7 +23,7 @@ int usage(const char* why) {
   if (why) std::cerr << "go_feap_sim_perf: " << why << "\n";
   std::cerr << "usage: go_feap_sim_perf --scene maze|powerplant [--frames N]\n"
                "Renders N (default 200) 640x480 depth frames and prints frames per second and the\n"
-               "mean / max time per frame.\n";
+               "mean / max time per frame, then the dynamics + controller speed.\n";
   return 2;
 }
 
@@ -64,31 +66,17 @@ std::vector<Eigen::Isometry3d> cameraPath(const go_feap::world::Scene& scene, in
 
 int main(int argc, char** argv) {
   using namespace go_feap;
-  std::string scene_spec;
-  int frames = 200;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&]() -> const char* { return i + 1 < argc ? argv[++i] : nullptr; };
-    if (a == "--scene") {
-      const char* v = value();
-      if (!v) return usage("--scene needs a value");
-      scene_spec = v;
-    } else if (a == "--frames") {
-      const char* v = value();
-      if (!v) return usage("--frames needs a value");
-      try {
-        std::size_t pos = 0;
-        frames = std::stoi(v, &pos);
-        if (pos != std::string(v).size() || frames <= 0) throw std::invalid_argument(v);
-      } catch (const std::exception&) {
-        return usage("--frames must be a positive integer");
-      }
-    } else if (a == "-h" || a == "--help") {
-      return usage(nullptr), 0;
-    } else {
-      return usage(("unknown argument '" + a + "'").c_str());
-    }
-  }
+  std::map<std::string, std::string> args;
+  bool help = false;
+  const std::string error = tools::parseArgs(argc, argv, {{"--scene", true}, {"--frames", true}}, args, help);
+  if (help) return usage(nullptr), 0;
+  if (!error.empty()) return usage(error.c_str());
+  const std::string scene_spec = args["--scene"];
+  unsigned long long frame_count = 200;
+  if (args.count("--frames") && (!tools::parseCount(args["--frames"], frame_count) || frame_count == 0 ||
+                                 frame_count > 1000000))
+    return usage("--frames must be a positive integer");
+  const int frames = static_cast<int>(frame_count);
   if (scene_spec != "maze" && scene_spec != "powerplant") return usage("--scene must be maze or powerplant");
 
   auto scene = world::makeScene(scene_spec, 0);
