@@ -1,0 +1,97 @@
+// Frontier detection and clustering (DESIGN §3.4, paper §III-A.1, Table I).
+#pragma once
+
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+#include "go_feap/common/grid.h"
+#include "go_feap/common/result.h"
+#include "go_feap/map/occupancy_map.h"
+
+namespace go_feap::frontier {
+
+using common::Aabb;
+using common::Index3;
+using common::Vec3;
+
+struct FrontierConfig {
+  int min_cluster_cells = 10;       ///< connected frontier regions with fewer cells are ignored
+  double max_cluster_extent = 2.0;  ///< m: a cluster with a cell farther than this from its mean is split (PCA)
+  double s_near = 5.0;              ///< m: radius for N_near (other frontiers' average positions)
+
+  common::Status validate() const;
+};
+
+/// A candidate place to observe a frontier from (filled by the local planner's sampler).
+struct Viewpoint {
+  Vec3 position = Vec3::Zero();
+  double yaw = 0.0;
+  int visible_cells = 0;  ///< N_view
+};
+
+/// One frontier cluster and its information (Table I).
+struct Frontier {
+  std::uint32_t id = 0;
+  std::vector<Index3> cells;  ///< frontier voxels, in increasing linear-index order
+  Vec3 average = Vec3::Zero();  ///< P_avg: mean of the cell centres (m)
+  Aabb box;                     ///< B: bounding box of the cell cubes (m)
+  double first_seen = 0.0;      ///< s: when it, or the oldest frontier it came from, appeared
+  int n_near = 0;               ///< N_near: other frontiers whose average lies within s_near
+  bool active = true;           ///< average inside the active altitude band
+  std::vector<Viewpoint> viewpoints;  ///< VP
+
+  double duration(double now) const { return now - first_seen; }  ///< T
+};
+
+/// Frontiers removed and created by one update.
+struct FrontierDelta {
+  std::vector<std::uint32_t> removed;
+  std::vector<std::uint32_t> added;
+  bool empty() const { return removed.empty() && added.empty(); }
+};
+
+/// Keeps the frontier clusters of an occupancy map up to date. A frontier cell is a known-
+/// free voxel of the exploration box with an unknown face neighbour inside the box. Cells
+/// are grouped into 26-connected regions; regions below min_cluster_cells are dropped and
+/// wide regions are split along their principal axis until every piece is narrow enough.
+class FrontierFinder {
+ public:
+  FrontierFinder(const FrontierConfig& config, const common::GridGeometry& geometry, const Aabb& box);
+
+  /// Updates after the map changed in the voxel index box [changed_min, changed_max]
+  /// (inclusive). Only clusters within reach of the change are rebuilt; the result equals
+  /// recomputeAll() up to frontier ids.
+  FrontierDelta update(const map::OccupancyMap& map, const Index3& changed_min, const Index3& changed_max, double now);
+  /// Rebuilds everything from the map (the oracle for update()).
+  FrontierDelta recomputeAll(const map::OccupancyMap& map, double now);
+
+  /// Frontiers whose average lies in [z_min, z_max] are active; the others are kept.
+  void setActiveBand(double z_min, double z_max);
+
+  const std::vector<Frontier>& frontiers() const { return frontiers_; }
+  const Frontier* find(std::uint32_t id) const;
+  bool isFrontierCell(const Index3& idx) const;
+  const FrontierConfig& config() const { return config_; }
+
+ private:
+  bool computeFrontierCell(const map::OccupancyMap& map, const Index3& idx) const;
+  FrontierDelta rebuild(const map::OccupancyMap& map, const Index3& lo, const Index3& hi, double now);
+  void splitInto(std::vector<Index3> cells, std::vector<std::vector<Index3>>& out) const;
+  void refreshNeighbourCounts();
+  bool inBox(const Index3& idx) const {
+    return (idx.array() >= box_lo_.array()).all() && (idx.array() < box_hi_.array()).all();
+  }
+
+  FrontierConfig config_;
+  common::GridGeometry geo_;
+  Aabb box_;
+  Index3 box_lo_, box_hi_;  ///< voxel range of the box, [lo, hi)
+  std::vector<std::uint64_t> is_frontier_;                   ///< one bit per voxel
+  std::unordered_map<std::size_t, std::uint32_t> owner_;     ///< cell -> frontier id (kept clusters only)
+  std::vector<Frontier> frontiers_;                          ///< sorted by id
+  std::uint32_t next_id_ = 1;
+  double band_min_ = -1e18, band_max_ = 1e18;
+};
+
+}  // namespace go_feap::frontier

@@ -1,0 +1,52 @@
+// The mapper's map: occupancy from depth plus the incremental ESDF kept in step with it.
+#pragma once
+
+#include <string>
+
+#include "go_feap/map/esdf.h"
+#include "go_feap/map/occupancy_map.h"
+
+namespace go_feap::map {
+
+struct MapConfig {
+  OccupancyConfig occupancy;
+  EsdfConfig esdf;
+  common::Status validate() const;
+};
+
+/// What one integrated frame changed, in world terms.
+struct MapUpdateInfo {
+  FrameChange frame;
+  std::size_t esdf_changed = 0;  ///< voxels whose distance changed
+  Aabb changed_box;              ///< world box of the voxels whose state changed (valid when frame.any_change)
+};
+
+class VoxelMap {
+ public:
+  /// Map sized from the exploration box (plus the occupancy margin). Config must validate.
+  VoxelMap(const MapConfig& config, const Aabb& box);
+
+  /// Integrates a depth image and updates the ESDF where occupancy flipped.
+  common::Result<MapUpdateInfo> integrate(const cv::Mat& depth, const DepthIntrinsics& K,
+                                          const Eigen::Isometry3d& T_W_C);
+
+  const OccupancyMap& occupancy() const { return occupancy_; }
+  const Esdf& esdf() const { return esdf_; }
+  const common::GridGeometry& geometry() const { return occupancy_.geometry(); }
+  const MapConfig& config() const { return config_; }
+
+  /// Writes known voxels (occupied and free) as an OctoMap .bt at the map resolution.
+  common::Status saveBt(const std::string& path) const;
+  /// Reads an OctoMap .bt into this map (voxels outside it are dropped; voxels the file
+  /// does not mention stay as they are) and brings the ESDF up to date.
+  common::Status loadBt(const std::string& path);
+
+  std::size_t memoryBytes() const { return occupancy_.memoryBytes() + esdf_.memoryBytes(); }
+
+ private:
+  MapConfig config_;
+  OccupancyMap occupancy_;
+  Esdf esdf_;
+};
+
+}  // namespace go_feap::map

@@ -1,0 +1,155 @@
+// Grid path search for the planners (DESIGN §3.4 path distances between frontiers, §3.7 paths to
+// fly): A* over the 26-connected lattice of voxel centres of the mapper's grid, where a voxel is
+// blocked when it is occupied, closer than a clearance to the nearest obstacle (ESDF), or, on
+// request, unknown.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "go_feap/common/grid.h"
+#include "go_feap/common/result.h"
+#include "go_feap/map/esdf.h"
+#include "go_feap/map/occupancy_map.h"
+
+namespace go_feap::planning {
+
+using common::Index3;
+using common::Vec3;
+
+struct AstarConfig {
+  double clearance = 0.2;       ///< m: voxels whose ESDF distance is below this are blocked (inflation = UAV radius)
+  bool unknown_is_free = true;  ///< true: unknown voxels are traversable (optimistic distance estimates between
+                                ///< frontiers); false: only known-free voxels (safe paths to fly)
+  int max_expansions = 200000;  ///< search budget: voxels expanded before giving up
+  /// Weight on the heuristic. 1 gives shortest paths; w > 1 may return a path up to w times longer than
+  /// the shortest in exchange for fewer expansions in cluttered maps. Not needed for speed in open space:
+  /// ties between equal-cost candidates are already broken towards the goal.
+  double tie_breaker = 1.0;
+
+  /// Checks every key; the message names the bad one, e.g. "astar: clearance must be finite and >= 0".
+  common::Status validate() const;
+  /// validate() plus clearance <= esdf.max_distance (distances are truncated there, so a larger
+  /// clearance would block every voxel).
+  common::Status validate(const map::EsdfConfig& esdf) const;
+};
+
+enum class PathStatus { kFound, kStartBlocked, kGoalBlocked, kNoPath, kBudgetExceeded };
+
+/// "found", "start_blocked", "goal_blocked", "no_path", "budget_exceeded".
+const char* toString(PathStatus s);
+
+struct PathResult {
+  PathStatus status = PathStatus::kNoPath;
+  /// Voxel centres from the start voxel to the goal voxel (the start and goal points themselves are
+  /// replaced by their, possibly snapped, voxel centres), after Astar::shorten(); empty unless found.
+  std::vector<Vec3> path;
+  double length = 0.0;  ///< m, sum of the segment lengths of `path`
+  /// The 26-connected voxel path the search found (consecutive centres are neighbours), before shortening.
+  std::vector<Vec3> raw_path;
+  double raw_length = 0.0;  ///< m, sum of the segment lengths of `raw_path`: the shortest-path cost (tie_breaker 1)
+  int expansions = 0;       ///< voxels expanded (closed) by the search
+};
+
+/// A* on the grid of an occupancy map and its ESDF. Holds references to both (they must outlive it and
+/// share one geometry) and reusable search scratch sized by the largest search so far, never by the grid;
+/// search() is const but uses that scratch, so one instance must not be searched from two threads at once.
+class Astar {
+ public:
+  /// Throws std::invalid_argument when config.validate(esdf.config()) fails or the two maps' geometries
+  /// differ (callers validate first).
+  Astar(const map::OccupancyMap& occupancy, const map::Esdf& esdf, const AstarConfig& config);
+
+  const AstarConfig& config() const { return config_; }
+  const common::GridGeometry& geometry() const { return geo_; }
+
+  /// Shortest 26-connected path between the voxels of `start` and `goal` (move costs 1, sqrt 2, sqrt 3
+  /// times the resolution) over traversable voxels, never leaving the grid. A diagonal move must not cut
+  /// a blocked voxel: every voxel around the edge or corner it passes through must be traversable too,
+  /// so every segment of the raw path passes segmentTraversable(). A start or goal that is blocked
+  /// or outside the grid is first moved to the nearest traversable voxel whose centre lies within
+  /// `snap_radius` metres of it (status kStartBlocked / kGoalBlocked when there is none). The heuristic is
+  /// the exact obstacle-free cost on this lattice (the 3D octile distance, >= the Euclidean distance and
+  /// still admissible), so open space costs few expansions. Stops with kBudgetExceeded after
+  /// config.max_expansions expansions.
+  PathResult search(const Vec3& start, const Vec3& goal, double snap_radius = 0.5) const;
+
+  /// Greedily removes intermediate points: from each kept point, the path continues to a following point
+  /// reachable by a straight segment that passes segmentTraversable(), found by galloping ahead and
+  /// bisecting (the farthest such point when visibility along the path does not come back after it is
+  /// lost). Consecutive input points are always joined, so the result keeps the first and last points,
+  /// is never longer than the input, and never shorter than the straight line between its ends.
+  std::vector<Vec3> shorten(const std::vector<Vec3>& path) const;
+
+  /// Inside the grid, not occupied, unknown only when config.unknown_is_free, and ESDF distance at least
+  /// config.clearance.
+  bool traversable(const Index3& idx) const;
+  /// True when every voxel the segment from a to b touches is traversable (see shorten()).
+  bool segmentTraversable(const Vec3& a, const Vec3& b) const;
+
+ private:
+  static constexpr int kBrickBits = 3;
+  static constexpr int kBrickEdge = 1 << kBrickBits;
+  static constexpr std::size_t kBrickCells = std::size_t{1} << (3 * kBrickBits);
+  // Cell values besides node indices (>= 0).
+  static constexpr std::int32_t kUnseen = -1, kBlocked = -2, kFree = -3;
+
+  /// One voxel the search reached: its cost from the start as counts of axis, face-diagonal and
+  /// space-diagonal moves (exact, so equal costs compare equal), and its parent node.
+  struct Node {
+    Index3 idx;
+    std::int32_t parent;
+    std::int32_t moves[3];
+    bool closed;
+  };
+  /// A brick (8^3 voxels) touched by the current search: slot valid when stamp equals search_stamp_.
+  struct BrickSlot {
+    std::uint32_t stamp;
+    std::uint32_t key;    ///< linear index of the brick in the grid of bricks
+    std::uint32_t brick;  ///< its cells are cells_[brick * kBrickCells, ...)
+  };
+  struct OpenEntry {
+    double f;  ///< cost + heuristic (voxels)
+    float h;   ///< heuristic, breaks ties in f
+    std::int32_t node;
+  };
+
+  bool traversable(const Index3& idx, std::size_t linear) const;
+  /// Nearest traversable voxel to p whose centre is within `radius` of it; false when none.
+  bool snap(const Vec3& p, double radius, Index3& out) const;
+  void resetScratch() const;
+  /// Slot of brick `key` in brick_slots_, or the empty slot where it would go.
+  std::size_t brickSlot(std::uint32_t key) const;
+  /// First cell of brick `key`, allocated (every cell kUnseen) on first use in this search.
+  std::size_t brick(std::uint32_t key) const;
+
+  const map::OccupancyMap& occupancy_;
+  const map::Esdf& esdf_;
+  AstarConfig config_;
+  common::GridGeometry geo_;
+  double blocked_below_ = 0.0;  // clearance less a rounding margin
+  Index3 brick_dims_ = Index3::Zero();
+
+  // Search scratch: the voxels a search touches, in bricks of 8^3 cells (locality: a voxel's neighbours
+  // mostly share its brick) found through an open-addressing table; each cell holds kUnseen, kBlocked,
+  // kFree or the index of the voxel's node. Kept between searches, sized by the largest one.
+  mutable std::vector<BrickSlot> brick_slots_;
+  mutable std::uint32_t search_stamp_ = 0;
+  mutable std::uint32_t bricks_used_ = 0;
+  mutable std::vector<std::int32_t> cells_;
+  mutable std::vector<Node> nodes_;
+  mutable std::vector<OpenEntry> open_;
+};
+
+/// Path length between two points, or their Euclidean distance flagged as a fallback.
+struct PathDistance {
+  double metres;
+  bool euclidean_fallback;
+};
+
+/// Length of the (shortened) A* path between a and b plus the two snaps from a and b to its end voxel
+/// centres (so never below |a - b|); when the search fails for any reason (blocked ends, no path, budget
+/// exceeded) |a - b| with euclidean_fallback set.
+PathDistance pathDistance(const Astar& astar, const Vec3& a, const Vec3& b);
+
+}  // namespace go_feap::planning

@@ -1,0 +1,77 @@
+// Omission-aware global planner (DESIGN §3.5, paper §III-A.2): picks the frontiers near the
+// UAV (NearCur_IDs), builds the travel-time matrix and omission likelihoods, and orders them
+// with the tour solver. Path lengths come from injected callables, so the map and A* live
+// elsewhere and this stays a pure function of its inputs.
+#pragma once
+
+#include <cstddef>
+#include <functional>
+#include <vector>
+
+#include "go_feap/common/grid.h"
+#include "go_feap/common/result.h"
+#include "go_feap/planning/omission.h"
+
+namespace go_feap::planning {
+
+struct GlobalPlannerConfig {
+  double s_near = 5.0;  ///< m, path distance from the UAV under which a frontier is near
+  int n_min_tsp = 3;    ///< fewer near frontiers are topped up with the nearest others
+  int n_max_tsp = 12;   ///< at most this many frontiers are ordered, nearest first
+  double lambda = 0.1;  ///< 1/s, weight of sum xi_k t_k against travel time (0: shortest path)
+  double v_max = 2.0;   ///< m/s, turns path lengths into travel times
+  int max_exact = 12;   ///< candidate sets up to this size are solved exactly (<= 16)
+  OmissionConfig omission;
+
+  /// Checks every key; the message names the bad one, e.g. "exploration: lambda must be >= 0"
+  /// or "exploration/omission: t_max must be > 0".
+  common::Status validate() const;
+};
+
+/// What the planner needs to know of a frontier (paper Table I).
+struct FrontierSummary {
+  unsigned id = 0;
+  common::Vec3 average = common::Vec3::Zero();  ///< P_avg, world frame, m
+  int cell_count = 0;                           ///< |C|
+  double duration = 0.0;                        ///< T, s
+  int n_near = 0;                               ///< N_near
+  bool active = true;                           ///< inside the current altitude band
+};
+
+/// Path lengths (m) between average positions, indices into the frontier list given to
+/// planTour(). A value that is not finite means "unreachable".
+struct PathDistances {
+  std::function<double(std::size_t j)> from_uav;                ///< UAV -> frontier j
+  std::function<double(std::size_t i, std::size_t j)> between;  ///< frontier i -> frontier j
+};
+
+/// NearCur_IDs: indices of the active frontiers whose distance from the UAV is below s_near,
+/// topped up with the nearest other active frontiers to n_min_tsp when fewer are near, and
+/// capped at the n_max_tsp nearest; sorted by distance (ties by index). Frontiers at a
+/// non-finite or negative distance are never chosen. `distances_from_uav[j]` (m) belongs to
+/// `frontiers[j]`; both vectors must have the same size (an empty result otherwise).
+std::vector<std::size_t> selectCandidates(const std::vector<FrontierSummary>& frontiers,
+                                          const std::vector<double>& distances_from_uav,
+                                          const GlobalPlannerConfig& config);
+
+/// The ordered tour handed to the local planner and rviz.
+struct GlobalTour {
+  std::vector<unsigned> frontier_ids;   ///< visiting order
+  std::vector<std::size_t> indices;     ///< the same frontiers as indices into the input list
+  std::vector<common::Vec3> waypoints;  ///< their P_avg, same order, m
+  std::vector<double> xi;               ///< their omission likelihood, same order, s
+  double cost = 0.0;                    ///< J = travel time + lambda * sum xi_k t_k, s
+  double lambda = 0.0;                  ///< omission weight used, 1/s
+  bool exact = false;                   ///< true when solved by Held-Karp
+};
+
+/// Orders the NearCur_IDs candidates among `frontiers` (only active ones are considered):
+/// cost matrix M[0][j] = from_uav(j) / v_max, M[i][j] = between(i, j) / v_max, column 0 = 0,
+/// xi from config.omission, solved exactly up to max_exact candidates, heuristically above.
+/// from_uav is called once per active frontier, between once per ordered pair of candidates.
+/// No active reachable frontier gives an empty tour. Errors: an invalid config, or a
+/// non-finite or negative distance between two candidates (named by frontier id).
+common::Result<GlobalTour> planTour(const std::vector<FrontierSummary>& frontiers,
+                                    const PathDistances& distances, const GlobalPlannerConfig& config);
+
+}  // namespace go_feap::planning

@@ -1,0 +1,61 @@
+// Sharing the mapper's map with the planning nodelets of the same nodelet manager.
+//
+// The EsdfMapper owns a SharedMap and publishes a MapHandle (a shared pointer to it) on
+// `map_handle` with every map update. Nodelets in the same manager receive the pointer
+// itself through roscpp's intra-process delivery (no copy, no serialisation); they keep
+// it and read the map under a shared lock (`std::shared_lock lock(shared->mutex)`), while
+// the mapper integrates each frame under the exclusive lock. A subscriber in another
+// process receives an empty handle (nothing crosses the wire) and must say so.
+#pragma once
+
+#include <ros/message_traits.h>
+#include <ros/serialization.h>
+
+#include <memory>
+#include <shared_mutex>
+
+#include "go_feap/map/voxel_map.h"
+
+namespace go_feap::ros_map {
+
+struct SharedMap {
+  explicit SharedMap(std::unique_ptr<map::VoxelMap> m) : map(std::move(m)) {}
+  mutable std::shared_mutex mutex;
+  std::unique_ptr<map::VoxelMap> map;
+  std::uint64_t sequence = 0;  ///< frames integrated (under the lock)
+};
+
+struct MapHandle {
+  std::shared_ptr<SharedMap> shared;
+};
+
+}  // namespace go_feap::ros_map
+
+namespace ros {
+namespace message_traits {
+template <>
+struct MD5Sum<go_feap::ros_map::MapHandle> {
+  static const char* value() { return "6f0e1d2c3b4a59687766554433221100"; }
+  static const char* value(const go_feap::ros_map::MapHandle&) { return value(); }
+};
+template <>
+struct DataType<go_feap::ros_map::MapHandle> {
+  static const char* value() { return "go_feap/MapHandle"; }
+  static const char* value(const go_feap::ros_map::MapHandle&) { return value(); }
+};
+template <>
+struct Definition<go_feap::ros_map::MapHandle> {
+  static const char* value() { return "# In-process handle to the mapper's map; carries nothing between processes.\n"; }
+  static const char* value(const go_feap::ros_map::MapHandle&) { return value(); }
+};
+}  // namespace message_traits
+
+namespace serialization {
+template <>
+struct Serializer<go_feap::ros_map::MapHandle> {
+  template <typename Stream, typename T>
+  inline static void allInOne(Stream&, T) {}
+  ROS_DECLARE_ALLINONE_SERIALIZER
+};
+}  // namespace serialization
+}  // namespace ros

@@ -1,0 +1,229 @@
+#include "go_feap/frontier/frontier_finder.h"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <unordered_set>
+
+namespace go_feap::frontier {
+
+common::Status FrontierConfig::validate() const {
+  if (min_cluster_cells < 1) return common::Status::Error("frontier: min_cluster_cells must be >= 1");
+  if (!(max_cluster_extent > 0.0)) return common::Status::Error("frontier: max_cluster_extent must be > 0");
+  if (!(s_near > 0.0)) return common::Status::Error("frontier: s_near must be > 0");
+  return common::Status::Ok();
+}
+
+FrontierFinder::FrontierFinder(const FrontierConfig& config, const common::GridGeometry& geometry, const Aabb& box)
+    : config_(config), geo_(geometry), box_(box), is_frontier_((geometry.size() + 63) / 64, 0) {
+  geo_.centreRange(box, box_lo_, box_hi_);
+}
+
+bool FrontierFinder::isFrontierCell(const Index3& idx) const {
+  if (!geo_.inside(idx)) return false;
+  const std::size_t l = geo_.linear(idx);
+  return (is_frontier_[l >> 6] >> (l & 63)) & 1u;
+}
+
+bool FrontierFinder::computeFrontierCell(const map::OccupancyMap& map, const Index3& idx) const {
+  if (!inBox(idx) || map.state(idx) != map::VoxelState::kFree) return false;
+  for (const Index3& o : common::faceNeighbours()) {
+    const Index3 nb = idx + o;
+    if (inBox(nb) && map.state(nb) == map::VoxelState::kUnknown) return true;
+  }
+  return false;
+}
+
+const Frontier* FrontierFinder::find(std::uint32_t id) const {
+  auto it = std::lower_bound(frontiers_.begin(), frontiers_.end(), id,
+                             [](const Frontier& f, std::uint32_t v) { return f.id < v; });
+  return it != frontiers_.end() && it->id == id ? &*it : nullptr;
+}
+
+void FrontierFinder::setActiveBand(double z_min, double z_max) {
+  band_min_ = z_min;
+  band_max_ = z_max;
+  for (Frontier& f : frontiers_) f.active = f.average.z() >= band_min_ && f.average.z() <= band_max_;
+}
+
+FrontierDelta FrontierFinder::update(const map::OccupancyMap& map, const Index3& changed_min,
+                                     const Index3& changed_max, double now) {
+  return rebuild(map, changed_min, changed_max, now);
+}
+
+FrontierDelta FrontierFinder::recomputeAll(const map::OccupancyMap& map, double now) {
+  return rebuild(map, box_lo_, box_hi_ - Index3::Ones(), now);
+}
+
+// Frontier status of a voxel depends on it and its face neighbours, so statuses can change
+// in the changed box grown by one voxel (R). A cluster is rebuilt when one of its cells lies
+// within one more voxel of R (26-adjacency), together with the whole connected region of
+// frontier cells it belongs to; everything farther away is untouched, which is what makes
+// the result equal to a full recomputation.
+FrontierDelta FrontierFinder::rebuild(const map::OccupancyMap& map, const Index3& changed_min,
+                                      const Index3& changed_max, double now) {
+  FrontierDelta delta;
+  const Index3 r_lo = (changed_min - Index3::Ones()).cwiseMax(box_lo_);
+  const Index3 r_hi = (changed_max + Index3::Ones()).cwiseMin(box_hi_ - Index3::Ones());
+  const Index3 n_lo = (changed_min - Index3::Constant(2)).cwiseMax(box_lo_);
+  const Index3 n_hi = (changed_max + Index3::Constant(2)).cwiseMin(box_hi_ - Index3::Ones());
+  if ((n_hi.array() < n_lo.array()).any()) return delta;
+
+  // 1. Clusters within reach of the change, before statuses change.
+  std::unordered_set<std::uint32_t> affected;
+  for (int z = n_lo.z(); z <= n_hi.z(); ++z)
+    for (int y = n_lo.y(); y <= n_hi.y(); ++y)
+      for (int x = n_lo.x(); x <= n_hi.x(); ++x) {
+        auto it = owner_.find(geo_.linear(Index3(x, y, z)));
+        if (it != owner_.end()) affected.insert(it->second);
+      }
+  // 2. New statuses in R.
+  for (int z = r_lo.z(); z <= r_hi.z(); ++z)
+    for (int y = r_lo.y(); y <= r_hi.y(); ++y)
+      for (int x = r_lo.x(); x <= r_hi.x(); ++x) {
+        const Index3 idx(x, y, z);
+        const std::size_t l = geo_.linear(idx);
+        if (computeFrontierCell(map, idx))
+          is_frontier_[l >> 6] |= std::uint64_t{1} << (l & 63);
+        else
+          is_frontier_[l >> 6] &= ~(std::uint64_t{1} << (l & 63));
+      }
+  // 3. Seeds: frontier cells near the change and the cells of affected clusters.
+  std::vector<std::size_t> seeds;
+  for (int z = n_lo.z(); z <= n_hi.z(); ++z)
+    for (int y = n_lo.y(); y <= n_hi.y(); ++y)
+      for (int x = n_lo.x(); x <= n_hi.x(); ++x)
+        if (isFrontierCell(Index3(x, y, z))) seeds.push_back(geo_.linear(Index3(x, y, z)));
+  std::unordered_map<std::uint32_t, double> first_seen;  // of removed clusters
+  auto markRemoved = [&](std::uint32_t id) {
+    const Frontier* f = find(id);
+    if (f) first_seen[id] = f->first_seen;
+  };
+  for (std::uint32_t id : affected) {
+    markRemoved(id);
+    if (const Frontier* f = find(id))
+      for (const Index3& c : f->cells)
+        if (isFrontierCell(c)) seeds.push_back(geo_.linear(c));
+  }
+
+  // 4. Flood fill (26-connected) over frontier cells from the seeds: whole regions.
+  std::unordered_set<std::size_t> visited;
+  std::vector<std::vector<Index3>> regions;
+  std::unordered_map<std::size_t, std::uint32_t> old_owner;  // cells of removed clusters
+  std::sort(seeds.begin(), seeds.end());
+  for (std::size_t s : seeds) {
+    if (visited.count(s)) continue;
+    std::vector<Index3> region;
+    std::vector<std::size_t> stack{s};
+    visited.insert(s);
+    while (!stack.empty()) {
+      const std::size_t l = stack.back();
+      stack.pop_back();
+      const Index3 c = geo_.unlinear(l);
+      region.push_back(c);
+      auto own = owner_.find(l);
+      if (own != owner_.end()) {
+        // A cell of a cluster not yet marked affected: its region is being rebuilt, so it
+        // goes too (robustness; regions never cross R unaffected).
+        if (affected.insert(own->second).second) markRemoved(own->second);
+        old_owner[l] = own->second;
+      }
+      for (int dz = -1; dz <= 1; ++dz)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const Index3 nb = c + Index3(dx, dy, dz);
+            if ((dx == 0 && dy == 0 && dz == 0) || !isFrontierCell(nb)) continue;
+            const std::size_t ln = geo_.linear(nb);
+            if (visited.insert(ln).second) stack.push_back(ln);
+          }
+    }
+    regions.push_back(std::move(region));
+  }
+  // Cells of removed clusters lose their owner.
+  for (std::uint32_t id : affected) {
+    const Frontier* f = find(id);
+    if (!f) continue;
+    for (const Index3& c : f->cells) {
+      auto it = owner_.find(geo_.linear(c));
+      if (it != owner_.end() && it->second == id) owner_.erase(it);
+    }
+    delta.removed.push_back(id);
+  }
+  std::sort(delta.removed.begin(), delta.removed.end());
+  frontiers_.erase(std::remove_if(frontiers_.begin(), frontiers_.end(),
+                                  [&](const Frontier& f) { return affected.count(f.id) > 0; }),
+                   frontiers_.end());
+
+  // 5. Regions -> clusters: drop small ones, split wide ones, inherit the oldest age.
+  const double h = 0.5 * geo_.resolution();
+  for (auto& region : regions) {
+    if (static_cast<int>(region.size()) < config_.min_cluster_cells) continue;
+    // Sorted cells make the split independent of the order the flood fill found them in.
+    std::sort(region.begin(), region.end(),
+              [&](const Index3& p, const Index3& q) { return geo_.linear(p) < geo_.linear(q); });
+    std::vector<std::vector<Index3>> pieces;
+    splitInto(std::move(region), pieces);
+    for (auto& cells : pieces) {
+      std::sort(cells.begin(), cells.end(),
+                [&](const Index3& p, const Index3& q) { return geo_.linear(p) < geo_.linear(q); });
+      Frontier f;
+      f.id = next_id_++;
+      f.first_seen = now;
+      f.box = {Vec3::Constant(1e18), Vec3::Constant(-1e18)};
+      for (const Index3& c : cells) {
+        const Vec3 p = geo_.indexToCoord(c);
+        f.average += p;
+        f.box.min = f.box.min.cwiseMin(p - Vec3::Constant(h));
+        f.box.max = f.box.max.cwiseMax(p + Vec3::Constant(h));
+        auto it = old_owner.find(geo_.linear(c));
+        if (it != old_owner.end()) f.first_seen = std::min(f.first_seen, first_seen[it->second]);
+        owner_[geo_.linear(c)] = f.id;
+      }
+      f.average /= static_cast<double>(cells.size());
+      f.active = f.average.z() >= band_min_ && f.average.z() <= band_max_;
+      f.cells = std::move(cells);
+      delta.added.push_back(f.id);
+      frontiers_.push_back(std::move(f));
+    }
+  }
+  refreshNeighbourCounts();
+  return delta;
+}
+
+void FrontierFinder::splitInto(std::vector<Index3> cells, std::vector<std::vector<Index3>>& out) const {
+  Vec3 mean = Vec3::Zero();
+  for (const Index3& c : cells) mean += geo_.indexToCoord(c);
+  mean /= static_cast<double>(cells.size());
+  double spread = 0.0;
+  for (const Index3& c : cells) spread = std::max(spread, (geo_.indexToCoord(c) - mean).norm());
+  if (spread <= config_.max_cluster_extent || cells.size() < 2) {
+    out.push_back(std::move(cells));
+    return;
+  }
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (const Index3& c : cells) {
+    const Vec3 d = geo_.indexToCoord(c) - mean;
+    cov += d * d.transpose();
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+  const Vec3 axis = eig.eigenvectors().col(2);  // largest eigenvalue
+  std::vector<Index3> a, b;
+  for (const Index3& c : cells) ((geo_.indexToCoord(c) - mean).dot(axis) >= 0.0 ? a : b).push_back(c);
+  if (a.empty() || b.empty()) {
+    out.push_back(std::move(cells));
+    return;
+  }
+  splitInto(std::move(a), out);
+  splitInto(std::move(b), out);
+}
+
+void FrontierFinder::refreshNeighbourCounts() {
+  std::sort(frontiers_.begin(), frontiers_.end(), [](const Frontier& a, const Frontier& b) { return a.id < b.id; });
+  const double r2 = config_.s_near * config_.s_near;
+  for (Frontier& f : frontiers_) {
+    f.n_near = 0;
+    for (const Frontier& g : frontiers_)
+      if (g.id != f.id && (g.average - f.average).squaredNorm() < r2) ++f.n_near;
+  }
+}
+
+}  // namespace go_feap::frontier

@@ -1,0 +1,64 @@
+// OctoMap .bt export and import of the occupancy map.
+#include <octomap/OcTree.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "go_feap/map/voxel_map.h"
+
+namespace go_feap::map {
+
+common::Status VoxelMap::saveBt(const std::string& path) const {
+  const auto& geo = occupancy_.geometry();
+  octomap::OcTree tree(geo.resolution());
+  const float occ = tree.getClampingThresMaxLog(), fre = tree.getClampingThresMinLog();
+  for (int z = 0; z < geo.dims().z(); ++z) {
+    for (int y = 0; y < geo.dims().y(); ++y)
+      for (int x = 0; x < geo.dims().x(); ++x) {
+        const Index3 idx(x, y, z);
+        const VoxelState s = occupancy_.state(idx);
+        if (s == VoxelState::kUnknown) continue;
+        const Vec3 c = geo.indexToCoord(idx);
+        tree.setNodeValue(octomap::point3d(c.x(), c.y(), c.z()), s == VoxelState::kOccupied ? occ : fre,
+                          /*lazy_eval=*/true);
+      }
+    if (z % 16 == 15) tree.prune();  // keeps memory bounded on large maps
+  }
+  tree.updateInnerOccupancy();
+  tree.prune();
+  std::ofstream out(path, std::ios::binary);
+  if (!out || !tree.writeBinary(out) || !out.flush())
+    return common::Status::Error(path + ": cannot write OctoMap file");
+  return common::Status::Ok();
+}
+
+common::Status VoxelMap::loadBt(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) return common::Status::Error(path + ": file not found");
+  std::ifstream in(path, std::ios::binary);
+  octomap::OcTree tree(0.1);
+  if (!tree.readBinary(in)) return common::Status::Error(path + ": corrupt or truncated OctoMap file");
+  const auto& geo = occupancy_.geometry();
+  std::vector<std::size_t> inserted, removed;
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    const VoxelState s = tree.isNodeOccupied(*it) ? VoxelState::kOccupied : VoxelState::kFree;
+    const double size = it.getSize();
+    const Vec3 lo = Vec3(it.getX(), it.getY(), it.getZ()) - Vec3::Constant(0.5 * size);
+    Index3 i0, i1;
+    geo.centreRange({lo, lo + Vec3::Constant(size)}, i0, i1);
+    for (int z = i0.z(); z < i1.z(); ++z)
+      for (int y = i0.y(); y < i1.y(); ++y)
+        for (int x = i0.x(); x < i1.x(); ++x) {
+          const Index3 idx(x, y, z);
+          const bool was = occupancy_.state(idx) == VoxelState::kOccupied;
+          occupancy_.setState(idx, s);
+          const bool is = s == VoxelState::kOccupied;
+          if (is && !was) inserted.push_back(geo.linear(idx));
+          if (was && !is) removed.push_back(geo.linear(idx));
+        }
+  }
+  esdf_.update(inserted, removed);
+  return common::Status::Ok();
+}
+
+}  // namespace go_feap::map

@@ -1,0 +1,222 @@
+#include "go_feap/map/occupancy_map.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "go_feap/common/raycast.h"
+
+namespace go_feap::map {
+
+namespace {
+
+double logit(double p) { return std::log(p / (1.0 - p)); }
+
+bool testBit(const std::vector<std::uint64_t>& bits, std::size_t l) { return (bits[l >> 6] >> (l & 63)) & 1u; }
+void setBit(std::vector<std::uint64_t>& bits, std::size_t l) { bits[l >> 6] |= std::uint64_t{1} << (l & 63); }
+void clearBit(std::vector<std::uint64_t>& bits, std::size_t l) { bits[l >> 6] &= ~(std::uint64_t{1} << (l & 63)); }
+
+// Clips the segment [a, b] to the box (slab method). False when it misses the box.
+bool clipSegment(const Aabb& box, Vec3& a, Vec3& b) {
+  double t0 = 0.0, t1 = 1.0;
+  const Vec3 d = b - a;
+  for (int i = 0; i < 3; ++i) {
+    if (std::abs(d[i]) < 1e-12) {
+      if (a[i] < box.min[i] || a[i] > box.max[i]) return false;
+      continue;
+    }
+    double ta = (box.min[i] - a[i]) / d[i], tb = (box.max[i] - a[i]) / d[i];
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+    if (t0 > t1) return false;
+  }
+  const Vec3 a0 = a;
+  a = a0 + t0 * d;
+  b = a0 + t1 * d;
+  return true;
+}
+
+}  // namespace
+
+common::Status OccupancyConfig::validate() const {
+  auto bad = [](const std::string& key, const std::string& why) {
+    return common::Status::Error("occupancy: " + key + " " + why);
+  };
+  if (!(resolution > 0.0)) return bad("resolution", "must be > 0");
+  if (!(margin >= 0.0)) return bad("margin", "must be >= 0");
+  if (!(p_min > 0.0 && p_min < 0.5)) return bad("p_min", "must be in (0, 0.5)");
+  if (!(p_max > 0.5 && p_max < 1.0)) return bad("p_max", "must be in (0.5, 1)");
+  if (!(p_hit > 0.5 && p_hit < 1.0)) return bad("p_hit", "must be in (0.5, 1)");
+  if (!(p_miss > 0.0 && p_miss < 0.5)) return bad("p_miss", "must be in (0, 0.5)");
+  if (!(p_occupied > 0.5 && p_occupied < p_max)) return bad("p_occupied", "must be in (0.5, p_max)");
+  if (!(min_range >= 0.0)) return bad("min_range", "must be >= 0");
+  if (!(max_range > min_range)) return bad("max_range", "must be > min_range");
+  if (skip_pixel < 1) return bad("skip_pixel", "must be >= 1");
+  // One byte per voxel: log-odds * 50 must fit in [-127, 127].
+  if (logit(p_max) * OccupancyMap::kScaleLimit() > 127.0 || logit(p_min) * OccupancyMap::kScaleLimit() < -127.0)
+    return bad("p_min/p_max", "must lie within [0.08, 0.92] (one byte of log-odds per voxel)");
+  return common::Status::Ok();
+}
+
+OccupancyMap::OccupancyMap(const OccupancyConfig& config, const Aabb& box)
+    : config_(config),
+      box_(box),
+      geo_(common::GridGeometry::covering(box.expanded(config.margin), config.resolution)),
+      logodds_(geo_.size(), kUnknown),
+      hit_(static_cast<std::int8_t>(std::lround(logit(config.p_hit) * kScale))),
+      miss_(static_cast<std::int8_t>(std::lround(logit(config.p_miss) * kScale))),
+      min_(static_cast<std::int8_t>(std::lround(logit(config.p_min) * kScale))),
+      max_(static_cast<std::int8_t>(std::lround(logit(config.p_max) * kScale))),
+      occupied_(static_cast<std::int8_t>(std::floor(logit(config.p_occupied) * kScale))),
+      hit_bits_((geo_.size() + 63) / 64, 0),
+      free_bits_((geo_.size() + 63) / 64, 0),
+      end_bits_((geo_.size() + 63) / 64, 0) {}
+
+double OccupancyMap::probability(const Index3& idx) const {
+  if (!geo_.inside(idx)) return 0.5;
+  const std::int8_t v = logodds_[geo_.linear(idx)];
+  if (v == kUnknown) return 0.5;
+  return 1.0 / (1.0 + std::exp(-v / kScale));
+}
+
+common::Status OccupancyMap::checkFrame(const cv::Mat& depth, const DepthIntrinsics& K) const {
+  if (depth.empty()) return common::Status::Error("depth image is empty");
+  if (depth.type() != CV_32FC1 && depth.type() != CV_16UC1)
+    return common::Status::Error("depth image must be 32FC1 (metres) or 16UC1 (millimetres)");
+  if (depth.cols != K.width || depth.rows != K.height)
+    return common::Status::Error("depth image is " + std::to_string(depth.cols) + "x" + std::to_string(depth.rows) +
+                                 " but camera_info says " + std::to_string(K.width) + "x" + std::to_string(K.height));
+  if (!(K.fx > 0.0 && K.fy > 0.0 && std::isfinite(K.cx) && std::isfinite(K.cy) && std::isfinite(K.fx) &&
+        std::isfinite(K.fy)))
+    return common::Status::Error("camera intrinsics are invalid (fx, fy must be finite and > 0)");
+  return common::Status::Ok();
+}
+
+common::Result<FrameChange> OccupancyMap::integrate(const cv::Mat& depth, const DepthIntrinsics& K,
+                                                    const Eigen::Isometry3d& T_W_C) {
+  if (auto st = checkFrame(depth, K); !st) return st;
+  if (!T_W_C.matrix().allFinite()) return common::Result<FrameChange>::Error("camera pose is not finite");
+  FrameChange change;
+  const Aabb bounds = geo_.bounds();
+  const Vec3 origin = T_W_C.translation();
+  const Eigen::Matrix3d R = T_W_C.linear();
+  const bool metric = depth.type() == CV_32FC1;
+  const bool origin_inside = bounds.contains(origin);
+  // Distinct end voxels with the first ray end point that reached each: casting towards
+  // the measured point (not the voxel centre) keeps grazing rays out of the wall in front.
+  std::vector<std::pair<std::size_t, Vec3>> ends;
+  touched_.clear();
+  auto touch = [&](std::size_t l) {
+    if (!testBit(hit_bits_, l) && !testBit(free_bits_, l)) touched_.push_back(l);
+  };
+
+  // 1. Sampled pixels -> ray end voxels; returns mark their voxel as hit.
+  const Vec3 du = R.col(0) / K.fx;
+  for (int v = 0; v < depth.rows; v += config_.skip_pixel) {
+    const Vec3 row = R.col(1) * ((v - K.cy) / K.fy) + R.col(2);
+    for (int u = 0; u < depth.cols; u += config_.skip_pixel) {
+      double d = metric ? static_cast<double>(depth.at<float>(v, u)) : 0.001 * depth.at<std::uint16_t>(v, u);
+      bool hit = true;
+      if (!std::isfinite(d) || d <= 0.0 || d < config_.min_range) {
+        ++change.pixels_invalid;
+        if (!config_.invalid_as_free) continue;
+        d = config_.max_range;
+        hit = false;
+      } else if (d > config_.max_range) {
+        d = config_.max_range;
+        hit = false;
+      }
+      ++change.pixels_used;
+      // A return marks the voxel just behind the measured surface point: a point exactly
+      // on a voxel face (as a voxel world renders it) belongs to the surface's voxel.
+      const double nudge = hit ? 0.02 * config_.resolution : 0.0;
+      const Vec3 ray = row + du * (u - K.cx);  // direction with unit optical-axis component
+      Vec3 b = origin + ray * d;
+      if (hit) b += ray.normalized() * nudge;
+      if (!origin_inside || !bounds.contains(b)) {
+        Vec3 a = origin;
+        const Vec3 b_full = b;
+        if (!clipSegment(bounds, a, b)) continue;
+        if ((b - b_full).squaredNorm() > 1e-12) hit = false;  // the return lies outside the map
+      }
+      const Index3 e = geo_.coordToIndex(b).cwiseMax(Index3::Zero()).cwiseMin(geo_.dims() - Index3::Ones());
+      const std::size_t l = geo_.linear(e);
+      if (hit) {
+        touch(l);
+        setBit(hit_bits_, l);
+      }
+      if (!testBit(end_bits_, l)) {
+        setBit(end_bits_, l);
+        ends.emplace_back(l, b);
+      }
+    }
+  }
+
+  // 2. One ray per distinct end voxel marks the voxels before it free.
+
+  for (const auto& [e, point] : ends) {
+    clearBit(end_bits_, e);
+    const Index3 end = geo_.unlinear(e);
+    const bool end_is_hit = testBit(hit_bits_, e);
+    Vec3 a = origin, b = point;
+    if (!bounds.contains(a) && !clipSegment(bounds, a, b)) continue;  // camera outside the map
+    ++change.rays;
+    common::traverse(geo_, a, b, [&](const Index3& c) {
+      if (c == end && end_is_hit) return false;
+      if (!geo_.inside(c)) return true;
+      const std::size_t l = geo_.linear(c);
+      touch(l);
+      setBit(free_bits_, l);
+      return c != end;
+    });
+  }
+
+  // 3. Apply: a return wins over free space in the same frame.
+  for (std::size_t l : touched_) {
+    const std::int8_t old = logodds_[l];
+    const VoxelState before = stateOf(old);
+    int v = old == kUnknown ? occupied_ : old;
+    v = testBit(hit_bits_, l) ? std::min<int>(max_, v + hit_) : std::max<int>(min_, v + miss_);
+    logodds_[l] = static_cast<std::int8_t>(v);
+    clearBit(hit_bits_, l);
+    clearBit(free_bits_, l);
+    const VoxelState after = stateOf(logodds_[l]);
+    if (after == before) continue;
+    const Index3 idx = geo_.unlinear(l);
+    if (!change.any_change) {
+      change.changed_min = change.changed_max = idx;
+      change.any_change = true;
+    } else {
+      change.changed_min = change.changed_min.cwiseMin(idx);
+      change.changed_max = change.changed_max.cwiseMax(idx);
+    }
+    ++change.changed_voxels;
+    if (after == VoxelState::kOccupied) change.became_occupied.push_back(l);
+    if (before == VoxelState::kOccupied) change.stopped_occupied.push_back(l);
+  }
+  return change;
+}
+
+void OccupancyMap::setState(const Index3& idx, VoxelState s) {
+  if (!geo_.inside(idx)) return;
+  logodds_[geo_.linear(idx)] = s == VoxelState::kUnknown ? kUnknown : (s == VoxelState::kOccupied ? max_ : min_);
+}
+
+bool OccupancyMap::isLineFree(const Vec3& a, const Vec3& b, bool unknown_blocks) const {
+  return common::traverse(geo_, a, b, [&](const Index3& c) {
+    if (!geo_.inside(c)) return false;
+    const VoxelState s = stateAt(geo_.linear(c));
+    return !(s == VoxelState::kOccupied || (unknown_blocks && s == VoxelState::kUnknown));
+  });
+}
+
+std::size_t OccupancyMap::memoryBytes() const {
+  return logodds_.capacity() + 8 * (hit_bits_.capacity() + free_bits_.capacity() + end_bits_.capacity()) +
+         sizeof(std::size_t) * touched_.capacity();
+}
+
+std::size_t OccupancyMap::knownCount() const {
+  return static_cast<std::size_t>(std::count_if(logodds_.begin(), logodds_.end(), [](std::int8_t v) { return v != kUnknown; }));
+}
+
+}  // namespace go_feap::map

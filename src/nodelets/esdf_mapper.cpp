@@ -1,0 +1,286 @@
+// EsdfMapper: integrates depth images into the occupancy map and the incremental ESDF.
+// In: depth (+ camera_info) and camera_pose (exact or approximate sync) or TF. Out:
+// map_update (go_feap/MapUpdate), map_handle (in-process map pointer, see
+// go_feap/ros/shared_map.h), throttled occupied_cloud and esdf_slice, service save_map.
+#include <cv_bridge/cv_bridge.h>
+#include <geometry_msgs/PoseStamped.h>
+#include <message_filters/subscriber.h>
+#include <message_filters/sync_policies/approximate_time.h>
+#include <message_filters/sync_policies/exact_time.h>
+#include <message_filters/synchronizer.h>
+#include <nodelet/nodelet.h>
+#include <pluginlib/class_list_macros.hpp>
+#include <ros/ros.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <sensor_msgs/image_encodings.h>
+#include <sensor_msgs/point_cloud2_iterator.h>
+#include <tf2_eigen/tf2_eigen.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_listener.h>
+
+#include <chrono>
+#include <map>
+#include <mutex>
+#include <optional>
+
+#include "go_feap/MapUpdate.h"
+#include "go_feap/SaveMap.h"
+#include "go_feap/ros/params.h"
+#include "go_feap/ros/shared_map.h"
+
+namespace go_feap {
+
+class EsdfMapper : public nodelet::Nodelet {
+  using ExactPolicy = message_filters::sync_policies::ExactTime<sensor_msgs::Image, geometry_msgs::PoseStamped>;
+  using ApproxPolicy = message_filters::sync_policies::ApproximateTime<sensor_msgs::Image, geometry_msgs::PoseStamped>;
+
+ private:
+  void onInit() override {
+    ros::NodeHandle& nh = getNodeHandle();
+    ros::NodeHandle& pnh = getPrivateNodeHandle();
+    const std::string me = getName();
+    ros_params::ParamReader p(pnh);
+    map::MapConfig c;
+    auto& o = c.occupancy;
+    p.get("occupancy/resolution", o.resolution).get("occupancy/margin", o.margin);
+    p.get("occupancy/p_hit", o.p_hit).get("occupancy/p_miss", o.p_miss).get("occupancy/p_min", o.p_min);
+    p.get("occupancy/p_max", o.p_max).get("occupancy/p_occupied", o.p_occupied);
+    p.get("occupancy/min_range", o.min_range).get("occupancy/max_range", o.max_range);
+    p.get("occupancy/skip_pixel", o.skip_pixel).get("occupancy/invalid_as_free", o.invalid_as_free);
+    p.get("esdf/max_distance", c.esdf.max_distance).get("esdf/uav_radius", c.esdf.uav_radius);
+    p.get("mapper/sync_mode", sync_mode_).get("mapper/pose_tolerance", pose_tolerance_);
+    p.get("mapper/max_pose_jump", max_pose_jump_).get("mapper/world_frame", world_frame_);
+    p.get("mapper/cloud_period", cloud_period_).get("mapper/esdf_slice_height", slice_height_);
+    p.get("mapper/warn_period", warn_period_);
+    common::Aabb box;
+    p.getVec3("exploration_box/min", box.min).getVec3("exploration_box/max", box.max);
+    ros_params::requireOrThrow(p.ok(), me, p.error());
+    ros_params::requireOrThrow(c.validate().ok(), me, c.validate().message());
+    ros_params::requireOrThrow(box.valid(), me, "parameter '" + p.fullName("exploration_box") + "' needs min < max");
+    ros_params::requireOrThrow(sync_mode_ == "exact" || sync_mode_ == "approximate" || sync_mode_ == "tf", me,
+                               "parameter '" + p.fullName("mapper/sync_mode") + "' must be exact, approximate or tf");
+    ros_params::requireOrThrow(pose_tolerance_ >= 0.0 && max_pose_jump_ > 0.0 && cloud_period_ >= 0.0 &&
+                                   warn_period_ > 0.0,
+                               me, "parameters '" + p.fullName("mapper") +
+                                       "/{pose_tolerance, max_pose_jump, cloud_period, warn_period}' must be >= 0 (> 0 for the last)");
+
+    shared_ = std::make_shared<ros_map::SharedMap>(std::make_unique<map::VoxelMap>(c, box));
+    update_pub_ = nh.advertise<MapUpdate>("map_update", 10);
+    handle_pub_ = nh.advertise<ros_map::MapHandle>("map_handle", 1, /*latch=*/true);
+    cloud_pub_ = nh.advertise<sensor_msgs::PointCloud2>("occupied_cloud", 1);
+    slice_pub_ = nh.advertise<sensor_msgs::PointCloud2>("esdf_slice", 1);
+    save_srv_ = nh.advertiseService("save_map", &EsdfMapper::onSave, this);
+    info_sub_ = nh.subscribe("camera_info", 1, &EsdfMapper::onInfo, this);
+    if (sync_mode_ == "tf") {
+      tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
+      tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, nh);
+      depth_only_sub_ = nh.subscribe("depth", 5, &EsdfMapper::onDepthTf, this);
+    } else {
+      depth_sub_.subscribe(nh, "depth", 5);
+      pose_sub_.subscribe(nh, "camera_pose", 20);
+      if (sync_mode_ == "exact") {
+        exact_sync_ = std::make_unique<message_filters::Synchronizer<ExactPolicy>>(ExactPolicy(20), depth_sub_, pose_sub_);
+        exact_sync_->registerCallback(&EsdfMapper::onDepthPose, this);
+      } else {
+        approx_sync_ = std::make_unique<message_filters::Synchronizer<ApproxPolicy>>(ApproxPolicy(20), depth_sub_, pose_sub_);
+        approx_sync_->registerCallback(&EsdfMapper::onDepthPose, this);
+      }
+    }
+    publishHandle();
+    const auto& geo = shared_->map->geometry();
+    NODELET_INFO_STREAM(me << ": map " << geo.dims().transpose() << " voxels at " << geo.resolution() << " m ("
+                           << shared_->map->memoryBytes() / (1024 * 1024) << " MiB), sync " << sync_mode_);
+  }
+
+  void onInfo(const sensor_msgs::CameraInfo::ConstPtr& info) {
+    std::lock_guard<std::mutex> lock(input_mutex_);
+    map::DepthIntrinsics K{static_cast<int>(info->width), static_cast<int>(info->height), info->K[0], info->K[4],
+                           info->K[2], info->K[5]};
+    intrinsics_ = K;
+  }
+
+  void onDepthPose(const sensor_msgs::Image::ConstPtr& depth, const geometry_msgs::PoseStamped::ConstPtr& pose) {
+    const double dt = std::abs((depth->header.stamp - pose->header.stamp).toSec());
+    if (dt > pose_tolerance_ + 1e-9) return skip("pose_time", "camera_pose is " + std::to_string(dt) + " s from the image");
+    Eigen::Isometry3d T_W_C;
+    tf2::fromMsg(pose->pose, T_W_C);
+    integrate(depth, T_W_C);
+  }
+
+  void onDepthTf(const sensor_msgs::Image::ConstPtr& depth) {
+    geometry_msgs::TransformStamped tf;
+    try {
+      tf = tf_buffer_->lookupTransform(world_frame_, depth->header.frame_id, depth->header.stamp,
+                                       ros::Duration(pose_tolerance_));
+    } catch (const tf2::TransformException& e) {
+      return skip("tf", std::string("no transform ") + world_frame_ + " <- " + depth->header.frame_id + ": " + e.what());
+    }
+    integrate(depth, tf2::transformToEigen(tf));
+  }
+
+  void integrate(const sensor_msgs::Image::ConstPtr& msg, const Eigen::Isometry3d& T_W_C) {
+    std::optional<map::DepthIntrinsics> K;
+    {
+      std::lock_guard<std::mutex> lock(input_mutex_);
+      K = intrinsics_;
+    }
+    if (!K) return skip("camera_info", "no camera_info received yet");
+    if (!T_W_C.matrix().allFinite() ||
+        !T_W_C.linear().isApprox(Eigen::Quaterniond(T_W_C.linear()).normalized().toRotationMatrix(), 1e-3))
+      return skip("pose", "camera pose is not finite or not a rotation");
+    if (last_position_ && (T_W_C.translation() - *last_position_).norm() > max_pose_jump_) {
+      last_position_ = T_W_C.translation();  // accept the new pose as the reference from now on
+      return skip("pose_jump", "camera pose jumped by more than " + std::to_string(max_pose_jump_) +
+                                   " m since the last frame (relocalisation?)");
+    }
+    if (msg->encoding != sensor_msgs::image_encodings::TYPE_32FC1 &&
+        msg->encoding != sensor_msgs::image_encodings::TYPE_16UC1 && msg->encoding != "mono16")
+      return skip("encoding", "depth encoding '" + msg->encoding + "' is neither 32FC1 (m) nor 16UC1 (mm)");
+    cv_bridge::CvImageConstPtr image;
+    try {
+      image = cv_bridge::toCvShare(msg);
+    } catch (const cv_bridge::Exception& e) {
+      return skip("image", std::string("cannot read the depth image: ") + e.what());
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    common::Result<map::MapUpdateInfo> info = common::Result<map::MapUpdateInfo>::Error("");
+    std::uint64_t sequence = 0;
+    {
+      std::unique_lock<std::shared_mutex> lock(shared_->mutex);
+      info = shared_->map->integrate(image->image, *K, T_W_C);
+      if (info) sequence = ++shared_->sequence;
+    }
+    if (!info) return skip("frame", info.message());
+    last_position_ = T_W_C.translation();
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    if (info->frame.pixels_invalid > 0)
+      NODELET_DEBUG_STREAM_THROTTLE(warn_period_, getName() << ": " << info->frame.pixels_invalid
+                                                            << " invalid depth pixels in the latest frame");
+
+    MapUpdate update;
+    update.header.stamp = msg->header.stamp;
+    update.header.frame_id = world_frame_;
+    update.sequence = sequence;
+    update.changed_voxels = static_cast<std::uint32_t>(info->frame.changed_voxels);
+    update.resolution = shared_->map->geometry().resolution();
+    if (info->frame.any_change) {
+      update.changed_min.x = info->changed_box.min.x();
+      update.changed_min.y = info->changed_box.min.y();
+      update.changed_min.z = info->changed_box.min.z();
+      update.changed_max.x = info->changed_box.max.x();
+      update.changed_max.y = info->changed_box.max.y();
+      update.changed_max.z = info->changed_box.max.z();
+    }
+    publishHandle();
+    update_pub_.publish(update);
+    NODELET_DEBUG_STREAM(getName() << ": frame " << sequence << " integrated in " << ms << " ms, "
+                                   << info->frame.changed_voxels << " voxels changed");
+    if (cloud_period_ > 0.0 && (last_cloud_.isZero() || msg->header.stamp - last_cloud_ >= ros::Duration(cloud_period_))) {
+      last_cloud_ = msg->header.stamp;
+      publishClouds(msg->header.stamp);
+    }
+  }
+
+  void publishHandle() {
+    auto handle = boost::make_shared<ros_map::MapHandle>();
+    handle->shared = shared_;
+    handle_pub_.publish(handle);
+  }
+
+  void publishClouds(const ros::Time& stamp) {
+    if (cloud_pub_.getNumSubscribers() == 0 && slice_pub_.getNumSubscribers() == 0) return;
+    std::vector<Eigen::Vector4f> occupied, slice;
+    {
+      std::shared_lock<std::shared_mutex> lock(shared_->mutex);
+      const map::VoxelMap& m = *shared_->map;
+      const auto& geo = m.geometry();
+      const int kz = geo.coordToIndex(common::Vec3(0, 0, slice_height_)).z();
+      for (std::size_t l = 0; l < geo.size(); ++l) {
+        const common::Index3 idx = geo.unlinear(l);
+        const common::Vec3 c = geo.indexToCoord(idx);
+        if (m.occupancy().stateAt(l) == map::VoxelState::kOccupied)
+          occupied.emplace_back(c.x(), c.y(), c.z(), c.z());
+        if (idx.z() == kz && m.occupancy().stateAt(l) != map::VoxelState::kUnknown)
+          slice.emplace_back(c.x(), c.y(), c.z(), static_cast<float>(m.esdf().distance(idx)));
+      }
+    }
+    cloud_pub_.publish(toCloud(occupied, "height", stamp));
+    slice_pub_.publish(toCloud(slice, "distance", stamp));
+  }
+
+  sensor_msgs::PointCloud2 toCloud(const std::vector<Eigen::Vector4f>& pts, const std::string& field,
+                                   const ros::Time& stamp) const {
+    sensor_msgs::PointCloud2 cloud;
+    cloud.header.stamp = stamp;
+    cloud.header.frame_id = world_frame_;
+    sensor_msgs::PointCloud2Modifier mod(cloud);
+    mod.setPointCloud2Fields(4, "x", 1, sensor_msgs::PointField::FLOAT32, "y", 1, sensor_msgs::PointField::FLOAT32,
+                             "z", 1, sensor_msgs::PointField::FLOAT32, field.c_str(), 1,
+                             sensor_msgs::PointField::FLOAT32);
+    mod.resize(pts.size());
+    sensor_msgs::PointCloud2Iterator<float> it(cloud, "x");
+    for (const auto& p : pts) {
+      it[0] = p[0];
+      it[1] = p[1];
+      it[2] = p[2];
+      it[3] = p[3];
+      ++it;
+    }
+    return cloud;
+  }
+
+  bool onSave(SaveMap::Request& req, SaveMap::Response& res) {
+    if (req.path.empty()) {
+      res.success = false;
+      res.message = "path is empty";
+      return true;
+    }
+    common::Status st = common::Status::Ok();
+    {
+      std::shared_lock<std::shared_mutex> lock(shared_->mutex);
+      st = shared_->map->saveBt(req.path);
+    }
+    res.success = st.ok();
+    res.message = st.ok() ? "wrote " + req.path : st.message();
+    NODELET_INFO_STREAM(getName() << ": save_map: " << res.message);
+    return true;
+  }
+
+  // Counts bad input per reason and logs at most once per warn_period.
+  void skip(const std::string& reason, const std::string& what) {
+    std::lock_guard<std::mutex> lock(input_mutex_);
+    const std::size_t n = ++skipped_[reason];
+    const ros::WallTime now = ros::WallTime::now();
+    ros::WallTime& last = last_warn_[reason];
+    if (last.isZero() || (now - last).toSec() >= warn_period_) {
+      last = now;
+      NODELET_WARN_STREAM(getName() << ": frame skipped (" << reason << "): " << what << " [" << n
+                                    << " skipped for this reason so far]");
+    }
+  }
+
+  std::shared_ptr<ros_map::SharedMap> shared_;
+  std::string sync_mode_, world_frame_;
+  double pose_tolerance_ = 0.02, max_pose_jump_ = 1.0, cloud_period_ = 1.0, slice_height_ = 1.0, warn_period_ = 2.0;
+  std::mutex input_mutex_;
+  std::optional<map::DepthIntrinsics> intrinsics_;
+  std::map<std::string, std::size_t> skipped_;
+  std::map<std::string, ros::WallTime> last_warn_;
+  std::optional<common::Vec3> last_position_;
+  ros::Time last_cloud_;
+  ros::Publisher update_pub_, handle_pub_, cloud_pub_, slice_pub_;
+  ros::ServiceServer save_srv_;
+  ros::Subscriber info_sub_, depth_only_sub_;
+  message_filters::Subscriber<sensor_msgs::Image> depth_sub_;
+  message_filters::Subscriber<geometry_msgs::PoseStamped> pose_sub_;
+  std::unique_ptr<message_filters::Synchronizer<ExactPolicy>> exact_sync_;
+  std::unique_ptr<message_filters::Synchronizer<ApproxPolicy>> approx_sync_;
+  std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
+  std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
+};
+
+}  // namespace go_feap
+
+PLUGINLIB_EXPORT_CLASS(go_feap::EsdfMapper, nodelet::Nodelet)

@@ -1,0 +1,163 @@
+// FrontierFinder: keeps the frontier clusters of the shared map up to date.
+// In: map_handle, map_update (from EsdfMapper, same manager), layer (LayerBounds).
+// Out: frontiers (go_feap/FrontierArray), frontier_markers (one colour per cluster, xi as text).
+#include <nodelet/nodelet.h>
+#include <pluginlib/class_list_macros.hpp>
+#include <ros/ros.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include <mutex>
+
+#include "go_feap/FrontierArray.h"
+#include "go_feap/LayerBounds.h"
+#include "go_feap/MapUpdate.h"
+#include "go_feap/ros/exploration_params.h"
+#include "go_feap/ros/shared_map.h"
+
+namespace go_feap {
+
+class FrontierFinder : public nodelet::Nodelet {
+ private:
+  void onInit() override {
+    ros::NodeHandle& nh = getNodeHandle();
+    ros_params::ParamReader p(getPrivateNodeHandle());
+    ros_params::readFrontierConfig(p, config_);
+    ros_params::readOmissionConfig(p, omission_);
+    ros_params::readBox(p, box_);
+    p.get("world_frame", world_frame_);
+    ros_params::requireOrThrow(p.ok(), getName(), p.error());
+    for (const common::Status& st : {config_.validate(), omission_.validate()})
+      ros_params::requireOrThrow(st.ok(), getName(), st.message());
+    ros_params::requireOrThrow(box_.valid(), getName(), "parameter 'exploration_box' needs min < max");
+    frontier_pub_ = nh.advertise<FrontierArray>("frontiers", 2);
+    marker_pub_ = nh.advertise<visualization_msgs::MarkerArray>("frontier_markers", 2);
+    handle_sub_ = nh.subscribe("map_handle", 1, &FrontierFinder::onHandle, this);
+    update_sub_ = nh.subscribe("map_update", 20, &FrontierFinder::onUpdate, this);
+    layer_sub_ = nh.subscribe("layer", 1, &FrontierFinder::onLayer, this);
+  }
+
+  void onHandle(const boost::shared_ptr<const ros_map::MapHandle>& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (shared_) return;
+    if (!msg->shared) {
+      NODELET_ERROR_THROTTLE(10.0, "%s: map_handle carries no map: run this nodelet in the EsdfMapper's manager",
+                             getName().c_str());
+      return;
+    }
+    shared_ = msg->shared;
+  }
+
+  void onLayer(const LayerBounds::ConstPtr& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    band_ = {msg->z_min, msg->z_max};
+    if (finder_) finder_->setActiveBand(msg->z_min, msg->z_max);
+  }
+
+  void onUpdate(const MapUpdate::ConstPtr& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!shared_) {
+      NODELET_WARN_THROTTLE(5.0, "%s: map_update before map_handle; waiting for the map", getName().c_str());
+      return;
+    }
+    const double now = msg->header.stamp.toSec();
+    {
+      std::shared_lock<std::shared_mutex> map_lock(shared_->mutex);
+      const map::OccupancyMap& occupancy = shared_->map->occupancy();
+      const bool gap = last_sequence_ != 0 && msg->sequence != last_sequence_ + 1;
+      if (!finder_ || gap) {
+        // First update, or updates were missed: the incremental path needs every change.
+        if (gap) NODELET_WARN_STREAM(getName() << ": map updates " << last_sequence_ + 1 << ".." << msg->sequence - 1
+                                               << " missed; recomputing all frontiers");
+        if (!finder_) finder_ = std::make_unique<frontier::FrontierFinder>(config_, occupancy.geometry(), box_);
+        finder_->setActiveBand(band_.first, band_.second);
+        finder_->recomputeAll(occupancy, now);
+      } else if (msg->changed_voxels > 0) {
+        const auto& geo = occupancy.geometry();
+        const double h = 0.5 * geo.resolution();
+        const common::Vec3 lo(msg->changed_min.x + h, msg->changed_min.y + h, msg->changed_min.z + h);
+        const common::Vec3 hi(msg->changed_max.x - h, msg->changed_max.y - h, msg->changed_max.z - h);
+        finder_->update(occupancy, geo.coordToIndex(lo), geo.coordToIndex(hi), now);
+      }
+    }
+    last_sequence_ = msg->sequence;
+    publish(msg->header.stamp, now);
+  }
+
+  void publish(const ros::Time& stamp, double now) {
+    FrontierArray out;
+    out.header.stamp = stamp;
+    out.header.frame_id = world_frame_;
+    visualization_msgs::MarkerArray markers;
+    visualization_msgs::Marker clear;
+    clear.action = visualization_msgs::Marker::DELETEALL;
+    markers.markers.push_back(clear);
+    const auto& geo = shared_->map->geometry();
+    for (const frontier::Frontier& f : finder_->frontiers()) {
+      go_feap::Frontier m;
+      m.id = f.id;
+      for (const common::Index3& c : f.cells) {
+        const common::Vec3 p = geo.indexToCoord(c);
+        geometry_msgs::Point pt;
+        pt.x = p.x(), pt.y = p.y(), pt.z = p.z();
+        m.cells.push_back(pt);
+      }
+      m.average.x = f.average.x(), m.average.y = f.average.y(), m.average.z = f.average.z();
+      m.aabb_min.x = f.box.min.x(), m.aabb_min.y = f.box.min.y(), m.aabb_min.z = f.box.min.z();
+      m.aabb_max.x = f.box.max.x(), m.aabb_max.y = f.box.max.y(), m.aabb_max.z = f.box.max.z();
+      m.n_near = static_cast<std::uint32_t>(f.n_near);
+      m.duration = f.duration(now);
+      m.omission_likelihood =
+          planning::xi(omission_, static_cast<int>(f.cells.size()), f.duration(now), f.n_near);
+      m.active = f.active;
+      out.frontiers.push_back(m);
+
+      visualization_msgs::Marker cubes;
+      cubes.header = out.header;
+      cubes.ns = "frontier_cells";
+      cubes.id = static_cast<int>(f.id);
+      cubes.type = visualization_msgs::Marker::CUBE_LIST;
+      cubes.scale.x = cubes.scale.y = cubes.scale.z = geo.resolution();
+      cubes.pose.orientation.w = 1.0;
+      // Golden-ratio hues: neighbouring ids get distinct colours; inactive ones are grey.
+      const double hue = std::fmod(f.id * 0.618033988749895, 1.0);
+      cubes.color.r = f.active ? 0.5 + 0.5 * std::cos(2 * M_PI * hue) : 0.5;
+      cubes.color.g = f.active ? 0.5 + 0.5 * std::cos(2 * M_PI * (hue - 1.0 / 3)) : 0.5;
+      cubes.color.b = f.active ? 0.5 + 0.5 * std::cos(2 * M_PI * (hue - 2.0 / 3)) : 0.5;
+      cubes.color.a = f.active ? 0.8 : 0.3;
+      cubes.points = m.cells;
+      markers.markers.push_back(cubes);
+      visualization_msgs::Marker text;
+      text.header = out.header;
+      text.ns = "frontier_xi";
+      text.id = static_cast<int>(f.id);
+      text.type = visualization_msgs::Marker::TEXT_VIEW_FACING;
+      text.pose.position = m.average;
+      text.pose.position.z += 0.3;
+      text.pose.orientation.w = 1.0;
+      text.scale.z = 0.25;
+      text.color.r = text.color.g = text.color.b = text.color.a = 1.0;
+      char buf[32];
+      std::snprintf(buf, sizeof(buf), "xi %.2f", m.omission_likelihood);
+      text.text = buf;
+      markers.markers.push_back(text);
+    }
+    frontier_pub_.publish(out);
+    marker_pub_.publish(markers);
+  }
+
+  frontier::FrontierConfig config_;
+  planning::OmissionConfig omission_;
+  common::Aabb box_;
+  std::string world_frame_;
+  std::mutex mutex_;
+  std::shared_ptr<ros_map::SharedMap> shared_;
+  std::unique_ptr<frontier::FrontierFinder> finder_;
+  std::pair<double, double> band_{-1e18, 1e18};
+  std::uint64_t last_sequence_ = 0;
+  ros::Publisher frontier_pub_, marker_pub_;
+  ros::Subscriber handle_sub_, update_sub_, layer_sub_;
+};
+
+}  // namespace go_feap
+
+PLUGINLIB_EXPORT_CLASS(go_feap::FrontierFinder, nodelet::Nodelet)

@@ -1,0 +1,169 @@
+// GlobalPlanner: orders the frontiers near the UAV with the omission-aware objective.
+// In: frontiers (go_feap/FrontierArray), odom, map_handle. Out: global_tour
+// (go_feap/GlobalTour) and global_tour_marker (line strip from the UAV through the tour).
+// Path lengths come from A* on the shared map; frontier-to-frontier lengths are cached by
+// frontier id pair and dropped when either frontier changes (changed frontiers get new ids).
+#include <nav_msgs/Odometry.h>
+#include <nodelet/nodelet.h>
+#include <pluginlib/class_list_macros.hpp>
+#include <ros/ros.h>
+#include <visualization_msgs/Marker.h>
+
+#include <chrono>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <set>
+
+#include "go_feap/FrontierArray.h"
+#include "go_feap/GlobalTour.h"
+#include "go_feap/ros/exploration_params.h"
+#include "go_feap/ros/shared_map.h"
+
+namespace go_feap {
+
+class GlobalPlanner : public nodelet::Nodelet {
+ private:
+  void onInit() override {
+    ros::NodeHandle& nh = getNodeHandle();
+    ros_params::ParamReader p(getPrivateNodeHandle());
+    ros_params::readGlobalPlannerConfig(p, config_);
+    ros_params::readAstarConfig(p, astar_config_);
+    p.get("world_frame", world_frame_);
+    ros_params::requireOrThrow(p.ok(), getName(), p.error());
+    for (const common::Status& st : {config_.validate(), astar_config_.validate()})
+      ros_params::requireOrThrow(st.ok(), getName(), st.message());
+    tour_pub_ = nh.advertise<GlobalTour>("global_tour", 2);
+    marker_pub_ = nh.advertise<visualization_msgs::Marker>("global_tour_marker", 2);
+    handle_sub_ = nh.subscribe("map_handle", 1, &GlobalPlanner::onHandle, this);
+    odom_sub_ = nh.subscribe("odom", 5, &GlobalPlanner::onOdom, this);
+    frontier_sub_ = nh.subscribe("frontiers", 2, &GlobalPlanner::onFrontiers, this);
+  }
+
+  void onHandle(const boost::shared_ptr<const ros_map::MapHandle>& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (shared_) return;
+    if (!msg->shared) {
+      NODELET_ERROR_THROTTLE(10.0, "%s: map_handle carries no map: run this nodelet in the EsdfMapper's manager",
+                             getName().c_str());
+      return;
+    }
+    const common::Status st = astar_config_.validate(msg->shared->map->config().esdf);
+    if (!st.ok()) {
+      NODELET_ERROR_STREAM_THROTTLE(10.0, getName() << ": " << st.message());
+      return;
+    }
+    shared_ = msg->shared;
+    astar_ = std::make_unique<planning::Astar>(shared_->map->occupancy(), shared_->map->esdf(), astar_config_);
+  }
+
+  void onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
+    const auto& p = msg->pose.pose.position;
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+      NODELET_WARN_THROTTLE(2.0, "%s: odometry position is not finite; ignored", getName().c_str());
+      return;
+    }
+    uav_ = common::Vec3(p.x, p.y, p.z);
+  }
+
+  void onFrontiers(const FrontierArray::ConstPtr& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!shared_ || !uav_) {
+      NODELET_WARN_THROTTLE(5.0, "%s: waiting for %s", getName().c_str(), !shared_ ? "map_handle" : "odom");
+      return;
+    }
+    std::vector<planning::FrontierSummary> frontiers;
+    std::set<unsigned> ids;
+    for (const auto& f : msg->frontiers) {
+      planning::FrontierSummary s;
+      s.id = f.id;
+      s.average = common::Vec3(f.average.x, f.average.y, f.average.z);
+      s.cell_count = static_cast<int>(f.cells.size());
+      s.duration = f.duration;
+      s.n_near = static_cast<int>(f.n_near);
+      s.active = f.active;
+      frontiers.push_back(s);
+      ids.insert(f.id);
+    }
+    // Changed frontiers come back with new ids: drop cached lengths of vanished ones.
+    for (auto it = cache_.begin(); it != cache_.end();)
+      it = ids.count(it->first.first) && ids.count(it->first.second) ? std::next(it) : cache_.erase(it);
+
+    const auto t0 = std::chrono::steady_clock::now();
+    std::size_t fallbacks = 0;
+    common::Result<planning::GlobalTour> tour = common::Result<planning::GlobalTour>::Error("");
+    {
+      std::shared_lock<std::shared_mutex> map_lock(shared_->mutex);
+      planning::PathDistances d;
+      // Beyond s_near (Euclidean, a lower bound of the path) a frontier cannot be near:
+      // its Euclidean distance only orders the top-up, so no search is spent on it.
+      d.from_uav = [&](std::size_t j) {
+        const double e = (frontiers[j].average - *uav_).norm();
+        if (e >= config_.s_near) return e;
+        const planning::PathDistance pd = planning::pathDistance(*astar_, *uav_, frontiers[j].average);
+        fallbacks += pd.euclidean_fallback;
+        return pd.metres;
+      };
+      d.between = [&](std::size_t i, std::size_t j) {
+        const auto key = std::make_pair(frontiers[i].id, frontiers[j].id);
+        auto it = cache_.find(key);
+        if (it == cache_.end()) {
+          const planning::PathDistance pd = planning::pathDistance(*astar_, frontiers[i].average, frontiers[j].average);
+          it = cache_.emplace(key, pd).first;
+        }
+        fallbacks += it->second.euclidean_fallback;
+        return it->second.metres;
+      };
+      tour = planning::planTour(frontiers, d, config_);
+    }
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    if (!tour) {
+      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": no tour: " << tour.message());
+      return;
+    }
+    NODELET_DEBUG_STREAM(getName() << ": tour of " << tour->frontier_ids.size() << " frontiers in " << ms << " ms ("
+                                   << fallbacks << " Euclidean fallbacks)");
+    GlobalTour out;
+    out.header.stamp = msg->header.stamp;
+    out.header.frame_id = world_frame_;
+    out.frontier_ids.assign(tour->frontier_ids.begin(), tour->frontier_ids.end());
+    out.cost = tour->cost;
+    out.lambda = tour->lambda;
+    out.exact = tour->exact;
+    visualization_msgs::Marker line;
+    line.header = out.header;
+    line.ns = "global_tour";
+    line.type = visualization_msgs::Marker::LINE_STRIP;
+    line.action = tour->waypoints.empty() ? visualization_msgs::Marker::DELETE : visualization_msgs::Marker::ADD;
+    line.pose.orientation.w = 1.0;
+    line.scale.x = 0.08;
+    line.color.r = 1.0, line.color.g = 0.55, line.color.a = 1.0;
+    geometry_msgs::Point start;
+    start.x = uav_->x(), start.y = uav_->y(), start.z = uav_->z();
+    line.points.push_back(start);
+    for (const common::Vec3& w : tour->waypoints) {
+      geometry_msgs::Point p;
+      p.x = w.x(), p.y = w.y(), p.z = w.z();
+      out.waypoints.push_back(p);
+      line.points.push_back(p);
+    }
+    tour_pub_.publish(out);
+    marker_pub_.publish(line);
+  }
+
+  planning::GlobalPlannerConfig config_;
+  planning::AstarConfig astar_config_;
+  std::string world_frame_;
+  std::mutex mutex_;
+  std::shared_ptr<ros_map::SharedMap> shared_;
+  std::unique_ptr<planning::Astar> astar_;
+  std::optional<common::Vec3> uav_;
+  std::map<std::pair<unsigned, unsigned>, planning::PathDistance> cache_;
+  ros::Publisher tour_pub_, marker_pub_;
+  ros::Subscriber handle_sub_, odom_sub_, frontier_sub_;
+};
+
+}  // namespace go_feap
+
+PLUGINLIB_EXPORT_CLASS(go_feap::GlobalPlanner, nodelet::Nodelet)

@@ -1,0 +1,444 @@
+#include "go_feap/planning/astar.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace go_feap::planning {
+
+using common::GridGeometry;
+using common::Status;
+using map::VoxelState;
+
+namespace {
+
+const double kSqrt2 = std::sqrt(2.0);
+const double kSqrt3 = std::sqrt(3.0);
+
+// Voxel distances within this fraction of a voxel of the clearance count as equal to it, so that a
+// clearance given as a multiple of the resolution is not undone by rounding.
+constexpr double kClearanceRounding = 1e-6;
+// Crossing times (in units of the segment) closer than this are one crossing of an edge or corner.
+constexpr double kCrossingTie = 1e-9;
+constexpr std::size_t kInitialBrickTableBits = 8;
+
+// The 26 neighbour offsets, the move type of each (number of axes changed minus one), and the
+// neighbours a move to it sweeps past: those whose offset takes, on every axis, either 0 or the move's
+// component (for a diagonal move the voxels sharing the edge or corner it passes through, and itself).
+struct Neighbourhood {
+  std::array<Index3, 26> offset;
+  std::array<int, 26> type;
+  std::array<std::uint32_t, 26> swept;
+  Neighbourhood() {
+    int i = 0;
+    for (int z = -1; z <= 1; ++z)
+      for (int y = -1; y <= 1; ++y)
+        for (int x = -1; x <= 1; ++x) {
+          if (x == 0 && y == 0 && z == 0) continue;
+          offset[i] = Index3(x, y, z);
+          type[i] = std::abs(x) + std::abs(y) + std::abs(z) - 1;
+          ++i;
+        }
+    for (int k = 0; k < 26; ++k) {
+      swept[k] = 0;
+      for (int j = 0; j < 26; ++j) {
+        bool inside = true;
+        for (int a = 0; a < 3; ++a) inside &= offset[j][a] == 0 || offset[j][a] == offset[k][a];
+        if (inside) swept[k] |= std::uint32_t{1} << j;
+      }
+    }
+  }
+};
+
+const Neighbourhood& neighbourhood() {
+  static const Neighbourhood kNeighbourhood;
+  return kNeighbourhood;
+}
+
+// Cost in voxels of a path made of m[0] axis, m[1] face-diagonal and m[2] space-diagonal moves.
+double movesCost(const std::int32_t m[3]) { return m[0] + m[1] * kSqrt2 + m[2] * kSqrt3; }
+
+// The cheapest obstacle-free move counts from a to b: as many space diagonals as the smallest
+// displacement, then face diagonals, then axis moves.
+void octileMoves(const Index3& a, const Index3& b, std::int32_t m[3]) {
+  std::array<int, 3> d = {std::abs(b.x() - a.x()), std::abs(b.y() - a.y()), std::abs(b.z() - a.z())};
+  std::sort(d.begin(), d.end());
+  m[2] = d[0];
+  m[1] = d[1] - d[0];
+  m[0] = d[2] - d[1];
+}
+
+// Open list: a 4-ary min-heap (shallower than a binary one, and a node's children share a cache line)
+// ordered by f, then by h, so that among equal-cost candidates the one nearer the goal comes first.
+template <typename Entry>
+bool before(const Entry& a, const Entry& b) {
+  return a.f < b.f || (a.f == b.f && a.h < b.h);
+}
+
+template <typename Entry>
+void heapPush(std::vector<Entry>& heap, const Entry& e) {
+  std::size_t i = heap.size();
+  heap.push_back(e);
+  while (i > 0) {
+    const std::size_t parent = (i - 1) / 4;
+    if (!before(e, heap[parent])) break;
+    heap[i] = heap[parent];
+    i = parent;
+  }
+  heap[i] = e;
+}
+
+template <typename Entry>
+Entry heapPop(std::vector<Entry>& heap) {
+  const Entry top = heap.front();
+  const Entry last = heap.back();
+  heap.pop_back();
+  const std::size_t n = heap.size();
+  if (n == 0) return top;
+  std::size_t i = 0;
+  for (;;) {
+    const std::size_t first = 4 * i + 1;
+    if (first >= n) break;
+    std::size_t best = first;
+    for (std::size_t c = first + 1; c < std::min(first + 4, n); ++c)
+      if (before(heap[c], heap[best])) best = c;
+    if (!before(heap[best], last)) break;
+    heap[i] = heap[best];
+    i = best;
+  }
+  heap[i] = last;
+  return top;
+}
+
+double pathLength(const std::vector<Vec3>& path) {
+  double length = 0.0;
+  for (std::size_t i = 1; i < path.size(); ++i) length += (path[i] - path[i - 1]).norm();
+  return length;
+}
+
+bool sameGeometry(const GridGeometry& a, const GridGeometry& b) {
+  const double res = a.resolution();
+  return a.dims() == b.dims() && std::abs(a.resolution() - b.resolution()) <= 1e-9 * res &&
+         (a.origin() - b.origin()).cwiseAbs().maxCoeff() <= 1e-6 * res;
+}
+
+}  // namespace
+
+Status AstarConfig::validate() const {
+  auto err = [](const char* key, const char* why) {
+    return Status::Error(std::string("astar: ") + key + " " + why);
+  };
+  if (!(clearance >= 0.0 && std::isfinite(clearance))) return err("clearance", "must be finite and >= 0");
+  if (max_expansions < 1) return err("max_expansions", "must be >= 1");
+  if (!(tie_breaker >= 1.0 && std::isfinite(tie_breaker))) return err("tie_breaker", "must be finite and >= 1");
+  return Status::Ok();
+}
+
+Status AstarConfig::validate(const map::EsdfConfig& esdf) const {
+  if (Status s = validate(); !s) return s;
+  if (clearance > esdf.max_distance)
+    return Status::Error("astar: clearance must be <= the ESDF's max_distance (" +
+                         std::to_string(esdf.max_distance) + " m, where distances are truncated), got " +
+                         std::to_string(clearance));
+  return Status::Ok();
+}
+
+const char* toString(PathStatus s) {
+  switch (s) {
+    case PathStatus::kFound:
+      return "found";
+    case PathStatus::kStartBlocked:
+      return "start_blocked";
+    case PathStatus::kGoalBlocked:
+      return "goal_blocked";
+    case PathStatus::kNoPath:
+      return "no_path";
+    case PathStatus::kBudgetExceeded:
+      return "budget_exceeded";
+  }
+  return "unknown";
+}
+
+Astar::Astar(const map::OccupancyMap& occupancy, const map::Esdf& esdf, const AstarConfig& config)
+    : occupancy_(occupancy), esdf_(esdf), config_(config), geo_(occupancy.geometry()) {
+  if (Status s = config.validate(esdf.config()); !s) throw std::invalid_argument(s.message());
+  if (!sameGeometry(occupancy.geometry(), esdf.geometry()))
+    throw std::invalid_argument("astar: the occupancy map and the ESDF must share one grid geometry");
+  if (geo_.size() > std::numeric_limits<std::uint32_t>::max())
+    throw std::invalid_argument("astar: grids of 2^32 voxels or more are not supported");
+  blocked_below_ = config.clearance - kClearanceRounding * geo_.resolution();
+  brick_dims_ = (geo_.dims().array() + (kBrickEdge - 1)) / kBrickEdge;
+}
+
+bool Astar::traversable(const Index3& idx) const {
+  return geo_.inside(idx) && traversable(idx, geo_.linear(idx));
+}
+
+bool Astar::traversable(const Index3& idx, std::size_t linear) const {
+  const VoxelState state = occupancy_.stateAt(linear);
+  if (state == VoxelState::kOccupied) return false;
+  if (state == VoxelState::kUnknown && !config_.unknown_is_free) return false;
+  return esdf_.distance(idx) >= blocked_below_;
+}
+
+bool Astar::snap(const Vec3& p, double radius, Index3& out) const {
+  if (!p.allFinite() || !(radius >= 0.0)) return false;
+  if (geo_.bounds().contains(p)) {
+    const Index3 own = geo_.coordToIndex(p);
+    if (traversable(own)) {
+      out = own;
+      return true;
+    }
+  }
+  // Index range of the voxels whose centres can lie within the radius, clamped to the grid in doubles
+  // before converting (p may be far outside).
+  Index3 lo, hi;
+  for (int a = 0; a < 3; ++a) {
+    const double n = geo_.dims()[a];
+    const double l = std::floor((p[a] - radius - geo_.origin()[a]) / geo_.resolution() - 0.5);
+    const double h = std::ceil((p[a] + radius - geo_.origin()[a]) / geo_.resolution() - 0.5);
+    lo[a] = static_cast<int>(std::clamp(l, 0.0, n));
+    hi[a] = static_cast<int>(std::clamp(h, -1.0, n - 1.0));
+    if (lo[a] > hi[a]) return false;
+  }
+  const double r2 = radius * radius;
+  double best = std::numeric_limits<double>::infinity();
+  Index3 idx;
+  for (idx.z() = lo.z(); idx.z() <= hi.z(); ++idx.z())
+    for (idx.y() = lo.y(); idx.y() <= hi.y(); ++idx.y())
+      for (idx.x() = lo.x(); idx.x() <= hi.x(); ++idx.x()) {
+        const double d2 = (geo_.indexToCoord(idx) - p).squaredNorm();
+        if (d2 <= r2 && d2 < best && traversable(idx)) {
+          best = d2;
+          out = idx;
+        }
+      }
+  return best <= r2;
+}
+
+bool Astar::segmentTraversable(const Vec3& a, const Vec3& b) const {
+  if (!a.allFinite() || !b.allFinite()) return false;
+  const GridGeometry& g = geo_;
+  if (!g.bounds().contains(a) || !g.bounds().contains(b)) return false;
+  const Vec3 pa = (a - g.origin()) / g.resolution(), pb = (b - g.origin()) / g.resolution();
+  Index3 cur = pa.array().floor().cast<int>();
+  const Index3 last = pb.array().floor().cast<int>();
+  if (!traversable(cur) || !traversable(last)) return false;
+  const Vec3 d = pb - pa;
+  Index3 step, remaining;
+  Vec3 t_max, t_delta;
+  for (int i = 0; i < 3; ++i) {
+    step[i] = d[i] > 0.0 ? 1 : -1;
+    remaining[i] = std::abs(last[i] - cur[i]);
+    if (remaining[i] == 0) {
+      t_max[i] = t_delta[i] = std::numeric_limits<double>::infinity();
+    } else {
+      t_delta[i] = 1.0 / std::abs(d[i]);
+      t_max[i] = (d[i] > 0.0 ? std::floor(pa[i]) + 1.0 - pa[i] : pa[i] - std::floor(pa[i])) * t_delta[i];
+    }
+  }
+  // Walks the voxels in order of the boundary crossings; where the segment crosses an edge or a corner
+  // (two or three crossings at once) every voxel around it is checked, not only the one a rounding
+  // would pick.
+  while ((remaining.array() > 0).any()) {
+    double t = std::numeric_limits<double>::infinity();
+    for (int i = 0; i < 3; ++i)
+      if (remaining[i] > 0) t = std::min(t, t_max[i]);
+    int axes[3], n = 0;
+    for (int i = 0; i < 3; ++i)
+      if (remaining[i] > 0 && t_max[i] <= t + kCrossingTie) axes[n++] = i;
+    for (int mask = 1; mask < (1 << n); ++mask) {
+      Index3 v = cur;
+      for (int k = 0; k < n; ++k)
+        if (mask & (1 << k)) v[axes[k]] += step[axes[k]];
+      if (!traversable(v)) return false;
+    }
+    for (int k = 0; k < n; ++k) {
+      cur[axes[k]] += step[axes[k]];
+      --remaining[axes[k]];
+      t_max[axes[k]] += t_delta[axes[k]];
+    }
+  }
+  return true;
+}
+
+std::vector<Vec3> Astar::shorten(const std::vector<Vec3>& path) const {
+  if (path.size() <= 2) return path;
+  const std::size_t last = path.size() - 1;
+  std::vector<Vec3> out{path.front()};
+  std::size_t anchor = 0;
+  while (anchor < last) {
+    // Gallop ahead (1, 2, 4, ... points) while the straight segment stays traversable, then bisect
+    // between the last point that passed and the first that failed: O(log n) segment tests per kept
+    // point instead of one per path point.
+    std::size_t good = anchor + 1, bad = path.size();
+    for (std::size_t stride = 1; good < last; stride *= 2) {
+      const std::size_t probe = std::min(good + stride, last);
+      if (!segmentTraversable(path[anchor], path[probe])) {
+        bad = probe;
+        break;
+      }
+      good = probe;
+    }
+    while (bad < path.size() && bad - good > 1) {
+      const std::size_t mid = good + (bad - good) / 2;
+      (segmentTraversable(path[anchor], path[mid]) ? good : bad) = mid;
+    }
+    out.push_back(path[good]);
+    anchor = good;
+  }
+  return out;
+}
+
+void Astar::resetScratch() const {
+  if (brick_slots_.empty()) brick_slots_.assign(std::size_t{1} << kInitialBrickTableBits, BrickSlot{0, 0, 0});
+  if (++search_stamp_ == 0) {  // wrapped: forget every old stamp
+    for (BrickSlot& s : brick_slots_) s.stamp = 0;
+    search_stamp_ = 1;
+  }
+  bricks_used_ = 0;
+  nodes_.clear();
+  open_.clear();
+}
+
+std::size_t Astar::brickSlot(std::uint32_t key) const {
+  // Fibonacci hashing: the top bits of the product, as many as the table is long.
+  const std::size_t mask = brick_slots_.size() - 1;
+  const int shift = 64 - __builtin_ctzll(brick_slots_.size());
+  std::size_t i = static_cast<std::size_t>((std::uint64_t{key} * 0x9E3779B97F4A7C15ull) >> shift);
+  while (brick_slots_[i].stamp == search_stamp_ && brick_slots_[i].key != key) i = (i + 1) & mask;
+  return i;
+}
+
+std::size_t Astar::brick(std::uint32_t key) const {
+  std::size_t i = brickSlot(key);
+  if (brick_slots_[i].stamp == search_stamp_) return std::size_t{brick_slots_[i].brick} * kBrickCells;
+  const std::uint32_t b = bricks_used_++;
+  const std::size_t first = std::size_t{b} * kBrickCells;
+  if (cells_.size() < first + kBrickCells) cells_.resize(first + kBrickCells);
+  std::fill_n(cells_.begin() + first, kBrickCells, kUnseen);
+  brick_slots_[i] = BrickSlot{search_stamp_, key, b};
+  if (2 * std::size_t{bricks_used_} > brick_slots_.size()) {
+    std::vector<BrickSlot> old;
+    for (const BrickSlot& s : brick_slots_)
+      if (s.stamp == search_stamp_) old.push_back(s);
+    brick_slots_.assign(brick_slots_.size() * 2, BrickSlot{0, 0, 0});
+    search_stamp_ = 1;
+    for (BrickSlot s : old) {
+      s.stamp = search_stamp_;
+      brick_slots_[brickSlot(s.key)] = s;
+    }
+  }
+  return first;
+}
+
+PathResult Astar::search(const Vec3& start, const Vec3& goal, double snap_radius) const {
+  PathResult result;
+  Index3 s, g;
+  if (!snap(start, snap_radius, s)) {
+    result.status = PathStatus::kStartBlocked;
+    return result;
+  }
+  if (!snap(goal, snap_radius, g)) {
+    result.status = PathStatus::kGoalBlocked;
+    return result;
+  }
+  const Neighbourhood& nb = neighbourhood();
+  const double w_extra = config_.tie_breaker - 1.0;
+
+  // f = cost + heuristic is computed from summed move counts so that equal costs give bit-identical f
+  // (h only breaks those ties, so single precision is enough for it).
+  auto open = [&](std::int32_t n) {
+    std::int32_t h[3], f[3];
+    octileMoves(nodes_[n].idx, g, h);
+    for (int i = 0; i < 3; ++i) f[i] = nodes_[n].moves[i] + h[i];
+    const double hc = movesCost(h);
+    heapPush(open_, OpenEntry{movesCost(f) + w_extra * hc, static_cast<float>(hc), n});
+  };
+  // Cell of a voxel inside the grid; neighbouring voxels mostly share a brick, so the last one is kept.
+  std::uint32_t cached_key = std::numeric_limits<std::uint32_t>::max();
+  std::size_t cached_first = 0;
+  auto cellOf = [&](const Index3& q) {
+    const auto key = static_cast<std::uint32_t>(
+        (q.x() >> kBrickBits) +
+        (static_cast<std::size_t>(q.y() >> kBrickBits) + static_cast<std::size_t>(q.z() >> kBrickBits) * brick_dims_.y()) *
+            brick_dims_.x());
+    if (key != cached_key) {
+      cached_first = brick(key);
+      cached_key = key;
+    }
+    constexpr int kMask = (1 << kBrickBits) - 1;
+    return cached_first + static_cast<std::size_t>((q.x() & kMask) | (q.y() & kMask) << kBrickBits |
+                                                   (q.z() & kMask) << (2 * kBrickBits));
+  };
+
+  resetScratch();
+  nodes_.push_back(Node{s, -1, {0, 0, 0}, false});
+  cells_[cellOf(s)] = 0;
+  open(0);
+  std::int32_t reached = -1;
+  result.status = PathStatus::kNoPath;
+  while (!open_.empty()) {
+    const std::int32_t n = heapPop(open_).node;
+    if (nodes_[n].closed) continue;  // a stale entry: the node was reached more cheaply since
+    if (nodes_[n].idx == g) {
+      ++result.expansions;
+      reached = n;
+      result.status = PathStatus::kFound;
+      break;
+    }
+    if (result.expansions >= config_.max_expansions) {
+      result.status = PathStatus::kBudgetExceeded;
+      break;
+    }
+    ++result.expansions;
+    nodes_[n].closed = true;
+    const Index3 idx = nodes_[n].idx;
+    std::array<std::size_t, 26> cell;
+    std::uint32_t free = 0;
+    for (int k = 0; k < 26; ++k) {
+      const Index3 q = idx + nb.offset[k];
+      if (!geo_.inside(q)) continue;
+      cell[k] = cellOf(q);
+      std::int32_t& c = cells_[cell[k]];
+      if (c == kUnseen) c = traversable(q, geo_.linear(q)) ? kFree : kBlocked;
+      if (c != kBlocked) free |= std::uint32_t{1} << k;
+    }
+    for (int k = 0; k < 26; ++k) {
+      if ((free & nb.swept[k]) != nb.swept[k]) continue;  // blocked, or cutting a blocked edge / corner
+      std::int32_t moves[3] = {nodes_[n].moves[0], nodes_[n].moves[1], nodes_[n].moves[2]};
+      ++moves[nb.type[k]];
+      std::int32_t m = cells_[cell[k]];
+      if (m >= 0) {
+        if (nodes_[m].closed || movesCost(moves) >= movesCost(nodes_[m].moves)) continue;
+      } else {
+        m = static_cast<std::int32_t>(nodes_.size());
+        nodes_.push_back(Node{idx + nb.offset[k], n, {0, 0, 0}, false});
+        cells_[cell[k]] = m;
+      }
+      nodes_[m].parent = n;
+      std::copy(moves, moves + 3, nodes_[m].moves);
+      open(m);
+    }
+  }
+  if (reached < 0) return result;
+
+  for (std::int32_t n = reached; n >= 0; n = nodes_[n].parent)
+    result.raw_path.push_back(geo_.indexToCoord(nodes_[n].idx));
+  std::reverse(result.raw_path.begin(), result.raw_path.end());
+  result.raw_length = pathLength(result.raw_path);
+  result.path = shorten(result.raw_path);
+  result.length = pathLength(result.path);
+  return result;
+}
+
+PathDistance pathDistance(const Astar& astar, const Vec3& a, const Vec3& b) {
+  const PathResult r = astar.search(a, b);
+  if (r.status != PathStatus::kFound) return {(b - a).norm(), true};
+  return {(r.path.front() - a).norm() + r.length + (b - r.path.back()).norm(), false};
+}
+
+}  // namespace go_feap::planning

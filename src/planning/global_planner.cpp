@@ -1,0 +1,99 @@
+#include "go_feap/planning/global_planner.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "go_feap/planning/tour_solver.h"
+
+namespace go_feap::planning {
+
+using common::Result;
+using common::Status;
+
+Status GlobalPlannerConfig::validate() const {
+  auto err = [](const char* key, const char* why) {
+    return Status::Error(std::string("exploration: ") + key + " " + why);
+  };
+  if (!(s_near > 0.0 && std::isfinite(s_near))) return err("s_near", "must be > 0");
+  if (n_min_tsp < 1) return err("n_min_tsp", "must be >= 1");
+  if (n_max_tsp < n_min_tsp) return err("n_max_tsp", "must be >= n_min_tsp");
+  if (!(lambda >= 0.0 && std::isfinite(lambda))) return err("lambda", "must be >= 0");
+  if (!(v_max > 0.0 && std::isfinite(v_max))) return err("v_max", "must be > 0");
+  if (max_exact < 0 || max_exact > kMaxExactFrontiers)
+    return err("max_exact", ("must be in [0, " + std::to_string(kMaxExactFrontiers) + "]").c_str());
+  if (Status s = omission.validate(); !s) return Status::Error("exploration/" + s.message());
+  return Status::Ok();
+}
+
+std::vector<std::size_t> selectCandidates(const std::vector<FrontierSummary>& frontiers,
+                                          const std::vector<double>& distances_from_uav,
+                                          const GlobalPlannerConfig& config) {
+  if (frontiers.size() != distances_from_uav.size()) return {};
+  std::vector<std::size_t> reachable;
+  for (std::size_t j = 0; j < frontiers.size(); ++j) {
+    const double d = distances_from_uav[j];
+    if (frontiers[j].active && d >= 0.0 && std::isfinite(d)) reachable.push_back(j);
+  }
+  std::stable_sort(reachable.begin(), reachable.end(), [&](std::size_t a, std::size_t b) {
+    return distances_from_uav[a] < distances_from_uav[b];
+  });
+  // Sorted by distance, the near ones come first: keep them all, then the nearest others
+  // up to n_min_tsp, and never more than n_max_tsp.
+  const auto near =
+      static_cast<std::size_t>(std::count_if(reachable.begin(), reachable.end(), [&](std::size_t j) {
+        return distances_from_uav[j] < config.s_near;
+      }));
+  const std::size_t keep =
+      std::min({reachable.size(), std::max(near, static_cast<std::size_t>(config.n_min_tsp)),
+                static_cast<std::size_t>(std::max(config.n_max_tsp, 0))});
+  reachable.resize(keep);
+  return reachable;
+}
+
+Result<GlobalTour> planTour(const std::vector<FrontierSummary>& frontiers, const PathDistances& distances,
+                            const GlobalPlannerConfig& config) {
+  if (Status s = config.validate(); !s) return s;
+  constexpr double kUnreachable = std::numeric_limits<double>::infinity();
+  std::vector<double> from_uav(frontiers.size(), kUnreachable);
+  for (std::size_t j = 0; j < frontiers.size(); ++j)
+    if (frontiers[j].active) from_uav[j] = distances.from_uav(j);
+  const std::vector<std::size_t> candidates = selectCandidates(frontiers, from_uav, config);
+
+  const int n = static_cast<int>(candidates.size());
+  Eigen::MatrixXd cost = Eigen::MatrixXd::Zero(n + 1, n + 1);
+  std::vector<double> xi_of(n);
+  for (int a = 0; a < n; ++a) {
+    const FrontierSummary& f = frontiers[candidates[a]];
+    cost(0, a + 1) = from_uav[candidates[a]] / config.v_max;
+    xi_of[a] = xi(config.omission, f.cell_count, f.duration, f.n_near);
+    for (int b = 0; b < n; ++b) {
+      if (a == b) continue;
+      const double s = distances.between(candidates[a], candidates[b]);
+      if (!(s >= 0.0 && std::isfinite(s)))
+        return Result<GlobalTour>::Error("global planner: path distance from frontier " +
+                                         std::to_string(f.id) + " to frontier " +
+                                         std::to_string(frontiers[candidates[b]].id) +
+                                         " must be finite and >= 0, got " + std::to_string(s));
+      cost(a + 1, b + 1) = s / config.v_max;
+    }
+  }
+
+  const TourResult solved = solve(cost, xi_of, config.lambda, config.max_exact);
+  if (!solved.status) return solved.status;
+  GlobalTour tour;
+  tour.cost = solved.cost;
+  tour.lambda = config.lambda;
+  tour.exact = solved.exact;
+  for (int node : solved.order) {
+    const std::size_t j = candidates[node - 1];
+    tour.frontier_ids.push_back(frontiers[j].id);
+    tour.indices.push_back(j);
+    tour.waypoints.push_back(frontiers[j].average);
+    tour.xi.push_back(xi_of[node - 1]);
+  }
+  return tour;
+}
+
+}  // namespace go_feap::planning

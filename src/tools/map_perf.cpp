@@ -1,0 +1,90 @@
+// go_feap_map_perf: times the mapper on depth rendered along a path through a procedural
+// scene: occupancy integration and ESDF update per frame, and the map's memory.
+#include <chrono>
+#include <iostream>
+#include <map>
+
+#include "camera_path.h"
+#include "cli_args.h"
+#include "go_feap/map/voxel_map.h"
+#include "go_feap/sim/depth_camera.h"
+#include "go_feap/world/scene_files.h"
+
+namespace {
+
+int usage(const char* why) {
+  if (why) std::cerr << "go_feap_map_perf: " << why << "\n";
+  std::cerr << "usage: go_feap_map_perf --scene maze|powerplant [--frames N] [--skip-pixel K]\n"
+               "Integrates N (default 300) rendered 640x480 depth frames taken along a path (steps of\n"
+               "about 0.1 m, turning) and prints integration and ESDF update times and map memory.\n";
+  return 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace go_feap;
+  std::map<std::string, std::string> args;
+  bool help = false;
+  const std::string error =
+      tools::parseArgs(argc, argv, {{"--scene", true}, {"--frames", true}, {"--skip-pixel", true}}, args, help);
+  if (help) return usage(nullptr), 0;
+  if (!error.empty()) return usage(error.c_str());
+  unsigned long long frames = 300, skip = 2;
+  if (args.count("--frames") && (!tools::parseCount(args["--frames"], frames) || frames == 0))
+    return usage("--frames must be a positive integer");
+  if (args.count("--skip-pixel") && (!tools::parseCount(args["--skip-pixel"], skip) || skip == 0))
+    return usage("--skip-pixel must be a positive integer");
+  const std::string spec = args["--scene"];
+  if (spec != "maze" && spec != "powerplant") return usage("--scene must be maze or powerplant");
+  auto scene = world::makeScene(spec, 0);
+  if (!scene) {
+    std::cerr << "go_feap_map_perf: " << scene.message() << "\n";
+    return 1;
+  }
+  const sim::DepthCameraConfig camera;
+  const sim::DepthRenderer renderer(camera, *scene);
+  // One loop of the path is ~10x the box diagonal long: ~0.1 m per step.
+  const int samples = static_cast<int>(10.0 * scene->box.size().norm() / 0.1);
+  const auto poses = tools::cameraPath(*scene, static_cast<int>(frames), samples);
+
+  map::MapConfig config;
+  config.occupancy.skip_pixel = static_cast<int>(skip);
+  map::OccupancyMap occupancy(config.occupancy, scene->box);
+  map::Esdf esdf(occupancy.geometry(), config.esdf);
+  const auto K = camera.intrinsics();
+  const map::DepthIntrinsics intrinsics{K.width, K.height, K.fx, K.fy, K.cx, K.cy};
+  using Clock = std::chrono::steady_clock;
+  double occ_total = 0, occ_max = 0, esdf_total = 0, esdf_max = 0;
+  std::size_t rays = 0;
+  cv::Mat depth;
+  for (const auto& T : poses) {
+    renderer.render(T, depth);
+    const auto t0 = Clock::now();
+    auto change = occupancy.integrate(depth, intrinsics, T);
+    const auto t1 = Clock::now();
+    if (!change) {
+      std::cerr << "go_feap_map_perf: " << change.message() << "\n";
+      return 1;
+    }
+    esdf.update(change->became_occupied, change->stopped_occupied);
+    const auto t2 = Clock::now();
+    const double a = std::chrono::duration<double, std::milli>(t1 - t0).count();
+    const double b = std::chrono::duration<double, std::milli>(t2 - t1).count();
+    occ_total += a, esdf_total += b;
+    occ_max = std::max(occ_max, a), esdf_max = std::max(esdf_max, b);
+    rays += change->rays;
+  }
+  const double n = static_cast<double>(poses.size());
+  const std::size_t bytes = occupancy.memoryBytes() + esdf.memoryBytes();
+  const auto& geo = occupancy.geometry();
+  const double volume = geo.size() * std::pow(geo.resolution(), 3);
+  std::cout << "scene " << spec << ", " << poses.size() << " frames 640x480, skip_pixel " << skip << ", "
+            << rays / n << " rays per frame after merging\n"
+            << "integration: mean " << occ_total / n << " ms, max " << occ_max << " ms per frame\n"
+            << "ESDF update: mean " << esdf_total / n << " ms, max " << esdf_max << " ms per frame\n"
+            << "map: " << geo.dims().transpose() << " voxels (" << volume << " m^3), " << bytes / (1024.0 * 1024.0)
+            << " MiB incl. ESDF = " << bytes / volume / 1024.0 << " KiB per m^3; " << occupancy.knownCount()
+            << " voxels known\n";
+  return 0;
+}

@@ -1,0 +1,115 @@
+// rostest: simulator + EsdfMapper + FrontierFinder + GlobalPlanner. After the vehicle turns
+// in place at the maze start, a non-empty tour must come out whose first frontier exists
+// and is reachable from the start through ground-truth free space.
+#include <gtest/gtest.h>
+#include <nav_msgs/Odometry.h>
+#include <ros/ros.h>
+
+#include <cmath>
+
+#include "go_feap/FrontierArray.h"
+#include "go_feap/GlobalTour.h"
+#include "go_feap/PositionCommand.h"
+#include "go_feap/world/scene_files.h"
+
+namespace {
+
+using go_feap::common::Index3;
+using go_feap::common::Vec3;
+
+class FrontierPlannerTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    frontier_sub_ = nh_.subscribe("frontiers", 2, &FrontierPlannerTest::onFrontiers, this);
+    tour_sub_ = nh_.subscribe("global_tour", 2, &FrontierPlannerTest::onTour, this);
+    odom_sub_ = nh_.subscribe("odom", 2, &FrontierPlannerTest::onOdom, this);
+    cmd_pub_ = nh_.advertise<go_feap::PositionCommand>("position_cmd", 10);
+  }
+  template <typename Pred>
+  bool spinUntil(Pred pred, double wall_timeout) {
+    const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(wall_timeout);
+    while (ros::ok() && ros::WallTime::now() < end) {
+      ros::spinOnce();
+      if (pred()) return true;
+      ros::WallDuration(0.005).sleep();
+    }
+    return pred();
+  }
+  void onFrontiers(const go_feap::FrontierArray::ConstPtr& m) { frontiers_ = m; }
+  void onTour(const go_feap::GlobalTour::ConstPtr& m) {
+    if (frontiers_ && !m->frontier_ids.empty()) {
+      tour_ = m;
+      tour_frontiers_ = frontiers_;
+    }
+  }
+  void onOdom(const nav_msgs::Odometry::ConstPtr& m) { odom_ = m; }
+
+  ros::NodeHandle nh_;
+  ros::Subscriber frontier_sub_, tour_sub_, odom_sub_;
+  ros::Publisher cmd_pub_;
+  go_feap::FrontierArray::ConstPtr frontiers_, tour_frontiers_;
+  go_feap::GlobalTour::ConstPtr tour_;
+  nav_msgs::Odometry::ConstPtr odom_;
+};
+
+TEST_F(FrontierPlannerTest, TourStartsAtAReachableFrontier) {
+  ros::NodeHandle pnh("~");
+  std::string name;
+  int seed = 0;
+  ASSERT_TRUE(pnh.getParam("scene", name) && pnh.getParam("seed", seed));
+  auto scene = go_feap::world::makeScene(name, seed);
+  ASSERT_TRUE(scene) << scene.message();
+  const auto observable = go_feap::world::computeObservableSet(*scene);
+  ASSERT_TRUE(spinUntil([&] { return odom_ != nullptr; }, 60.0));
+
+  const Vec3 c = scene->start.position;
+  const ros::Time t0 = ros::Time::now();
+  ASSERT_TRUE(spinUntil(
+      [&] {
+        const double t = (ros::Time::now() - t0).toSec();
+        go_feap::PositionCommand cmd;
+        cmd.header.stamp = ros::Time::now();
+        cmd.position.x = c.x(), cmd.position.y = c.y(), cmd.position.z = c.z();
+        cmd.yaw = std::atan2(std::sin(0.8 * t), std::cos(0.8 * t));
+        cmd.yaw_dot = 0.8;
+        cmd_pub_.publish(cmd);
+        return t > 2 * M_PI / 0.8 && tour_ != nullptr;
+      },
+      150.0))
+      << "no non-empty global_tour";
+
+  ASSERT_FALSE(tour_->frontier_ids.empty());
+  EXPECT_EQ(tour_->frontier_ids.size(), tour_->waypoints.size());
+  EXPECT_TRUE(tour_->exact);
+  const go_feap::Frontier* first = nullptr;
+  for (const auto& f : tour_frontiers_->frontiers)
+    if (f.id == tour_->frontier_ids.front()) first = &f;
+  ASSERT_NE(first, nullptr) << "the tour's first frontier is not among the frontiers";
+  EXPECT_TRUE(first->active);
+  // Reachable: some cell of it lies in the ground-truth observable set (free space
+  // connected to the start).
+  const auto& geo = observable.mask.geometry();
+  std::size_t reachable = 0;
+  for (const auto& p : first->cells) {
+    const Index3 idx = geo.coordToIndex(Vec3(p.x, p.y, p.z));
+    reachable += geo.inside(idx) && observable.mask.at(idx) && !scene->isOccupied(idx);
+  }
+  EXPECT_GT(reachable, first->cells.size() / 2);
+  // Every frontier cell is known free in truth too (not inside a wall).
+  std::size_t in_wall = 0, cells = 0;
+  for (const auto& f : tour_frontiers_->frontiers)
+    for (const auto& p : f.cells) {
+      ++cells;
+      in_wall += scene->isOccupied(Vec3(p.x, p.y, p.z));
+    }
+  EXPECT_LT(in_wall, cells / 50 + 1);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ::testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "test_frontier_planner_ros");
+  ros::NodeHandle nh;
+  return RUN_ALL_TESTS();
+}

@@ -1,0 +1,185 @@
+// rostest: simulator + EsdfMapper. The vehicle turns in place at the maze start; the
+// occupied cloud must show the walls around it (checked against the ground truth), bad
+// frames must be skipped without losing the map, and save_map must write a readable .bt.
+#include <geometry_msgs/PoseStamped.h>
+#include <gtest/gtest.h>
+#include <nav_msgs/Odometry.h>
+#include <octomap/OcTree.h>
+#include <ros/ros.h>
+#include <sensor_msgs/Image.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <sensor_msgs/point_cloud2_iterator.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include "go_feap/MapUpdate.h"
+#include "go_feap/PositionCommand.h"
+#include "go_feap/SaveMap.h"
+#include "go_feap/world/scene_files.h"
+
+namespace {
+
+using go_feap::common::Vec3;
+
+struct CloudVerdict {
+  std::size_t points = 0;
+  double on_truth = 0.0;  // share of points within one voxel of a ground-truth obstacle
+  int directions = 0;     // of +x, +y, -x, -y: walls seen within 2.5 m of the centre
+};
+
+CloudVerdict judge(const sensor_msgs::PointCloud2& cloud, const go_feap::world::Scene& scene, const Vec3& centre) {
+  CloudVerdict v;
+  std::size_t good = 0;
+  bool dir[4] = {false, false, false, false};
+  for (sensor_msgs::PointCloud2ConstIterator<float> it(cloud, "x"); it != it.end(); ++it) {
+    const Vec3 p(it[0], it[1], it[2]);
+    ++v.points;
+    bool near_truth = false;
+    for (int dx = -1; dx <= 1 && !near_truth; ++dx)
+      for (int dy = -1; dy <= 1 && !near_truth; ++dy)
+        for (int dz = -1; dz <= 1 && !near_truth; ++dz)
+          near_truth = scene.isOccupied(Vec3(p + 0.1 * Vec3(dx, dy, dz)));
+    good += near_truth;
+    const Vec3 d = p - centre;
+    if (p.z() < 0.3 || std::hypot(d.x(), d.y()) > 2.5) continue;  // walls, not floor
+    const double a = std::atan2(d.y(), d.x());
+    dir[static_cast<int>(std::lround(a / (M_PI / 2)) + 4) % 4] = true;
+  }
+  v.on_truth = v.points ? double(good) / v.points : 0.0;
+  for (bool b : dir) v.directions += b;
+  return v;
+}
+
+class MapperTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    odom_sub_ = nh_.subscribe("odom", 10, &MapperTest::onOdom, this);
+    cloud_sub_ = nh_.subscribe("occupied_cloud", 1, &MapperTest::onCloud, this);
+    update_sub_ = nh_.subscribe("map_update", 10, &MapperTest::onUpdate, this);
+    cmd_pub_ = nh_.advertise<go_feap::PositionCommand>("position_cmd", 10);
+    depth_pub_ = nh_.advertise<sensor_msgs::Image>("depth", 10);
+    pose_pub_ = nh_.advertise<geometry_msgs::PoseStamped>("camera_pose", 10);
+  }
+  template <typename Pred>
+  bool spinUntil(Pred pred, double wall_timeout) {
+    const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(wall_timeout);
+    while (ros::ok() && ros::WallTime::now() < end) {
+      ros::spinOnce();
+      if (pred()) return true;
+      ros::WallDuration(0.005).sleep();
+    }
+    return pred();
+  }
+  void onOdom(const nav_msgs::Odometry::ConstPtr& m) { odom_ = m; }
+  void onCloud(const sensor_msgs::PointCloud2::ConstPtr& m) { cloud_ = m; }
+  void onUpdate(const go_feap::MapUpdate::ConstPtr& m) {
+    last_update_ = m;
+    ++updates_;
+  }
+
+  ros::NodeHandle nh_;
+  ros::Subscriber odom_sub_, cloud_sub_, update_sub_;
+  ros::Publisher cmd_pub_, depth_pub_, pose_pub_;
+  nav_msgs::Odometry::ConstPtr odom_;
+  sensor_msgs::PointCloud2::ConstPtr cloud_;
+  go_feap::MapUpdate::ConstPtr last_update_;
+  std::size_t updates_ = 0;
+};
+
+TEST_F(MapperTest, TurningInPlaceMapsTheWallsBadFramesAreSkippedSaveMapWorks) {
+  ros::NodeHandle pnh("~");
+  std::string scene_name;
+  int seed = 0;
+  ASSERT_TRUE(pnh.getParam("scene", scene_name) && pnh.getParam("seed", seed));
+  auto scene = go_feap::world::makeScene(scene_name, seed);
+  ASSERT_TRUE(scene) << scene.message();
+  ASSERT_TRUE(spinUntil([&] { return odom_ && last_update_; }, 60.0)) << "no odom or map_update";
+
+  // Turn in place at the start: yaw ramps through a full circle in 8 s of sim time.
+  const Vec3 centre = scene->start.position;
+  const ros::Time t0 = ros::Time::now();
+  ASSERT_TRUE(spinUntil(
+      [&] {
+        const double t = (ros::Time::now() - t0).toSec();
+        go_feap::PositionCommand c;
+        c.header.stamp = ros::Time::now();
+        c.position.x = centre.x();
+        c.position.y = centre.y();
+        c.position.z = centre.z();
+        c.yaw = std::atan2(std::sin(0.8 * t), std::cos(0.8 * t));
+        c.yaw_dot = 0.8;
+        cmd_pub_.publish(c);
+        return t > 2 * M_PI / 0.8 + 1.0;
+      },
+      120.0));
+  cloud_.reset();
+  ASSERT_TRUE(spinUntil([&] { return cloud_ != nullptr; }, 30.0)) << "no occupied_cloud";
+  const CloudVerdict before = judge(*cloud_, *scene, centre);
+  std::cout << before.points << " occupied points, " << 100 * before.on_truth << " % on the truth, walls in "
+            << before.directions << " of 4 directions\n";
+  EXPECT_GT(before.points, 2000u);
+  EXPECT_GE(before.on_truth, 0.97);
+  EXPECT_EQ(before.directions, 4);
+  EXPECT_GT(last_update_->sequence, 50u);
+
+  // Bad frames: wrong encoding, and a camera pose 30 m away (relocalisation): skipped.
+  for (int i = 0; i < 5; ++i) {
+    const ros::Time stamp = ros::Time::now() + ros::Duration(0.001 * (i + 1));
+    sensor_msgs::Image img;
+    img.header.stamp = stamp;
+    img.header.frame_id = "camera";
+    img.width = 640;
+    img.height = 480;
+    img.encoding = i % 2 ? "rgb8" : "32FC1";
+    img.step = img.encoding == "rgb8" ? 640 * 3 : 640 * 4;
+    img.data.assign(img.step * img.height, 0);
+    geometry_msgs::PoseStamped pose;
+    pose.header = img.header;
+    pose.header.frame_id = "world";
+    pose.pose.position.x = i % 2 ? centre.x() : centre.x() + 30.0;
+    pose.pose.position.y = centre.y();
+    pose.pose.position.z = centre.z();
+    pose.pose.orientation.w = 1.0;
+    pose_pub_.publish(pose);
+    depth_pub_.publish(img);
+    spinUntil([] { return false; }, 0.2);
+  }
+  cloud_.reset();
+  ASSERT_TRUE(spinUntil([&] { return cloud_ != nullptr; }, 30.0)) << "mapper stopped publishing";
+  const CloudVerdict after = judge(*cloud_, *scene, centre);
+  EXPECT_GE(after.points, before.points * 95 / 100) << "map lost after bad frames";
+  EXPECT_EQ(after.directions, 4);
+
+  // save_map writes a .bt that OctoMap reads back with the walls in it.
+  const std::string path =
+      (std::filesystem::temp_directory_path() / ("go_feap_mapper_" + std::to_string(::getpid()) + ".bt")).string();
+  go_feap::SaveMap srv;
+  srv.request.path = path;
+  ASSERT_TRUE(ros::service::waitForService("save_map", ros::Duration(10.0)));
+  ASSERT_TRUE(ros::service::call("save_map", srv));
+  EXPECT_TRUE(srv.response.success) << srv.response.message;
+  octomap::OcTree tree(0.1);
+  ASSERT_TRUE(tree.readBinary(path));
+  std::size_t occupied = 0, on_truth = 0;
+  for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) {
+    if (!tree.isNodeOccupied(*it)) continue;
+    ++occupied;
+    on_truth += scene->isOccupied(Vec3(it.getX(), it.getY(), it.getZ()));
+  }
+  std::filesystem::remove(path);
+  EXPECT_GT(occupied, 1000u);
+  EXPECT_GE(double(on_truth) / occupied, 0.95);
+  srv.request.path = "/nonexistent_dir/x.bt";
+  ASSERT_TRUE(ros::service::call("save_map", srv));
+  EXPECT_FALSE(srv.response.success);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ::testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "test_mapper_ros");
+  ros::NodeHandle nh;
+  return RUN_ALL_TESTS();
+}

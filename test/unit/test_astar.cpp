@@ -1,0 +1,553 @@
+// A* grid search against exhaustive shortest paths (Bellman-Ford relaxation over the same 26-connected
+// graph) and a brute-force blocking rule, on small random maps.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "go_feap/planning/astar.h"
+
+using go_feap::common::Aabb;
+using go_feap::common::GridGeometry;
+using go_feap::common::Index3;
+using go_feap::common::Vec3;
+using go_feap::map::Esdf;
+using go_feap::map::EsdfConfig;
+using go_feap::map::OccupancyConfig;
+using go_feap::map::OccupancyMap;
+using go_feap::map::VoxelState;
+using go_feap::planning::Astar;
+using go_feap::planning::AstarConfig;
+using go_feap::planning::PathDistance;
+using go_feap::planning::pathDistance;
+using go_feap::planning::PathResult;
+using go_feap::planning::PathStatus;
+
+namespace {
+
+constexpr double kRes = 0.1;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+OccupancyConfig occupancyConfig() {
+  OccupancyConfig c;
+  c.resolution = kRes;
+  c.margin = 0.0;
+  return c;
+}
+
+EsdfConfig esdfConfig() {
+  EsdfConfig c;
+  c.max_distance = 1.0;
+  c.uav_radius = 0.2;
+  return c;
+}
+
+AstarConfig astarConfig(double clearance, bool unknown_is_free) {
+  AstarConfig c;
+  c.clearance = clearance;
+  c.unknown_is_free = unknown_is_free;
+  return c;
+}
+
+// An occupancy map of dims voxels with its corner at the origin, and its ESDF kept in step through
+// Esdf::update() with the occupied voxels' linear indices.
+class World {
+ public:
+  explicit World(const Index3& dims)
+      : occupancy_(occupancyConfig(), Aabb{Vec3::Zero(), dims.cast<double>() * kRes}),
+        esdf_(occupancy_.geometry(), esdfConfig()),
+        synced_(occupancy_.geometry().size(), 0) {}
+
+  const GridGeometry& geo() const { return occupancy_.geometry(); }
+  const OccupancyMap& occupancy() const { return occupancy_; }
+  const Esdf& esdf() const { return esdf_; }
+
+  /// Sets the voxels of [lo, hi] (inclusive, clipped to the grid) and brings the ESDF up to date.
+  void set(const Index3& lo, const Index3& hi, VoxelState s) {
+    for (int z = std::max(0, lo.z()); z <= std::min(hi.z(), geo().dims().z() - 1); ++z)
+      for (int y = std::max(0, lo.y()); y <= std::min(hi.y(), geo().dims().y() - 1); ++y)
+        for (int x = std::max(0, lo.x()); x <= std::min(hi.x(), geo().dims().x() - 1); ++x)
+          occupancy_.setState(Index3(x, y, z), s);
+    sync();
+  }
+  void fill(VoxelState s) { set(Index3::Zero(), geo().dims(), s); }
+  bool occupied(std::size_t l) const { return occupancy_.stateAt(l) == VoxelState::kOccupied; }
+
+ private:
+  void sync() {
+    std::vector<std::size_t> inserted, removed;
+    for (std::size_t l = 0; l < synced_.size(); ++l) {
+      const std::uint8_t now = occupied(l) ? 1 : 0;
+      if (now == synced_[l]) continue;
+      (now ? inserted : removed).push_back(l);
+      synced_[l] = now;
+    }
+    esdf_.update(inserted, removed);
+  }
+
+  OccupancyMap occupancy_;
+  Esdf esdf_;
+  std::vector<std::uint8_t> synced_;
+};
+
+// Small deterministic integers, the same on every standard library.
+struct Rng {
+  explicit Rng(unsigned seed) : engine(seed) {}
+  int operator()(int lo, int hi) { return lo + static_cast<int>(engine() % static_cast<unsigned>(hi - lo + 1)); }
+  std::mt19937 engine;
+};
+
+Index3 randomVoxel(Rng& rng, const Index3& dims) {
+  return Index3(rng(0, dims.x() - 1), rng(0, dims.y() - 1), rng(0, dims.z() - 1));
+}
+
+void addRandomBoxes(World& world, Rng& rng, int count, VoxelState s) {
+  for (int i = 0; i < count; ++i) {
+    const Index3 lo = randomVoxel(rng, world.geo().dims());
+    const Index3 size(rng(0, 7), rng(0, 7), rng(0, 5));
+    world.set(lo, lo + size, s);
+  }
+}
+
+// Blocking rule from first principles: occupied, unknown when unknown is not free, or nearer than the
+// clearance to an occupied voxel centre (nearest one found by scanning every voxel).
+std::vector<std::uint8_t> bruteForceTraversable(const World& world, const AstarConfig& config) {
+  const GridGeometry& g = world.geo();
+  std::vector<Index3> obstacles;
+  for (std::size_t l = 0; l < g.size(); ++l)
+    if (world.occupied(l)) obstacles.push_back(g.unlinear(l));
+  std::vector<std::uint8_t> ok(g.size(), 0);
+  for (std::size_t l = 0; l < g.size(); ++l) {
+    const VoxelState s = world.occupancy().stateAt(l);
+    if (s == VoxelState::kOccupied || (s == VoxelState::kUnknown && !config.unknown_is_free)) continue;
+    const Index3 v = g.unlinear(l);
+    double nearest = esdfConfig().max_distance;
+    for (const Index3& o : obstacles) nearest = std::min(nearest, kRes * (o - v).cast<double>().norm());
+    ok[l] = nearest >= config.clearance - 1e-9;
+  }
+  return ok;
+}
+
+// Whether the move from v by d (a 26-neighbour offset) keeps to traversable voxels: the target and, for
+// a diagonal move, every voxel around the edge or corner it passes through (v + e, e_a in {0, d_a}).
+bool moveAllowed(const GridGeometry& g, const std::vector<std::uint8_t>& ok, const Index3& v, const Index3& d) {
+  for (int ez = 0; ez <= std::abs(d.z()); ++ez)
+    for (int ey = 0; ey <= std::abs(d.y()); ++ey)
+      for (int ex = 0; ex <= std::abs(d.x()); ++ex) {
+        const Index3 n = v + Index3(ex * d.x(), ey * d.y(), ez * d.z());
+        if (n != v && (!g.inside(n) || !ok[g.linear(n)])) return false;
+      }
+  return true;
+}
+
+// Shortest path costs (m) from `source` to every voxel over traversable voxels, 26-connected with move
+// costs 1, sqrt 2, sqrt 3 voxels and no corner cutting: plain Bellman-Ford relaxation sweeps until
+// nothing changes.
+std::vector<double> shortestCosts(const GridGeometry& g, const std::vector<std::uint8_t>& ok, const Index3& source) {
+  std::vector<double> cost(g.size(), kInf);
+  cost[g.linear(source)] = 0.0;
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (std::size_t l = 0; l < g.size(); ++l) {
+      if (!ok[l] || cost[l] == kInf) continue;
+      const Index3 v = g.unlinear(l);
+      for (int dz = -1; dz <= 1; ++dz)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const Index3 n = v + Index3(dx, dy, dz);
+            if (n == v || !moveAllowed(g, ok, v, Index3(dx, dy, dz))) continue;
+            const double c = cost[l] + kRes * std::sqrt(static_cast<double>(dx * dx + dy * dy + dz * dz));
+            if (c < cost[g.linear(n)] - 1e-12) {
+              cost[g.linear(n)] = c;
+              changed = true;
+            }
+          }
+    }
+  }
+  return cost;
+}
+
+double polylineLength(const std::vector<Vec3>& path) {
+  double length = 0.0;
+  for (std::size_t i = 1; i < path.size(); ++i) length += (path[i] - path[i - 1]).norm();
+  return length;
+}
+
+// Every point sampled every res / 20 along every segment lies in a traversable voxel.
+void expectSegmentsTraversable(const Astar& astar, const std::vector<Vec3>& path) {
+  for (std::size_t i = 1; i < path.size(); ++i) {
+    const int samples = static_cast<int>(std::ceil((path[i] - path[i - 1]).norm() / (kRes / 20))) + 1;
+    for (int s = 0; s <= samples; ++s) {
+      const Vec3 p = path[i - 1] + (path[i] - path[i - 1]) * (static_cast<double>(s) / samples);
+      ASSERT_TRUE(astar.traversable(astar.geometry().coordToIndex(p)))
+          << "segment " << i << " sample " << s << " at " << p.transpose() << " from " << path[i - 1].transpose() << " to " << path[i].transpose() << " seg ok " << astar.segmentTraversable(path[i - 1], path[i]);
+    }
+  }
+}
+
+// Shape of a found path: raw path continuous through traversable voxels between the two end voxels,
+// lengths consistent, shortened path traversable and between the straight line and the raw path.
+void expectWellFormed(const Astar& astar, const PathResult& r, const Index3& start, const Index3& goal) {
+  const GridGeometry& g = astar.geometry();
+  ASSERT_EQ(r.status, PathStatus::kFound);
+  ASSERT_FALSE(r.raw_path.empty());
+  EXPECT_EQ(g.coordToIndex(r.raw_path.front()), start);
+  EXPECT_EQ(g.coordToIndex(r.raw_path.back()), goal);
+  for (std::size_t i = 0; i < r.raw_path.size(); ++i) {
+    const Index3 v = g.coordToIndex(r.raw_path[i]);
+    ASSERT_TRUE(r.raw_path[i].isApprox(g.indexToCoord(v), 1e-12)) << "not a voxel centre";
+    ASSERT_TRUE(astar.traversable(v)) << "raw voxel " << i << " blocked";
+    if (i > 0) {
+      const Index3 step = v - g.coordToIndex(r.raw_path[i - 1]);
+      ASSERT_EQ(step.cwiseAbs().maxCoeff(), 1) << "raw path jumps at " << i;
+    }
+  }
+  EXPECT_NEAR(r.raw_length, polylineLength(r.raw_path), 1e-9);
+  ASSERT_GE(r.path.size(), 1u);
+  EXPECT_EQ(r.path.front(), r.raw_path.front());
+  EXPECT_EQ(r.path.back(), r.raw_path.back());
+  EXPECT_NEAR(r.length, polylineLength(r.path), 1e-9);
+  EXPECT_LE(r.length, r.raw_length + 1e-9);
+  EXPECT_GE(r.length, (r.path.back() - r.path.front()).norm() - 1e-9);
+  expectSegmentsTraversable(astar, r.path);
+}
+
+const Index3 kRandomDims(25, 20, 10);
+
+}  // namespace
+
+TEST(AstarConfig, ValidateNamesTheBadKey) {
+  EXPECT_TRUE(AstarConfig().validate().ok());
+  AstarConfig c;
+  c.clearance = -0.1;
+  EXPECT_NE(c.validate().message().find("clearance"), std::string::npos);
+  c = AstarConfig();
+  c.clearance = std::nan("");
+  EXPECT_NE(c.validate().message().find("clearance"), std::string::npos);
+  c = AstarConfig();
+  c.max_expansions = 0;
+  EXPECT_NE(c.validate().message().find("max_expansions"), std::string::npos);
+  c = AstarConfig();
+  c.tie_breaker = 0.99;
+  EXPECT_NE(c.validate().message().find("tie_breaker"), std::string::npos);
+  c = AstarConfig();
+  c.clearance = 1.5;
+  EXPECT_TRUE(c.validate().ok());
+  const std::string m = c.validate(esdfConfig()).message();
+  EXPECT_NE(m.find("clearance"), std::string::npos) << m;
+  EXPECT_NE(m.find("max_distance"), std::string::npos) << m;
+}
+
+TEST(Astar, ConstructorRefusesBadConfigAndMismatchedMaps) {
+  World world(Index3(10, 10, 5)), other(Index3(10, 11, 5));
+  EXPECT_THROW(Astar(world.occupancy(), world.esdf(), astarConfig(1.5, true)), std::invalid_argument);
+  EXPECT_THROW(Astar(world.occupancy(), other.esdf(), astarConfig(0.2, true)), std::invalid_argument);
+  EXPECT_NO_THROW(Astar(world.occupancy(), world.esdf(), astarConfig(0.2, true)));
+}
+
+TEST(Astar, StatusNames) {
+  EXPECT_STREQ(toString(PathStatus::kFound), "found");
+  EXPECT_STREQ(toString(PathStatus::kStartBlocked), "start_blocked");
+  EXPECT_STREQ(toString(PathStatus::kGoalBlocked), "goal_blocked");
+  EXPECT_STREQ(toString(PathStatus::kNoPath), "no_path");
+  EXPECT_STREQ(toString(PathStatus::kBudgetExceeded), "budget_exceeded");
+}
+
+TEST(Astar, TraversableFollowsTheBlockingRule) {
+  for (unsigned seed : {11u, 12u, 13u}) {
+    World world(kRandomDims);
+    Rng rng(seed);
+    world.fill(VoxelState::kFree);
+    addRandomBoxes(world, rng, 8, VoxelState::kUnknown);
+    addRandomBoxes(world, rng, 10, VoxelState::kOccupied);
+    for (double clearance : {0.0, 0.1, 0.2, 0.25})
+      for (bool unknown_is_free : {true, false}) {
+        const AstarConfig config = astarConfig(clearance, unknown_is_free);
+        const Astar astar(world.occupancy(), world.esdf(), config);
+        const std::vector<std::uint8_t> want = bruteForceTraversable(world, config);
+        std::size_t mismatches = 0, traversable = 0;
+        for (std::size_t l = 0; l < want.size(); ++l) {
+          const bool got = astar.traversable(world.geo().unlinear(l));
+          mismatches += got != static_cast<bool>(want[l]);
+          traversable += got;
+        }
+        EXPECT_EQ(mismatches, 0u) << "seed " << seed << " clearance " << clearance;
+        EXPECT_GT(traversable, 0u);
+        EXPECT_LT(traversable, want.size());
+      }
+    const Astar astar(world.occupancy(), world.esdf(), AstarConfig());
+    EXPECT_FALSE(astar.traversable(Index3(-1, 0, 0)));
+    EXPECT_FALSE(astar.traversable(kRandomDims));
+  }
+}
+
+TEST(Astar, CostEqualsExhaustiveShortestPathOnRandomGrids) {
+  int found = 0, no_path = 0;
+  for (unsigned seed = 1; seed <= 6; ++seed) {
+    World world(kRandomDims);
+    Rng rng(seed);
+    world.fill(VoxelState::kFree);
+    addRandomBoxes(world, rng, 6, VoxelState::kUnknown);
+    addRandomBoxes(world, rng, 14, VoxelState::kOccupied);
+    // Every other map is cut in two by a full wall, so that some goals are unreachable.
+    if (seed % 2 == 0) world.set(Index3(12, 0, 0), Index3(12, 100, 100), VoxelState::kOccupied);
+    const AstarConfig config = astarConfig(0.1 * (seed % 3), seed % 4 != 3);
+    const Astar astar(world.occupancy(), world.esdf(), config);
+    AstarConfig weighted = config;
+    weighted.tie_breaker = 1.5;
+    const Astar greedy(world.occupancy(), world.esdf(), weighted);
+    const GridGeometry& g = world.geo();
+    std::vector<std::uint8_t> ok(g.size());
+    for (std::size_t l = 0; l < g.size(); ++l) ok[l] = astar.traversable(g.unlinear(l));
+
+    for (int query = 0; query < 6; ++query) {
+      Index3 start, goal;
+      do start = randomVoxel(rng, g.dims());
+      while (!ok[g.linear(start)]);
+      const std::vector<double> cost = shortestCosts(g, ok, start);
+      for (int k = 0; k < 4; ++k) {
+        do goal = randomVoxel(rng, g.dims());
+        while (!ok[g.linear(goal)]);
+        const PathResult r = astar.search(g.indexToCoord(start), g.indexToCoord(goal), 0.0);
+        const double want = cost[g.linear(goal)];
+        SCOPED_TRACE("seed " + std::to_string(seed) + " query " + std::to_string(query) + "/" + std::to_string(k));
+        if (want == kInf) {
+          EXPECT_EQ(r.status, PathStatus::kNoPath) << toString(r.status);
+          EXPECT_TRUE(r.path.empty());
+          EXPECT_TRUE(r.raw_path.empty());
+          ++no_path;
+          continue;
+        }
+        ++found;
+        expectWellFormed(astar, r, start, goal);
+        EXPECT_NEAR(r.raw_length, want, 1e-9);
+        EXPECT_LE(r.expansions, config.max_expansions);
+        // The scratch reused by the next search gives the same answer.
+        const PathResult again = astar.search(g.indexToCoord(start), g.indexToCoord(goal), 0.0);
+        EXPECT_EQ(again.raw_path, r.raw_path);
+        // A heavier heuristic weight stays within its bound of the optimum.
+        const PathResult w = greedy.search(g.indexToCoord(start), g.indexToCoord(goal), 0.0);
+        expectWellFormed(greedy, w, start, goal);
+        EXPECT_GE(w.raw_length, want - 1e-9);
+        EXPECT_LE(w.raw_length, weighted.tie_breaker * want + 1e-9);
+      }
+    }
+  }
+  EXPECT_GT(found, 50);
+  EXPECT_GT(no_path, 5);
+}
+
+TEST(Astar, CorridorNarrowerThanTwiceTheClearanceIsImpassable) {
+  // A wall across the whole grid at x = 15 with a slot of `width` voxels in y over the full height;
+  // with clearance 0.25 m the slot needs a voxel 2.5 voxels from both sides.
+  for (int width : {2, 4, 6, 8}) {
+    World world(Index3(31, 21, 6));
+    world.fill(VoxelState::kFree);
+    world.set(Index3(15, 0, 0), Index3(15, 20, 5), VoxelState::kOccupied);
+    world.set(Index3(15, 7, 0), Index3(15, 6 + width, 5), VoxelState::kFree);
+    const Astar astar(world.occupancy(), world.esdf(), astarConfig(0.25, false));
+    const Vec3 a = world.geo().indexToCoord(Index3(5, 10, 2)), b = world.geo().indexToCoord(Index3(25, 10, 2));
+    const PathResult r = astar.search(a, b);
+    SCOPED_TRACE("slot width " + std::to_string(width * kRes) + " m");
+    if (width * kRes < 2 * 0.25) {
+      EXPECT_EQ(r.status, PathStatus::kNoPath) << toString(r.status);
+    } else {
+      expectWellFormed(astar, r, Index3(5, 10, 2), Index3(25, 10, 2));
+      // Without clearance any slot is passable.
+    }
+    const Astar bare(world.occupancy(), world.esdf(), astarConfig(0.0, false));
+    EXPECT_EQ(bare.search(a, b).status, PathStatus::kFound);
+  }
+}
+
+TEST(Astar, UnknownRegionIsTraversableOnlyWhenUnknownIsFree) {
+  World world(Index3(31, 21, 6));
+  world.fill(VoxelState::kFree);
+  world.set(Index3(15, 0, 0), Index3(15, 20, 5), VoxelState::kOccupied);
+  world.set(Index3(15, 6, 0), Index3(15, 14, 5), VoxelState::kFree);
+  const Index3 start(5, 10, 2), goal(25, 10, 2);
+  const Vec3 a = world.geo().indexToCoord(start), b = world.geo().indexToCoord(goal);
+  {
+    const Astar safe(world.occupancy(), world.esdf(), astarConfig(0.2, false));
+    expectWellFormed(safe, safe.search(a, b), start, goal);
+  }
+  // Unknown space around the opening.
+  world.set(Index3(13, 0, 0), Index3(17, 20, 5), VoxelState::kUnknown);
+  world.set(Index3(15, 0, 0), Index3(15, 5, 5), VoxelState::kOccupied);
+  world.set(Index3(15, 15, 0), Index3(15, 20, 5), VoxelState::kOccupied);
+  const Astar optimistic(world.occupancy(), world.esdf(), astarConfig(0.2, true));
+  const PathResult through = optimistic.search(a, b);
+  expectWellFormed(optimistic, through, start, goal);
+  bool crossed_unknown = false;
+  for (const Vec3& p : through.raw_path) crossed_unknown |= world.occupancy().state(p) == VoxelState::kUnknown;
+  EXPECT_TRUE(crossed_unknown);
+
+  const Astar safe(world.occupancy(), world.esdf(), astarConfig(0.2, false));
+  const PathResult blocked = safe.search(a, b);
+  EXPECT_EQ(blocked.status, PathStatus::kNoPath) << toString(blocked.status);
+  // A known-free path never touches unknown voxels.
+  const PathResult same_side = safe.search(a, world.geo().indexToCoord(Index3(8, 3, 4)));
+  ASSERT_EQ(same_side.status, PathStatus::kFound);
+  for (const Vec3& p : same_side.raw_path) EXPECT_EQ(world.occupancy().state(p), VoxelState::kFree);
+}
+
+TEST(Astar, SearchStaysInsideTheGrid) {
+  // A wall over the whole cross-section: outside the grid (unknown, hence optimistic) is no way round.
+  World world(Index3(20, 10, 5));
+  world.fill(VoxelState::kFree);
+  world.set(Index3(10, 0, 0), Index3(10, 9, 4), VoxelState::kOccupied);
+  const Astar astar(world.occupancy(), world.esdf(), astarConfig(0.0, true));
+  const PathResult r = astar.search(Vec3(0.25, 0.55, 0.25), Vec3(1.75, 0.55, 0.25));
+  EXPECT_EQ(r.status, PathStatus::kNoPath) << toString(r.status);
+  EXPECT_GT(r.expansions, 0);
+}
+
+TEST(Astar, BlockedEndsSnapToTheNearestTraversableVoxel) {
+  World world(Index3(30, 20, 10));
+  world.fill(VoxelState::kFree);
+  world.set(Index3(8, 8, 3), Index3(12, 12, 7), VoxelState::kOccupied);
+  const Astar astar(world.occupancy(), world.esdf(), astarConfig(0.1, false));
+  const GridGeometry& g = world.geo();
+  const Vec3 inside_box(1.03, 1.01, 0.52), goal(2.55, 1.55, 0.55);
+  ASSERT_FALSE(astar.traversable(g.coordToIndex(inside_box)));
+
+  const PathResult r = astar.search(inside_box, goal, 0.5);
+  ASSERT_EQ(r.status, PathStatus::kFound) << toString(r.status);
+  const Index3 snapped = g.coordToIndex(r.path.front());
+  EXPECT_TRUE(astar.traversable(snapped));
+  double nearest = kInf;
+  for (std::size_t l = 0; l < g.size(); ++l)
+    if (astar.traversable(g.unlinear(l))) nearest = std::min(nearest, (g.indexToCoord(g.unlinear(l)) - inside_box).norm());
+  EXPECT_NEAR((r.path.front() - inside_box).norm(), nearest, 1e-12);
+  EXPECT_LE(nearest, 0.5);
+  expectWellFormed(astar, r, snapped, g.coordToIndex(goal));
+
+  EXPECT_EQ(astar.search(inside_box, goal, 0.1).status, PathStatus::kStartBlocked);
+  EXPECT_EQ(astar.search(goal, inside_box, 0.1).status, PathStatus::kGoalBlocked);
+  const PathResult reverse = astar.search(goal, inside_box, 0.5);
+  ASSERT_EQ(reverse.status, PathStatus::kFound);
+  EXPECT_EQ(reverse.path.back(), r.path.front());
+
+  // A start just outside the grid snaps inside; one far away does not.
+  const PathResult outside = astar.search(Vec3(-0.2, 0.55, 0.55), goal, 0.5);
+  ASSERT_EQ(outside.status, PathStatus::kFound);
+  EXPECT_EQ(g.coordToIndex(outside.path.front()), Index3(0, 5, 5));
+  EXPECT_EQ(astar.search(Vec3(-50.0, 0.5, 0.5), goal, 0.5).status, PathStatus::kStartBlocked);
+  EXPECT_EQ(astar.search(Vec3(std::nan(""), 0.5, 0.5), goal, 0.5).status, PathStatus::kStartBlocked);
+}
+
+TEST(Astar, OpenSpaceGoesStraightToTheGoal) {
+  World world(Index3(60, 40, 20));
+  world.fill(VoxelState::kFree);
+  const Astar astar(world.occupancy(), world.esdf(), AstarConfig());
+  const Index3 start(1, 2, 3), goal(57, 31, 16);
+  const PathResult r = astar.search(world.geo().indexToCoord(start), world.geo().indexToCoord(goal));
+  expectWellFormed(astar, r, start, goal);
+  // The heuristic is exact here and ties go towards the goal: only path voxels are expanded.
+  EXPECT_EQ(r.expansions, static_cast<int>(r.raw_path.size()));
+  ASSERT_EQ(r.path.size(), 2u);
+  EXPECT_NEAR(r.length, (world.geo().indexToCoord(goal) - world.geo().indexToCoord(start)).norm(), 1e-9);
+
+  const PathResult same = astar.search(Vec3(0.31, 0.32, 0.33), Vec3(0.39, 0.38, 0.37));
+  ASSERT_EQ(same.status, PathStatus::kFound);
+  ASSERT_EQ(same.path.size(), 1u);
+  EXPECT_EQ(same.length, 0.0);
+  EXPECT_EQ(same.expansions, 1);
+}
+
+TEST(Astar, BudgetExceededFallsBackToEuclidean) {
+  World world(Index3(60, 40, 20));
+  world.fill(VoxelState::kFree);
+  // A wall with a far-off opening, so that the search has to explore.
+  world.set(Index3(30, 0, 0), Index3(30, 39, 19), VoxelState::kOccupied);
+  world.set(Index3(30, 36, 0), Index3(30, 39, 3), VoxelState::kFree);
+  const Vec3 a(0.55, 0.55, 1.05), b(5.55, 0.55, 1.05);
+
+  AstarConfig small = astarConfig(0.1, true);
+  small.max_expansions = 100;
+  const Astar starved(world.occupancy(), world.esdf(), small);
+  const PathResult r = starved.search(a, b);
+  EXPECT_EQ(r.status, PathStatus::kBudgetExceeded) << toString(r.status);
+  EXPECT_EQ(r.expansions, 100);
+  EXPECT_TRUE(r.path.empty());
+  const PathDistance fallback = pathDistance(starved, a, b);
+  EXPECT_TRUE(fallback.euclidean_fallback);
+  EXPECT_DOUBLE_EQ(fallback.metres, (b - a).norm());
+
+  const Astar astar(world.occupancy(), world.esdf(), astarConfig(0.1, true));
+  const PathResult full = astar.search(a, b);
+  expectWellFormed(astar, full, world.geo().coordToIndex(a), world.geo().coordToIndex(b));
+  EXPECT_GT(full.expansions, 100);
+  const PathDistance d = pathDistance(astar, a, b);
+  EXPECT_FALSE(d.euclidean_fallback);
+  EXPECT_NEAR(d.metres, full.length, 1e-9);  // a and b are voxel centres
+  EXPECT_GT(d.metres, (b - a).norm() + 2.0);  // the detour through the opening
+
+  // Other failures fall back too: a start far outside the map.
+  const Vec3 far(-20.0, 0.5, 1.0);
+  const PathDistance blocked = pathDistance(astar, far, b);
+  EXPECT_TRUE(blocked.euclidean_fallback);
+  EXPECT_DOUBLE_EQ(blocked.metres, (b - far).norm());
+}
+
+TEST(Astar, PathDistanceCountsTheSnapsToVoxelCentres) {
+  World world(Index3(20, 20, 10));
+  world.fill(VoxelState::kFree);
+  const Astar astar(world.occupancy(), world.esdf(), AstarConfig());
+  const Vec3 a(0.52, 0.51, 0.53), b(1.23, 0.87, 0.61);
+  const PathDistance d = pathDistance(astar, a, b);
+  EXPECT_FALSE(d.euclidean_fallback);
+  EXPECT_GE(d.metres, (b - a).norm() - 1e-12);
+  const Vec3 ca = world.geo().indexToCoord(world.geo().coordToIndex(a));
+  const Vec3 cb = world.geo().indexToCoord(world.geo().coordToIndex(b));
+  EXPECT_NEAR(d.metres, (ca - a).norm() + (cb - ca).norm() + (b - cb).norm(), 1e-9);
+}
+
+TEST(Astar, ShortenKeepsCornersAroundObstacles) {
+  // An L-shaped path around the corner of a box: the shortcut through the box is refused, the two
+  // straight legs are merged.
+  World world(Index3(20, 20, 3));
+  world.fill(VoxelState::kFree);
+  world.set(Index3(5, 5, 0), Index3(19, 19, 2), VoxelState::kOccupied);
+  const Astar astar(world.occupancy(), world.esdf(), astarConfig(0.0, false));
+  const GridGeometry& g = world.geo();
+  std::vector<Vec3> path;
+  for (int x = 18; x >= 2; --x) path.push_back(g.indexToCoord(Index3(x, 2, 1)));
+  for (int y = 3; y <= 18; ++y) path.push_back(g.indexToCoord(Index3(2, y, 1)));
+  const std::vector<Vec3> short_path = astar.shorten(path);
+  expectSegmentsTraversable(astar, short_path);
+  EXPECT_EQ(short_path.front(), path.front());
+  EXPECT_EQ(short_path.back(), path.back());
+  EXPECT_LT(short_path.size(), path.size());
+  EXPECT_GE(short_path.size(), 3u);
+  EXPECT_LE(polylineLength(short_path), polylineLength(path));
+  EXPECT_GE(polylineLength(short_path), (path.back() - path.front()).norm());
+  EXPECT_FALSE(astar.segmentTraversable(path.front(), path.back()));
+
+  // A diagonal segment through an edge where two voxels meet is refused when either of them is blocked.
+  World edge(Index3(4, 4, 1));
+  edge.fill(VoxelState::kFree);
+  edge.set(Index3(1, 1, 0), Index3(1, 1, 0), VoxelState::kOccupied);
+  const Astar tight(edge.occupancy(), edge.esdf(), astarConfig(0.0, false));
+  const Vec3 p = edge.geo().indexToCoord(Index3(0, 1, 0)), q = edge.geo().indexToCoord(Index3(2, 3, 0));
+  EXPECT_FALSE(tight.segmentTraversable(p, q));
+  EXPECT_TRUE(tight.segmentTraversable(p, edge.geo().indexToCoord(Index3(0, 3, 0))));
+  EXPECT_EQ(tight.shorten({p}).size(), 1u);
+
+  // Nor does the search squeeze diagonally between two blocked voxels.
+  World pocket(Index3(4, 4, 1));
+  pocket.fill(VoxelState::kFree);
+  pocket.set(Index3(1, 0, 0), Index3(1, 0, 0), VoxelState::kOccupied);
+  pocket.set(Index3(0, 1, 0), Index3(0, 1, 0), VoxelState::kOccupied);
+  const Astar strict(pocket.occupancy(), pocket.esdf(), astarConfig(0.0, false));
+  EXPECT_EQ(strict.search(pocket.geo().indexToCoord(Index3(0, 0, 0)), pocket.geo().indexToCoord(Index3(3, 3, 0)), 0.0)
+                .status,
+            PathStatus::kNoPath);
+  EXPECT_TRUE(tight.shorten({}).empty());
+}

@@ -1,0 +1,162 @@
+// Frontier detection against hand-built grids and a full recomputation.
+#include <gtest/gtest.h>
+
+#include <random>
+#include <set>
+
+#include "go_feap/frontier/frontier_finder.h"
+
+using namespace go_feap;
+using common::Aabb;
+using common::Index3;
+using common::Vec3;
+using map::VoxelState;
+
+namespace {
+
+const Aabb kBox{Vec3(0, 0, 0), Vec3(3.0, 2.0, 1.0)};  // 30 x 20 x 10 voxels
+
+map::OccupancyConfig mapConfig() {
+  map::OccupancyConfig c;
+  c.margin = 0.3;
+  return c;
+}
+
+// Sets every voxel whose centre lies in [lo, hi] (metres) to s; returns the index range.
+std::pair<Index3, Index3> paint(map::OccupancyMap& m, const Vec3& lo, const Vec3& hi, VoxelState s) {
+  Index3 a, b;
+  m.geometry().centreRange({lo, hi}, a, b);
+  for (int z = a.z(); z < b.z(); ++z)
+    for (int y = a.y(); y < b.y(); ++y)
+      for (int x = a.x(); x < b.x(); ++x) m.setState(Index3(x, y, z), s);
+  return {a, b - Index3::Ones()};
+}
+
+std::set<std::vector<std::size_t>> clusterSets(const frontier::FrontierFinder& f, const common::GridGeometry& g) {
+  std::set<std::vector<std::size_t>> out;
+  for (const auto& fr : f.frontiers()) {
+    std::vector<std::size_t> v;
+    for (const Index3& c : fr.cells) v.push_back(g.linear(c));
+    out.insert(v);
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST(FrontierFinder, KnownFreeBlockInUnknownSpace) {
+  map::OccupancyMap m(mapConfig(), kBox);
+  // Known free block x in [1.0, 2.0], y in [0.5, 1.5], whole height; the rest unknown.
+  paint(m, Vec3(1.0, 0.5, 0.0), Vec3(2.0, 1.5, 1.0), VoxelState::kFree);
+  frontier::FrontierConfig cfg;
+  cfg.max_cluster_extent = 100.0;
+  frontier::FrontierFinder f(cfg, m.geometry(), kBox);
+  f.recomputeAll(m, 0.0);
+  // Expected: the block's cells on its four x/y side faces (top and bottom border the
+  // box: no unknown neighbour inside it).
+  std::set<std::size_t> expect, got;
+  const auto& g = m.geometry();
+  for (std::size_t l = 0; l < g.size(); ++l) {
+    const Vec3 c = g.indexToCoord(g.unlinear(l));
+    const bool in_block = c.x() > 1.0 && c.x() < 2.0 && c.y() > 0.5 && c.y() < 1.5 && c.z() > 0.0 && c.z() < 1.0;
+    const bool side = std::abs(c.x() - 1.05) < 1e-6 || std::abs(c.x() - 1.95) < 1e-6 || std::abs(c.y() - 0.55) < 1e-6 ||
+                      std::abs(c.y() - 1.45) < 1e-6;
+    if (in_block && side) expect.insert(l);
+  }
+  for (const auto& fr : f.frontiers())
+    for (const Index3& c : fr.cells) got.insert(g.linear(c));
+  EXPECT_EQ(expect.size(), 36u * 10);
+  EXPECT_EQ(got, expect);
+  ASSERT_EQ(f.frontiers().size(), 1u);  // one connected ring
+  EXPECT_LT((f.frontiers()[0].average - Vec3(1.5, 1.0, 0.5)).norm(), 1e-9);
+}
+
+TEST(FrontierFinder, IncrementalEqualsFullRecomputationOnRandomUpdates) {
+  for (int seed = 0; seed < 6; ++seed) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> ux(0.0, 3.0), uy(0.0, 2.0), uz(0.0, 1.0), size(0.1, 0.9);
+    std::uniform_int_distribution<int> state(0, 9);
+    map::OccupancyMap m(mapConfig(), kBox);
+    frontier::FrontierConfig cfg;
+    cfg.min_cluster_cells = 4;
+    cfg.max_cluster_extent = 0.6;
+    frontier::FrontierFinder inc(cfg, m.geometry(), kBox);
+    inc.recomputeAll(m, 0.0);
+    for (int step = 0; step < 40; ++step) {
+      const Vec3 c(ux(rng), uy(rng), uz(rng));
+      const Vec3 h(size(rng), size(rng), size(rng));
+      const int k = state(rng);
+      const VoxelState s = k < 6 ? VoxelState::kFree : (k < 9 ? VoxelState::kOccupied : VoxelState::kUnknown);
+      const auto [lo, hi] = paint(m, c - h, c + h, s);
+      if ((hi.array() < lo.array()).any()) continue;
+      inc.update(m, lo, hi, step + 1.0);
+      frontier::FrontierFinder full(cfg, m.geometry(), kBox);
+      full.recomputeAll(m, step + 1.0);
+      ASSERT_EQ(clusterSets(inc, m.geometry()), clusterSets(full, m.geometry())) << "seed " << seed << " step " << step;
+    }
+    EXPECT_GT(inc.frontiers().size(), 0u);
+  }
+}
+
+TEST(FrontierFinder, WideClustersAreSplitSmallRegionsDropped) {
+  map::OccupancyMap m(mapConfig(), kBox);
+  // A 3 m long, 1-voxel-high free strip at z in [0.4, 0.5): a long frontier.
+  paint(m, Vec3(0.0, 0.94, 0.44), Vec3(3.0, 0.96, 0.46), VoxelState::kFree);
+  // A tiny 2-cell free spot far away.
+  paint(m, Vec3(1.45, 0.15, 0.85), Vec3(1.55, 0.15, 0.85), VoxelState::kFree);
+  frontier::FrontierConfig cfg;
+  cfg.min_cluster_cells = 5;
+  cfg.max_cluster_extent = 0.5;
+  frontier::FrontierFinder f(cfg, m.geometry(), kBox);
+  f.recomputeAll(m, 0.0);
+  std::size_t cells = 0;
+  for (const auto& fr : f.frontiers()) {
+    cells += fr.cells.size();
+    for (const Index3& c : fr.cells) EXPECT_LE((m.geometry().indexToCoord(c) - fr.average).norm(), 0.5 + 1e-9);
+    EXPECT_GT(fr.average.y(), 0.5) << "the 2-cell spot must be dropped";
+  }
+  EXPECT_EQ(cells, 30u);
+  EXPECT_GE(f.frontiers().size(), 4u);
+}
+
+TEST(FrontierFinder, DurationInheritedFromTheOldestAncestor) {
+  map::OccupancyMap m(mapConfig(), kBox);
+  const auto [lo, hi] = paint(m, Vec3(0.5, 0.5, 0.0), Vec3(1.0, 1.0, 1.0), VoxelState::kFree);
+  frontier::FrontierConfig cfg;
+  cfg.max_cluster_extent = 100.0;
+  frontier::FrontierFinder f(cfg, m.geometry(), kBox);
+  f.update(m, lo, hi, 2.0);
+  ASSERT_EQ(f.frontiers().size(), 1u);
+  EXPECT_DOUBLE_EQ(f.frontiers()[0].first_seen, 2.0);
+  // The free block grows at t = 7: the frontier is rebuilt but keeps its age.
+  const auto [lo2, hi2] = paint(m, Vec3(1.0, 0.5, 0.0), Vec3(1.4, 1.0, 1.0), VoxelState::kFree);
+  f.update(m, lo2, hi2, 7.0);
+  ASSERT_EQ(f.frontiers().size(), 1u);
+  EXPECT_DOUBLE_EQ(f.frontiers()[0].first_seen, 2.0);
+  EXPECT_DOUBLE_EQ(f.frontiers()[0].duration(10.0), 8.0);
+  // A separate new block at t = 9 is young.
+  const auto [lo3, hi3] = paint(m, Vec3(2.3, 0.2, 0.0), Vec3(2.8, 0.6, 1.0), VoxelState::kFree);
+  f.update(m, lo3, hi3, 9.0);
+  ASSERT_EQ(f.frontiers().size(), 2u);
+  std::set<double> ages;
+  for (const auto& fr : f.frontiers()) ages.insert(fr.first_seen);
+  EXPECT_EQ(ages, (std::set<double>{2.0, 9.0}));
+}
+
+TEST(FrontierFinder, NearCountsAndActiveBand) {
+  map::OccupancyMap m(mapConfig(), {Vec3(0, 0, 0), Vec3(10, 2, 1)});
+  const Aabb box{Vec3(0, 0, 0), Vec3(10, 2, 1)};
+  // Three free pockets (each its own frontier) with averages at x = 1, 2.5 and 8.
+  for (double x : {1.0, 2.5, 8.0}) paint(m, Vec3(x - 0.2, 0.8, 0.0), Vec3(x + 0.2, 1.2, 1.0), VoxelState::kFree);
+  frontier::FrontierConfig cfg;
+  cfg.max_cluster_extent = 100.0;
+  cfg.s_near = 2.0;
+  frontier::FrontierFinder f(cfg, m.geometry(), box);
+  f.recomputeAll(m, 0.0);
+  ASSERT_EQ(f.frontiers().size(), 3u);
+  for (const auto& fr : f.frontiers()) EXPECT_EQ(fr.n_near, fr.average.x() < 5.0 ? 1 : 0) << fr.average.transpose();
+  f.setActiveBand(0.6, 2.0);
+  for (const auto& fr : f.frontiers()) EXPECT_FALSE(fr.active);
+  f.setActiveBand(0.0, 1.0);
+  for (const auto& fr : f.frontiers()) EXPECT_TRUE(fr.active);
+}

@@ -1,0 +1,300 @@
+// Omission likelihood, NearCur_IDs selection and the global planner against brute force.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "go_feap/planning/global_planner.h"
+#include "go_feap/planning/omission.h"
+
+using namespace go_feap::planning;
+using go_feap::common::Vec3;
+
+namespace {
+
+OmissionConfig omissionConfig() {
+  OmissionConfig c;
+  c.alpha_max = 1.5;
+  c.c_small = 20;
+  c.w_t = 2.0;
+  c.t_max = 10.0;
+  c.n_t = 3.0;
+  c.n_max = 4;
+  return c;
+}
+
+std::vector<FrontierSummary> frontiersAtDistances(const std::vector<double>& d) {
+  std::vector<FrontierSummary> f(d.size());
+  for (std::size_t j = 0; j < d.size(); ++j) {
+    f[j].id = static_cast<unsigned>(100 + j);
+    f[j].average = Vec3(d[j], 0.0, 1.0);
+  }
+  return f;
+}
+
+}  // namespace
+
+TEST(Omission, FactorEdges) {
+  const OmissionConfig c = omissionConfig();
+  struct Row {
+    const char* what;
+    double value, expected;
+  };
+  const double below = std::nextafter(c.t_max, 0.0);
+  const Row rows[] = {
+      {"alpha(0)", alpha(c, 0), 1.5},
+      {"alpha(-3)", alpha(c, -3), 1.5},
+      {"alpha(c_small)", alpha(c, 20), 1.5},
+      {"alpha(2 c_small)", alpha(c, 40), 0.75},
+      {"alpha(10 c_small)", alpha(c, 200), 0.15},
+      {"omega(0)", omega(c, 0.0), 2.0},
+      {"omega(just below t_max)", omega(c, below), 2.0},
+      {"omega(t_max)", omega(c, c.t_max), 0.0},
+      {"omega(2 t_max)", omega(c, 2.0 * c.t_max), 0.0},
+      {"beta(0)", beta(c, 0), 0.0},
+      {"beta(1)", beta(c, 1), 3.0},
+      {"beta(n_max - 1)", beta(c, c.n_max - 1), 3.0},
+      {"beta(n_max)", beta(c, c.n_max), 0.0},
+      {"beta(n_max + 5)", beta(c, c.n_max + 5), 0.0},
+      {"xi(small, young, grouped)", xi(c, 10, 1.0, 2), 1.5 * 2.0 * 3.0},
+      {"xi(large, young, grouped)", xi(c, 40, 1.0, 2), 0.75 * 2.0 * 3.0},
+      {"xi(old)", xi(c, 10, c.t_max, 2), 0.0},
+      {"xi(alone)", xi(c, 10, 1.0, 0), 0.0},
+      {"xi(crowded)", xi(c, 10, 1.0, c.n_max), 0.0},
+  };
+  for (const Row& r : rows) EXPECT_DOUBLE_EQ(r.value, r.expected) << r.what;
+  // alpha never increases with size.
+  for (int cells = 0; cells < 500; ++cells) EXPECT_GE(alpha(c, cells), alpha(c, cells + 1)) << cells;
+}
+
+TEST(Omission, ValidateNamesTheKey) {
+  EXPECT_TRUE(OmissionConfig().validate().ok());
+  EXPECT_TRUE(omissionConfig().validate().ok());
+  struct Row {
+    void (*spoil)(OmissionConfig&);
+    const char* message;
+  };
+  const Row rows[] = {
+      {[](OmissionConfig& c) { c.alpha_max = -1.0; }, "omission: alpha_max must be >= 0"},
+      {[](OmissionConfig& c) { c.alpha_max = std::nan(""); }, "omission: alpha_max must be >= 0"},
+      {[](OmissionConfig& c) { c.c_small = 0; }, "omission: c_small must be > 0"},
+      {[](OmissionConfig& c) { c.w_t = -0.1; }, "omission: w_t must be >= 0"},
+      {[](OmissionConfig& c) { c.t_max = 0.0; }, "omission: t_max must be > 0"},
+      {[](OmissionConfig& c) { c.n_t = std::numeric_limits<double>::infinity(); },
+       "omission: n_t must be >= 0"},
+      {[](OmissionConfig& c) { c.n_max = 1; }, "omission: n_max must be > 1"},
+  };
+  for (const Row& r : rows) {
+    OmissionConfig c;
+    r.spoil(c);
+    EXPECT_EQ(c.validate().message(), r.message);
+  }
+}
+
+TEST(GlobalPlannerConfig, ValidateNamesTheKey) {
+  EXPECT_TRUE(GlobalPlannerConfig().validate().ok());
+  struct Row {
+    void (*spoil)(GlobalPlannerConfig&);
+    const char* message;
+  };
+  const Row rows[] = {
+      {[](GlobalPlannerConfig& c) { c.s_near = 0.0; }, "exploration: s_near must be > 0"},
+      {[](GlobalPlannerConfig& c) { c.n_min_tsp = 0; }, "exploration: n_min_tsp must be >= 1"},
+      {[](GlobalPlannerConfig& c) { c.n_max_tsp = 2; }, "exploration: n_max_tsp must be >= n_min_tsp"},
+      {[](GlobalPlannerConfig& c) { c.lambda = -0.1; }, "exploration: lambda must be >= 0"},
+      {[](GlobalPlannerConfig& c) { c.v_max = 0.0; }, "exploration: v_max must be > 0"},
+      {[](GlobalPlannerConfig& c) { c.max_exact = 17; }, "exploration: max_exact must be in [0, 16]"},
+      {[](GlobalPlannerConfig& c) { c.omission.t_max = -1.0; }, "exploration/omission: t_max must be > 0"},
+  };
+  for (const Row& r : rows) {
+    GlobalPlannerConfig c;
+    r.spoil(c);
+    EXPECT_EQ(c.validate().message(), r.message);
+  }
+}
+
+TEST(SelectCandidates, NearOnesSortedByDistanceInactiveExcluded) {
+  GlobalPlannerConfig c;
+  c.s_near = 5.0;
+  c.n_min_tsp = 2;
+  c.n_max_tsp = 12;
+  const std::vector<double> d = {4.0, 1.0, 6.0, 3.0, 2.0, 4.999, 5.0};
+  auto f = frontiersAtDistances(d);
+  f[3].active = false;
+  EXPECT_EQ(selectCandidates(f, d, c), (std::vector<std::size_t>{1, 4, 0, 5}));
+}
+
+TEST(SelectCandidates, TooFewNearAreFilledWithTheNearestOthers) {
+  GlobalPlannerConfig c;
+  c.s_near = 5.0;
+  c.n_min_tsp = 3;
+  const std::vector<double> d = {20.0, 9.0, 1.0, 7.0, 8.0};
+  auto f = frontiersAtDistances(d);
+  f[3].active = false;  // nearer than 4 but not in the band: never a filler
+  EXPECT_EQ(selectCandidates(f, d, c), (std::vector<std::size_t>{2, 4, 1}));
+  // Not enough active frontiers at all: all of them.
+  c.n_min_tsp = 10;
+  c.n_max_tsp = 10;
+  EXPECT_EQ(selectCandidates(f, d, c), (std::vector<std::size_t>{2, 4, 1, 0}));
+}
+
+TEST(SelectCandidates, TooManyNearAreCappedNearestFirst) {
+  GlobalPlannerConfig c;
+  c.s_near = 50.0;
+  c.n_min_tsp = 2;
+  c.n_max_tsp = 3;
+  const std::vector<double> d = {5.0, 4.0, 3.0, 2.0, 1.0, 0.5};
+  auto f = frontiersAtDistances(d);
+  f[5].active = false;
+  EXPECT_EQ(selectCandidates(f, d, c), (std::vector<std::size_t>{4, 3, 2}));
+}
+
+TEST(SelectCandidates, UnreachableAndMismatchedInput) {
+  GlobalPlannerConfig c;
+  c.n_min_tsp = 3;
+  const double inf = std::numeric_limits<double>::infinity();
+  const std::vector<double> d = {inf, 2.0, std::nan(""), 30.0, -1.0};
+  const auto f = frontiersAtDistances(d);
+  EXPECT_EQ(selectCandidates(f, d, c), (std::vector<std::size_t>{1, 3}));
+  EXPECT_TRUE(selectCandidates(f, {1.0, 2.0}, c).empty());
+}
+
+namespace {
+
+// Frontiers on a small floor plan; distances are Euclidean, except a wall that makes going
+// from frontier index 2 to index 4 a detour (asymmetric on purpose).
+struct Fixture {
+  std::vector<FrontierSummary> frontiers;
+  Vec3 uav = Vec3(0.0, 0.0, 1.0);
+  std::vector<std::size_t> from_uav_calls;
+
+  Fixture() {
+    const Vec3 positions[] = {{3, 1, 1}, {-2, 2, 1},  {1, -3, 1}, {6, 2, 1},
+                              {2, 4, 1}, {-4, -1, 1}, {0, 6, 1}};
+    const int cells[] = {10, 80, 15, 12, 300, 25, 8};
+    const double durations[] = {1.0, 3.0, 15.0, 2.0, 0.5, 4.0, 1.0};
+    const int n_near[] = {2, 1, 2, 0, 3, 2, 1};
+    for (int j = 0; j < 7; ++j) {
+      FrontierSummary s;
+      s.id = static_cast<unsigned>(10 * j + 7);
+      s.average = positions[j];
+      s.cell_count = cells[j];
+      s.duration = durations[j];
+      s.n_near = n_near[j];
+      frontiers.push_back(s);
+    }
+    frontiers[6].active = false;
+  }
+
+  double between(std::size_t i, std::size_t j) const {
+    const double d = (frontiers[i].average - frontiers[j].average).norm();
+    return (i == 2 && j == 4) ? 1.8 * d : d;
+  }
+  PathDistances distances() {
+    return {[this](std::size_t j) {
+              from_uav_calls.push_back(j);
+              return (frontiers[j].average - uav).norm();
+            },
+            [this](std::size_t i, std::size_t j) { return between(i, j); }};
+  }
+};
+
+}  // namespace
+
+TEST(PlanTour, FixtureMatchesBruteForce) {
+  Fixture fx;
+  GlobalPlannerConfig c;
+  c.s_near = 100.0;
+  c.lambda = 0.4;
+  c.omission = omissionConfig();
+  const auto result = planTour(fx.frontiers, fx.distances(), c);
+  ASSERT_TRUE(result.ok()) << result.message();
+  const GlobalTour& tour = *result;
+  EXPECT_TRUE(tour.exact);
+  EXPECT_EQ(tour.lambda, 0.4);
+
+  // The inactive frontier is neither planned for nor asked about.
+  EXPECT_EQ(std::count(fx.from_uav_calls.begin(), fx.from_uav_calls.end(), 6u), 0);
+  EXPECT_EQ(fx.from_uav_calls.size(), 6u);
+
+  // Brute force over every order of the six active frontiers, straight from the positions:
+  // travel time to the last one plus lambda * sum xi * arrival time.
+  std::vector<std::size_t> order = {0, 1, 2, 3, 4, 5};
+  double best = std::numeric_limits<double>::infinity();
+  std::vector<std::size_t> best_order;
+  do {
+    double t = (fx.frontiers[order[0]].average - fx.uav).norm() / c.v_max;
+    const auto& f0 = fx.frontiers[order[0]];
+    double penalty = xi(c.omission, f0.cell_count, f0.duration, f0.n_near) * t;
+    for (std::size_t m = 1; m < order.size(); ++m) {
+      t += fx.between(order[m - 1], order[m]) / c.v_max;
+      const auto& f = fx.frontiers[order[m]];
+      penalty += xi(c.omission, f.cell_count, f.duration, f.n_near) * t;
+    }
+    const double j = t + c.lambda * penalty;
+    if (j < best) best = j, best_order = order;
+  } while (std::next_permutation(order.begin(), order.end()));
+
+  EXPECT_EQ(tour.indices, best_order);
+  EXPECT_NEAR(tour.cost, best, 1e-9 * best);
+  ASSERT_EQ(tour.frontier_ids.size(), 6u);
+  for (std::size_t m = 0; m < 6; ++m) {
+    const auto& f = fx.frontiers[best_order[m]];
+    EXPECT_EQ(tour.frontier_ids[m], f.id);
+    EXPECT_EQ(tour.waypoints[m], f.average);
+    EXPECT_DOUBLE_EQ(tour.xi[m], xi(c.omission, f.cell_count, f.duration, f.n_near));
+  }
+
+  // The omission term matters on this fixture: without it the order differs.
+  GlobalPlannerConfig plain = c;
+  plain.lambda = 0.0;
+  const auto plain_tour = planTour(fx.frontiers, fx.distances(), plain);
+  ASSERT_TRUE(plain_tour.ok());
+  EXPECT_NE(plain_tour->indices, tour.indices);
+}
+
+TEST(PlanTour, UsesOnlyNearCandidatesAndTheHeuristicAboveMaxExact) {
+  Fixture fx;
+  GlobalPlannerConfig c;
+  c.s_near = 3.5;  // indices 0 (3.2 m), 1 (2.8 m), 2 (3.2 m) are near
+  c.n_min_tsp = 2;
+  c.omission = omissionConfig();
+  auto result = planTour(fx.frontiers, fx.distances(), c);
+  ASSERT_TRUE(result.ok()) << result.message();
+  std::vector<std::size_t> planned = result->indices;
+  std::sort(planned.begin(), planned.end());
+  EXPECT_EQ(planned, (std::vector<std::size_t>{0, 1, 2}));
+
+  c.s_near = 100.0;
+  c.max_exact = 4;
+  result = planTour(fx.frontiers, fx.distances(), c);
+  ASSERT_TRUE(result.ok());
+  EXPECT_FALSE(result->exact);
+  EXPECT_EQ(result->indices.size(), 6u);
+}
+
+TEST(PlanTour, EmptyAndBadInput) {
+  Fixture fx;
+  GlobalPlannerConfig c;
+  for (auto& f : fx.frontiers) f.active = false;
+  auto result = planTour(fx.frontiers, fx.distances(), c);
+  ASSERT_TRUE(result.ok());
+  EXPECT_TRUE(result->frontier_ids.empty());
+  EXPECT_EQ(result->cost, 0.0);
+
+  Fixture fy;
+  PathDistances broken = fy.distances();
+  broken.between = [](std::size_t i, std::size_t j) {
+    return (i == 1 && j == 0) ? std::numeric_limits<double>::infinity() : 1.0;
+  };
+  result = planTour(fy.frontiers, broken, c);
+  ASSERT_FALSE(result.ok());
+  EXPECT_NE(result.message().find("from frontier 17 to frontier 7"), std::string::npos) << result.message();
+
+  c.lambda = -1.0;
+  result = planTour(fy.frontiers, fy.distances(), c);
+  ASSERT_FALSE(result.ok());
+  EXPECT_EQ(result.message(), "exploration: lambda must be >= 0");
+}

@@ -1,0 +1,226 @@
+// Occupancy from depth against ground truth: depth rendered by the simulator's camera in
+// known scenes, integrated, and compared voxel by voxel.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <set>
+
+#include "go_feap/map/voxel_map.h"
+#include "go_feap/sim/depth_camera.h"
+#include "go_feap/world/generators.h"
+
+using namespace go_feap;
+using common::Index3;
+using common::Vec3;
+using map::VoxelState;
+
+namespace {
+
+map::DepthIntrinsics intrinsicsOf(const sim::CameraIntrinsics& c) {
+  return {c.width, c.height, c.fx, c.fy, c.cx, c.cy};
+}
+
+// Optical frame (z forward, x right, y down) of a camera at p looking along yaw, level.
+Eigen::Isometry3d cameraPose(const Vec3& p, double yaw) {
+  Eigen::Matrix3d R_B_C;
+  R_B_C << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::AngleAxisd(yaw, Vec3::UnitZ()).toRotationMatrix() * R_B_C;
+  T.translation() = p;
+  return T;
+}
+
+struct Fixture {
+  world::Scene scene;
+  sim::DepthCameraConfig camera;
+  std::vector<Eigen::Isometry3d> poses;
+};
+
+// The maze, seen while turning in place at the start and at two cells further on.
+Fixture mazeFixture() {
+  Fixture f;
+  auto s = world::generateMaze(world::MazeConfig(), 0);
+  EXPECT_TRUE(s) << s.message();
+  f.scene = std::move(s).value();
+  for (const Vec3& p : {Vec3(-9, -4, 1.0), Vec3(-9, -2, 1.3), Vec3(-7, -4, 0.8)})
+    for (int k = 0; k < 16; ++k) f.poses.push_back(cameraPose(p, k * 2 * M_PI / 16));
+  return f;
+}
+
+map::MapConfig mapConfig() {
+  map::MapConfig c;
+  c.occupancy.skip_pixel = 2;
+  return c;
+}
+
+// Every ground-truth voxel a full-resolution camera ray ends in (the visible surface).
+std::set<std::size_t> visibleSurface(const Fixture& f, const sim::DepthRenderer& renderer, const common::GridGeometry& geo) {
+  std::set<std::size_t> seen;
+  const auto K = f.camera.intrinsics();
+  cv::Mat depth;
+  for (const auto& T : f.poses) {
+    renderer.render(T, depth);
+    for (int v = 0; v < depth.rows; ++v)
+      for (int u = 0; u < depth.cols; ++u) {
+        const double d = depth.at<float>(v, u);
+        if (d <= 0) continue;
+        const Vec3 ray = T.linear() * Vec3((u - K.cx) / K.fx, (v - K.cy) / K.fy, 1.0);
+        const Vec3 p = T.translation() + ray * d + ray.normalized() * 1e-4;
+        const Index3 idx = geo.coordToIndex(p);
+        if (geo.inside(idx) && f.scene.isOccupied(p)) seen.insert(geo.linear(idx));
+      }
+  }
+  return seen;
+}
+
+}  // namespace
+
+TEST(OccupancyMap, RenderedMazeMatchesGroundTruthSurfaceAndFreeSpace) {
+  const Fixture f = mazeFixture();
+  const sim::DepthRenderer renderer(f.camera, f.scene);
+  map::VoxelMap m(mapConfig(), f.scene.box);
+  cv::Mat depth;
+  for (const auto& T : f.poses) {
+    renderer.render(T, depth);
+    auto info = m.integrate(depth, intrinsicsOf(f.camera.intrinsics()), T);
+    ASSERT_TRUE(info) << info.message();
+  }
+  const auto& geo = m.geometry();
+  const std::set<std::size_t> seen = visibleSurface(f, renderer, geo);
+  ASSERT_GT(seen.size(), 2000u);
+  std::size_t occ = 0, occ_true = 0, recalled = 0, free = 0, free_true = 0;
+  for (std::size_t l = 0; l < geo.size(); ++l) {
+    const VoxelState s = m.occupancy().stateAt(l);
+    const bool gt = f.scene.isOccupied(geo.indexToCoord(geo.unlinear(l)));
+    if (s == VoxelState::kOccupied) {
+      ++occ;
+      occ_true += gt;
+      recalled += seen.count(l);
+    } else if (s == VoxelState::kFree) {
+      ++free;
+      free_true += !gt;
+    }
+  }
+  const double precision = double(occ_true) / occ, recall = double(recalled) / seen.size();
+  const double free_precision = double(free_true) / free;
+  std::cout << "occupied precision " << precision << ", recall " << recall << " (" << seen.size()
+            << " visible surface voxels), free precision " << free_precision << " over " << free << " voxels\n";
+  EXPECT_GE(precision, 0.95);
+  EXPECT_GE(recall, 0.95);
+  EXPECT_GE(free_precision, 0.99);
+  EXPECT_GT(free, 50000u);
+  // The ESDF follows the occupancy exactly.
+  for (std::size_t l = 0; l < geo.size(); ++l)
+    ASSERT_EQ(m.esdf().isObstacle(geo.unlinear(l)), m.occupancy().stateAt(l) == VoxelState::kOccupied);
+}
+
+TEST(OccupancyMap, MillimetreAndMetreEncodingsGiveTheSameMap) {
+  const Fixture f = mazeFixture();
+  const sim::DepthRenderer renderer(f.camera, f.scene);
+  map::VoxelMap a(mapConfig(), f.scene.box), b(mapConfig(), f.scene.box);
+  cv::Mat depth, mm, metres;
+  for (std::size_t i = 0; i < f.poses.size(); i += 3) {
+    renderer.render(f.poses[i], depth);
+    depth.convertTo(mm, CV_16UC1, 1000.0);  // rounds to the millimetre, as a D435i does
+    mm.convertTo(metres, CV_32FC1, 0.001);
+    ASSERT_TRUE(a.integrate(mm, intrinsicsOf(f.camera.intrinsics()), f.poses[i]));
+    ASSERT_TRUE(b.integrate(metres, intrinsicsOf(f.camera.intrinsics()), f.poses[i]));
+  }
+  std::size_t known = 0;
+  for (std::size_t l = 0; l < a.geometry().size(); ++l) {
+    ASSERT_EQ(a.occupancy().stateAt(l), b.occupancy().stateAt(l)) << "voxel " << l;
+    known += a.occupancy().stateAt(l) != VoxelState::kUnknown;
+  }
+  EXPECT_GT(known, 10000u);
+}
+
+TEST(OccupancyMap, InvalidPixelsAreFreeOrSkippedByParameter) {
+  // Empty world: every pixel of the rendered image is 0 (nothing in range); add NaNs.
+  world::Scene empty = world::makeEmptyScene("empty", {Vec3(-6, -6, -2), Vec3(6, 6, 4)}, 0.1, 0.0);
+  sim::DepthCameraConfig cam;
+  cv::Mat depth(cam.height, cam.width, CV_32FC1, cv::Scalar(0.0f));
+  for (int v = 0; v < depth.rows; v += 7) depth.at<float>(v, v % depth.cols) = std::numeric_limits<float>::quiet_NaN();
+  const auto T = cameraPose(Vec3(0, 0, 1), 0.0);
+  for (bool as_free : {true, false}) {
+    map::MapConfig c = mapConfig();
+    c.occupancy.invalid_as_free = as_free;
+    map::VoxelMap m(c, empty.box);
+    auto info = m.integrate(depth, intrinsicsOf(cam.intrinsics()), T);
+    ASSERT_TRUE(info) << info.message();
+    EXPECT_EQ(info->frame.pixels_invalid, (cam.width / 2) * (cam.height / 2));
+    // A point 3 m ahead on the optical axis; and one beyond the range.
+    EXPECT_EQ(m.occupancy().state(Vec3(3.0, 0.0, 1.0)), as_free ? VoxelState::kFree : VoxelState::kUnknown);
+    EXPECT_EQ(m.occupancy().state(Vec3(5.0, 0.0, 1.0)), VoxelState::kUnknown);
+  }
+  // Beyond-range returns carve free space to the range, never a hit.
+  cv::Mat far(cam.height, cam.width, CV_32FC1, cv::Scalar(9.0f));
+  map::VoxelMap m(mapConfig(), empty.box);
+  auto info = m.integrate(far, intrinsicsOf(cam.intrinsics()), T);
+  ASSERT_TRUE(info);
+  EXPECT_TRUE(info->frame.became_occupied.empty());
+  EXPECT_EQ(m.occupancy().state(Vec3(4.3, 0.0, 1.0)), VoxelState::kFree);
+  EXPECT_EQ(m.occupancy().state(Vec3(4.8, 0.0, 1.0)), VoxelState::kUnknown);
+}
+
+TEST(OccupancyMap, BadFramesAreRefusedAndChangeNothing) {
+  world::Scene empty = world::makeEmptyScene("empty", {Vec3(-3, -3, 0), Vec3(3, 3, 3)}, 0.1, 0.0);
+  sim::DepthCameraConfig cam;
+  map::VoxelMap m(mapConfig(), empty.box);
+  const auto K = intrinsicsOf(cam.intrinsics());
+  const auto T = cameraPose(Vec3(0, 0, 1), 0.0);
+  cv::Mat wrong_type(cam.height, cam.width, CV_8UC1, cv::Scalar(1));
+  auto a = m.integrate(wrong_type, K, T);
+  ASSERT_FALSE(a);
+  EXPECT_NE(a.message().find("32FC1"), std::string::npos) << a.message();
+  cv::Mat small(100, 100, CV_32FC1, cv::Scalar(1.0f));
+  auto b = m.integrate(small, K, T);
+  ASSERT_FALSE(b);
+  EXPECT_NE(b.message().find("camera_info"), std::string::npos) << b.message();
+  Eigen::Isometry3d bad = T;
+  bad.translation().x() = std::nan("");
+  cv::Mat ok(cam.height, cam.width, CV_32FC1, cv::Scalar(2.0f));
+  auto c = m.integrate(ok, K, bad);
+  ASSERT_FALSE(c);
+  EXPECT_EQ(m.occupancy().knownCount(), 0u);
+}
+
+TEST(OccupancyMap, OctomapRoundTripKeepsStates) {
+  const Fixture f = mazeFixture();
+  const sim::DepthRenderer renderer(f.camera, f.scene);
+  map::VoxelMap m(mapConfig(), f.scene.box);
+  cv::Mat depth;
+  for (std::size_t i = 0; i < 16; ++i) {
+    renderer.render(f.poses[i], depth);
+    ASSERT_TRUE(m.integrate(depth, intrinsicsOf(f.camera.intrinsics()), f.poses[i]));
+  }
+  const std::string path = (std::filesystem::temp_directory_path() / ("go_feap_map_" + std::to_string(::getpid()) + ".bt")).string();
+  ASSERT_TRUE(m.saveBt(path));
+  map::VoxelMap back(mapConfig(), f.scene.box);
+  ASSERT_TRUE(back.loadBt(path));
+  std::filesystem::remove(path);
+  std::size_t known = 0;
+  for (std::size_t l = 0; l < m.geometry().size(); ++l) {
+    ASSERT_EQ(m.occupancy().stateAt(l), back.occupancy().stateAt(l)) << "voxel " << l;
+    known += m.occupancy().stateAt(l) != VoxelState::kUnknown;
+    ASSERT_EQ(back.esdf().isObstacle(m.geometry().unlinear(l)), back.occupancy().stateAt(l) == VoxelState::kOccupied);
+  }
+  EXPECT_GT(known, 10000u);
+  EXPECT_FALSE(back.loadBt(path));
+}
+
+TEST(OccupancyMap, LineVisibility) {
+  map::OccupancyMap m(map::OccupancyConfig(), {Vec3(-3, -3, 0), Vec3(3, 3, 3)});
+  const auto& geo = m.geometry();
+  // Free everywhere except a wall at x in [1.0, 1.1) and an unknown slab at x in [-1.1, -1.0).
+  for (std::size_t l = 0; l < geo.size(); ++l) {
+    const Index3 i = geo.unlinear(l);
+    const double x = geo.indexToCoord(i).x();
+    m.setState(i, x > 1.0 && x < 1.1 ? VoxelState::kOccupied
+                                     : (x > -1.1 && x < -1.0 ? VoxelState::kUnknown : VoxelState::kFree));
+  }
+  EXPECT_FALSE(m.isLineFree(Vec3(0, 0, 1), Vec3(2, 0, 1), false));
+  EXPECT_TRUE(m.isLineFree(Vec3(0, 0, 1), Vec3(0.9, 0.5, 1.5), false));
+  EXPECT_TRUE(m.isLineFree(Vec3(0, 0, 1), Vec3(-2, 0, 1), false));
+  EXPECT_FALSE(m.isLineFree(Vec3(0, 0, 1), Vec3(-2, 0, 1), true));
+  EXPECT_FALSE(m.isLineFree(Vec3(0, 0, 1), Vec3(0, 0, 5), false)) << "leaves the map";
+}

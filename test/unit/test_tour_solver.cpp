@@ -1,0 +1,273 @@
+// Tour solvers against a brute-force oracle over all visiting orders.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <iostream>
+#include <limits>
+#include <numeric>
+#include <random>
+
+#include "go_feap/planning/tour_solver.h"
+
+using namespace go_feap::planning;
+
+namespace {
+
+struct Problem {
+  Eigen::MatrixXd cost;
+  std::vector<double> xi;
+  double lambda = 0.0;
+};
+
+enum class Kind {
+  kUniform,    // every off-diagonal travel time independent in [0, 10) s
+  kEuclidean,  // frontiers in a 20 x 20 x 3 m box at 2 m/s, each direction up to 30% longer
+};
+
+Problem randomProblem(int n, unsigned seed, Kind kind, double lambda_max = 2.0) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Problem p;
+  p.cost = Eigen::MatrixXd::Zero(n + 1, n + 1);
+  std::vector<Eigen::Vector3d> pts(n + 1);
+  for (auto& q : pts) q = Eigen::Vector3d(20.0 * u(rng), 20.0 * u(rng), 3.0 * u(rng));
+  for (int i = 0; i <= n; ++i)
+    for (int j = 1; j <= n; ++j)
+      if (i != j)
+        p.cost(i, j) =
+            kind == Kind::kUniform ? 10.0 * u(rng) : (pts[i] - pts[j]).norm() / 2.0 * (1.0 + 0.3 * u(rng));
+  p.xi.resize(n);
+  for (double& x : p.xi) x = 3.0 * u(rng);
+  p.lambda = lambda_max * u(rng);
+  return p;
+}
+
+// J written the other way round from the solver: travel time to the last frontier plus
+// lambda * sum xi_k * (arrival time at k).
+double arrivalObjective(const Problem& p, const std::vector<int>& order) {
+  double t = 0.0, penalty = 0.0;
+  int prev = 0;
+  for (int k : order) {
+    t += p.cost(prev, k);
+    penalty += p.xi[k - 1] * t;
+    prev = k;
+  }
+  return t + p.lambda * penalty;
+}
+
+struct Best {
+  double cost = std::numeric_limits<double>::infinity();
+  std::vector<int> order;
+};
+
+Best bruteForce(const Problem& p) {
+  const int n = static_cast<int>(p.xi.size());
+  std::vector<int> order(n);
+  std::iota(order.begin(), order.end(), 1);
+  Best best;
+  do {
+    const double j = arrivalObjective(p, order);
+    if (j < best.cost) best = {j, order};
+  } while (std::next_permutation(order.begin(), order.end()));
+  if (n == 0) best.cost = 0.0;
+  return best;
+}
+
+bool isPermutation(std::vector<int> order, int n) {
+  std::sort(order.begin(), order.end());
+  for (int k = 0; k < static_cast<int>(order.size()); ++k)
+    if (order[k] != k + 1) return false;
+  return static_cast<int>(order.size()) == n;
+}
+
+}  // namespace
+
+TEST(TourCost, HandComputedExample) {
+  Problem p;
+  p.cost = Eigen::MatrixXd::Zero(4, 4);
+  p.cost(0, 1) = 2, p.cost(0, 2) = 4, p.cost(0, 3) = 1;
+  p.cost(1, 2) = 3, p.cost(1, 3) = 2;
+  p.cost(2, 1) = 5, p.cost(2, 3) = 1;
+  p.cost(3, 1) = 6, p.cost(3, 2) = 2;
+  p.xi = {1.0, 0.0, 2.0};
+  p.lambda = 0.5;
+  // 0->3: 1 * (1 + 0.5 * 3) = 2.5; 3->1: 6 * (1 + 0.5 * 1) = 9; 1->2: 3 * 1 = 3.
+  EXPECT_DOUBLE_EQ(tourCost(p.cost, p.xi, p.lambda, {3, 1, 2}), 14.5);
+  // Arrival times 1, 7, 10: 10 + 0.5 * (2 * 1 + 1 * 7 + 0 * 10) = 14.5.
+  EXPECT_DOUBLE_EQ(arrivalObjective(p, {3, 1, 2}), 14.5);
+  // 0->1: 2 * 2.5 = 5; 1->2: 3 * 2 = 6; 2->3: 1 * 2 = 2.
+  EXPECT_DOUBLE_EQ(tourCost(p.cost, p.xi, p.lambda, {1, 2, 3}), 13.0);
+  EXPECT_DOUBLE_EQ(tourCost(p.cost, p.xi, 0.0, {1, 2, 3}), 6.0);
+
+  EXPECT_TRUE(std::isnan(tourCost(p.cost, p.xi, p.lambda, {1, 2})));
+  EXPECT_TRUE(std::isnan(tourCost(p.cost, p.xi, p.lambda, {1, 1, 2})));
+  EXPECT_TRUE(std::isnan(tourCost(p.cost, p.xi, p.lambda, {0, 1, 2})));
+  EXPECT_TRUE(std::isnan(tourCost(p.cost, p.xi, p.lambda, {1, 2, 4})));
+
+  const TourResult exact = solveExact(p.cost, p.xi, p.lambda);
+  ASSERT_TRUE(exact.status.ok()) << exact.status.message();
+  EXPECT_EQ(exact.order, bruteForce(p).order);
+}
+
+TEST(SolveExact, MatchesBruteForceOnRandomAsymmetricInstances) {
+  for (int n = 0; n <= 8; ++n) {
+    for (unsigned seed = 0; seed < 5; ++seed) {
+      const Problem p = randomProblem(n, 100 * n + seed, seed % 2 ? Kind::kUniform : Kind::kEuclidean);
+      const Best oracle = bruteForce(p);
+      const TourResult r = solveExact(p.cost, p.xi, p.lambda);
+      ASSERT_TRUE(r.status.ok()) << r.status.message();
+      EXPECT_TRUE(r.exact);
+      ASSERT_TRUE(isPermutation(r.order, n)) << "n " << n << " seed " << seed;
+      EXPECT_NEAR(r.cost, oracle.cost, 1e-9 * (1.0 + oracle.cost)) << "n " << n << " seed " << seed;
+      EXPECT_NEAR(r.cost, arrivalObjective(p, r.order), 1e-9 * (1.0 + oracle.cost));
+    }
+  }
+}
+
+TEST(SolveExact, LambdaZeroIsTheShortestOpenPath) {
+  for (unsigned seed = 0; seed < 6; ++seed) {
+    Problem p = randomProblem(7, 500 + seed, seed % 2 ? Kind::kUniform : Kind::kEuclidean);
+    p.lambda = 0.0;
+    std::vector<int> order(7);
+    std::iota(order.begin(), order.end(), 1);
+    double shortest = std::numeric_limits<double>::infinity();
+    do {
+      double length = 0.0;
+      int prev = 0;
+      for (int k : order) length += p.cost(prev, k), prev = k;
+      shortest = std::min(shortest, length);
+    } while (std::next_permutation(order.begin(), order.end()));
+    const TourResult r = solveExact(p.cost, p.xi, 0.0);
+    ASSERT_TRUE(r.status.ok());
+    EXPECT_NEAR(r.cost, shortest, 1e-9 * shortest) << "seed " << seed;
+  }
+}
+
+TEST(SolveExact, ColumnZeroIsIgnored) {
+  Problem p = randomProblem(6, 7, Kind::kUniform);
+  const TourResult open = solveExact(p.cost, p.xi, p.lambda);
+  p.cost.col(0).setConstant(-1e6);  // returning to the UAV is never part of the path
+  const TourResult r = solveExact(p.cost, p.xi, p.lambda);
+  ASSERT_TRUE(r.status.ok()) << r.status.message();
+  EXPECT_EQ(r.order, open.order);
+  EXPECT_DOUBLE_EQ(r.cost, open.cost);
+}
+
+TEST(SolveExact, OmissionPullsALikelyOmittedFrontierForward) {
+  // The UAV at the origin, frontiers 1..3 ahead at x = 1, 2, 3 m, frontier 4 behind at
+  // (-4, 0.5). The shortest open path sweeps ahead first (3 + 7.02 s) and leaves frontier 4
+  // to the end; with xi_4 = 5 s and lambda = 1 / s, carrying its penalty over the sweep costs
+  // more than the detour, so it comes first.
+  const std::vector<Eigen::Vector2d> at = {{0, 0}, {1, 0}, {2, 0}, {3, 0}, {-4, 0.5}};
+  Eigen::MatrixXd cost(5, 5);
+  for (int i = 0; i < 5; ++i)
+    for (int j = 0; j < 5; ++j) cost(i, j) = j == 0 ? 0.0 : (at[i] - at[j]).norm();
+  const std::vector<double> xi = {0.0, 0.0, 0.0, 5.0};
+
+  const TourResult plain = solveExact(cost, xi, 0.0);
+  ASSERT_TRUE(plain.status.ok());
+  EXPECT_EQ(plain.order, (std::vector<int>{1, 2, 3, 4}));
+  EXPECT_NEAR(plain.cost, 3.0 + cost(3, 4), 1e-12);
+
+  const TourResult aware = solveExact(cost, xi, 1.0);
+  ASSERT_TRUE(aware.status.ok());
+  EXPECT_EQ(aware.order, (std::vector<int>{4, 1, 2, 3}));
+  EXPECT_NEAR(aware.cost, 6.0 * cost(0, 4) + cost(4, 1) + 2.0, 1e-12);
+  // The heuristic sees the same objective.
+  EXPECT_EQ(solveHeuristic(cost, xi, 1.0).order, aware.order);
+}
+
+TEST(SolveExact, RefusesTooManyFrontiers) {
+  const Problem p = randomProblem(kMaxExactFrontiers + 1, 3, Kind::kEuclidean);
+  const TourResult r = solveExact(p.cost, p.xi, p.lambda);
+  EXPECT_FALSE(r.status.ok());
+  EXPECT_NE(r.status.message().find("at most " + std::to_string(kMaxExactFrontiers)), std::string::npos)
+      << r.status.message();
+  EXPECT_TRUE(r.order.empty());
+
+  const TourResult dispatched = solve(p.cost, p.xi, p.lambda, 12);
+  ASSERT_TRUE(dispatched.status.ok());
+  EXPECT_FALSE(dispatched.exact);
+  EXPECT_TRUE(isPermutation(dispatched.order, kMaxExactFrontiers + 1));
+
+  const Problem small = randomProblem(12, 4, Kind::kEuclidean);
+  EXPECT_TRUE(solve(small.cost, small.xi, small.lambda, 12).exact);
+  EXPECT_FALSE(solve(small.cost, small.xi, small.lambda, 11).exact);
+}
+
+TEST(TourProblem, InvalidInputIsRefusedWithAReason) {
+  const Problem p = randomProblem(4, 9, Kind::kUniform);
+  auto message = [](const TourResult& r) { return r.status.ok() ? std::string("ok") : r.status.message(); };
+
+  EXPECT_NE(message(solveExact(Eigen::MatrixXd::Zero(4, 5), p.xi, 1.0)).find("square"), std::string::npos);
+  EXPECT_NE(message(solveExact(Eigen::MatrixXd(0, 0), {}, 1.0)).find("square"), std::string::npos);
+  EXPECT_NE(message(solveHeuristic(p.cost, {1.0, 2.0}, 1.0)).find("xi must have 4"), std::string::npos);
+  EXPECT_NE(message(solveExact(p.cost, p.xi, -1.0)).find("lambda"), std::string::npos);
+  std::vector<double> bad_xi = p.xi;
+  bad_xi[2] = std::nan("");
+  EXPECT_NE(message(solveHeuristic(p.cost, bad_xi, 1.0)).find("xi of frontier 3"), std::string::npos);
+  Eigen::MatrixXd bad_cost = p.cost;
+  bad_cost(2, 1) = -0.5;
+  EXPECT_NE(message(solveExact(bad_cost, p.xi, 1.0)).find("cost(2, 1)"), std::string::npos);
+  bad_cost(2, 1) = std::numeric_limits<double>::infinity();
+  EXPECT_NE(message(solveHeuristic(bad_cost, p.xi, 1.0)).find("cost(2, 1)"), std::string::npos);
+
+  // No frontier: an empty, valid tour.
+  const TourResult empty = solve(Eigen::MatrixXd::Zero(1, 1), {}, 1.0, 12);
+  EXPECT_TRUE(empty.status.ok());
+  EXPECT_TRUE(empty.order.empty());
+  EXPECT_EQ(empty.cost, 0.0);
+}
+
+TEST(SolveHeuristic, WithinFivePercentOfExactAtTwelveFrontiers) {
+  for (Kind kind : {Kind::kEuclidean, Kind::kUniform}) {
+    const char* name = kind == Kind::kEuclidean ? "euclidean" : "uniform";
+    double sum_gap = 0.0, max_gap = 0.0;
+    int optimal = 0;
+    constexpr int kInstances = 30;
+    for (unsigned seed = 0; seed < kInstances; ++seed) {
+      const Problem p = randomProblem(12, 7000 + seed, kind);
+      const TourResult exact = solveExact(p.cost, p.xi, p.lambda);
+      const TourResult heuristic = solveHeuristic(p.cost, p.xi, p.lambda);
+      ASSERT_TRUE(exact.status.ok() && heuristic.status.ok());
+      ASSERT_TRUE(isPermutation(heuristic.order, 12));
+      EXPECT_FALSE(heuristic.exact);
+      EXPECT_DOUBLE_EQ(heuristic.cost, tourCost(p.cost, p.xi, p.lambda, heuristic.order));
+      const double gap = heuristic.cost / exact.cost - 1.0;
+      EXPECT_GE(gap, -1e-12) << name << " seed " << seed;
+      EXPECT_LE(gap, 0.05) << name << " seed " << seed;
+      sum_gap += gap;
+      max_gap = std::max(max_gap, gap);
+      optimal += gap < 1e-9;
+    }
+    std::cout << "[ gap      ] " << name << " n = 12, " << kInstances << " instances: mean "
+              << 100.0 * sum_gap / kInstances << " %, max " << 100.0 * max_gap << " %, optimal " << optimal
+              << "/" << kInstances << "\n";
+    ::testing::Test::RecordProperty(std::string(name) + "_mean_gap_percent",
+                                    std::to_string(100.0 * sum_gap / kInstances));
+    ::testing::Test::RecordProperty(std::string(name) + "_max_gap_percent", std::to_string(100.0 * max_gap));
+  }
+}
+
+TEST(SolveHeuristic, ThreeHundredFrontiersGiveAValidImprovedTour) {
+  const Problem p = randomProblem(300, 42, Kind::kEuclidean, 0.2);
+  const TourResult r = solveHeuristic(p.cost, p.xi, p.lambda);
+  ASSERT_TRUE(r.status.ok()) << r.status.message();
+  ASSERT_TRUE(isPermutation(r.order, 300));
+  EXPECT_FALSE(r.exact);
+  EXPECT_NEAR(r.cost, arrivalObjective(p, r.order), 1e-9 * r.cost);
+
+  // Local search starts from nearest neighbour among others, so it never ends worse.
+  std::vector<int> nearest;
+  std::vector<bool> used(301, false);
+  for (int cur = 0; nearest.size() < 300;) {
+    int next = -1;
+    for (int k = 1; k <= 300; ++k)
+      if (!used[k] && (next < 0 || p.cost(cur, k) < p.cost(cur, next))) next = k;
+    used[next] = true;
+    nearest.push_back(next);
+    cur = next;
+  }
+  EXPECT_LT(r.cost, tourCost(p.cost, p.xi, p.lambda, nearest));
+}
