@@ -68,14 +68,18 @@ FrontierDelta FrontierFinder::rebuild(const map::OccupancyMap& map, const Index3
   const Index3 n_hi = (changed_max + Index3::Constant(2)).cwiseMin(box_hi_ - Index3::Ones());
   if ((n_hi.array() < n_lo.array()).any()) return delta;
 
-  // 1. Clusters within reach of the change, before statuses change.
+  // 1. Clusters within reach of the change, before statuses change: those with a cell in
+  // the reach box (a cheap box test first, then their cells).
   std::unordered_set<std::uint32_t> affected;
-  for (int z = n_lo.z(); z <= n_hi.z(); ++z)
-    for (int y = n_lo.y(); y <= n_hi.y(); ++y)
-      for (int x = n_lo.x(); x <= n_hi.x(); ++x) {
-        auto it = owner_.find(geo_.linear(Index3(x, y, z)));
-        if (it != owner_.end()) affected.insert(it->second);
+  const Aabb reach{geo_.indexToCoord(n_lo), geo_.indexToCoord(n_hi)};
+  for (const Frontier& f : frontiers_) {
+    if ((f.box.max.array() < reach.min.array()).any() || (f.box.min.array() > reach.max.array()).any()) continue;
+    for (const Index3& c : f.cells)
+      if ((c.array() >= n_lo.array()).all() && (c.array() <= n_hi.array()).all()) {
+        affected.insert(f.id);
+        break;
       }
+  }
   // 2. New statuses in R.
   for (int z = r_lo.z(); z <= r_hi.z(); ++z)
     for (int y = r_lo.y(); y <= r_hi.y(); ++y)

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "go_feap/common/raycast.h"
 
@@ -112,6 +113,8 @@ common::Result<FrameChange> OccupancyMap::integrate(const cv::Mat& depth, const 
 
   // 1. Sampled pixels -> ray end voxels; returns mark their voxel as hit.
   const Vec3 du = R.col(0) / K.fx;
+  std::size_t last_end = std::numeric_limits<std::size_t>::max();
+  bool last_hit = false;
   for (int v = 0; v < depth.rows; v += config_.skip_pixel) {
     const Vec3 row = R.col(1) * ((v - K.cy) / K.fy) + R.col(2);
     for (int u = 0; u < depth.cols; u += config_.skip_pixel) {
@@ -141,6 +144,10 @@ common::Result<FrameChange> OccupancyMap::integrate(const cv::Mat& depth, const 
       }
       const Index3 e = geo_.coordToIndex(b).cwiseMax(Index3::Zero()).cwiseMin(geo_.dims() - Index3::Ones());
       const std::size_t l = geo_.linear(e);
+      // Neighbouring pixels mostly end in the same voxel: nothing new to record then.
+      if (l == last_end && hit == last_hit) continue;
+      last_end = l;
+      last_hit = hit;
       if (hit) {
         touch(l);
         setBit(hit_bits_, l);

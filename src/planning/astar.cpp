@@ -71,46 +71,11 @@ void octileMoves(const Index3& a, const Index3& b, std::int32_t m[3]) {
   m[0] = d[2] - d[1];
 }
 
-// Open list: a 4-ary min-heap (shallower than a binary one, and a node's children share a cache line)
-// ordered by f, then by h, so that among equal-cost candidates the one nearer the goal comes first.
+// Open list order: by f, then by h, so that among equal-cost candidates the one nearer the goal comes
+// first.
 template <typename Entry>
 bool before(const Entry& a, const Entry& b) {
   return a.f < b.f || (a.f == b.f && a.h < b.h);
-}
-
-template <typename Entry>
-void heapPush(std::vector<Entry>& heap, const Entry& e) {
-  std::size_t i = heap.size();
-  heap.push_back(e);
-  while (i > 0) {
-    const std::size_t parent = (i - 1) / 4;
-    if (!before(e, heap[parent])) break;
-    heap[i] = heap[parent];
-    i = parent;
-  }
-  heap[i] = e;
-}
-
-template <typename Entry>
-Entry heapPop(std::vector<Entry>& heap) {
-  const Entry top = heap.front();
-  const Entry last = heap.back();
-  heap.pop_back();
-  const std::size_t n = heap.size();
-  if (n == 0) return top;
-  std::size_t i = 0;
-  for (;;) {
-    const std::size_t first = 4 * i + 1;
-    if (first >= n) break;
-    std::size_t best = first;
-    for (std::size_t c = first + 1; c < std::min(first + 4, n); ++c)
-      if (before(heap[c], heap[best])) best = c;
-    if (!before(heap[best], last)) break;
-    heap[i] = heap[best];
-    i = best;
-  }
-  heap[i] = last;
-  return top;
 }
 
 double pathLength(const std::vector<Vec3>& path) {
@@ -304,6 +269,55 @@ void Astar::resetScratch() const {
   open_.clear();
 }
 
+// The open list is a 4-ary min-heap (shallow, and a node's children share a cache line) with each node's
+// position kept in the node, so that a cheaper route to an open node moves its entry up instead of adding
+// a second one: the heap holds only the open nodes.
+void Astar::heapUp(std::size_t i, const OpenEntry& e) const {
+  while (i > 0) {
+    const std::size_t parent = (i - 1) / 4;
+    if (!before(e, open_[parent])) break;
+    open_[i] = open_[parent];
+    nodes_[open_[i].node].heap_pos = static_cast<std::int32_t>(i);
+    i = parent;
+  }
+  open_[i] = e;
+  nodes_[e.node].heap_pos = static_cast<std::int32_t>(i);
+}
+
+void Astar::heapPush(const OpenEntry& e) const {
+  const std::int32_t pos = nodes_[e.node].heap_pos;
+  if (pos >= 0) {
+    heapUp(static_cast<std::size_t>(pos), e);  // the entry only ever gets cheaper
+  } else {
+    open_.push_back(e);
+    heapUp(open_.size() - 1, e);
+  }
+}
+
+std::int32_t Astar::heapPop() const {
+  const std::int32_t top = open_.front().node;
+  nodes_[top].heap_pos = -1;
+  const OpenEntry last = open_.back();
+  open_.pop_back();
+  const std::size_t n = open_.size();
+  if (n == 0) return top;
+  std::size_t i = 0;
+  for (;;) {
+    const std::size_t first = 4 * i + 1;
+    if (first >= n) break;
+    std::size_t best = first;
+    for (std::size_t c = first + 1; c < std::min(first + 4, n); ++c)
+      if (before(open_[c], open_[best])) best = c;
+    if (!before(open_[best], last)) break;
+    open_[i] = open_[best];
+    nodes_[open_[i].node].heap_pos = static_cast<std::int32_t>(i);
+    i = best;
+  }
+  open_[i] = last;
+  nodes_[last.node].heap_pos = static_cast<std::int32_t>(i);
+  return top;
+}
+
 std::size_t Astar::brickSlot(std::uint32_t key) const {
   // Fibonacci hashing: the top bits of the product, as many as the table is long.
   const std::size_t mask = brick_slots_.size() - 1;
@@ -356,7 +370,7 @@ PathResult Astar::search(const Vec3& start, const Vec3& goal, double snap_radius
     octileMoves(nodes_[n].idx, g, h);
     for (int i = 0; i < 3; ++i) f[i] = nodes_[n].moves[i] + h[i];
     const double hc = movesCost(h);
-    heapPush(open_, OpenEntry{movesCost(f) + w_extra * hc, static_cast<float>(hc), n});
+    heapPush(OpenEntry{movesCost(f) + w_extra * hc, static_cast<float>(hc), n});
   };
   // Cell of a voxel inside the grid; neighbouring voxels mostly share a brick, so the last one is kept.
   std::uint32_t cached_key = std::numeric_limits<std::uint32_t>::max();
@@ -376,14 +390,13 @@ PathResult Astar::search(const Vec3& start, const Vec3& goal, double snap_radius
   };
 
   resetScratch();
-  nodes_.push_back(Node{s, -1, {0, 0, 0}, false});
+  nodes_.push_back(Node{s, -1, {0, 0, 0}, -1});
   cells_[cellOf(s)] = 0;
   open(0);
   std::int32_t reached = -1;
   result.status = PathStatus::kNoPath;
   while (!open_.empty()) {
-    const std::int32_t n = heapPop(open_).node;
-    if (nodes_[n].closed) continue;  // a stale entry: the node was reached more cheaply since
+    const std::int32_t n = heapPop();
     if (nodes_[n].idx == g) {
       ++result.expansions;
       reached = n;
@@ -395,8 +408,8 @@ PathResult Astar::search(const Vec3& start, const Vec3& goal, double snap_radius
       break;
     }
     ++result.expansions;
-    nodes_[n].closed = true;
     const Index3 idx = nodes_[n].idx;
+    cells_[cellOf(idx)] = kClosed;  // later visits skip it without reading the node
     std::array<std::size_t, 26> cell;
     std::uint32_t free = 0;
     for (int k = 0; k < 26; ++k) {
@@ -405,18 +418,19 @@ PathResult Astar::search(const Vec3& start, const Vec3& goal, double snap_radius
       cell[k] = cellOf(q);
       std::int32_t& c = cells_[cell[k]];
       if (c == kUnseen) c = traversable(q, geo_.linear(q)) ? kFree : kBlocked;
-      if (c != kBlocked) free |= std::uint32_t{1} << k;
+      if (c != kBlocked) free |= std::uint32_t{1} << k;  // kClosed voxels are traversable too
     }
     for (int k = 0; k < 26; ++k) {
       if ((free & nb.swept[k]) != nb.swept[k]) continue;  // blocked, or cutting a blocked edge / corner
+      std::int32_t m = cells_[cell[k]];
+      if (m == kClosed) continue;
       std::int32_t moves[3] = {nodes_[n].moves[0], nodes_[n].moves[1], nodes_[n].moves[2]};
       ++moves[nb.type[k]];
-      std::int32_t m = cells_[cell[k]];
       if (m >= 0) {
-        if (nodes_[m].closed || movesCost(moves) >= movesCost(nodes_[m].moves)) continue;
+        if (movesCost(moves) >= movesCost(nodes_[m].moves)) continue;
       } else {
         m = static_cast<std::int32_t>(nodes_.size());
-        nodes_.push_back(Node{idx + nb.offset[k], n, {0, 0, 0}, false});
+        nodes_.push_back(Node{idx + nb.offset[k], n, {0, 0, 0}, -1});
         cells_[cell[k]] = m;
       }
       nodes_[m].parent = n;

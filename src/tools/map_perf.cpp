@@ -1,12 +1,17 @@
-// go_feap_map_perf: times the mapper on depth rendered along a path through a procedural
-// scene: occupancy integration and ESDF update per frame, and the map's memory.
+// go_feap_map_perf: times the mapping and global-planning stages on depth rendered along a
+// path through a procedural scene: occupancy integration, ESDF update, incremental frontier
+// update and omission-aware global planning (A* distances, Held-Karp) per frame, and the
+// map's memory.
 #include <chrono>
 #include <iostream>
 #include <map>
 
 #include "camera_path.h"
 #include "cli_args.h"
+#include "go_feap/frontier/frontier_finder.h"
 #include "go_feap/map/voxel_map.h"
+#include "go_feap/planning/astar.h"
+#include "go_feap/planning/global_planner.h"
 #include "go_feap/sim/depth_camera.h"
 #include "go_feap/world/scene_files.h"
 
@@ -16,7 +21,8 @@ int usage(const char* why) {
   if (why) std::cerr << "go_feap_map_perf: " << why << "\n";
   std::cerr << "usage: go_feap_map_perf --scene maze|powerplant [--frames N] [--skip-pixel K]\n"
                "Integrates N (default 300) rendered 640x480 depth frames taken along a path (steps of\n"
-               "about 0.1 m, turning) and prints integration and ESDF update times and map memory.\n";
+               "about 0.1 m, turning) and prints integration, ESDF, frontier and global planning times\n"
+               "and map memory.\n";
   return 2;
 }
 
@@ -55,7 +61,13 @@ int main(int argc, char** argv) {
   const auto K = camera.intrinsics();
   const map::DepthIntrinsics intrinsics{K.width, K.height, K.fx, K.fy, K.cx, K.cy};
   using Clock = std::chrono::steady_clock;
-  double occ_total = 0, occ_max = 0, esdf_total = 0, esdf_max = 0;
+  frontier::FrontierFinder finder(frontier::FrontierConfig(), occupancy.geometry(), scene->box);
+  const planning::GlobalPlannerConfig global;
+  const planning::Astar astar(occupancy, esdf, planning::AstarConfig());
+  double occ_total = 0, occ_max = 0, esdf_total = 0, esdf_max = 0, fr_total = 0, fr_max = 0, gl_total = 0, gl_max = 0,
+         astar_total = 0, astar_max = 0;
+  std::size_t tour_total = 0, frontier_total = 0;
+  int frame = 0;
   std::size_t rays = 0;
   cv::Mat depth;
   for (const auto& T : poses) {
@@ -74,6 +86,40 @@ int main(int argc, char** argv) {
     occ_total += a, esdf_total += b;
     occ_max = std::max(occ_max, a), esdf_max = std::max(esdf_max, b);
     rays += change->rays;
+
+    // Frontiers over the changed box, then a tour from the camera position.
+    const double now = frame++ / 15.0;
+    const auto t3 = Clock::now();
+    if (change->any_change) finder.update(occupancy, change->changed_min, change->changed_max, now);
+    const auto t4 = Clock::now();
+    std::vector<planning::FrontierSummary> summaries;
+    for (const auto& f : finder.frontiers())
+      summaries.push_back({f.id, f.average, static_cast<int>(f.cells.size()), f.duration(now), f.n_near, f.active});
+    const common::Vec3 uav = T.translation();
+    // Time spent in A* is booked separately from selection + cost matrix + solve.
+    double astar_ms = 0.0;
+    auto timed = [&](auto&& fn) {
+      const auto s0 = Clock::now();
+      const double r = fn();
+      astar_ms += std::chrono::duration<double, std::milli>(Clock::now() - s0).count();
+      return r;
+    };
+    planning::PathDistances d;
+    d.from_uav = [&](std::size_t j) {
+      const double e = (summaries[j].average - uav).norm();
+      return e >= global.s_near ? e : timed([&] { return planning::pathDistance(astar, uav, summaries[j].average).metres; });
+    };
+    d.between = [&](std::size_t i, std::size_t j) {
+      return timed([&] { return planning::pathDistance(astar, summaries[i].average, summaries[j].average).metres; });
+    };
+    auto tour = planning::planTour(summaries, d, global);
+    const auto t5 = Clock::now();
+    const double c = std::chrono::duration<double, std::milli>(t4 - t3).count();
+    const double g = std::chrono::duration<double, std::milli>(t5 - t4).count() - astar_ms;
+    fr_total += c, gl_total += g, astar_total += astar_ms;
+    fr_max = std::max(fr_max, c), gl_max = std::max(gl_max, g), astar_max = std::max(astar_max, astar_ms);
+    frontier_total += summaries.size();
+    if (tour) tour_total += tour->frontier_ids.size();
   }
   const double n = static_cast<double>(poses.size());
   const std::size_t bytes = occupancy.memoryBytes() + esdf.memoryBytes();
@@ -83,6 +129,12 @@ int main(int argc, char** argv) {
             << rays / n << " rays per frame after merging\n"
             << "integration: mean " << occ_total / n << " ms, max " << occ_max << " ms per frame\n"
             << "ESDF update: mean " << esdf_total / n << " ms, max " << esdf_max << " ms per frame\n"
+            << "frontier update: mean " << fr_total / n << " ms, max " << fr_max << " ms per frame ("
+            << frontier_total / n << " frontiers on average)\n"
+            << "global planning (NearCur_IDs, cost matrix, Held-Karp): mean " << gl_total / n << " ms, max " << gl_max
+            << " ms per frame (" << tour_total / n << " frontiers per tour on average)\n"
+            << "A* path lengths for it (no cache): mean " << astar_total / n << " ms, max " << astar_max
+            << " ms per frame\n"
             << "map: " << geo.dims().transpose() << " voxels (" << volume << " m^3), " << bytes / (1024.0 * 1024.0)
             << " MiB incl. ESDF = " << bytes / volume / 1024.0 << " KiB per m^3; " << occupancy.knownCount()
             << " voxels known\n";

@@ -1,4 +1,4 @@
-// A* grid search against exhaustive shortest paths (Bellman-Ford relaxation over the same 26-connected
+// A* grid search against exhaustive shortest paths (Dijkstra over every voxel of the same 26-connected
 // graph) and a brute-force blocking rule, on small random maps.
 #include <gtest/gtest.h>
 
@@ -6,9 +6,11 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <queue>
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "go_feap/planning/astar.h"
@@ -147,28 +149,30 @@ bool moveAllowed(const GridGeometry& g, const std::vector<std::uint8_t>& ok, con
 }
 
 // Shortest path costs (m) from `source` to every voxel over traversable voxels, 26-connected with move
-// costs 1, sqrt 2, sqrt 3 voxels and no corner cutting: plain Bellman-Ford relaxation sweeps until
-// nothing changes.
+// costs 1, sqrt 2, sqrt 3 voxels and no corner cutting: textbook Dijkstra over the whole grid.
 std::vector<double> shortestCosts(const GridGeometry& g, const std::vector<std::uint8_t>& ok, const Index3& source) {
   std::vector<double> cost(g.size(), kInf);
+  using Item = std::pair<double, std::size_t>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> queue;
   cost[g.linear(source)] = 0.0;
-  for (bool changed = true; changed;) {
-    changed = false;
-    for (std::size_t l = 0; l < g.size(); ++l) {
-      if (!ok[l] || cost[l] == kInf) continue;
-      const Index3 v = g.unlinear(l);
-      for (int dz = -1; dz <= 1; ++dz)
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dx = -1; dx <= 1; ++dx) {
-            const Index3 n = v + Index3(dx, dy, dz);
-            if (n == v || !moveAllowed(g, ok, v, Index3(dx, dy, dz))) continue;
-            const double c = cost[l] + kRes * std::sqrt(static_cast<double>(dx * dx + dy * dy + dz * dz));
-            if (c < cost[g.linear(n)] - 1e-12) {
-              cost[g.linear(n)] = c;
-              changed = true;
-            }
+  queue.push({0.0, g.linear(source)});
+  while (!queue.empty()) {
+    const auto [c, l] = queue.top();
+    queue.pop();
+    if (c > cost[l]) continue;
+    const Index3 v = g.unlinear(l);
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const Index3 d(dx, dy, dz);
+          if (d == Index3::Zero() || !moveAllowed(g, ok, v, d)) continue;
+          const std::size_t n = g.linear(v + d);
+          const double next = c + kRes * std::sqrt(static_cast<double>(d.squaredNorm()));
+          if (next < cost[n]) {
+            cost[n] = next;
+            queue.push({next, n});
           }
-    }
+        }
   }
   return cost;
 }
@@ -341,6 +345,58 @@ TEST(Astar, CostEqualsExhaustiveShortestPathOnRandomGrids) {
   }
   EXPECT_GT(found, 50);
   EXPECT_GT(no_path, 5);
+}
+
+TEST(Astar, CostEqualsExhaustiveShortestPathInLargeMazes) {
+  // Long searches (thousands of expansions) through walls with few gaps, with one Astar reused
+  // for searches of every size.
+  int found = 0;
+  for (unsigned seed : {21u, 22u}) {
+    const Index3 dims(96, 64, 12);
+    World world(dims);
+    Rng rng(seed);
+    world.fill(VoxelState::kFree);
+    for (int x = 8; x < dims.x(); x += 10) {
+      world.set(Index3(x, 0, 0), Index3(x + 1, dims.y(), dims.z()), VoxelState::kOccupied);
+      for (int gap = 0; gap < 2; ++gap) {
+        const int y = rng(0, dims.y() - 8), z = rng(0, dims.z() - 6);
+        world.set(Index3(x, y, z), Index3(x + 1, y + 6, z + 4), VoxelState::kFree);
+      }
+    }
+    for (int y = 10; y < dims.y(); y += 12) {
+      const int x = rng(0, dims.x() - 40);
+      world.set(Index3(x, y, 0), Index3(x + 30, y, dims.z()), VoxelState::kOccupied);
+    }
+    addRandomBoxes(world, rng, 6, VoxelState::kOccupied);
+    const Astar astar(world.occupancy(), world.esdf(), astarConfig(0.1, true));
+    const GridGeometry& g = world.geo();
+    std::vector<std::uint8_t> ok(g.size());
+    for (std::size_t l = 0; l < g.size(); ++l) ok[l] = astar.traversable(g.unlinear(l));
+    for (int query = 0; query < 3; ++query) {
+      Index3 start, goal;
+      do start = Index3(rng(0, 6), rng(0, dims.y() - 1), rng(0, dims.z() - 1));
+      while (!ok[g.linear(start)]);
+      const std::vector<double> cost = shortestCosts(g, ok, start);
+      for (int k = 0; k < 3; ++k) {
+        do goal = Index3(rng(dims.x() - 30 * (k + 1), dims.x() - 1), rng(0, dims.y() - 1), rng(0, dims.z() - 1));
+        while (!ok[g.linear(goal)]);
+        SCOPED_TRACE("seed " + std::to_string(seed) + " query " + std::to_string(query) + "/" + std::to_string(k));
+        const PathResult r = astar.search(g.indexToCoord(start), g.indexToCoord(goal), 0.0);
+        const double want = cost[g.linear(goal)];
+        if (want == kInf) {
+          EXPECT_EQ(r.status, PathStatus::kNoPath) << toString(r.status);
+          continue;
+        }
+        expectWellFormed(astar, r, start, goal);
+        EXPECT_NEAR(r.raw_length, want, 1e-9);
+        ++found;
+        if (k == 0) {
+          EXPECT_GT(r.expansions, 5000);
+        }
+      }
+    }
+  }
+  EXPECT_GE(found, 12);
 }
 
 TEST(Astar, CorridorNarrowerThanTwiceTheClearanceIsImpassable) {

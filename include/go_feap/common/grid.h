@@ -40,7 +40,7 @@ class GridGeometry {
  public:
   GridGeometry() = default;
   GridGeometry(const Vec3& origin, double resolution, const Index3& dims)
-      : origin_(origin), resolution_(resolution), dims_(dims) {}
+      : origin_(origin), resolution_(resolution), inv_resolution_(1.0 / resolution), dims_(dims) {}
 
   /// Smallest grid with voxels of `resolution` covering `box`; the origin is snapped to
   /// a multiple of the resolution so that grids built from different boxes align.
@@ -66,7 +66,7 @@ class GridGeometry {
 
   /// Index of the voxel containing `p` (may be outside the grid).
   Index3 coordToIndex(const Vec3& p) const {
-    return ((p - origin_) / resolution_).array().floor().cast<int>();
+    return ((p - origin_) * inv_resolution_).array().floor().cast<int>();
   }
   /// Centre of voxel `idx`.
   Vec3 indexToCoord(const Index3& idx) const {
@@ -97,6 +97,7 @@ class GridGeometry {
  private:
   Vec3 origin_ = Vec3::Zero();
   double resolution_ = 0.1;
+  double inv_resolution_ = 10.0;  // multiplying is cheaper than dividing on hot paths
   Index3 dims_ = Index3::Zero();
 };
 

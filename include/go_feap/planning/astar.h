@@ -91,8 +91,8 @@ class Astar {
   static constexpr int kBrickBits = 3;
   static constexpr int kBrickEdge = 1 << kBrickBits;
   static constexpr std::size_t kBrickCells = std::size_t{1} << (3 * kBrickBits);
-  // Cell values besides node indices (>= 0).
-  static constexpr std::int32_t kUnseen = -1, kBlocked = -2, kFree = -3;
+  // Cell values besides the index (>= 0) of an open node.
+  static constexpr std::int32_t kUnseen = -1, kBlocked = -2, kFree = -3, kClosed = -4;
 
   /// One voxel the search reached: its cost from the start as counts of axis, face-diagonal and
   /// space-diagonal moves (exact, so equal costs compare equal), and its parent node.
@@ -100,7 +100,7 @@ class Astar {
     Index3 idx;
     std::int32_t parent;
     std::int32_t moves[3];
-    bool closed;
+    std::int32_t heap_pos;  ///< index of its entry in open_, -1 when not open
   };
   /// A brick (8^3 voxels) touched by the current search: slot valid when stamp equals search_stamp_.
   struct BrickSlot {
@@ -118,6 +118,11 @@ class Astar {
   /// Nearest traversable voxel to p whose centre is within `radius` of it; false when none.
   bool snap(const Vec3& p, double radius, Index3& out) const;
   void resetScratch() const;
+  void heapUp(std::size_t i, const OpenEntry& e) const;
+  /// Adds node e.node to the open list, or moves its entry to the (lower) f of e.
+  void heapPush(const OpenEntry& e) const;
+  /// Removes the first entry of the open list and returns its node.
+  std::int32_t heapPop() const;
   /// Slot of brick `key` in brick_slots_, or the empty slot where it would go.
   std::size_t brickSlot(std::uint32_t key) const;
   /// First cell of brick `key`, allocated (every cell kUnseen) on first use in this search.
@@ -132,7 +137,7 @@ class Astar {
 
   // Search scratch: the voxels a search touches, in bricks of 8^3 cells (locality: a voxel's neighbours
   // mostly share its brick) found through an open-addressing table; each cell holds kUnseen, kBlocked,
-  // kFree or the index of the voxel's node. Kept between searches, sized by the largest one.
+  // kFree, kClosed or the index of the voxel's open node. Kept between searches, sized by the largest one.
   mutable std::vector<BrickSlot> brick_slots_;
   mutable std::uint32_t search_stamp_ = 0;
   mutable std::uint32_t bricks_used_ = 0;
