@@ -14,7 +14,11 @@ common::Status FrontierConfig::validate() const {
 }
 
 FrontierFinder::FrontierFinder(const FrontierConfig& config, const common::GridGeometry& geometry, const Aabb& box)
-    : config_(config), geo_(geometry), box_(box), is_frontier_((geometry.size() + 63) / 64, 0) {
+    : config_(config),
+      geo_(geometry),
+      box_(box),
+      is_frontier_((geometry.size() + 63) / 64, 0),
+      scratch_((geometry.size() + 63) / 64, 0) {
   geo_.centreRange(box, box_lo_, box_hi_);
 }
 
@@ -50,6 +54,68 @@ FrontierDelta FrontierFinder::update(const map::OccupancyMap& map, const Index3&
   return rebuild(map, changed_min, changed_max, now);
 }
 
+FrontierDelta FrontierFinder::update(const map::OccupancyMap& map, const std::vector<std::size_t>& changed,
+                                     double now) {
+  if (changed.empty()) return {};
+  // S: voxels whose frontier status may have changed (the changed ones and their face
+  // neighbours, in the box), marked in a scratch bitset.
+  std::vector<std::size_t> marked;
+  Index3 s_lo = box_hi_, s_hi = box_lo_;
+  auto mark = [&](const Index3& idx) {
+    if (!inBox(idx)) return;
+    const std::size_t l = geo_.linear(idx);
+    if ((scratch_[l >> 6] >> (l & 63)) & 1u) return;
+    scratch_[l >> 6] |= std::uint64_t{1} << (l & 63);
+    marked.push_back(l);
+    s_lo = s_lo.cwiseMin(idx);
+    s_hi = s_hi.cwiseMax(idx);
+  };
+  for (std::size_t l : changed) {
+    const Index3 idx = geo_.unlinear(l);
+    mark(idx);
+    for (const Index3& o : common::faceNeighbours()) mark(idx + o);
+  }
+  auto inS = [&](const Index3& idx) {
+    if (!geo_.inside(idx)) return false;
+    const std::size_t l = geo_.linear(idx);
+    return ((scratch_[l >> 6] >> (l & 63)) & 1u) != 0;
+  };
+  // Clusters with a cell in S or 26-adjacent to it (a box test first).
+  std::unordered_set<std::uint32_t> affected;
+  if (!marked.empty()) {
+    const double r = geo_.resolution();
+    const Aabb reach{geo_.indexToCoord(s_lo) - Vec3::Constant(1.5 * r), geo_.indexToCoord(s_hi) + Vec3::Constant(1.5 * r)};
+    for (const Frontier& f : frontiers_) {
+      if ((f.box.max.array() < reach.min.array()).any() || (f.box.min.array() > reach.max.array()).any()) continue;
+      bool hit = false;
+      for (const Index3& c : f.cells) {
+        for (int dz = -1; dz <= 1 && !hit; ++dz)
+          for (int dy = -1; dy <= 1 && !hit; ++dy)
+            for (int dx = -1; dx <= 1 && !hit; ++dx) hit = inS(c + Index3(dx, dy, dz));
+        if (hit) break;
+      }
+      if (hit) affected.insert(f.id);
+    }
+  }
+  // New statuses in S; frontier cells of S seed the regrowth.
+  std::vector<std::size_t> seeds;
+  for (std::size_t l : marked) {
+    const Index3 idx = geo_.unlinear(l);
+    if (computeFrontierCell(map, idx)) {
+      is_frontier_[l >> 6] |= std::uint64_t{1} << (l & 63);
+      seeds.push_back(l);
+    } else {
+      is_frontier_[l >> 6] &= ~(std::uint64_t{1} << (l & 63));
+    }
+    scratch_[l >> 6] &= ~(std::uint64_t{1} << (l & 63));
+  }
+  for (std::uint32_t id : affected)
+    if (const Frontier* f = find(id))
+      for (const Index3& c : f->cells)
+        if (isFrontierCell(c)) seeds.push_back(geo_.linear(c));
+  return regrow(std::move(affected), std::move(seeds), now);
+}
+
 FrontierDelta FrontierFinder::recomputeAll(const map::OccupancyMap& map, double now) {
   return rebuild(map, box_lo_, box_hi_ - Index3::Ones(), now);
 }
@@ -61,12 +127,11 @@ FrontierDelta FrontierFinder::recomputeAll(const map::OccupancyMap& map, double 
 // the result equal to a full recomputation.
 FrontierDelta FrontierFinder::rebuild(const map::OccupancyMap& map, const Index3& changed_min,
                                       const Index3& changed_max, double now) {
-  FrontierDelta delta;
   const Index3 r_lo = (changed_min - Index3::Ones()).cwiseMax(box_lo_);
   const Index3 r_hi = (changed_max + Index3::Ones()).cwiseMin(box_hi_ - Index3::Ones());
   const Index3 n_lo = (changed_min - Index3::Constant(2)).cwiseMax(box_lo_);
   const Index3 n_hi = (changed_max + Index3::Constant(2)).cwiseMin(box_hi_ - Index3::Ones());
-  if ((n_hi.array() < n_lo.array()).any()) return delta;
+  if ((n_hi.array() < n_lo.array()).any()) return {};
 
   // 1. Clusters within reach of the change, before statuses change: those with a cell in
   // the reach box (a cheap box test first, then their cells).
@@ -97,17 +162,24 @@ FrontierDelta FrontierFinder::rebuild(const map::OccupancyMap& map, const Index3
     for (int y = n_lo.y(); y <= n_hi.y(); ++y)
       for (int x = n_lo.x(); x <= n_hi.x(); ++x)
         if (isFrontierCell(Index3(x, y, z))) seeds.push_back(geo_.linear(Index3(x, y, z)));
+  for (std::uint32_t id : affected)
+    if (const Frontier* f = find(id))
+      for (const Index3& c : f->cells)
+        if (isFrontierCell(c)) seeds.push_back(geo_.linear(c));
+  return regrow(std::move(affected), std::move(seeds), now);
+}
+
+// Rebuilds the removed (affected) clusters' regions from the seeds: flood fill over frontier
+// cells, then drop / split / age exactly as a full recomputation does.
+FrontierDelta FrontierFinder::regrow(std::unordered_set<std::uint32_t> affected, std::vector<std::size_t> seeds,
+                                     double now) {
+  FrontierDelta delta;
   std::unordered_map<std::uint32_t, double> first_seen;  // of removed clusters
   auto markRemoved = [&](std::uint32_t id) {
     const Frontier* f = find(id);
     if (f) first_seen[id] = f->first_seen;
   };
-  for (std::uint32_t id : affected) {
-    markRemoved(id);
-    if (const Frontier* f = find(id))
-      for (const Index3& c : f->cells)
-        if (isFrontierCell(c)) seeds.push_back(geo_.linear(c));
-  }
+  for (std::uint32_t id : affected) markRemoved(id);
 
   // 4. Flood fill (26-connected) over frontier cells from the seeds: whole regions.
   std::unordered_set<std::size_t> visited;

@@ -198,6 +198,7 @@ common::Result<FrameChange> OccupancyMap::integrate(const cv::Mat& depth, const 
       change.changed_max = change.changed_max.cwiseMax(idx);
     }
     ++change.changed_voxels;
+    change.changed.push_back(l);
     if (after == VoxelState::kOccupied) change.became_occupied.push_back(l);
     if (before == VoxelState::kOccupied) change.stopped_occupied.push_back(l);
   }

@@ -150,7 +150,10 @@ class EsdfMapper : public nodelet::Nodelet {
     {
       std::unique_lock<std::shared_mutex> lock(shared_->mutex);
       info = shared_->map->integrate(image->image, *K, T_W_C);
-      if (info) sequence = ++shared_->sequence;
+      if (info) {
+        sequence = ++shared_->sequence;
+        shared_->last_changed = info->frame.changed;
+      }
     }
     if (!info) return skip("frame", info.message());
     last_position_ = T_W_C.translation();

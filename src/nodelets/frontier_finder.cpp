@@ -71,6 +71,9 @@ class FrontierFinder : public nodelet::Nodelet {
         if (!finder_) finder_ = std::make_unique<frontier::FrontierFinder>(config_, occupancy.geometry(), box_);
         finder_->setActiveBand(band_.first, band_.second);
         finder_->recomputeAll(occupancy, now);
+      } else if (msg->changed_voxels > 0 && shared_->sequence == msg->sequence) {
+        // The map is still at this frame: its list of changed voxels is exact and cheap.
+        finder_->update(occupancy, shared_->last_changed, now);
       } else if (msg->changed_voxels > 0) {
         const auto& geo = occupancy.geometry();
         const double h = 0.5 * geo.resolution();

@@ -24,6 +24,7 @@ constexpr double kClearanceRounding = 1e-6;
 // Crossing times (in units of the segment) closer than this are one crossing of an edge or corner.
 constexpr double kCrossingTie = 1e-9;
 constexpr std::size_t kInitialBrickTableBits = 8;
+constexpr int kMaxExpansions = 50000000;
 
 // The 26 neighbour offsets, the move type of each (number of axes changed minus one), and the
 // neighbours a move to it sweeps past: those whose offset takes, on every axis, either 0 or the move's
@@ -97,8 +98,11 @@ Status AstarConfig::validate() const {
     return Status::Error(std::string("astar: ") + key + " " + why);
   };
   if (!(clearance >= 0.0 && std::isfinite(clearance))) return err("clearance", "must be finite and >= 0");
-  if (max_expansions < 1) return err("max_expansions", "must be >= 1");
-  if (!(tie_breaker >= 1.0 && std::isfinite(tie_breaker))) return err("tie_breaker", "must be finite and >= 1");
+  // Each expansion adds at most 26 nodes, indexed by int32.
+  if (max_expansions < 1 || max_expansions > kMaxExpansions)
+    return err("max_expansions", ("must be in [1, " + std::to_string(kMaxExpansions) + "]").c_str());
+  if (!(tie_breaker >= 1.0 && std::isfinite(tie_breaker)))
+    return err("tie_breaker", "must be finite and >= 1");
   return Status::Ok();
 }
 
@@ -333,7 +337,7 @@ std::size_t Astar::brick(std::uint32_t key) const {
   const std::uint32_t b = bricks_used_++;
   const std::size_t first = std::size_t{b} * kBrickCells;
   if (cells_.size() < first + kBrickCells) cells_.resize(first + kBrickCells);
-  std::fill_n(cells_.begin() + first, kBrickCells, kUnseen);
+  std::fill_n(cells_.begin() + first, kBrickCells, kCellUnseen);
   brick_slots_[i] = BrickSlot{search_stamp_, key, b};
   if (2 * std::size_t{bricks_used_} > brick_slots_.size()) {
     std::vector<BrickSlot> old;
@@ -377,9 +381,9 @@ PathResult Astar::search(const Vec3& start, const Vec3& goal, double snap_radius
   std::size_t cached_first = 0;
   auto cellOf = [&](const Index3& q) {
     const auto key = static_cast<std::uint32_t>(
-        (q.x() >> kBrickBits) +
-        (static_cast<std::size_t>(q.y() >> kBrickBits) + static_cast<std::size_t>(q.z() >> kBrickBits) * brick_dims_.y()) *
-            brick_dims_.x());
+        (q.x() >> kBrickBits) + (static_cast<std::size_t>(q.y() >> kBrickBits) +
+                                 static_cast<std::size_t>(q.z() >> kBrickBits) * brick_dims_.y()) *
+                                    brick_dims_.x());
     if (key != cached_key) {
       cached_first = brick(key);
       cached_key = key;
@@ -409,7 +413,7 @@ PathResult Astar::search(const Vec3& start, const Vec3& goal, double snap_radius
     }
     ++result.expansions;
     const Index3 idx = nodes_[n].idx;
-    cells_[cellOf(idx)] = kClosed;  // later visits skip it without reading the node
+    cells_[cellOf(idx)] = kCellClosed;  // later visits skip it without reading the node
     std::array<std::size_t, 26> cell;
     std::uint32_t free = 0;
     for (int k = 0; k < 26; ++k) {
@@ -417,13 +421,13 @@ PathResult Astar::search(const Vec3& start, const Vec3& goal, double snap_radius
       if (!geo_.inside(q)) continue;
       cell[k] = cellOf(q);
       std::int32_t& c = cells_[cell[k]];
-      if (c == kUnseen) c = traversable(q, geo_.linear(q)) ? kFree : kBlocked;
-      if (c != kBlocked) free |= std::uint32_t{1} << k;  // kClosed voxels are traversable too
+      if (c == kCellUnseen) c = traversable(q, geo_.linear(q)) ? kCellFree : kCellBlocked;
+      if (c != kCellBlocked) free |= std::uint32_t{1} << k;  // kCellClosed voxels are traversable too
     }
     for (int k = 0; k < 26; ++k) {
       if ((free & nb.swept[k]) != nb.swept[k]) continue;  // blocked, or cutting a blocked edge / corner
       std::int32_t m = cells_[cell[k]];
-      if (m == kClosed) continue;
+      if (m == kCellClosed) continue;
       std::int32_t moves[3] = {nodes_[n].moves[0], nodes_[n].moves[1], nodes_[n].moves[2]};
       ++moves[nb.type[k]];
       if (m >= 0) {

@@ -90,7 +90,7 @@ int main(int argc, char** argv) {
     // Frontiers over the changed box, then a tour from the camera position.
     const double now = frame++ / 15.0;
     const auto t3 = Clock::now();
-    if (change->any_change) finder.update(occupancy, change->changed_min, change->changed_max, now);
+    if (change->any_change) finder.update(occupancy, change->changed, now);
     const auto t4 = Clock::now();
     std::vector<planning::FrontierSummary> summaries;
     for (const auto& f : finder.frontiers())

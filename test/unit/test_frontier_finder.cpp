@@ -80,19 +80,29 @@ TEST(FrontierFinder, IncrementalEqualsFullRecomputationOnRandomUpdates) {
     frontier::FrontierConfig cfg;
     cfg.min_cluster_cells = 4;
     cfg.max_cluster_extent = 0.6;
-    frontier::FrontierFinder inc(cfg, m.geometry(), kBox);
+    frontier::FrontierFinder inc(cfg, m.geometry(), kBox), listed(cfg, m.geometry(), kBox);
     inc.recomputeAll(m, 0.0);
+    listed.recomputeAll(m, 0.0);
     for (int step = 0; step < 40; ++step) {
       const Vec3 c(ux(rng), uy(rng), uz(rng));
       const Vec3 h(size(rng), size(rng), size(rng));
       const int k = state(rng);
       const VoxelState s = k < 6 ? VoxelState::kFree : (k < 9 ? VoxelState::kOccupied : VoxelState::kUnknown);
+      std::vector<std::size_t> changed;  // voxels whose state really changes
+      Index3 a, b;
+      m.geometry().centreRange({c - h, c + h}, a, b);
+      for (int z = a.z(); z < b.z(); ++z)
+        for (int y = a.y(); y < b.y(); ++y)
+          for (int x = a.x(); x < b.x(); ++x)
+            if (m.state(Index3(x, y, z)) != s) changed.push_back(m.geometry().linear(Index3(x, y, z)));
       const auto [lo, hi] = paint(m, c - h, c + h, s);
       if ((hi.array() < lo.array()).any()) continue;
       inc.update(m, lo, hi, step + 1.0);
+      listed.update(m, changed, step + 1.0);
       frontier::FrontierFinder full(cfg, m.geometry(), kBox);
       full.recomputeAll(m, step + 1.0);
       ASSERT_EQ(clusterSets(inc, m.geometry()), clusterSets(full, m.geometry())) << "seed " << seed << " step " << step;
+      ASSERT_EQ(clusterSets(listed, m.geometry()), clusterSets(full, m.geometry())) << "list, seed " << seed << " step " << step;
     }
     EXPECT_GT(inc.frontiers().size(), 0u);
   }

@@ -3,6 +3,7 @@
 
 #include <cstdint>
 #include <unordered_map>
+#include <unordered_set>
 #include <vector>
 
 #include "go_feap/common/grid.h"
@@ -63,6 +64,9 @@ class FrontierFinder {
   /// (inclusive). Only clusters within reach of the change are rebuilt; the result equals
   /// recomputeAll() up to frontier ids.
   FrontierDelta update(const map::OccupancyMap& map, const Index3& changed_min, const Index3& changed_max, double now);
+  /// Updates after the voxels `changed` (linear indices) changed state; cheaper than the
+  /// box form when the changes are sparse in a large box. Same result.
+  FrontierDelta update(const map::OccupancyMap& map, const std::vector<std::size_t>& changed, double now);
   /// Rebuilds everything from the map (the oracle for update()).
   FrontierDelta recomputeAll(const map::OccupancyMap& map, double now);
 
@@ -77,6 +81,7 @@ class FrontierFinder {
  private:
   bool computeFrontierCell(const map::OccupancyMap& map, const Index3& idx) const;
   FrontierDelta rebuild(const map::OccupancyMap& map, const Index3& lo, const Index3& hi, double now);
+  FrontierDelta regrow(std::unordered_set<std::uint32_t> affected, std::vector<std::size_t> seeds, double now);
   void splitInto(std::vector<Index3> cells, std::vector<std::vector<Index3>>& out) const;
   void refreshNeighbourCounts();
   bool inBox(const Index3& idx) const {
@@ -88,6 +93,7 @@ class FrontierFinder {
   Aabb box_;
   Index3 box_lo_, box_hi_;  ///< voxel range of the box, [lo, hi)
   std::vector<std::uint64_t> is_frontier_;                   ///< one bit per voxel
+  std::vector<std::uint64_t> scratch_;                       ///< per-update marks, cleared after use
   std::unordered_map<std::size_t, std::uint32_t> owner_;     ///< cell -> frontier id (kept clusters only)
   std::vector<Frontier> frontiers_;                          ///< sorted by id
   std::uint32_t next_id_ = 1;

@@ -49,6 +49,7 @@ struct FrameChange {
   std::size_t changed_voxels = 0;    ///< voxels whose state (unknown/free/occupied) changed
   bool any_change = false;
   Index3 changed_min = Index3::Zero(), changed_max = Index3::Zero();  ///< inclusive, when any_change
+  std::vector<std::size_t> changed;          ///< linear indices of the voxels whose state changed
   std::vector<std::size_t> became_occupied;  ///< linear indices
   std::vector<std::size_t> stopped_occupied; ///< linear indices
 };

@@ -18,10 +18,13 @@ using common::Index3;
 using common::Vec3;
 
 struct AstarConfig {
-  double clearance = 0.2;       ///< m: voxels whose ESDF distance is below this are blocked (inflation = UAV radius)
-  bool unknown_is_free = true;  ///< true: unknown voxels are traversable (optimistic distance estimates between
-                                ///< frontiers); false: only known-free voxels (safe paths to fly)
-  int max_expansions = 200000;  ///< search budget: voxels expanded before giving up
+  /// m: voxels whose ESDF distance is below this are blocked (inflation = UAV radius).
+  double clearance = 0.2;
+  /// true: unknown voxels are traversable (optimistic distance estimates between frontiers); false: only
+  /// known-free voxels (safe paths to fly).
+  bool unknown_is_free = true;
+  /// Search budget: voxels expanded before giving up, at most 5e7.
+  int max_expansions = 200000;
   /// Weight on the heuristic. 1 gives shortest paths; w > 1 may return a path up to w times longer than
   /// the shortest in exchange for fewer expansions in cluttered maps. Not needed for speed in open space:
   /// ties between equal-cost candidates are already broken towards the goal.
@@ -47,8 +50,9 @@ struct PathResult {
   double length = 0.0;  ///< m, sum of the segment lengths of `path`
   /// The 26-connected voxel path the search found (consecutive centres are neighbours), before shortening.
   std::vector<Vec3> raw_path;
-  double raw_length = 0.0;  ///< m, sum of the segment lengths of `raw_path`: the shortest-path cost (tie_breaker 1)
-  int expansions = 0;       ///< voxels expanded (closed) by the search
+  /// m, sum of the segment lengths of `raw_path`: the shortest-path cost when tie_breaker is 1.
+  double raw_length = 0.0;
+  int expansions = 0;  ///< voxels expanded (closed) by the search
 };
 
 /// A* on the grid of an occupancy map and its ESDF. Holds references to both (they must outlive it and
@@ -92,7 +96,7 @@ class Astar {
   static constexpr int kBrickEdge = 1 << kBrickBits;
   static constexpr std::size_t kBrickCells = std::size_t{1} << (3 * kBrickBits);
   // Cell values besides the index (>= 0) of an open node.
-  static constexpr std::int32_t kUnseen = -1, kBlocked = -2, kFree = -3, kClosed = -4;
+  static constexpr std::int32_t kCellUnseen = -1, kCellBlocked = -2, kCellFree = -3, kCellClosed = -4;
 
   /// One voxel the search reached: its cost from the start as counts of axis, face-diagonal and
   /// space-diagonal moves (exact, so equal costs compare equal), and its parent node.
@@ -125,7 +129,7 @@ class Astar {
   std::int32_t heapPop() const;
   /// Slot of brick `key` in brick_slots_, or the empty slot where it would go.
   std::size_t brickSlot(std::uint32_t key) const;
-  /// First cell of brick `key`, allocated (every cell kUnseen) on first use in this search.
+  /// First cell of brick `key`, allocated (every cell kCellUnseen) on first use in this search.
   std::size_t brick(std::uint32_t key) const;
 
   const map::OccupancyMap& occupancy_;
@@ -136,8 +140,9 @@ class Astar {
   Index3 brick_dims_ = Index3::Zero();
 
   // Search scratch: the voxels a search touches, in bricks of 8^3 cells (locality: a voxel's neighbours
-  // mostly share its brick) found through an open-addressing table; each cell holds kUnseen, kBlocked,
-  // kFree, kClosed or the index of the voxel's open node. Kept between searches, sized by the largest one.
+  // mostly share its brick) found through an open-addressing table; each cell holds kCellUnseen,
+  // kCellBlocked, kCellFree (traversable, not reached), kCellClosed or the index of the voxel's open node.
+  // Kept between searches, sized by the largest one.
   mutable std::vector<BrickSlot> brick_slots_;
   mutable std::uint32_t search_stamp_ = 0;
   mutable std::uint32_t bricks_used_ = 0;

@@ -23,6 +23,7 @@ struct SharedMap {
   mutable std::shared_mutex mutex;
   std::unique_ptr<map::VoxelMap> map;
   std::uint64_t sequence = 0;  ///< frames integrated (under the lock)
+  std::vector<std::size_t> last_changed;  ///< voxels whose state changed in frame `sequence`
 };
 
 struct MapHandle {
