@@ -39,12 +39,12 @@ class FrontierFinder : public nodelet::Nodelet {
   void onHandle(const boost::shared_ptr<const ros_map::MapHandle>& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
     if (shared_) return;
-    if (!msg->shared) {
-      NODELET_ERROR_THROTTLE(10.0, "%s: map_handle carries no map: run this nodelet in the EsdfMapper's manager",
-                             getName().c_str());
+    auto map = ros_map::acceptHandle(*msg);
+    if (!map) {
+      NODELET_ERROR_STREAM_THROTTLE(10.0, getName() << ": " << map.message());
       return;
     }
-    shared_ = msg->shared;
+    shared_ = *map;
   }
 
   void onLayer(const LayerBounds::ConstPtr& msg) {

@@ -43,17 +43,17 @@ class GlobalPlanner : public nodelet::Nodelet {
   void onHandle(const boost::shared_ptr<const ros_map::MapHandle>& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
     if (shared_) return;
-    if (!msg->shared) {
-      NODELET_ERROR_THROTTLE(10.0, "%s: map_handle carries no map: run this nodelet in the EsdfMapper's manager",
-                             getName().c_str());
+    auto map = ros_map::acceptHandle(*msg);
+    if (!map) {
+      NODELET_ERROR_STREAM_THROTTLE(10.0, getName() << ": " << map.message());
       return;
     }
-    const common::Status st = astar_config_.validate(msg->shared->map->config().esdf);
+    const common::Status st = astar_config_.validate((*map)->map->config().esdf);
     if (!st.ok()) {
       NODELET_ERROR_STREAM_THROTTLE(10.0, getName() << ": " << st.message());
       return;
     }
-    shared_ = msg->shared;
+    shared_ = *map;
     astar_ = std::make_unique<planning::Astar>(shared_->map->occupancy(), shared_->map->esdf(), astar_config_);
   }
 

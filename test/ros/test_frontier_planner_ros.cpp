@@ -10,9 +10,12 @@
 #include "go_feap/FrontierArray.h"
 #include "go_feap/GlobalTour.h"
 #include "go_feap/PositionCommand.h"
+#include "ros_test_util.h"
 #include "go_feap/world/scene_files.h"
 
 namespace {
+
+using go_feap::test::spinUntil;
 
 using go_feap::common::Index3;
 using go_feap::common::Vec3;
@@ -24,16 +27,6 @@ class FrontierPlannerTest : public ::testing::Test {
     tour_sub_ = nh_.subscribe("global_tour", 2, &FrontierPlannerTest::onTour, this);
     odom_sub_ = nh_.subscribe("odom", 2, &FrontierPlannerTest::onOdom, this);
     cmd_pub_ = nh_.advertise<go_feap::PositionCommand>("position_cmd", 10);
-  }
-  template <typename Pred>
-  bool spinUntil(Pred pred, double wall_timeout) {
-    const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(wall_timeout);
-    while (ros::ok() && ros::WallTime::now() < end) {
-      ros::spinOnce();
-      if (pred()) return true;
-      ros::WallDuration(0.005).sleep();
-    }
-    return pred();
   }
   void onFrontiers(const go_feap::FrontierArray::ConstPtr& m) { frontiers_ = m; }
   void onTour(const go_feap::GlobalTour::ConstPtr& m) {
@@ -62,20 +55,7 @@ TEST_F(FrontierPlannerTest, TourStartsAtAReachableFrontier) {
   const auto observable = go_feap::world::computeObservableSet(*scene);
   ASSERT_TRUE(spinUntil([&] { return odom_ != nullptr; }, 60.0));
 
-  const Vec3 c = scene->start.position;
-  const ros::Time t0 = ros::Time::now();
-  ASSERT_TRUE(spinUntil(
-      [&] {
-        const double t = (ros::Time::now() - t0).toSec();
-        go_feap::PositionCommand cmd;
-        cmd.header.stamp = ros::Time::now();
-        cmd.position.x = c.x(), cmd.position.y = c.y(), cmd.position.z = c.z();
-        cmd.yaw = std::atan2(std::sin(0.8 * t), std::cos(0.8 * t));
-        cmd.yaw_dot = 0.8;
-        cmd_pub_.publish(cmd);
-        return t > 2 * M_PI / 0.8 && tour_ != nullptr;
-      },
-      150.0))
+  ASSERT_TRUE(go_feap::test::turnInPlace(cmd_pub_, scene->start.position, [&] { return tour_ != nullptr; }, 150.0))
       << "no non-empty global_tour";
 
   ASSERT_FALSE(tour_->frontier_ids.empty());
@@ -107,9 +87,4 @@ TEST_F(FrontierPlannerTest, TourStartsAtAReachableFrontier) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  ::testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "test_frontier_planner_ros");
-  ros::NodeHandle nh;
-  return RUN_ALL_TESTS();
-}
+GO_FEAP_ROSTEST_MAIN("test_frontier_planner_ros")

@@ -15,10 +15,13 @@
 
 #include "go_feap/MapUpdate.h"
 #include "go_feap/PositionCommand.h"
+#include "ros_test_util.h"
 #include "go_feap/SaveMap.h"
 #include "go_feap/world/scene_files.h"
 
 namespace {
+
+using go_feap::test::spinUntil;
 
 using go_feap::common::Vec3;
 
@@ -61,16 +64,6 @@ class MapperTest : public ::testing::Test {
     depth_pub_ = nh_.advertise<sensor_msgs::Image>("depth", 10);
     pose_pub_ = nh_.advertise<geometry_msgs::PoseStamped>("camera_pose", 10);
   }
-  template <typename Pred>
-  bool spinUntil(Pred pred, double wall_timeout) {
-    const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(wall_timeout);
-    while (ros::ok() && ros::WallTime::now() < end) {
-      ros::spinOnce();
-      if (pred()) return true;
-      ros::WallDuration(0.005).sleep();
-    }
-    return pred();
-  }
   void onOdom(const nav_msgs::Odometry::ConstPtr& m) { odom_ = m; }
   void onCloud(const sensor_msgs::PointCloud2::ConstPtr& m) { cloud_ = m; }
   void onUpdate(const go_feap::MapUpdate::ConstPtr& m) {
@@ -98,21 +91,7 @@ TEST_F(MapperTest, TurningInPlaceMapsTheWallsBadFramesAreSkippedSaveMapWorks) {
 
   // Turn in place at the start: yaw ramps through a full circle in 8 s of sim time.
   const Vec3 centre = scene->start.position;
-  const ros::Time t0 = ros::Time::now();
-  ASSERT_TRUE(spinUntil(
-      [&] {
-        const double t = (ros::Time::now() - t0).toSec();
-        go_feap::PositionCommand c;
-        c.header.stamp = ros::Time::now();
-        c.position.x = centre.x();
-        c.position.y = centre.y();
-        c.position.z = centre.z();
-        c.yaw = std::atan2(std::sin(0.8 * t), std::cos(0.8 * t));
-        c.yaw_dot = 0.8;
-        cmd_pub_.publish(c);
-        return t > 2 * M_PI / 0.8 + 1.0;
-      },
-      120.0));
+  ASSERT_TRUE(go_feap::test::turnInPlace(cmd_pub_, centre, [] { return true; }, 120.0));
   cloud_.reset();
   ASSERT_TRUE(spinUntil([&] { return cloud_ != nullptr; }, 30.0)) << "no occupied_cloud";
   const CloudVerdict before = judge(*cloud_, *scene, centre);
@@ -177,9 +156,4 @@ TEST_F(MapperTest, TurningInPlaceMapsTheWallsBadFramesAreSkippedSaveMapWorks) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  ::testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "test_mapper_ros");
-  ros::NodeHandle nh;
-  return RUN_ALL_TESTS();
-}
+GO_FEAP_ROSTEST_MAIN("test_mapper_ros")

@@ -14,8 +14,11 @@
 #include <mutex>
 
 #include "go_feap/PositionCommand.h"
+#include "ros_test_util.h"
 
 namespace {
+
+using go_feap::test::spinUntil;
 
 class SimulatorTest : public ::testing::Test {
  protected:
@@ -29,16 +32,6 @@ class SimulatorTest : public ::testing::Test {
   }
 
   // Spins until pred() holds or `wall_timeout` seconds pass.
-  template <typename Pred>
-  bool spinUntil(Pred pred, double wall_timeout) {
-    const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(wall_timeout);
-    while (ros::ok() && ros::WallTime::now() < end) {
-      ros::spinOnce();
-      if (pred()) return true;
-      ros::WallDuration(0.005).sleep();
-    }
-    return pred();
-  }
   void spinSim(double sim_seconds) {
     const ros::Time end = ros::Time::now() + ros::Duration(sim_seconds);
     spinUntil([&] { return ros::Time::now() >= end; }, 10.0 * sim_seconds + 30.0);
@@ -58,15 +51,8 @@ class SimulatorTest : public ::testing::Test {
     return Eigen::Vector3d(p.x, p.y, p.z);
   }
   void command(const Eigen::Vector3d& p, double yaw, double ax = 0.0) {
-    go_feap::PositionCommand c;
-    c.header.stamp = ros::Time::now();
-    c.header.frame_id = "world";
-    c.position.x = p.x();
-    c.position.y = p.y();
-    c.position.z = p.z();
+    go_feap::PositionCommand c = go_feap::test::holdCommand(p, yaw);
     c.acceleration.x = ax;
-    c.yaw = yaw;
-    c.trajectory_flag = go_feap::PositionCommand::TRAJECTORY_STATUS_READY;
     cmd_pub_.publish(c);
   }
 
@@ -143,9 +129,4 @@ TEST_F(SimulatorTest, CommandMovesOdomCameraStampsMatchNanIsIgnored) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  ::testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "test_simulator_ros");
-  ros::NodeHandle nh;
-  return RUN_ALL_TESTS();
-}
+GO_FEAP_ROSTEST_MAIN("test_simulator_ros")

@@ -30,6 +30,15 @@ struct MapHandle {
   std::shared_ptr<SharedMap> shared;
 };
 
+/// The map a received handle points to, or an error when it carries none (it came from
+/// another process, where no pointer can travel).
+inline common::Result<std::shared_ptr<SharedMap>> acceptHandle(const MapHandle& handle) {
+  if (!handle.shared)
+    return common::Result<std::shared_ptr<SharedMap>>::Error(
+        "map_handle carries no map: run this nodelet in the EsdfMapper's nodelet manager");
+  return handle.shared;
+}
+
 }  // namespace go_feap::ros_map
 
 namespace ros {

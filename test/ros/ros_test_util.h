@@ -1,0 +1,63 @@
+// Helpers shared by the rostest nodes.
+#pragma once
+
+#include <gtest/gtest.h>
+#include <ros/ros.h>
+
+#include <Eigen/Core>
+#include <cmath>
+
+#include "go_feap/PositionCommand.h"
+
+namespace go_feap::test {
+
+/// Spins until pred() holds or `wall_timeout` wall seconds pass; returns pred().
+template <typename Pred>
+bool spinUntil(Pred pred, double wall_timeout) {
+  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(wall_timeout);
+  while (ros::ok() && ros::WallTime::now() < end) {
+    ros::spinOnce();
+    if (pred()) return true;
+    ros::WallDuration(0.005).sleep();
+  }
+  return pred();
+}
+
+/// A command holding `position` with heading `yaw` (rad) turning at `yaw_dot` (rad/s).
+inline PositionCommand holdCommand(const Eigen::Vector3d& position, double yaw, double yaw_dot = 0.0) {
+  PositionCommand c;
+  c.header.stamp = ros::Time::now();
+  c.header.frame_id = "world";
+  c.position.x = position.x();
+  c.position.y = position.y();
+  c.position.z = position.z();
+  c.yaw = std::atan2(std::sin(yaw), std::cos(yaw));
+  c.yaw_dot = yaw_dot;
+  c.trajectory_flag = PositionCommand::TRAJECTORY_STATUS_READY;
+  return c;
+}
+
+/// Turns the vehicle in place at `centre` through a full circle at 0.8 rad/s (simulated
+/// time), then keeps spinning until `done()` holds; false on wall-time out.
+template <typename Done>
+bool turnInPlace(ros::Publisher& cmd_pub, const Eigen::Vector3d& centre, Done done, double wall_timeout) {
+  const ros::Time t0 = ros::Time::now();
+  return spinUntil(
+      [&] {
+        const double t = (ros::Time::now() - t0).toSec();
+        cmd_pub.publish(holdCommand(centre, 0.8 * t, 0.8));
+        return t > 2 * M_PI / 0.8 + 1.0 && done();
+      },
+      wall_timeout);
+}
+
+}  // namespace go_feap::test
+
+/// gtest main for a rostest node.
+#define GO_FEAP_ROSTEST_MAIN(node_name)               \
+  int main(int argc, char** argv) {                   \
+    ::testing::InitGoogleTest(&argc, argv);           \
+    ros::init(argc, argv, node_name);                 \
+    ros::NodeHandle nh;                               \
+    return RUN_ALL_TESTS();                           \
+  }
