@@ -1,0 +1,95 @@
+// Altitude-stratified exploration (DESIGN §3.8, paper §III-B): the exploration state
+// machine and the altitude bands it steps through. A pure class driven by step(); the
+// nodelet only converts messages and logs the transitions it reports.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "go_feap/common/grid.h"
+#include "go_feap/common/result.h"
+
+namespace go_feap::planning {
+
+struct LayerManagerConfig {
+  double layer_height = 1.0;      ///< m, height of an altitude band
+  double settle_time = 1.0;       ///< s a band must stay without frontiers before it counts as explored
+  int max_retries = 3;            ///< failed attempts on a frontier before it is blacklisted
+  double time_limit = 600.0;      ///< s after the trigger: FINISHED(time_limit)
+  double stuck_timeout = 30.0;    ///< s without map progress while frontiers remain: FINISHED(stuck)
+  common::Status validate() const;
+};
+
+enum class ExplorationState { kWaitTrigger, kExplore, kFinalPass, kFinished };
+enum class FinishReason { kNone, kComplete, kTimeLimit, kStuck };
+const char* toString(ExplorationState s);
+const char* toString(FinishReason r);
+
+/// A band of altitudes [z_min, z_max] (m); index counts from the lowest band of the box.
+struct Band {
+  int index = 0;
+  int count = 0;
+  double z_min = 0.0, z_max = 0.0;
+  bool final_pass = false;  ///< the whole box, during the final pass
+};
+
+/// What the chain reports at a step.
+struct LayerInputs {
+  bool trigger = false;                    ///< a start request arrived (repeats are ignored)
+  std::vector<std::uint32_t> band_frontiers;  ///< ids of frontiers in the current band
+  std::vector<std::uint32_t> all_frontiers;   ///< ids of every frontier in the box
+  std::vector<std::uint32_t> failed;       ///< frontiers the planners failed to reach since the last step
+  std::uint64_t map_progress = 0;          ///< any counter that grows while the map grows (e.g. frames that changed it)
+};
+
+struct Transition {
+  ExplorationState from, to;
+  int band_from, band_to;
+  std::string why;
+};
+
+struct LayerOutputs {
+  ExplorationState state = ExplorationState::kWaitTrigger;
+  FinishReason reason = FinishReason::kNone;
+  Band band;
+  std::vector<Transition> transitions;  ///< what changed in this step, in order
+  bool trigger_ignored = false;         ///< a trigger arrived while already exploring
+};
+
+class LayerManager {
+ public:
+  /// Bands cover box.min.z .. box.max.z from the band holding start_z: that band first,
+  /// then the bands above it (upwards), then those below it (downwards).
+  LayerManager(const LayerManagerConfig& config, const common::Aabb& box, double start_z);
+
+  LayerOutputs step(const LayerInputs& in, double t);
+
+  const std::vector<int>& bandOrder() const { return order_; }
+  Band band(int index) const;
+  const std::set<std::uint32_t>& blacklist() const { return blacklist_; }
+  bool isBlacklisted(std::uint32_t id) const { return blacklist_.count(id) > 0; }
+  ExplorationState state() const { return state_; }
+
+ private:
+  std::size_t countUsable(const std::vector<std::uint32_t>& ids) const;
+  LayerOutputs output() const;
+
+  LayerManagerConfig config_;
+  common::Aabb box_;
+  int count_ = 1;
+  std::vector<int> order_;
+  std::size_t position_ = 0;  ///< index into order_
+  ExplorationState state_ = ExplorationState::kWaitTrigger;
+  FinishReason reason_ = FinishReason::kNone;
+  double t_trigger_ = 0.0;
+  double empty_since_ = -1.0;  ///< when the current band (or box) last became free of usable frontiers
+  std::uint64_t last_progress_ = 0;
+  double progress_time_ = 0.0;
+  std::map<std::uint32_t, int> failures_;
+  std::set<std::uint32_t> blacklist_;
+};
+
+}  // namespace go_feap::planning

@@ -1,0 +1,151 @@
+#include "go_feap/planning/layer_manager.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace go_feap::planning {
+
+common::Status LayerManagerConfig::validate() const {
+  auto bad = [](const std::string& key, const std::string& why) {
+    return common::Status::Error("layers: " + key + " " + why);
+  };
+  if (!(layer_height > 0.0)) return bad("layer_height", "must be > 0");
+  if (!(settle_time >= 0.0)) return bad("settle_time", "must be >= 0");
+  if (max_retries < 1) return bad("max_retries", "must be >= 1");
+  if (!(time_limit > 0.0)) return bad("time_limit", "must be > 0");
+  if (!(stuck_timeout > 0.0)) return bad("stuck_timeout", "must be > 0");
+  return common::Status::Ok();
+}
+
+const char* toString(ExplorationState s) {
+  switch (s) {
+    case ExplorationState::kWaitTrigger: return "WAIT_TRIGGER";
+    case ExplorationState::kExplore: return "EXPLORE";
+    case ExplorationState::kFinalPass: return "FINAL_PASS";
+    case ExplorationState::kFinished: return "FINISHED";
+  }
+  return "?";
+}
+
+const char* toString(FinishReason r) {
+  switch (r) {
+    case FinishReason::kNone: return "";
+    case FinishReason::kComplete: return "complete";
+    case FinishReason::kTimeLimit: return "time_limit";
+    case FinishReason::kStuck: return "stuck";
+  }
+  return "?";
+}
+
+LayerManager::LayerManager(const LayerManagerConfig& config, const common::Aabb& box, double start_z)
+    : config_(config), box_(box) {
+  const double height = box.max.z() - box.min.z();
+  count_ = std::max(1, static_cast<int>(std::ceil(height / config.layer_height - 1e-9)));
+  const int start = std::clamp(static_cast<int>(std::floor((start_z - box.min.z()) / config.layer_height)), 0,
+                               count_ - 1);
+  for (int k = start; k < count_; ++k) order_.push_back(k);
+  for (int k = start - 1; k >= 0; --k) order_.push_back(k);
+}
+
+Band LayerManager::band(int index) const {
+  Band b;
+  b.index = index;
+  b.count = count_;
+  b.z_min = box_.min.z() + index * config_.layer_height;
+  b.z_max = std::min(box_.max.z(), b.z_min + config_.layer_height);
+  return b;
+}
+
+std::size_t LayerManager::countUsable(const std::vector<std::uint32_t>& ids) const {
+  return static_cast<std::size_t>(
+      std::count_if(ids.begin(), ids.end(), [&](std::uint32_t id) { return !blacklist_.count(id); }));
+}
+
+LayerOutputs LayerManager::output() const {
+  LayerOutputs out;
+  out.state = state_;
+  out.reason = reason_;
+  if (state_ == ExplorationState::kFinalPass || state_ == ExplorationState::kFinished) {
+    out.band.index = 0;
+    out.band.count = count_;
+    out.band.z_min = box_.min.z();
+    out.band.z_max = box_.max.z();
+    out.band.final_pass = state_ == ExplorationState::kFinalPass;
+  } else {
+    out.band = band(order_[position_]);
+  }
+  return out;
+}
+
+LayerOutputs LayerManager::step(const LayerInputs& in, double t) {
+  std::vector<Transition> transitions;
+  bool ignored = false;
+  auto go = [&](ExplorationState to, const std::string& why) {
+    const int from_band = state_ == ExplorationState::kExplore ? order_[position_] : -1;
+    const ExplorationState from = state_;
+    state_ = to;
+    const int to_band = state_ == ExplorationState::kExplore ? order_[position_] : -1;
+    transitions.push_back({from, to, from_band, to_band, why});
+    empty_since_ = -1.0;
+  };
+  auto finish = [&](FinishReason r, const std::string& why) {
+    reason_ = r;
+    go(ExplorationState::kFinished, why);
+  };
+
+  // Failed attempts: blacklist after max_retries, so unreachable frontiers cannot hold
+  // exploration open forever.
+  for (std::uint32_t id : in.failed)
+    if (++failures_[id] >= config_.max_retries) blacklist_.insert(id);
+
+  if (state_ == ExplorationState::kWaitTrigger) {
+    if (in.trigger) {
+      t_trigger_ = t;
+      progress_time_ = t;
+      last_progress_ = in.map_progress;
+      position_ = 0;
+      go(ExplorationState::kExplore, "triggered");
+    }
+  } else if (in.trigger) {
+    ignored = true;
+  }
+
+  if (state_ == ExplorationState::kExplore || state_ == ExplorationState::kFinalPass) {
+    if (in.map_progress != last_progress_) {
+      last_progress_ = in.map_progress;
+      progress_time_ = t;
+    }
+    if (t - t_trigger_ >= config_.time_limit) {
+      finish(FinishReason::kTimeLimit, "time limit reached");
+    } else if (t - progress_time_ >= config_.stuck_timeout) {
+      finish(FinishReason::kStuck, "no map progress for " + std::to_string(config_.stuck_timeout) + " s");
+    }
+  }
+  // A band (or, in the final pass, the box) without usable frontiers for settle_time is
+  // done. The next band's frontiers arrive with the next inputs.
+  if (state_ == ExplorationState::kExplore || state_ == ExplorationState::kFinalPass) {
+    const bool final_pass = state_ == ExplorationState::kFinalPass;
+    if (countUsable(final_pass ? in.all_frontiers : in.band_frontiers) > 0) {
+      empty_since_ = -1.0;
+    } else if (empty_since_ < 0.0) {
+      empty_since_ = t;
+    }
+    if (empty_since_ >= 0.0 && t - empty_since_ >= config_.settle_time) {
+      if (final_pass) {
+        finish(FinishReason::kComplete, "no frontier left in the box");
+      } else if (position_ + 1 < order_.size()) {
+        ++position_;
+        go(ExplorationState::kExplore, "band explored");
+      } else {
+        go(ExplorationState::kFinalPass, "every band explored");
+      }
+    }
+  }
+
+  LayerOutputs out = output();
+  out.transitions = std::move(transitions);
+  out.trigger_ignored = ignored;
+  return out;
+}
+
+}  // namespace go_feap::planning

@@ -1,0 +1,160 @@
+// The exploration state machine: every transition, band order, blacklist bound, termination.
+#include <gtest/gtest.h>
+
+#include "go_feap/planning/layer_manager.h"
+
+using namespace go_feap::planning;
+using go_feap::common::Aabb;
+using go_feap::common::Vec3;
+
+namespace {
+
+const Aabb kBox{Vec3(0, 0, 0), Vec3(10, 10, 5.5)};  // 6 bands of 1 m (the top one 0.5 m)
+
+LayerManagerConfig config() {
+  LayerManagerConfig c;
+  c.layer_height = 1.0;
+  c.settle_time = 1.0;
+  c.max_retries = 2;
+  c.time_limit = 1000.0;
+  c.stuck_timeout = 50.0;
+  return c;
+}
+
+LayerInputs frontiers(std::vector<std::uint32_t> band, std::vector<std::uint32_t> all, std::uint64_t progress) {
+  LayerInputs in;
+  in.band_frontiers = std::move(band);
+  in.all_frontiers = std::move(all);
+  in.map_progress = progress;
+  return in;
+}
+
+}  // namespace
+
+TEST(LayerManager, BandsGoUpFromTheStartBandThenDown) {
+  LayerManager m(config(), kBox, 2.3);
+  EXPECT_EQ(m.bandOrder(), (std::vector<int>{2, 3, 4, 5, 1, 0}));
+  EXPECT_DOUBLE_EQ(m.band(5).z_min, 5.0);
+  EXPECT_DOUBLE_EQ(m.band(5).z_max, 5.5);
+  EXPECT_EQ(m.band(0).count, 6);
+  LayerManager low(config(), kBox, 0.0), high(config(), kBox, 5.5);
+  EXPECT_EQ(low.bandOrder(), (std::vector<int>{0, 1, 2, 3, 4, 5}));
+  EXPECT_EQ(high.bandOrder(), (std::vector<int>{5, 4, 3, 2, 1, 0}));
+}
+
+TEST(LayerManager, WalksEveryTransitionToComplete) {
+  LayerManager m(config(), kBox, 2.3);
+  double t = 0.0;
+  std::uint64_t progress = 0;
+  // Waits for the trigger.
+  LayerOutputs out = m.step(frontiers({1}, {1}, progress), t);
+  EXPECT_EQ(out.state, ExplorationState::kWaitTrigger);
+  EXPECT_TRUE(out.transitions.empty());
+  LayerInputs trig = frontiers({1}, {1}, progress);
+  trig.trigger = true;
+  out = m.step(trig, t += 0.1);
+  ASSERT_EQ(out.state, ExplorationState::kExplore);
+  ASSERT_EQ(out.transitions.size(), 1u);
+  EXPECT_EQ(out.transitions[0].to, ExplorationState::kExplore);
+  EXPECT_EQ(out.band.index, 2);
+  // A second trigger is ignored.
+  out = m.step(trig, t += 0.1);
+  EXPECT_TRUE(out.trigger_ignored);
+  EXPECT_TRUE(out.transitions.empty());
+  // Each band empties; it is left only after settle_time without frontiers.
+  std::vector<int> visited{2};
+  for (int guard = 0; guard < 100 && out.state == ExplorationState::kExplore; ++guard) {
+    out = m.step(frontiers({}, {7}, ++progress), t += 0.5);
+    if (!out.transitions.empty() && out.state == ExplorationState::kExplore) visited.push_back(out.band.index);
+  }
+  EXPECT_EQ(visited, (std::vector<int>{2, 3, 4, 5, 1, 0}));
+  ASSERT_EQ(out.state, ExplorationState::kFinalPass);
+  EXPECT_TRUE(out.band.final_pass);
+  EXPECT_DOUBLE_EQ(out.band.z_min, 0.0);
+  EXPECT_DOUBLE_EQ(out.band.z_max, 5.5);
+  // Final pass: frontier 7 remains anywhere; it goes, then the box settles.
+  out = m.step(frontiers({}, {7}, ++progress), t += 5.0);
+  EXPECT_EQ(out.state, ExplorationState::kFinalPass);
+  out = m.step(frontiers({}, {}, ++progress), t += 0.5);  // box empty since now
+  EXPECT_EQ(out.state, ExplorationState::kFinalPass);
+  out = m.step(frontiers({}, {}, ++progress), t += 0.6);  // 0.6 s < settle_time
+  EXPECT_EQ(out.state, ExplorationState::kFinalPass);
+  out = m.step(frontiers({}, {}, ++progress), t += 0.4);  // 1.0 s: settled
+  ASSERT_EQ(out.state, ExplorationState::kFinished);
+  EXPECT_EQ(out.reason, FinishReason::kComplete);
+  // Finished stays finished.
+  out = m.step(frontiers({3}, {3}, ++progress), t += 1.0);
+  EXPECT_EQ(out.state, ExplorationState::kFinished);
+  EXPECT_TRUE(out.transitions.empty());
+}
+
+TEST(LayerManager, FrontiersReappearingResetTheSettleTimer) {
+  LayerManager m(config(), kBox, 0.5);
+  LayerInputs trig = frontiers({}, {}, 0);
+  trig.trigger = true;
+  m.step(trig, 0.0);
+  m.step(frontiers({}, {}, 1), 0.5);                      // empty since 0.5
+  m.step(frontiers({4}, {4}, 2), 1.2);                    // a frontier appears: timer reset
+  LayerOutputs out = m.step(frontiers({}, {}, 3), 1.6);   // empty since 1.6
+  EXPECT_EQ(out.band.index, 0);
+  out = m.step(frontiers({}, {}, 4), 2.3);
+  EXPECT_EQ(out.band.index, 0);
+  out = m.step(frontiers({}, {}, 5), 2.7);
+  EXPECT_EQ(out.band.index, 1);
+}
+
+TEST(LayerManager, UnreachableFrontiersAreBlacklistedAfterBoundedRetries) {
+  LayerManager m(config(), {Vec3(0, 0, 0), Vec3(10, 10, 1)}, 0.5);  // one band
+  LayerInputs trig = frontiers({9}, {9}, 0);
+  trig.trigger = true;
+  m.step(trig, 0.0);
+  LayerInputs fail = frontiers({9}, {9}, 1);
+  fail.failed = {9};
+  LayerOutputs out = m.step(fail, 1.0);
+  EXPECT_FALSE(m.isBlacklisted(9));
+  fail.map_progress = 2;
+  out = m.step(fail, 2.0);  // second failure: max_retries = 2
+  EXPECT_TRUE(m.isBlacklisted(9));
+  // Only the blacklisted frontier is left: the band and then the final pass finish.
+  double t = 2.0;
+  std::uint64_t p = 3;
+  for (int i = 0; i < 20 && out.state != ExplorationState::kFinished; ++i) out = m.step(frontiers({9}, {9}, ++p), t += 0.6);
+  EXPECT_EQ(out.state, ExplorationState::kFinished);
+  EXPECT_EQ(out.reason, FinishReason::kComplete);
+}
+
+TEST(LayerManager, TimeLimitAndStuckTerminate) {
+  LayerManagerConfig c = config();
+  c.time_limit = 10.0;
+  LayerManager a(c, kBox, 0.5);
+  LayerInputs trig = frontiers({1}, {1}, 0);
+  trig.trigger = true;
+  a.step(trig, 100.0);
+  LayerOutputs out;
+  std::uint64_t p = 0;
+  for (double t = 100.0; t < 115.0 && out.state != ExplorationState::kFinished; t += 0.5)
+    out = a.step(frontiers({1}, {1}, ++p), t);
+  EXPECT_EQ(out.reason, FinishReason::kTimeLimit);
+
+  c.time_limit = 1000.0;
+  c.stuck_timeout = 5.0;
+  LayerManager b(c, kBox, 0.5);
+  b.step(trig, 0.0);
+  out = LayerOutputs();
+  for (double t = 0.5; t < 20.0 && out.state != ExplorationState::kFinished; t += 0.5)
+    out = b.step(frontiers({1}, {1}, 42), t);  // the map stops growing
+  EXPECT_EQ(out.reason, FinishReason::kStuck);
+  ASSERT_FALSE(out.transitions.empty());
+  EXPECT_NE(out.transitions.back().why.find("no map progress"), std::string::npos);
+}
+
+TEST(LayerManager, ValidateNamesKeys) {
+  LayerManagerConfig c = config();
+  c.layer_height = 0.0;
+  EXPECT_NE(c.validate().message().find("layer_height"), std::string::npos);
+  c = config();
+  c.max_retries = 0;
+  EXPECT_NE(c.validate().message().find("max_retries"), std::string::npos);
+  EXPECT_STREQ(toString(FinishReason::kStuck), "stuck");
+  EXPECT_STREQ(toString(ExplorationState::kFinalPass), "FINAL_PASS");
+}
