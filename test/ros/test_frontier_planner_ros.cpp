@@ -7,7 +7,11 @@
 
 #include <cmath>
 
+#include <std_srvs/Trigger.h>
+
+#include "go_feap/ExplorationStatus.h"
 #include "go_feap/FrontierArray.h"
+#include "go_feap/LayerBounds.h"
 #include "go_feap/GlobalTour.h"
 #include "go_feap/PositionCommand.h"
 #include "ros_test_util.h"
@@ -26,6 +30,8 @@ class FrontierPlannerTest : public ::testing::Test {
     frontier_sub_ = nh_.subscribe("frontiers", 2, &FrontierPlannerTest::onFrontiers, this);
     tour_sub_ = nh_.subscribe("global_tour", 2, &FrontierPlannerTest::onTour, this);
     odom_sub_ = nh_.subscribe("odom", 2, &FrontierPlannerTest::onOdom, this);
+    status_sub_ = nh_.subscribe("status", 5, &FrontierPlannerTest::onStatus, this);
+    layer_sub_ = nh_.subscribe("layer", 1, &FrontierPlannerTest::onLayer, this);
     cmd_pub_ = nh_.advertise<go_feap::PositionCommand>("position_cmd", 10);
   }
   void onFrontiers(const go_feap::FrontierArray::ConstPtr& m) { frontiers_ = m; }
@@ -36,9 +42,13 @@ class FrontierPlannerTest : public ::testing::Test {
     }
   }
   void onOdom(const nav_msgs::Odometry::ConstPtr& m) { odom_ = m; }
+  void onStatus(const go_feap::ExplorationStatus::ConstPtr& m) { status_ = m; }
+  void onLayer(const go_feap::LayerBounds::ConstPtr& m) { layer_ = m; }
 
   ros::NodeHandle nh_;
-  ros::Subscriber frontier_sub_, tour_sub_, odom_sub_;
+  ros::Subscriber frontier_sub_, tour_sub_, odom_sub_, status_sub_, layer_sub_;
+  go_feap::ExplorationStatus::ConstPtr status_;
+  go_feap::LayerBounds::ConstPtr layer_;
   ros::Publisher cmd_pub_;
   go_feap::FrontierArray::ConstPtr frontiers_, tour_frontiers_;
   go_feap::GlobalTour::ConstPtr tour_;
@@ -83,6 +93,28 @@ TEST_F(FrontierPlannerTest, TourStartsAtAReachableFrontier) {
       in_wall += scene->isOccupied(Vec3(p.x, p.y, p.z));
     }
   EXPECT_LT(in_wall, cells / 50 + 1);
+}
+
+TEST_F(FrontierPlannerTest, TriggerStartsTheStartBandOnceAndFrontiersFollowIt) {
+  ASSERT_TRUE(spinUntil([&] { return status_ && layer_ && frontiers_; }, 60.0)) << "no status, layer or frontiers";
+  EXPECT_EQ(status_->state, go_feap::ExplorationStatus::WAIT_TRIGGER);
+  std_srvs::Trigger trigger;
+  ASSERT_TRUE(ros::service::waitForService("trigger", ros::Duration(10.0)));
+  ASSERT_TRUE(ros::service::call("trigger", trigger));
+  EXPECT_TRUE(trigger.response.success) << trigger.response.message;
+  ASSERT_TRUE(spinUntil([&] { return status_->state == go_feap::ExplorationStatus::EXPLORE; }, 30.0));
+  // The maze start is at z = 1.0: band 1 of 1 m bands, [1, 2].
+  ASSERT_TRUE(spinUntil([&] { return layer_->index == 1; }, 10.0));
+  EXPECT_DOUBLE_EQ(layer_->z_min, 1.0);
+  EXPECT_DOUBLE_EQ(layer_->z_max, 2.0);
+  EXPECT_EQ(layer_->count, 3u);
+  ASSERT_TRUE(ros::service::call("trigger", trigger));
+  EXPECT_FALSE(trigger.response.success) << "a second trigger must be ignored";
+  // Frontiers published after the band change carry the band's active flags.
+  const ros::Time after = ros::Time::now() + ros::Duration(0.5);
+  ASSERT_TRUE(spinUntil([&] { return frontiers_->header.stamp > after && !frontiers_->frontiers.empty(); }, 60.0));
+  for (const auto& f : frontiers_->frontiers)
+    EXPECT_EQ(f.active, f.average.z >= 1.0 && f.average.z <= 2.0) << "frontier " << f.id << " z " << f.average.z;
 }
 
 }  // namespace

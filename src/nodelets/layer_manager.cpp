@@ -1,0 +1,179 @@
+// LayerManager: runs the exploration state machine and steers the chain band by band.
+// In: frontiers, map_update (progress), frontier_failed (std_msgs/UInt32 from planners),
+// trigger (std_srvs/Trigger service, or a goal on move_base_simple/goal from rviz's 2D Nav
+// Goal, or layers/auto_start). Out: layer (go_feap/LayerBounds), status
+// (go_feap/ExplorationStatus). Every transition is logged.
+#include <geometry_msgs/PoseStamped.h>
+#include <nav_msgs/Odometry.h>
+#include <nodelet/nodelet.h>
+#include <pluginlib/class_list_macros.hpp>
+#include <ros/ros.h>
+#include <std_msgs/UInt32.h>
+#include <std_srvs/Trigger.h>
+
+#include <mutex>
+#include <optional>
+
+#include "go_feap/ExplorationStatus.h"
+#include "go_feap/FrontierArray.h"
+#include "go_feap/LayerBounds.h"
+#include "go_feap/MapUpdate.h"
+#include "go_feap/planning/layer_manager.h"
+#include "go_feap/ros/exploration_params.h"
+
+namespace go_feap {
+
+class LayerManager : public nodelet::Nodelet {
+ private:
+  void onInit() override {
+    ros::NodeHandle& nh = getNodeHandle();
+    ros_params::ParamReader p(getPrivateNodeHandle());
+    p.get("layers/layer_height", config_.layer_height).get("layers/settle_time", config_.settle_time);
+    p.get("layers/max_retries", config_.max_retries).get("layers/time_limit", config_.time_limit);
+    p.get("layers/stuck_timeout", config_.stuck_timeout).get("layers/rate", rate_);
+    p.get("layers/auto_start", auto_start_).get("world_frame", world_frame_);
+    ros_params::readBox(p, box_);
+    ros_params::requireOrThrow(p.ok(), getName(), p.error());
+    ros_params::requireOrThrow(config_.validate().ok(), getName(), config_.validate().message());
+    ros_params::requireOrThrow(box_.valid(), getName(), "parameter 'exploration_box' needs min < max");
+    ros_params::requireOrThrow(rate_ > 0.0, getName(), "parameter '" + p.fullName("layers/rate") + "' must be > 0");
+
+    layer_pub_ = nh.advertise<LayerBounds>("layer", 1, /*latch=*/true);
+    status_pub_ = nh.advertise<ExplorationStatus>("status", 5, /*latch=*/true);
+    frontier_sub_ = nh.subscribe("frontiers", 2, &LayerManager::onFrontiers, this);
+    update_sub_ = nh.subscribe("map_update", 20, &LayerManager::onMapUpdate, this);
+    failed_sub_ = nh.subscribe("frontier_failed", 20, &LayerManager::onFailed, this);
+    odom_sub_ = nh.subscribe("odom", 2, &LayerManager::onOdom, this);
+    goal_sub_ = nh.subscribe("move_base_simple/goal", 1, &LayerManager::onGoal, this);
+    trigger_srv_ = nh.advertiseService("trigger", &LayerManager::onTrigger, this);
+    timer_ = nh.createTimer(ros::Duration(1.0 / rate_), &LayerManager::onTimer, this);
+    if (auto_start_) pending_trigger_ = true;
+  }
+
+  void onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto& q = msg->pose.pose.position;
+    const common::Vec3 p(q.x, q.y, q.z);
+    if (!p.allFinite()) return;
+    const double z = p.z();
+    const bool flying = manager_ && (manager_->state() == planning::ExplorationState::kExplore ||
+                                     manager_->state() == planning::ExplorationState::kFinalPass);
+    if (flying && last_position_) distance_ += (p - *last_position_).norm();
+    last_position_ = p;
+    if (!manager_) {
+      manager_ = std::make_unique<planning::LayerManager>(config_, box_, z);
+      publish(ros::Time::now(), manager_->step({}, ros::Time::now().toSec()));
+    }
+  }
+  void onFrontiers(const FrontierArray::ConstPtr& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    frontiers_ = msg;
+  }
+  void onMapUpdate(const MapUpdate::ConstPtr& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (msg->changed_voxels > 0) ++progress_;
+  }
+  void onFailed(const std_msgs::UInt32::ConstPtr& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    failed_.push_back(msg->data);
+  }
+  void onGoal(const geometry_msgs::PoseStamped::ConstPtr&) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    pending_trigger_ = true;
+  }
+  bool onTrigger(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    pending_trigger_ = true;
+    if (!manager_) {
+      res.success = true;
+      res.message = "no odometry yet: the trigger is kept until it arrives";
+    } else if (manager_->state() == planning::ExplorationState::kWaitTrigger) {
+      res.success = true;
+      res.message = "exploration starts";
+    } else {
+      res.success = false;
+      res.message = "already started: trigger ignored";
+    }
+    return true;
+  }
+
+  void onTimer(const ros::TimerEvent&) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!manager_) return;
+    const ros::Time now = ros::Time::now();
+    planning::LayerInputs in;
+    in.trigger = pending_trigger_;
+    pending_trigger_ = false;
+    in.failed.swap(failed_);
+    in.map_progress = progress_;
+    const planning::Band band = current_band_;
+    if (frontiers_) {
+      for (const auto& f : frontiers_->frontiers) {
+        in.all_frontiers.push_back(f.id);
+        if (f.average.z >= band.z_min && f.average.z <= band.z_max) in.band_frontiers.push_back(f.id);
+      }
+    }
+    publish(now, manager_->step(in, now.toSec()));
+  }
+
+  void publish(const ros::Time& now, const planning::LayerOutputs& out) {
+    for (const planning::Transition& tr : out.transitions) {
+      NODELET_INFO_STREAM(getName() << ": " << planning::toString(tr.from)
+                                    << (tr.band_from >= 0 ? "(band " + std::to_string(tr.band_from) + ")" : "")
+                                    << " -> " << planning::toString(tr.to)
+                                    << (tr.band_to >= 0 ? "(band " + std::to_string(tr.band_to) + ")" : "") << ": "
+                                    << tr.why
+                                    << (out.state == planning::ExplorationState::kFinished
+                                            ? std::string(" [") + planning::toString(out.reason) + "]"
+                                            : ""));
+    }
+    if (out.trigger_ignored) NODELET_INFO_STREAM(getName() << ": trigger received while exploring: ignored");
+    if (!t_start_ && out.state != planning::ExplorationState::kWaitTrigger) t_start_ = now;
+    current_band_ = out.band;
+    LayerBounds layer;
+    layer.header.stamp = now;
+    layer.header.frame_id = world_frame_;
+    layer.index = static_cast<std::uint32_t>(out.band.index);
+    layer.count = static_cast<std::uint32_t>(out.band.count);
+    layer.z_min = out.band.z_min;
+    layer.z_max = out.band.z_max;
+    layer.final_pass = out.band.final_pass;
+    if (!out.transitions.empty() || !published_) layer_pub_.publish(layer);
+    published_ = true;
+    ExplorationStatus status;
+    status.header = layer.header;
+    status.state = static_cast<std::uint8_t>(out.state);
+    status.state_name = planning::toString(out.state);
+    status.layer = layer.index;
+    status.elapsed = t_start_ ? (now - *t_start_).toSec() : 0.0;
+    status.distance = distance_;
+    status.coverage = -1.0;  // unknown here: the metrics recorder compares with ground truth
+    status.frontier_count = frontiers_ ? static_cast<std::uint32_t>(frontiers_->frontiers.size()) : 0;
+    status.finish_reason = planning::toString(out.reason);
+    status_pub_.publish(status);
+  }
+
+  planning::LayerManagerConfig config_;
+  common::Aabb box_;
+  double rate_ = 5.0;
+  bool auto_start_ = false;
+  std::string world_frame_;
+  std::mutex mutex_;
+  std::unique_ptr<planning::LayerManager> manager_;
+  planning::Band current_band_;
+  FrontierArray::ConstPtr frontiers_;
+  std::vector<std::uint32_t> failed_;
+  std::uint64_t progress_ = 0;
+  bool pending_trigger_ = false, published_ = false;
+  std::optional<ros::Time> t_start_;
+  std::optional<common::Vec3> last_position_;
+  double distance_ = 0.0;
+  ros::Publisher layer_pub_, status_pub_;
+  ros::Subscriber frontier_sub_, update_sub_, failed_sub_, odom_sub_, goal_sub_;
+  ros::ServiceServer trigger_srv_;
+  ros::Timer timer_;
+};
+
+}  // namespace go_feap
+
+PLUGINLIB_EXPORT_CLASS(go_feap::LayerManager, nodelet::Nodelet)
