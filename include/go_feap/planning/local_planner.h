@@ -1,0 +1,107 @@
+// Local planner (DESIGN §3.6, paper §III-A.3): types the frontiers ahead from how cluttered the recent
+// depth frames were, filters their viewpoints accordingly, and picks one viewpoint per frontier for
+// the first K frontiers of the global tour by a shortest path through a layered DAG.
+#pragma once
+
+#include <cstddef>
+#include <deque>
+#include <functional>
+#include <opencv2/core.hpp>
+#include <vector>
+
+#include "go_feap/common/grid.h"
+#include "go_feap/common/result.h"
+#include "go_feap/frontier/frontier_finder.h"
+
+namespace go_feap::planning {
+
+struct LocalPlannerConfig {
+  int k_frontiers = 3;             ///< layers of the DAG: the first frontiers of the tour (with viewpoints)
+  int top_k = 5;                   ///< viewpoints kept per frontier after filtering
+  double d_near = 2.0;             ///< m, a frontier at a smaller path distance is near
+  double v_max = 2.0;              ///< m/s
+  double yaw_rate_max = 1.0;       ///< rad/s
+  int window_size = 10;            ///< depth frames in the obstacle-ratio window (flag_que)
+  double clutter_threshold = 0.5;  ///< window mean above this: cluttered / corner
+  double max_range = 4.5;          ///< m, depth returns closer than this count as obstacles
+  /// m; distances below count as this in the steering rate, so viewpoints at the current position
+  /// get a finite rate ranked by how far they turn.
+  double min_dist = 0.1;
+
+  /// Checks every key; the message names the bad one, e.g. "local_planner: top_k must be >= 1".
+  common::Status validate() const;
+};
+
+/// flag_i of a depth frame: the share of all its pixels that hold a valid return (finite, > 0) closer
+/// than max_range (m). CV_32FC1 in metres or CV_16UC1 in millimetres. Errors: an empty image, another
+/// type, or max_range not > 0.
+common::Result<double> obstacleRatio(const cv::Mat& depth, double max_range);
+
+/// The sliding window flag_que of the last window_size obstacle ratios.
+class ObstacleWindow {
+ public:
+  /// window_size >= 1 (smaller counts as 1).
+  ObstacleWindow(int window_size, double clutter_threshold);
+  explicit ObstacleWindow(const LocalPlannerConfig& config)
+      : ObstacleWindow(config.window_size, config.clutter_threshold) {}
+
+  /// Appends a ratio, dropping the oldest when the window is full. Values outside [0, 1] (NaN
+  /// included) are ignored and give false.
+  bool push(double ratio);
+  /// Mean of the ratios in the window; 0 when empty.
+  double mean() const;
+  /// True when the window holds a ratio and its mean is above the threshold.
+  bool cluttered() const;
+  std::size_t size() const { return ratios_.size(); }
+  void clear() { ratios_.clear(); }
+
+ private:
+  std::size_t window_size_;
+  double threshold_;
+  std::deque<double> ratios_;
+};
+
+enum class FrontierType { kNearOrCluttered, kOpen };
+
+/// kNearOrCluttered when path_distance < d_near or the window is cluttered, else kOpen.
+FrontierType classifyFrontier(double path_distance, const ObstacleWindow& window,
+                              const LocalPlannerConfig& config);
+
+/// Expected steering rate phi = cost_yaw / cost_dist of flying from (position, yaw) to `viewpoint`:
+/// cost_yaw = |wrapped yaw difference| / yaw_rate_max, cost_dist = max(distance, min_dist) / v_max.
+double steeringRate(const common::Vec3& position, double yaw, const frontier::Viewpoint& viewpoint,
+                    const LocalPlannerConfig& config);
+
+/// The top_k viewpoints for a frontier of the given type. kNearOrCluttered: the highest steering rate
+/// first (turning in place rather than flying, paper Fig. 6), ties by visible_cells; kOpen: the most
+/// visible_cells first. Further ties keep the input order.
+std::vector<frontier::Viewpoint> filterViewpoints(const std::vector<frontier::Viewpoint>& viewpoints,
+                                                  FrontierType type, const common::Vec3& position, double yaw,
+                                                  const LocalPlannerConfig& config);
+
+/// Distance (m) between two points for the edge costs; a non-finite value means "no edge".
+using DistanceFn = std::function<double(const common::Vec3& a, const common::Vec3& b)>;
+
+/// Time lower bound (s) between two poses: max(dist / v_max, |wrapped dyaw| / yaw_rate_max).
+double edgeCost(double dist, double yaw_a, double yaw_b, const LocalPlannerConfig& config);
+
+struct LocalPlan {
+  std::vector<frontier::Viewpoint> path;  ///< one viewpoint per layer; path[0] is the next to fly to
+  std::vector<unsigned> frontier_ids;     ///< the frontier of each path entry
+  double cost = 0.0;                      ///< s, sum of the edge costs from the start
+  std::vector<std::vector<frontier::Viewpoint>> layers;  ///< the filtered viewpoints (for rviz)
+};
+
+/// Shortest path from the start pose through the layered DAG: layer i holds the filtered viewpoints
+/// (filterViewpoints() with types[j]) of the i-th frontier of `tour` that has any, for the first
+/// k_frontiers such frontiers; edges lead from the start to layer 0 and from layer i to layer i + 1,
+/// with edgeCost(distance(a, b), ...). The DAG is relaxed layer by layer in topological order, which
+/// gives Dijkstra's result in O(edges); ties keep the earlier viewpoint. `distance` defaults to the
+/// Euclidean distance. Errors: invalid config, types.size() != tour.size(), no frontier with
+/// viewpoints, or no finite path.
+common::Result<LocalPlan> planLocal(const common::Vec3& position, double yaw,
+                                    const std::vector<frontier::Frontier>& tour,
+                                    const std::vector<FrontierType>& types, const LocalPlannerConfig& config,
+                                    const DistanceFn& distance = DistanceFn());
+
+}  // namespace go_feap::planning

@@ -1,0 +1,183 @@
+#include "go_feap/planning/local_planner.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <utility>
+
+#include "go_feap/planning/viewpoints.h"
+
+namespace go_feap::planning {
+
+using common::Result;
+using common::Status;
+using common::Vec3;
+using frontier::Viewpoint;
+
+namespace {
+
+bool positiveFinite(double v) { return v > 0.0 && std::isfinite(v); }
+
+}  // namespace
+
+Status LocalPlannerConfig::validate() const {
+  auto err = [](const char* key, const char* why) {
+    return Status::Error(std::string("local_planner: ") + key + " " + why);
+  };
+  if (k_frontiers < 1) return err("k_frontiers", "must be >= 1");
+  if (top_k < 1) return err("top_k", "must be >= 1");
+  if (!(d_near >= 0.0 && std::isfinite(d_near))) return err("d_near", "must be finite and >= 0");
+  if (!positiveFinite(v_max)) return err("v_max", "must be > 0");
+  if (!positiveFinite(yaw_rate_max)) return err("yaw_rate_max", "must be > 0");
+  if (window_size < 1) return err("window_size", "must be >= 1");
+  if (!(clutter_threshold >= 0.0 && clutter_threshold <= 1.0))
+    return err("clutter_threshold", "must be in [0, 1]");
+  if (!positiveFinite(max_range)) return err("max_range", "must be > 0");
+  if (!positiveFinite(min_dist)) return err("min_dist", "must be > 0");
+  return Status::Ok();
+}
+
+Result<double> obstacleRatio(const cv::Mat& depth, double max_range) {
+  if (depth.empty()) return Result<double>::Error("obstacle ratio: empty depth image");
+  if (!positiveFinite(max_range)) return Result<double>::Error("obstacle ratio: max_range must be > 0");
+  std::size_t close = 0;
+  if (depth.type() == CV_32FC1) {
+    for (int v = 0; v < depth.rows; ++v) {
+      const float* row = depth.ptr<float>(v);
+      for (int u = 0; u < depth.cols; ++u)
+        if (std::isfinite(row[u]) && row[u] > 0.0f && row[u] < max_range) ++close;
+    }
+  } else if (depth.type() == CV_16UC1) {
+    const double max_mm = max_range * 1000.0;
+    for (int v = 0; v < depth.rows; ++v) {
+      const std::uint16_t* row = depth.ptr<std::uint16_t>(v);
+      for (int u = 0; u < depth.cols; ++u)
+        if (row[u] > 0 && row[u] < max_mm) ++close;
+    }
+  } else {
+    return Result<double>::Error("obstacle ratio: depth image must be CV_32FC1 (m) or CV_16UC1 (mm)");
+  }
+  return static_cast<double>(close) / static_cast<double>(depth.total());
+}
+
+ObstacleWindow::ObstacleWindow(int window_size, double clutter_threshold)
+    : window_size_(static_cast<std::size_t>(std::max(1, window_size))), threshold_(clutter_threshold) {}
+
+bool ObstacleWindow::push(double ratio) {
+  if (!(ratio >= 0.0 && ratio <= 1.0)) return false;
+  ratios_.push_back(ratio);
+  while (ratios_.size() > window_size_) ratios_.pop_front();
+  return true;
+}
+
+double ObstacleWindow::mean() const {
+  if (ratios_.empty()) return 0.0;
+  double sum = 0.0;
+  for (double r : ratios_) sum += r;
+  return sum / static_cast<double>(ratios_.size());
+}
+
+bool ObstacleWindow::cluttered() const { return !ratios_.empty() && mean() > threshold_; }
+
+FrontierType classifyFrontier(double path_distance, const ObstacleWindow& window,
+                              const LocalPlannerConfig& config) {
+  return path_distance < config.d_near || window.cluttered() ? FrontierType::kNearOrCluttered
+                                                             : FrontierType::kOpen;
+}
+
+double steeringRate(const Vec3& position, double yaw, const Viewpoint& viewpoint,
+                    const LocalPlannerConfig& config) {
+  const double cost_yaw = std::abs(wrapAngle(viewpoint.yaw - yaw)) / config.yaw_rate_max;
+  const double cost_dist = std::max((viewpoint.position - position).norm(), config.min_dist) / config.v_max;
+  return cost_yaw / cost_dist;
+}
+
+std::vector<Viewpoint> filterViewpoints(const std::vector<Viewpoint>& viewpoints, FrontierType type,
+                                        const Vec3& position, double yaw, const LocalPlannerConfig& config) {
+  struct Ranked {
+    double key;
+    const Viewpoint* vp;
+  };
+  std::vector<Ranked> ranked;
+  ranked.reserve(viewpoints.size());
+  for (const Viewpoint& vp : viewpoints)
+    ranked.push_back(
+        {type == FrontierType::kNearOrCluttered ? steeringRate(position, yaw, vp, config) : 0.0, &vp});
+  std::stable_sort(ranked.begin(), ranked.end(), [](const Ranked& a, const Ranked& b) {
+    if (a.key != b.key) return a.key > b.key;
+    return a.vp->visible_cells > b.vp->visible_cells;
+  });
+  std::vector<Viewpoint> out;
+  const std::size_t n = std::min(ranked.size(), static_cast<std::size_t>(std::max(0, config.top_k)));
+  for (std::size_t i = 0; i < n; ++i) out.push_back(*ranked[i].vp);
+  return out;
+}
+
+double edgeCost(double dist, double yaw_a, double yaw_b, const LocalPlannerConfig& config) {
+  return std::max(dist / config.v_max, std::abs(wrapAngle(yaw_b - yaw_a)) / config.yaw_rate_max);
+}
+
+Result<LocalPlan> planLocal(const Vec3& position, double yaw, const std::vector<frontier::Frontier>& tour,
+                            const std::vector<FrontierType>& types, const LocalPlannerConfig& config,
+                            const DistanceFn& distance) {
+  if (Status s = config.validate(); !s) return s;
+  if (types.size() != tour.size())
+    return Result<LocalPlan>::Error("local planner: " + std::to_string(types.size()) +
+                                    " frontier types for " + std::to_string(tour.size()) + " tour frontiers");
+  LocalPlan plan;
+  std::vector<unsigned> ids;
+  for (std::size_t j = 0;
+       j < tour.size() && plan.layers.size() < static_cast<std::size_t>(config.k_frontiers); ++j) {
+    if (tour[j].viewpoints.empty()) continue;
+    plan.layers.push_back(filterViewpoints(tour[j].viewpoints, types[j], position, yaw, config));
+    ids.push_back(tour[j].id);
+  }
+  if (plan.layers.empty()) return Result<LocalPlan>::Error("local planner: no tour frontier has viewpoints");
+
+  auto dist = [&](const Vec3& a, const Vec3& b) { return distance ? distance(a, b) : (b - a).norm(); };
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  // cost[i][v]: cheapest time from the start to viewpoint v of layer i; parent[i][v] its predecessor.
+  std::vector<std::vector<double>> cost(plan.layers.size());
+  std::vector<std::vector<int>> parent(plan.layers.size());
+  for (std::size_t i = 0; i < plan.layers.size(); ++i) {
+    const std::vector<Viewpoint>& layer = plan.layers[i];
+    cost[i].assign(layer.size(), kInf);
+    parent[i].assign(layer.size(), -1);
+    for (std::size_t v = 0; v < layer.size(); ++v) {
+      if (i == 0) {
+        const double d = dist(position, layer[v].position);
+        if (std::isfinite(d)) cost[0][v] = edgeCost(d, yaw, layer[v].yaw, config);
+        continue;
+      }
+      const std::vector<Viewpoint>& prev = plan.layers[i - 1];
+      for (std::size_t u = 0; u < prev.size(); ++u) {
+        if (!std::isfinite(cost[i - 1][u])) continue;
+        const double d = dist(prev[u].position, layer[v].position);
+        if (!std::isfinite(d)) continue;
+        const double c = cost[i - 1][u] + edgeCost(d, prev[u].yaw, layer[v].yaw, config);
+        if (c < cost[i][v]) {
+          cost[i][v] = c;
+          parent[i][v] = static_cast<int>(u);
+        }
+      }
+    }
+  }
+  const std::vector<double>& last = cost.back();
+  const auto best = std::min_element(last.begin(), last.end());
+  if (best == last.end() || !std::isfinite(*best))
+    return Result<LocalPlan>::Error("local planner: no finite path through the viewpoint layers");
+
+  plan.cost = *best;
+  std::vector<int> chosen(plan.layers.size());
+  chosen.back() = static_cast<int>(best - last.begin());
+  for (std::size_t i = plan.layers.size() - 1; i > 0; --i)
+    chosen[i - 1] = parent[i][static_cast<std::size_t>(chosen[i])];
+  for (std::size_t i = 0; i < plan.layers.size(); ++i)
+    plan.path.push_back(plan.layers[i][static_cast<std::size_t>(chosen[i])]);
+  plan.frontier_ids = std::move(ids);
+  return plan;
+}
+
+}  // namespace go_feap::planning

@@ -1,0 +1,391 @@
+// Viewpoint sampling against oracles: the field of view by projecting into a pinhole camera, the line of
+// sight by exact segment-voxel intersection with every occupied voxel, and the sampled set against an
+// exhaustive enumeration of the ring positions, on random maps.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "go_feap/planning/viewpoints.h"
+
+using go_feap::common::Aabb;
+using go_feap::common::GridGeometry;
+using go_feap::common::Index3;
+using go_feap::common::Vec3;
+using go_feap::frontier::Frontier;
+using go_feap::frontier::Viewpoint;
+using go_feap::map::Esdf;
+using go_feap::map::EsdfConfig;
+using go_feap::map::OccupancyConfig;
+using go_feap::map::OccupancyMap;
+using go_feap::map::VoxelState;
+using go_feap::planning::candidateYaws;
+using go_feap::planning::countVisible;
+using go_feap::planning::inView;
+using go_feap::planning::sampleViewpoints;
+using go_feap::planning::ViewpointConfig;
+using go_feap::planning::wrapAngle;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kRes = 0.1;
+
+// An occupancy map with its corner at the origin, all free at first, and an ESDF kept in step with it.
+class World {
+ public:
+  explicit World(const Index3& dims)
+      : map_(config(), Aabb{Vec3::Zero(), dims.cast<double>() * kRes}),
+        esdf_(map_.geometry(), esdfConfig()),
+        synced_(map_.geometry().size(), 0) {
+    set(Index3::Zero(), dims, VoxelState::kFree);
+  }
+
+  const GridGeometry& geo() const { return map_.geometry(); }
+  const OccupancyMap& map() const { return map_; }
+  const Esdf& esdf() const { return esdf_; }
+  const std::vector<Index3>& occupied() const { return occupied_; }
+
+  /// Sets the voxels of [lo, hi] (inclusive, clipped to the grid) and updates the ESDF.
+  void set(const Index3& lo, const Index3& hi, VoxelState s) {
+    const Index3 d = geo().dims();
+    for (int z = std::max(0, lo.z()); z <= std::min(hi.z(), d.z() - 1); ++z)
+      for (int y = std::max(0, lo.y()); y <= std::min(hi.y(), d.y() - 1); ++y)
+        for (int x = std::max(0, lo.x()); x <= std::min(hi.x(), d.x() - 1); ++x)
+          map_.setState(Index3(x, y, z), s);
+    std::vector<std::size_t> inserted, removed;
+    occupied_.clear();
+    for (std::size_t l = 0; l < synced_.size(); ++l) {
+      const std::uint8_t now = map_.stateAt(l) == VoxelState::kOccupied ? 1 : 0;
+      if (now) occupied_.push_back(geo().unlinear(l));
+      if (now == synced_[l]) continue;
+      (now ? inserted : removed).push_back(l);
+      synced_[l] = now;
+    }
+    esdf_.update(inserted, removed);
+  }
+
+ private:
+  static OccupancyConfig config() {
+    OccupancyConfig c;
+    c.resolution = kRes;
+    c.margin = 0.0;
+    return c;
+  }
+  static EsdfConfig esdfConfig() {
+    EsdfConfig c;
+    c.max_distance = 1.0;
+    return c;
+  }
+
+  OccupancyMap map_;
+  Esdf esdf_;
+  std::vector<std::uint8_t> synced_;
+  std::vector<Index3> occupied_;
+};
+
+struct Rng {
+  explicit Rng(unsigned seed) : engine(seed) {}
+  int operator()(int lo, int hi) {
+    return lo + static_cast<int>(engine() % static_cast<unsigned>(hi - lo + 1));
+  }
+  double uniform(double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(engine); }
+  std::mt19937 engine;
+};
+
+// --- Oracles -----------------------------------------------------------------------------------------
+
+// A 640x480 pinhole camera at p looking along yaw (optical frame: z forward, x right, y down), with the
+// focal lengths that give the configured fields of view.
+bool projectsIntoImage(const Vec3& p, double yaw, const Vec3& c, const ViewpointConfig& cfg) {
+  if ((c - p).norm() > cfg.sensor_range) return false;
+  Eigen::Matrix3d R_W_C;
+  R_W_C.col(2) = Vec3(std::cos(yaw), std::sin(yaw), 0.0);
+  R_W_C.col(0) = Vec3(std::sin(yaw), -std::cos(yaw), 0.0);
+  R_W_C.col(1) = Vec3(0.0, 0.0, -1.0);
+  const Vec3 q = R_W_C.transpose() * (c - p);
+  if (q.z() <= 0.0) return false;
+  const double w = 640, h = 480;
+  const double fx = 0.5 * w / std::tan(0.5 * cfg.hfov), fy = 0.5 * h / std::tan(0.5 * cfg.vfov);
+  const double u = fx * q.x() / q.z() + 0.5 * w, v = fy * q.y() / q.z() + 0.5 * h;
+  return u >= 0.0 && u <= w && v >= 0.0 && v <= h;
+}
+
+// True when the segment a-b crosses the open cube of voxel idx over a positive length (slab method).
+bool segmentHitsVoxel(const GridGeometry& geo, const Vec3& a, const Vec3& b, const Index3& idx) {
+  const Vec3 lo = geo.origin() + idx.cast<double>() * geo.resolution();
+  const Vec3 hi = lo + Vec3::Constant(geo.resolution());
+  double t0 = 0.0, t1 = 1.0;
+  for (int i = 0; i < 3; ++i) {
+    const double d = b[i] - a[i];
+    if (d == 0.0) {
+      if (a[i] <= lo[i] || a[i] >= hi[i]) return false;
+      continue;
+    }
+    double ta = (lo[i] - a[i]) / d, tb = (hi[i] - a[i]) / d;
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+  }
+  return t0 < t1;
+}
+
+bool oracleLineOfSight(const World& w, const Vec3& p, const Vec3& c) {
+  const Vec3 d = c - p;
+  const Vec3 end = d.norm() > kRes ? Vec3(c - d.normalized() * kRes) : p;
+  const Vec3 lo = p.cwiseMin(end) - Vec3::Constant(kRes), hi = p.cwiseMax(end) + Vec3::Constant(kRes);
+  for (const Index3& o : w.occupied()) {
+    const Vec3 oc = w.geo().indexToCoord(o);
+    if ((oc.array() < lo.array()).any() || (oc.array() > hi.array()).any()) continue;
+    if (segmentHitsVoxel(w.geo(), p, end, o)) return false;
+  }
+  return true;
+}
+
+// N_view for every yaw of `yaws` at p, with the ray test done once per cell.
+std::vector<int> oracleCounts(const World& w, const Vec3& p, const std::vector<double>& yaws,
+                              const std::vector<Index3>& cells, const ViewpointConfig& cfg) {
+  std::vector<int> counts(yaws.size(), 0);
+  for (const Index3& idx : cells) {
+    const Vec3 c = w.geo().indexToCoord(idx);
+    if ((c - p).norm() > cfg.sensor_range || !oracleLineOfSight(w, p, c)) continue;
+    for (std::size_t k = 0; k < yaws.size(); ++k)
+      if (projectsIntoImage(p, yaws[k], c, cfg)) ++counts[k];
+  }
+  return counts;
+}
+
+// --- Fixtures ----------------------------------------------------------------------------------------
+
+// 4 x 4 x 2 m, random occupied and unknown boxes.
+void randomise(World& w, Rng& rng, int obstacles, int unknowns) {
+  const Index3 d = w.geo().dims();
+  auto box = [&](int lo_size, int hi_size, VoxelState s) {
+    const Index3 lo(rng(0, d.x() - 1), rng(0, d.y() - 1), rng(0, d.z() - 1));
+    const Index3 size(rng(lo_size, hi_size), rng(lo_size, hi_size), rng(lo_size, 2 * hi_size));
+    w.set(lo, lo + size, s);
+  };
+  for (int i = 0; i < obstacles; ++i) box(1, 4, VoxelState::kOccupied);
+  for (int i = 0; i < unknowns; ++i) box(3, 8, VoxelState::kUnknown);
+}
+
+Vec3 randomFreePoint(const World& w, Rng& rng) {
+  const Index3 d = w.geo().dims();
+  for (;;) {
+    const Index3 idx(rng(0, d.x() - 1), rng(0, d.y() - 1), rng(0, d.z() - 1));
+    if (w.map().state(idx) != VoxelState::kFree) continue;
+    return w.geo().indexToCoord(idx) +
+           Vec3(rng.uniform(-0.45, 0.45), rng.uniform(-0.45, 0.45), rng.uniform(-0.45, 0.45)) * kRes;
+  }
+}
+
+// Free voxels with an unknown face neighbour inside the grid, in increasing linear order.
+Frontier frontierOf(const World& w) {
+  Frontier f;
+  f.id = 7;
+  for (std::size_t l = 0; l < w.geo().size(); ++l) {
+    const Index3 idx = w.geo().unlinear(l);
+    if (w.map().state(idx) != VoxelState::kFree) continue;
+    for (const Index3& o : go_feap::common::faceNeighbours())
+      if (const Index3 n = idx + o; w.geo().inside(n) && w.map().state(n) == VoxelState::kUnknown) {
+        f.cells.push_back(idx);
+        break;
+      }
+  }
+  for (const Index3& c : f.cells) f.average += w.geo().indexToCoord(c);
+  if (!f.cells.empty()) f.average /= static_cast<double>(f.cells.size());
+  return f;
+}
+
+ViewpointConfig testConfig() {
+  ViewpointConfig c;
+  c.ring_radii = {0.8, 1.2, 1.6};
+  c.angular_step = kPi / 6;
+  c.height_offsets = {-0.5, 0.0, 0.5};
+  c.clearance = 0.3;
+  c.sensor_range = 2.5;  // smaller than the map, so range matters
+  c.min_visible = 5;
+  c.yaw_samples = 12;
+  return c;
+}
+
+// --- Tests -------------------------------------------------------------------------------------------
+
+TEST(ViewpointConfig, ValidateNamesTheBadKey) {
+  EXPECT_TRUE(ViewpointConfig().validate().ok());
+  auto expectBad = [](const char* key, auto mutate) {
+    ViewpointConfig c;
+    mutate(c);
+    const auto s = c.validate();
+    EXPECT_FALSE(s.ok()) << key;
+    EXPECT_NE(s.message().find(key), std::string::npos) << s.message();
+  };
+  expectBad("ring_radii", [](ViewpointConfig& c) { c.ring_radii.clear(); });
+  expectBad("ring_radii", [](ViewpointConfig& c) { c.ring_radii = {1.0, -1.0}; });
+  expectBad("angular_step", [](ViewpointConfig& c) { c.angular_step = 0.0; });
+  expectBad("height_offsets", [](ViewpointConfig& c) { c.height_offsets.clear(); });
+  expectBad("height_offsets", [](ViewpointConfig& c) { c.height_offsets = {NAN}; });
+  expectBad("clearance", [](ViewpointConfig& c) { c.clearance = -0.1; });
+  expectBad("sensor_range", [](ViewpointConfig& c) { c.sensor_range = 0.0; });
+  expectBad("hfov", [](ViewpointConfig& c) { c.hfov = kPi; });
+  expectBad("vfov", [](ViewpointConfig& c) { c.vfov = 0.0; });
+  expectBad("min_visible", [](ViewpointConfig& c) { c.min_visible = -1; });
+  expectBad("yaw_samples", [](ViewpointConfig& c) { c.yaw_samples = 0; });
+}
+
+TEST(Viewpoints, WrapAngleAndCandidateYaws) {
+  EXPECT_NEAR(wrapAngle(3 * kPi / 2), -kPi / 2, 1e-12);
+  EXPECT_NEAR(wrapAngle(-kPi), kPi, 1e-12);
+  EXPECT_NEAR(wrapAngle(0.3 + 4 * kPi), 0.3, 1e-12);
+  const std::vector<double> yaws = candidateYaws(Vec3(1, 1, 0), Vec3(1, 3, 5), 8);
+  ASSERT_EQ(yaws.size(), 8u);
+  EXPECT_NEAR(yaws[0], kPi / 2, 1e-12);  // faces the target
+  for (std::size_t k = 0; k < yaws.size(); ++k) {
+    EXPECT_GT(yaws[k], -kPi);
+    EXPECT_LE(yaws[k], kPi);
+    EXPECT_NEAR(std::abs(wrapAngle(yaws[k] - yaws[0] - 2 * kPi * k / 8)), 0.0, 1e-12);
+  }
+  EXPECT_NEAR(candidateYaws(Vec3(1, 1, 0), Vec3(1, 1, 2), 4)[0], 0.0, 1e-12);
+}
+
+TEST(Viewpoints, InViewMatchesCameraProjection) {
+  const ViewpointConfig cfg;
+  Rng rng(3);
+  int inside = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const Vec3 p(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1));
+    const Vec3 c = p + Vec3(rng.uniform(-5, 5), rng.uniform(-5, 5), rng.uniform(-3, 3));
+    const double yaw = rng.uniform(-kPi, kPi);
+    const bool expected = projectsIntoImage(p, yaw, c, cfg);
+    inside += expected;
+    ASSERT_EQ(inView(p, yaw, c, cfg), expected) << i;
+  }
+  EXPECT_GT(inside, 500);  // both outcomes exercised
+  EXPECT_LT(inside, 19500);
+}
+
+TEST(Viewpoints, CountVisibleMatchesBruteForce) {
+  const ViewpointConfig cfg = testConfig();
+  for (unsigned seed : {1u, 2u, 3u, 4u}) {
+    World w(Index3(40, 40, 20));
+    Rng rng(seed);
+    randomise(w, rng, 25, 4);
+    std::vector<Index3> cells;
+    while (cells.size() < 100) {
+      const Index3 idx(rng(0, 39), rng(0, 39), rng(0, 19));
+      if (w.map().state(idx) == VoxelState::kFree) cells.push_back(idx);
+    }
+    const World empty(Index3(40, 40, 20));
+    int total = 0, blocked_some = 0;
+    for (int i = 0; i < 15; ++i) {
+      const Vec3 p = randomFreePoint(w, rng);
+      std::vector<double> yaws;
+      for (int k = 0; k < 8; ++k) yaws.push_back(rng.uniform(-kPi, kPi));
+      const std::vector<int> expected = oracleCounts(w, p, yaws, cells, cfg);
+      const std::vector<int> in_fov_only = oracleCounts(empty, p, yaws, cells, cfg);
+      for (std::size_t k = 0; k < yaws.size(); ++k) {
+        ASSERT_EQ(countVisible(p, yaws[k], cells, w.map(), cfg), expected[k])
+            << "seed " << seed << " i " << i;
+        total += expected[k];
+        blocked_some += expected[k] < in_fov_only[k];
+      }
+    }
+    EXPECT_GT(total, 0) << seed;
+    EXPECT_GT(blocked_some, 0) << seed;  // occlusion really happens in the fixture
+  }
+}
+
+TEST(Viewpoints, SampledViewpointsMatchExhaustiveEnumeration) {
+  const ViewpointConfig cfg = testConfig();
+  const double z_min = 0.4, z_max = 1.4;
+  for (unsigned seed : {11u, 12u, 13u}) {
+    World w(Index3(40, 40, 20));
+    Rng rng(seed);
+    randomise(w, rng, 30, 0);
+    const Index3 lo(rng(12, 22), rng(12, 22), 4);
+    w.set(lo, lo + Index3(rng(3, 6), rng(3, 6), 8), VoxelState::kUnknown);
+    const Frontier f = frontierOf(w);
+    ASSERT_GE(f.cells.size(), 50u);
+
+    const std::vector<Viewpoint> vps = sampleViewpoints(f, w.map(), w.esdf(), z_min, z_max, cfg);
+    ASSERT_FALSE(vps.empty()) << seed;
+    for (std::size_t i = 0; i < vps.size(); ++i) {
+      const Viewpoint& vp = vps[i];
+      EXPECT_EQ(w.map().state(vp.position), VoxelState::kFree);
+      EXPECT_GE(w.esdf().distance(vp.position), cfg.clearance);
+      EXPECT_GE(vp.position.z(), z_min);
+      EXPECT_LE(vp.position.z(), z_max);
+      EXPECT_GE(vp.visible_cells, cfg.min_visible);
+      if (i > 0) {
+        EXPECT_GE(vps[i - 1].visible_cells, vp.visible_cells);
+      }
+      // The count is right, and the chosen yaw sees at least as much as every other candidate yaw.
+      const std::vector<double> yaws = candidateYaws(vp.position, f.average, cfg.yaw_samples);
+      const std::vector<int> counts = oracleCounts(w, vp.position, yaws, f.cells, cfg);
+      EXPECT_EQ(countVisible(vp.position, vp.yaw, f.cells, w.map(), cfg), vp.visible_cells);
+      EXPECT_EQ(*std::max_element(counts.begin(), counts.end()), vp.visible_cells);
+      EXPECT_TRUE(
+          std::any_of(yaws.begin(), yaws.end(), [&](double y) { return std::abs(y - vp.yaw) < 1e-12; }));
+    }
+
+    // Every ring position that qualifies is returned, and nothing else.
+    std::vector<Vec3> expected;
+    const int n_angles = static_cast<int>(std::lround(2 * kPi / cfg.angular_step));
+    for (double r : cfg.ring_radii)
+      for (int a = 0; a < n_angles; ++a)
+        for (double off : cfg.height_offsets) {
+          const double theta = 2 * kPi * a / n_angles;
+          const Vec3 p = f.average + Vec3(r * std::cos(theta), r * std::sin(theta), 0.0);
+          const Vec3 q(p.x(), p.y(), std::clamp(f.average.z() + off, z_min, z_max));
+          if (w.map().state(q) != VoxelState::kFree || w.esdf().distance(q) < cfg.clearance) continue;
+          const std::vector<int> counts =
+              oracleCounts(w, q, candidateYaws(q, f.average, cfg.yaw_samples), f.cells, cfg);
+          if (*std::max_element(counts.begin(), counts.end()) < cfg.min_visible) continue;
+          if (std::none_of(expected.begin(), expected.end(),
+                           [&](const Vec3& e) { return (e - q).norm() < 1e-9; }))
+            expected.push_back(q);
+        }
+    ASSERT_EQ(vps.size(), expected.size()) << seed;
+    for (const Vec3& e : expected)
+      EXPECT_TRUE(std::any_of(vps.begin(), vps.end(),
+                              [&](const Viewpoint& v) { return (v.position - e).norm() < 1e-9; }));
+  }
+}
+
+TEST(Viewpoints, HeightsAreClampedToTheBand) {
+  World w(Index3(40, 40, 20));
+  w.set(Index3(15, 15, 0), Index3(25, 25, 19), VoxelState::kUnknown);
+  const Frontier f = frontierOf(w);
+  ViewpointConfig cfg = testConfig();
+  cfg.height_offsets = {-2.0, 0.0, 2.0};
+  const std::vector<Viewpoint> vps = sampleViewpoints(f, w.map(), w.esdf(), 0.9, 1.1, cfg);
+  ASSERT_FALSE(vps.empty());
+  for (const Viewpoint& vp : vps) {
+    EXPECT_GE(vp.position.z(), 0.9);
+    EXPECT_LE(vp.position.z(), 1.1);
+  }
+  EXPECT_TRUE(sampleViewpoints(f, w.map(), w.esdf(), 1.1, 0.9, cfg).empty());  // empty band
+  cfg.yaw_samples = 0;
+  EXPECT_TRUE(sampleViewpoints(f, w.map(), w.esdf(), 0.9, 1.1, cfg).empty());  // invalid config
+}
+
+TEST(Viewpoints, OccludedFrontierIsNotSeen) {
+  // A wall between the viewpoint and the frontier hides it; without the wall every cell in view counts.
+  World w(Index3(40, 20, 20));
+  w.set(Index3(30, 0, 0), Index3(39, 19, 19), VoxelState::kUnknown);
+  const Frontier f = frontierOf(w);  // the plane x = 29
+  ViewpointConfig cfg;
+  const Vec3 p(0.55, 1.0, 1.0);
+  const int open = countVisible(p, 0.0, f.cells, w.map(), cfg);
+  EXPECT_GT(open, 100);
+  w.set(Index3(15, 0, 0), Index3(15, 19, 19), VoxelState::kOccupied);
+  EXPECT_EQ(countVisible(p, 0.0, f.cells, w.map(), cfg), 0);
+  EXPECT_EQ(countVisible(p, kPi, f.cells, w.map(), cfg), 0);
+}
+
+}  // namespace
