@@ -12,6 +12,7 @@
 #include "go_feap/ExplorationStatus.h"
 #include "go_feap/FrontierArray.h"
 #include "go_feap/LayerBounds.h"
+#include "go_feap/ViewpointPath.h"
 #include "go_feap/GlobalTour.h"
 #include "go_feap/PositionCommand.h"
 #include "ros_test_util.h"
@@ -32,6 +33,7 @@ class FrontierPlannerTest : public ::testing::Test {
     odom_sub_ = nh_.subscribe("odom", 2, &FrontierPlannerTest::onOdom, this);
     status_sub_ = nh_.subscribe("status", 5, &FrontierPlannerTest::onStatus, this);
     layer_sub_ = nh_.subscribe("layer", 1, &FrontierPlannerTest::onLayer, this);
+    target_sub_ = nh_.subscribe("local_target", 2, &FrontierPlannerTest::onTarget, this);
     cmd_pub_ = nh_.advertise<go_feap::PositionCommand>("position_cmd", 10);
   }
   void onFrontiers(const go_feap::FrontierArray::ConstPtr& m) { frontiers_ = m; }
@@ -44,9 +46,15 @@ class FrontierPlannerTest : public ::testing::Test {
   void onOdom(const nav_msgs::Odometry::ConstPtr& m) { odom_ = m; }
   void onStatus(const go_feap::ExplorationStatus::ConstPtr& m) { status_ = m; }
   void onLayer(const go_feap::LayerBounds::ConstPtr& m) { layer_ = m; }
+  void onTarget(const go_feap::ViewpointPath::ConstPtr& m) {
+    target_ = m;
+    target_tour_ = tour_;
+  }
 
   ros::NodeHandle nh_;
-  ros::Subscriber frontier_sub_, tour_sub_, odom_sub_, status_sub_, layer_sub_;
+  ros::Subscriber frontier_sub_, tour_sub_, odom_sub_, status_sub_, layer_sub_, target_sub_;
+  go_feap::ViewpointPath::ConstPtr target_;
+  go_feap::GlobalTour::ConstPtr target_tour_;
   go_feap::ExplorationStatus::ConstPtr status_;
   go_feap::LayerBounds::ConstPtr layer_;
   ros::Publisher cmd_pub_;
@@ -93,6 +101,30 @@ TEST_F(FrontierPlannerTest, TourStartsAtAReachableFrontier) {
       in_wall += scene->isOccupied(Vec3(p.x, p.y, p.z));
     }
   EXPECT_LT(in_wall, cells / 50 + 1);
+}
+
+TEST_F(FrontierPlannerTest, LocalTargetIsAFreeViewpointOfATourFrontier) {
+  ros::NodeHandle pnh("~");
+  std::string name;
+  int seed = 0;
+  ASSERT_TRUE(pnh.getParam("scene", name) && pnh.getParam("seed", seed));
+  auto scene = go_feap::world::makeScene(name, seed);
+  ASSERT_TRUE(scene) << scene.message();
+  ASSERT_TRUE(spinUntil([&] { return target_ && target_tour_ && !target_->positions.empty(); }, 90.0))
+      << "no local_target";
+  EXPECT_EQ(target_->positions.size(), target_->yaws.size());
+  EXPECT_EQ(target_->positions.size(), target_->frontier_ids.size());
+  EXPECT_LE(target_->positions.size(), 3u);
+  // Viewpoints lie in ground-truth free space with clearance (0.4 m requested; checked at
+  // 0.25 m, one voxel less than the mapped clearance plus a voxel of map error).
+  for (const auto& p : target_->positions) {
+    const Vec3 v(p.x, p.y, p.z);
+    for (double dx = -0.25; dx <= 0.25; dx += 0.05)
+      for (double dy = -0.25; dy <= 0.25; dy += 0.05)
+        for (double dz = -0.25; dz <= 0.25; dz += 0.05)
+          ASSERT_FALSE(scene->isOccupied(Vec3(v + Vec3(dx, dy, dz)))) << "viewpoint " << v.transpose();
+    EXPECT_TRUE(scene->box.contains(v));
+  }
 }
 
 TEST_F(FrontierPlannerTest, TriggerStartsTheStartBandOnceAndFrontiersFollowIt) {

@@ -1,0 +1,196 @@
+// LocalPlanner: picks the next viewpoint. Samples candidate viewpoints around the first
+// frontiers of the global tour, filters them by frontier type (near or cluttered: steering
+// rate; open: N_view) and runs the viewpoint DAG. In: global_tour, frontiers, odom, depth
+// (obstacle-ratio window), layer, map_handle. Out: local_target (go_feap/ViewpointPath),
+// viewpoint_markers.
+#include <cv_bridge/cv_bridge.h>
+#include <nav_msgs/Odometry.h>
+#include <nodelet/nodelet.h>
+#include <pluginlib/class_list_macros.hpp>
+#include <ros/ros.h>
+#include <sensor_msgs/Image.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include <mutex>
+#include <optional>
+
+#include "go_feap/FrontierArray.h"
+#include "go_feap/GlobalTour.h"
+#include "go_feap/LayerBounds.h"
+#include "go_feap/ViewpointPath.h"
+#include "go_feap/planning/local_planner.h"
+#include "go_feap/planning/viewpoints.h"
+#include "go_feap/ros/exploration_params.h"
+#include "go_feap/ros/shared_map.h"
+
+namespace go_feap {
+
+class LocalPlanner : public nodelet::Nodelet {
+ private:
+  void onInit() override {
+    ros::NodeHandle& nh = getNodeHandle();
+    ros_params::ParamReader p(getPrivateNodeHandle());
+    auto& v = viewpoint_config_;
+    p.get("viewpoints/ring_radii", v.ring_radii).get("viewpoints/angular_step", v.angular_step);
+    p.get("viewpoints/height_offsets", v.height_offsets).get("viewpoints/clearance", v.clearance);
+    p.get("viewpoints/sensor_range", v.sensor_range).get("viewpoints/hfov", v.hfov).get("viewpoints/vfov", v.vfov);
+    p.get("viewpoints/min_visible", v.min_visible).get("viewpoints/yaw_samples", v.yaw_samples);
+    auto& l = local_config_;
+    p.get("local/k_frontiers", l.k_frontiers).get("local/top_k", l.top_k).get("local/d_near", l.d_near);
+    p.get("local/v_max", l.v_max).get("local/yaw_rate_max", l.yaw_rate_max).get("local/window_size", l.window_size);
+    p.get("local/clutter_threshold", l.clutter_threshold).get("local/max_range", l.max_range);
+    p.get("local/min_dist", l.min_dist);
+    ros_params::readAstarConfig(p, astar_config_);
+    p.get("world_frame", world_frame_);
+    ros_params::requireOrThrow(p.ok(), getName(), p.error());
+    for (const common::Status& st : {v.validate(), l.validate(), astar_config_.validate()})
+      ros_params::requireOrThrow(st.ok(), getName(), st.message());
+    window_ = std::make_unique<planning::ObstacleWindow>(l.window_size, l.clutter_threshold);
+
+    target_pub_ = nh.advertise<ViewpointPath>("local_target", 2);
+    marker_pub_ = nh.advertise<visualization_msgs::MarkerArray>("viewpoint_markers", 2);
+    handle_sub_ = nh.subscribe("map_handle", 1, &LocalPlanner::onHandle, this);
+    odom_sub_ = nh.subscribe("odom", 5, &LocalPlanner::onOdom, this);
+    depth_sub_ = nh.subscribe("depth", 2, &LocalPlanner::onDepth, this);
+    layer_sub_ = nh.subscribe("layer", 1, &LocalPlanner::onLayer, this);
+    frontier_sub_ = nh.subscribe("frontiers", 2, &LocalPlanner::onFrontiers, this);
+    tour_sub_ = nh.subscribe("global_tour", 2, &LocalPlanner::onTour, this);
+  }
+
+  void onHandle(const boost::shared_ptr<const ros_map::MapHandle>& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (shared_) return;
+    auto map = ros_map::acceptHandle(*msg);
+    if (!map) {
+      NODELET_ERROR_STREAM_THROTTLE(10.0, getName() << ": " << map.message());
+      return;
+    }
+    shared_ = *map;
+    astar_ = std::make_unique<planning::Astar>(shared_->map->occupancy(), shared_->map->esdf(), astar_config_);
+  }
+  void onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
+    const auto& p = msg->pose.pose.position;
+    const auto& q = msg->pose.pose.orientation;
+    const common::Vec3 pos(p.x, p.y, p.z);
+    const double yaw = std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!pos.allFinite() || !std::isfinite(yaw)) return;
+    position_ = pos;
+    yaw_ = yaw;
+  }
+  void onDepth(const sensor_msgs::Image::ConstPtr& msg) {
+    cv_bridge::CvImageConstPtr image;
+    try {
+      image = cv_bridge::toCvShare(msg);
+    } catch (const cv_bridge::Exception& e) {
+      NODELET_WARN_STREAM_THROTTLE(5.0, getName() << ": depth image unreadable (" << e.what() << "); skipped");
+      return;
+    }
+    const auto ratio = planning::obstacleRatio(image->image, local_config_.max_range);
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!ratio) {
+      NODELET_WARN_STREAM_THROTTLE(5.0, getName() << ": " << ratio.message() << "; frame not counted");
+      return;
+    }
+    window_->push(*ratio);
+  }
+  void onLayer(const LayerBounds::ConstPtr& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    band_ = {msg->z_min, msg->z_max};
+  }
+  void onFrontiers(const FrontierArray::ConstPtr& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    frontiers_ = msg;
+  }
+
+  void onTour(const GlobalTour::ConstPtr& tour) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!shared_ || !position_ || !frontiers_) return;
+    std::vector<frontier::Frontier> ordered;
+    std::vector<planning::FrontierType> types;
+    std::shared_lock<std::shared_mutex> map_lock(shared_->mutex);
+    const map::VoxelMap& m = *shared_->map;
+    const auto& geo = m.geometry();
+    int with_viewpoints = 0;
+    for (unsigned id : tour->frontier_ids) {
+      if (with_viewpoints >= local_config_.k_frontiers) break;
+      const go_feap::Frontier* msg = nullptr;
+      for (const auto& f : frontiers_->frontiers)
+        if (f.id == id) msg = &f;
+      if (!msg) continue;  // the frontier changed since the tour was planned
+      frontier::Frontier f;
+      f.id = msg->id;
+      f.average = common::Vec3(msg->average.x, msg->average.y, msg->average.z);
+      for (const auto& c : msg->cells) f.cells.push_back(geo.coordToIndex(common::Vec3(c.x, c.y, c.z)));
+      f.viewpoints = planning::sampleViewpoints(f, m.occupancy(), m.esdf(), band_.first, band_.second,
+                                                viewpoint_config_);
+      if (f.viewpoints.empty()) continue;
+      ++with_viewpoints;
+      const double d = planning::pathDistance(*astar_, *position_, f.average).metres;
+      types.push_back(planning::classifyFrontier(d, *window_, local_config_));
+      ordered.push_back(std::move(f));
+    }
+    map_lock.unlock();
+    if (ordered.empty()) {
+      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": no viewpoint found for the first tour frontiers");
+      return;
+    }
+    auto plan = planning::planLocal(*position_, yaw_, ordered, types, local_config_);
+    if (!plan) {
+      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": no local plan: " << plan.message());
+      return;
+    }
+    ViewpointPath out;
+    out.header.stamp = tour->header.stamp;
+    out.header.frame_id = world_frame_;
+    out.cost = plan->cost;
+    visualization_msgs::MarkerArray markers;
+    visualization_msgs::Marker candidates, chosen;
+    candidates.header = chosen.header = out.header;
+    candidates.ns = "candidate_viewpoints";
+    chosen.ns = "chosen_viewpoints";
+    candidates.type = visualization_msgs::Marker::SPHERE_LIST;
+    chosen.type = visualization_msgs::Marker::LINE_STRIP;
+    candidates.pose.orientation.w = chosen.pose.orientation.w = 1.0;
+    candidates.scale.x = candidates.scale.y = candidates.scale.z = 0.12;
+    candidates.color.g = candidates.color.b = 0.8, candidates.color.a = 0.6;
+    chosen.scale.x = 0.06;
+    chosen.color.g = 1.0, chosen.color.a = 1.0;
+    auto point = [](const common::Vec3& v) {
+      geometry_msgs::Point p;
+      p.x = v.x(), p.y = v.y(), p.z = v.z();
+      return p;
+    };
+    chosen.points.push_back(point(*position_));
+    for (std::size_t i = 0; i < plan->path.size(); ++i) {
+      out.positions.push_back(point(plan->path[i].position));
+      out.yaws.push_back(plan->path[i].yaw);
+      out.frontier_ids.push_back(plan->frontier_ids[i]);
+      chosen.points.push_back(point(plan->path[i].position));
+    }
+    for (const auto& layer : plan->layers)
+      for (const auto& vp : layer) candidates.points.push_back(point(vp.position));
+    markers.markers = {candidates, chosen};
+    target_pub_.publish(out);
+    marker_pub_.publish(markers);
+  }
+
+  planning::ViewpointConfig viewpoint_config_;
+  planning::LocalPlannerConfig local_config_;
+  planning::AstarConfig astar_config_;
+  std::string world_frame_;
+  std::mutex mutex_;
+  std::shared_ptr<ros_map::SharedMap> shared_;
+  std::unique_ptr<planning::Astar> astar_;
+  std::unique_ptr<planning::ObstacleWindow> window_;
+  std::optional<common::Vec3> position_;
+  double yaw_ = 0.0;
+  std::pair<double, double> band_{-1e18, 1e18};
+  FrontierArray::ConstPtr frontiers_;
+  ros::Publisher target_pub_, marker_pub_;
+  ros::Subscriber handle_sub_, odom_sub_, depth_sub_, layer_sub_, frontier_sub_, tour_sub_;
+};
+
+}  // namespace go_feap
+
+PLUGINLIB_EXPORT_CLASS(go_feap::LocalPlanner, nodelet::Nodelet)
