@@ -1,0 +1,54 @@
+// When to replan the local trajectory and how to stop when planning fails (DESIGN §3.7). Pure functions:
+// the caller gathers the inputs (its clock, its target) and acts on the answer.
+#pragma once
+
+#include <optional>
+
+#include "go_feap/common/result.h"
+#include "go_feap/map/esdf.h"
+#include "go_feap/trajectory/bspline.h"
+
+namespace go_feap::trajectory {
+
+enum class ReplanReason { kNone, kNewTarget, kShortTimeLeft, kPredictedCollision, kNoTrajectory };
+
+/// "none", "new_target", "short_time_left", "predicted_collision", "no_trajectory".
+const char* toString(ReplanReason reason);
+
+struct ReplanConfig {
+  double min_time_left = 1.0;     ///< s; replan when less than this is left of the current trajectory
+  double target_tolerance = 0.3;  ///< m; a target farther than this from the trajectory's end counts as new
+
+  /// Checks every key; the message names the bad one, e.g. "replan: min_time_left must be finite and >= 0".
+  common::Status validate() const;
+};
+
+struct ReplanInputs {
+  bool has_trajectory = false;
+  double time_left = 0.0;               ///< s left on the current trajectory
+  bool target_changed = false;          ///< the caller switched targets
+  double target_distance_to_end = 0.0;  ///< m from the current target to the trajectory's end position
+  /// When the remaining trajectory first comes too close to an obstacle (firstCollisionTime()), if it does.
+  std::optional<double> collision_time;
+};
+
+/// The most urgent reason to replan, in this order: no trajectory, predicted collision, new target
+/// (target_changed or target_distance_to_end > target_tolerance), short time left
+/// (time_left < min_time_left); kNone otherwise.
+ReplanReason shouldReplan(const ReplanInputs& inputs, const ReplanConfig& config);
+
+/// First time in [t_now, min(t_now + horizon, duration)] at which `trajectory` (3-D) comes closer than
+/// min_clearance to an obstacle of the ESDF, sampled at most half a voxel apart (the step comes from a
+/// bound on the speed: the largest control-polygon velocity). Points outside the ESDF's grid count as
+/// free (the ESDF reports max_distance there). nullopt when none does, or for an empty trajectory.
+std::optional<double> firstCollisionTime(const UniformBspline& trajectory, double t_now,
+                                         const map::Esdf& esdf, double min_clearance, double horizon);
+
+/// Cubic spline from position p with velocity v that brakes along v at a_max (m/s^2, > 0) and then holds:
+/// it starts at p with velocity v (acceleration -a_max along v), never exceeds a_max, and ends at rest
+/// after |v| / a_max plus at most one knot span (<= 0.05 s), at most |v|^2 / (2 a_max) + a_max dt^2 / 24
+/// from p. A zero velocity gives a spline that holds p. Throws std::invalid_argument unless a_max > 0 and
+/// the inputs are finite.
+UniformBspline safeStop(const Vec3& p, const Vec3& v, double a_max);
+
+}  // namespace go_feap::trajectory

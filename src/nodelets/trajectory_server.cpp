@@ -1,0 +1,109 @@
+// TrajectoryServer: samples the current B-spline trajectory into position commands at a
+// fixed rate. In: bspline, odom. Out: position_cmd (go_feap/PositionCommand). Holds the
+// position where the last trajectory ended, or where the vehicle was, when none is active.
+#include <nav_msgs/Odometry.h>
+#include <nodelet/nodelet.h>
+#include <pluginlib/class_list_macros.hpp>
+#include <ros/ros.h>
+
+#include <mutex>
+#include <optional>
+
+#include "go_feap/PositionCommand.h"
+#include "go_feap/ros/bspline_conversion.h"
+#include "go_feap/ros/params.h"
+
+namespace go_feap {
+
+class TrajectoryServer : public nodelet::Nodelet {
+ private:
+  void onInit() override {
+    ros::NodeHandle& nh = getNodeHandle();
+    ros_params::ParamReader p(getPrivateNodeHandle());
+    p.get("server/rate", rate_).get("world_frame", world_frame_);
+    ros_params::requireOrThrow(p.ok(), getName(), p.error());
+    ros_params::requireOrThrow(rate_ >= 10.0 && rate_ <= 1000.0, getName(),
+                               "parameter '" + p.fullName("server/rate") + "' must be in [10, 1000] Hz");
+    cmd_pub_ = nh.advertise<PositionCommand>("position_cmd", 10);
+    bspline_sub_ = nh.subscribe("bspline", 5, &TrajectoryServer::onBspline, this);
+    odom_sub_ = nh.subscribe("odom", 5, &TrajectoryServer::onOdom, this);
+    timer_ = nh.createTimer(ros::Duration(1.0 / rate_), &TrajectoryServer::onTimer, this);
+  }
+
+  void onBspline(const Bspline::ConstPtr& msg) {
+    auto t = ros_traj::fromMsg(*msg);
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!t) {
+      NODELET_WARN_STREAM_THROTTLE(1.0, getName() << ": trajectory " << msg->traj_id << " refused: " << t.message());
+      return;
+    }
+    current_ = std::move(t).value();
+  }
+
+  void onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
+    const auto& p = msg->pose.pose.position;
+    const auto& q = msg->pose.pose.orientation;
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return;
+    if (!hold_) {  // first pose: hold it until a trajectory arrives
+      hold_position_ = Eigen::Vector3d(p.x, p.y, p.z);
+      hold_yaw_ = std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
+      hold_ = true;
+    }
+  }
+
+  void onTimer(const ros::TimerEvent&) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const ros::Time now = ros::Time::now();
+    PositionCommand cmd;
+    cmd.header.stamp = now;
+    cmd.header.frame_id = world_frame_;
+    Eigen::Vector3d p, v = Eigen::Vector3d::Zero(), a = Eigen::Vector3d::Zero();
+    double yaw = hold_yaw_, yaw_dot = 0.0;
+    if (current_ && now >= current_->start_time) {
+      const double t = (now - current_->start_time).toSec();
+      const double T = current_->duration();
+      const double tc = std::min(t, T);
+      p = current_->position.evaluate(tc, 0);
+      const double ty = std::min(t, current_->yaw.duration());
+      yaw = current_->yaw.evaluate(ty, 0)(0);
+      if (t <= T) {
+        v = current_->position.evaluate(tc, 1);
+        a = current_->position.evaluate(tc, 2);
+        cmd.trajectory_flag = PositionCommand::TRAJECTORY_STATUS_READY;
+      } else {
+        cmd.trajectory_flag = PositionCommand::TRAJECTORY_STATUS_COMPLETED;
+      }
+      if (t <= current_->yaw.duration()) yaw_dot = current_->yaw.evaluate(ty, 1)(0);
+      cmd.trajectory_id = static_cast<std::uint32_t>(current_->id);
+      hold_position_ = p;  // where to hold if the trajectory is dropped
+      hold_yaw_ = yaw;
+    } else if (hold_) {
+      p = hold_position_;
+      cmd.trajectory_flag = PositionCommand::TRAJECTORY_STATUS_EMPTY;
+    } else {
+      return;  // nothing known yet
+    }
+    cmd.position.x = p.x(), cmd.position.y = p.y(), cmd.position.z = p.z();
+    cmd.velocity.x = v.x(), cmd.velocity.y = v.y(), cmd.velocity.z = v.z();
+    cmd.acceleration.x = a.x(), cmd.acceleration.y = a.y(), cmd.acceleration.z = a.z();
+    cmd.yaw = std::atan2(std::sin(yaw), std::cos(yaw));
+    cmd.yaw_dot = yaw_dot;
+    cmd_pub_.publish(cmd);
+  }
+
+  double rate_ = 100.0;
+  std::string world_frame_;
+  std::mutex mutex_;
+  std::optional<ros_traj::Trajectory> current_;
+  bool hold_ = false;
+  Eigen::Vector3d hold_position_ = Eigen::Vector3d::Zero();
+  double hold_yaw_ = 0.0;
+  ros::Publisher cmd_pub_;
+  ros::Subscriber bspline_sub_, odom_sub_;
+  ros::Timer timer_;
+};
+
+}  // namespace go_feap
+
+PLUGINLIB_EXPORT_CLASS(go_feap::TrajectoryServer, nodelet::Nodelet)

@@ -1,0 +1,55 @@
+#include "go_feap/ros/bspline_conversion.h"
+
+#include <cmath>
+
+namespace go_feap::ros_traj {
+
+Bspline toMsg(const Trajectory& t) {
+  Bspline msg;
+  msg.order = t.position.degree();
+  msg.traj_id = t.id;
+  msg.start_time = t.start_time;
+  const int n = t.position.numControlPoints(), p = t.position.degree();
+  for (int i = 0; i < n + p + 1; ++i) msg.knots.push_back((i - p) * t.position.knotSpan());
+  for (int i = 0; i < n; ++i) {
+    geometry_msgs::Point pt;
+    pt.x = t.position.controlPoints()(0, i);
+    pt.y = t.position.controlPoints()(1, i);
+    pt.z = t.position.controlPoints()(2, i);
+    msg.pos_pts.push_back(pt);
+  }
+  for (int i = 0; i < t.yaw.numControlPoints(); ++i) msg.yaw_pts.push_back(t.yaw.controlPoints()(0, i));
+  msg.yaw_dt = t.yaw.knotSpan();
+  return msg;
+}
+
+common::Result<Trajectory> fromMsg(const Bspline& msg) {
+  using R = common::Result<Trajectory>;
+  const int p = msg.order, n = static_cast<int>(msg.pos_pts.size());
+  if (p < 1 || p > 7) return R::Error("bspline: order " + std::to_string(p) + " is not in [1, 7]");
+  if (n < p + 1) return R::Error("bspline: " + std::to_string(n) + " control points are too few for order " + std::to_string(p));
+  if (static_cast<int>(msg.knots.size()) != n + p + 1)
+    return R::Error("bspline: " + std::to_string(msg.knots.size()) + " knots, expected " + std::to_string(n + p + 1));
+  const double dt = msg.knots[1] - msg.knots[0];
+  if (!(dt > 0.0) || !std::isfinite(dt)) return R::Error("bspline: knot span must be finite and > 0");
+  for (std::size_t i = 1; i < msg.knots.size(); ++i)
+    if (std::abs(msg.knots[i] - msg.knots[i - 1] - dt) > 1e-6 * std::max(1.0, dt))
+      return R::Error("bspline: knots are not uniform");
+  Eigen::MatrixXd q(3, n);
+  for (int i = 0; i < n; ++i) q.col(i) << msg.pos_pts[i].x, msg.pos_pts[i].y, msg.pos_pts[i].z;
+  if (!q.allFinite()) return R::Error("bspline: a control point is not finite");
+  const int m = static_cast<int>(msg.yaw_pts.size());
+  if (m < 4) return R::Error("bspline: yaw spline needs at least 4 control points");
+  if (!(msg.yaw_dt > 0.0) || !std::isfinite(msg.yaw_dt)) return R::Error("bspline: yaw_dt must be finite and > 0");
+  Eigen::MatrixXd y(1, m);
+  for (int i = 0; i < m; ++i) y(0, i) = msg.yaw_pts[i];
+  if (!y.allFinite()) return R::Error("bspline: a yaw control point is not finite");
+  Trajectory t;
+  t.id = msg.traj_id;
+  t.start_time = msg.start_time;
+  t.position = trajectory::UniformBspline(q, p, dt);
+  t.yaw = trajectory::UniformBspline(y, 3, msg.yaw_dt);
+  return t;
+}
+
+}  // namespace go_feap::ros_traj

@@ -1,0 +1,84 @@
+#include "go_feap/trajectory/replan.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace go_feap::trajectory {
+
+using common::Status;
+
+const char* toString(ReplanReason reason) {
+  switch (reason) {
+    case ReplanReason::kNone:
+      return "none";
+    case ReplanReason::kNewTarget:
+      return "new_target";
+    case ReplanReason::kShortTimeLeft:
+      return "short_time_left";
+    case ReplanReason::kPredictedCollision:
+      return "predicted_collision";
+    case ReplanReason::kNoTrajectory:
+      return "no_trajectory";
+  }
+  return "unknown";
+}
+
+Status ReplanConfig::validate() const {
+  if (!(min_time_left >= 0.0 && std::isfinite(min_time_left)))
+    return Status::Error("replan: min_time_left must be finite and >= 0");
+  if (!(target_tolerance >= 0.0 && std::isfinite(target_tolerance)))
+    return Status::Error("replan: target_tolerance must be finite and >= 0");
+  return Status::Ok();
+}
+
+ReplanReason shouldReplan(const ReplanInputs& inputs, const ReplanConfig& config) {
+  if (!inputs.has_trajectory) return ReplanReason::kNoTrajectory;
+  if (inputs.collision_time) return ReplanReason::kPredictedCollision;
+  if (inputs.target_changed || inputs.target_distance_to_end > config.target_tolerance)
+    return ReplanReason::kNewTarget;
+  if (inputs.time_left < config.min_time_left) return ReplanReason::kShortTimeLeft;
+  return ReplanReason::kNone;
+}
+
+std::optional<double> firstCollisionTime(const UniformBspline& trajectory, double t_now,
+                                         const map::Esdf& esdf, double min_clearance, double horizon) {
+  if (trajectory.empty() || trajectory.dimension() != 3) return std::nullopt;
+  const double t0 = std::clamp(t_now, 0.0, trajectory.duration());
+  const double t1 = std::clamp(t_now + std::max(0.0, horizon), t0, trajectory.duration());
+  const Eigen::MatrixXd& q = trajectory.controlPoints();
+  double speed_bound = 0.0;  // the velocity curve lies in the hull of the polygon's velocities
+  for (int i = 0; i + 1 < trajectory.numControlPoints(); ++i)
+    speed_bound = std::max(speed_bound, (q.col(i + 1) - q.col(i)).norm() / trajectory.knotSpan());
+  const double max_step = 0.5 * esdf.geometry().resolution();
+  const int steps = std::max(1, static_cast<int>(std::ceil((t1 - t0) * speed_bound / max_step)));
+  for (int i = 0; i <= steps; ++i) {
+    const double t = t0 + (t1 - t0) * i / steps;
+    if (esdf.distance(trajectory.position(t)) < min_clearance) return t;
+  }
+  return std::nullopt;
+}
+
+UniformBspline safeStop(const Vec3& p, const Vec3& v, double a_max) {
+  if (!(a_max > 0.0 && std::isfinite(a_max)) || !p.allFinite() || !v.allFinite())
+    throw std::invalid_argument("safeStop: a_max must be finite and > 0, p and v finite");
+  constexpr double kTargetSpan = 0.05;  // s
+  const double speed = v.norm();
+  if (speed < 1e-9) return UniformBspline(p.replicate(1, 4), 3, kTargetSpan);
+  const Vec3 dir = v / speed;
+  // Velocity control points V_i = a dt (m - i) dir, i = 0..m, fall linearly to exactly 0 at V_m; the
+  // average of V_0 and V_1 is the start velocity when dt = speed / (a (m - 1/2)). Every acceleration
+  // control point is then -a_max dir or 0.
+  const int m = std::max(2, static_cast<int>(std::ceil(speed / a_max / kTargetSpan)) + 1);
+  const double dt = speed / (a_max * (m - 0.5));
+  Eigen::Matrix3Xd q(3, m + 3);
+  q.col(0).setZero();
+  for (int i = 0; i <= m; ++i) q.col(i + 1) = q.col(i) + (a_max * dt * (m - i) * dt) * dir;
+  q.col(m + 2) = q.col(m + 1);
+  const Vec3 start = (q.col(0) + 4.0 * q.col(1) + q.col(2)) / 6.0;
+  q.colwise() += p - start;
+  return UniformBspline(q, 3, dt);
+}
+
+}  // namespace go_feap::trajectory

@@ -1,0 +1,497 @@
+// B-spline optimiser: every cost term's gradient against central differences, optimised trajectories on
+// random obstacle fields against finite-difference dynamics and analytic distances to the obstacle boxes,
+// the yaw spline, the replanning rule, collision prediction and the safe stop.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <limits>
+#include <map>
+#include <optional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "go_feap/map/esdf.h"
+#include "go_feap/map/occupancy_map.h"
+#include "go_feap/planning/astar.h"
+#include "go_feap/trajectory/bspline.h"
+#include "go_feap/trajectory/bspline_optimizer.h"
+#include "go_feap/trajectory/replan.h"
+
+using go_feap::common::Aabb;
+using go_feap::common::GridGeometry;
+using go_feap::common::Index3;
+using go_feap::common::Vec3;
+using go_feap::map::Esdf;
+using go_feap::map::EsdfConfig;
+using go_feap::map::OccupancyConfig;
+using go_feap::map::OccupancyMap;
+using go_feap::map::VoxelState;
+using go_feap::planning::Astar;
+using go_feap::planning::AstarConfig;
+using go_feap::planning::PathResult;
+using go_feap::planning::PathStatus;
+namespace traj = go_feap::trajectory;
+using traj::BsplineCost;
+using traj::OptimizerConfig;
+using traj::OptimizeStats;
+using traj::ReplanConfig;
+using traj::ReplanInputs;
+using traj::ReplanReason;
+using traj::UniformBspline;
+
+namespace {
+
+constexpr double kRes = 0.1;
+constexpr double kPi = 3.14159265358979323846;
+
+// Uniform doubles and integers from raw mt19937 output, the same on every standard library.
+struct Rng {
+  explicit Rng(unsigned seed) : engine(seed) {}
+  double operator()(double lo, double hi) { return lo + (hi - lo) * (engine() / 4294967296.0); }
+  int integer(int lo, int hi) { return lo + static_cast<int>(engine() % static_cast<unsigned>(hi - lo + 1)); }
+  std::mt19937 engine;
+};
+
+EsdfConfig esdfConfig() {
+  EsdfConfig c;
+  c.max_distance = 1.0;
+  c.uav_radius = 0.2;
+  return c;
+}
+
+OccupancyConfig occupancyConfig() {
+  OccupancyConfig c;
+  c.resolution = kRes;
+  c.margin = 0.0;
+  return c;
+}
+
+// A box world: occupancy map and ESDF over [0, size], obstacles given as inclusive voxel boxes. Also keeps,
+// per obstacle box, the box spanned by its voxel centres: the distance from a point to it is a lower
+// bound of the distance to the nearest obstacle voxel centre (the quantity the ESDF interpolates).
+class World {
+ public:
+  explicit World(const Vec3& size)
+      : occupancy_(occupancyConfig(), Aabb{Vec3::Zero(), size}), esdf_(occupancy_.geometry(), esdfConfig()) {}
+
+  const GridGeometry& geo() const { return occupancy_.geometry(); }
+  const OccupancyMap& occupancy() const { return occupancy_; }
+  const Esdf& esdf() const { return esdf_; }
+
+  void addBox(Index3 lo, Index3 hi) {
+    lo = lo.cwiseMax(Index3::Zero());
+    hi = hi.cwiseMin(geo().dims() - Index3::Ones());
+    if ((hi.array() < lo.array()).any()) return;
+    for (int z = lo.z(); z <= hi.z(); ++z)
+      for (int y = lo.y(); y <= hi.y(); ++y)
+        for (int x = lo.x(); x <= hi.x(); ++x) {
+          occupancy_.setState(Index3(x, y, z), VoxelState::kOccupied);
+          pending_.push_back(geo().linear(Index3(x, y, z)));
+        }
+    centre_boxes_.push_back({geo().indexToCoord(lo), geo().indexToCoord(hi)});
+  }
+  void sync() {
+    esdf_.update(pending_, {});
+    pending_.clear();
+  }
+  /// Distance from p to the nearest obstacle box of voxel centres.
+  double boxDistance(const Vec3& p) const {
+    double best = std::numeric_limits<double>::infinity();
+    for (const Aabb& b : centre_boxes_) {
+      const Vec3 d = (b.min - p).cwiseMax(p - b.max).cwiseMax(Vec3::Zero());
+      best = std::min(best, d.norm());
+    }
+    return best;
+  }
+
+ private:
+  OccupancyMap occupancy_;
+  Esdf esdf_;
+  std::vector<std::size_t> pending_;
+  std::vector<Aabb> centre_boxes_;
+};
+
+// 8 x 8 x 3 m with floor, ceiling, pillars and floating boxes.
+void fillRandomField(World& world, Rng& rng) {
+  const Index3 dims = world.geo().dims();
+  world.addBox(Index3(0, 0, 0), Index3(dims.x() - 1, dims.y() - 1, 0));
+  world.addBox(Index3(0, 0, dims.z() - 1), Index3(dims.x() - 1, dims.y() - 1, dims.z() - 1));
+  const int pillars = rng.integer(4, 9);
+  for (int i = 0; i < pillars; ++i) {
+    const Index3 lo(rng.integer(5, dims.x() - 10), rng.integer(5, dims.y() - 10), 0);
+    world.addBox(lo, lo + Index3(rng.integer(2, 9), rng.integer(2, 9), dims.z() - 1));
+  }
+  const int floating = rng.integer(2, 5);
+  for (int i = 0; i < floating; ++i) {
+    const Index3 lo(rng.integer(5, dims.x() - 10), rng.integer(5, dims.y() - 10),
+                    rng.integer(5, dims.z() - 10));
+    world.addBox(lo, lo + Index3(rng.integer(2, 9), rng.integer(2, 9), rng.integer(2, 6)));
+  }
+  world.sync();
+}
+
+OptimizerConfig optimizerConfig() {
+  OptimizerConfig c;
+  c.v_max = 2.0;
+  c.a_max = 2.0;
+  c.clearance = 0.5;
+  c.min_clearance = 0.2;
+  return c;
+}
+
+// The sampled speed and acceleration of a spline by finite differences of its positions (independent of
+// its derivative curves), over `samples` equal time steps.
+void finiteDifferenceDynamics(const UniformBspline& s, int samples, double& v_max, double& a_max) {
+  const double h = 1e-4;
+  v_max = a_max = 0.0;
+  for (int k = 0; k <= samples; ++k) {
+    const double t = std::clamp(s.duration() * k / samples, h, s.duration() - h);
+    const Vec3 p0 = s.position(t - h), p1 = s.position(t), p2 = s.position(t + h);
+    v_max = std::max(v_max, (p2 - p0).norm() / (2 * h));
+    a_max = std::max(a_max, (p2 - 2 * p1 + p0).norm() / (h * h));
+  }
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Gradients.
+
+struct TermCase {
+  unsigned mask;
+  const char* name;
+};
+
+TEST(BsplineCost, EachTermGradientMatchesCentralDifferences) {
+  World world(Vec3(4.0, 4.0, 2.0));
+  world.addBox(Index3(12, 12, 0), Index3(17, 17, 19));
+  world.addBox(Index3(25, 5, 5), Index3(30, 30, 10));
+  world.sync();
+  OptimizerConfig config = optimizerConfig();
+  config.v_max = 1.5;
+  config.a_max = 1.5;
+  const TermCase cases[] = {
+      {traj::kSmoothness, "smoothness"},     {traj::kClearance, "clearance"}, {traj::kVelocity, "velocity"},
+      {traj::kAcceleration, "acceleration"}, {traj::kTime, "time"},           {traj::kAllTerms, "all"}};
+  Rng rng(11);
+  for (int trial = 0; trial < 20; ++trial) {
+    // Control points scattered around the obstacles, so every term is active; random boundary states.
+    Eigen::MatrixXd q(3, 14);
+    for (int i = 0; i < q.cols(); ++i) q.col(i) = Vec3(rng(0.8, 3.2), rng(0.8, 3.2), rng(0.5, 1.5));
+    const UniformBspline init(q, 3, rng(0.15, 0.4));
+    const BsplineCost cost(init, world.esdf(), config);
+    std::vector<double> x = cost.variables(init);
+    // The variables describe the same spline (boundary points rebuilt from the boundary states).
+    EXPECT_LT((cost.spline(x.data()).controlPoints() - q).cwiseAbs().maxCoeff(), 1e-9);
+    x.back() += rng(-0.2, 0.2);  // a different dt moves the boundary points too
+    for (const TermCase& c : cases) {
+      std::vector<double> grad;
+      const double f = cost.evaluate(x, &grad, c.mask);
+      EXPECT_GT(f, 0.0) << c.name << " inactive";
+      double scale = 1.0;
+      for (double g : grad) scale = std::max(scale, std::abs(g));
+      int compared = 0;
+      for (std::size_t i = 0; i < x.size(); ++i) {
+        const double h = 1e-6;
+        std::vector<double> xp = x, xm = x;
+        xp[i] += h;
+        xm[i] -= h;
+        const double fp = cost.evaluate(xp, nullptr, c.mask), fm = cost.evaluate(xm, nullptr, c.mask);
+        const double forward = (fp - f) / h, backward = (f - fm) / h;
+        // The ESDF interpolant has kinks on voxel faces: skip the rare variable whose step crosses one.
+        if (std::abs(forward - backward) > 1e-3 * scale) continue;
+        ++compared;
+        EXPECT_NEAR(grad[i], (fp - fm) / (2 * h), 1e-5 * scale)
+            << c.name << " variable " << i << " trial " << trial;
+      }
+      EXPECT_GE(compared, static_cast<int>(x.size()) - 2) << c.name;
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Random obstacle fields.
+
+TEST(BsplineOptimizer, RandomFieldsMeetLimitsOrFail) {
+  const OptimizerConfig config = optimizerConfig();
+  int fields = 0, successes = 0, attempts = 0;
+  double worst_v = 0.0, worst_a = 0.0, worst_clearance = std::numeric_limits<double>::infinity();
+  double total_ms = 0.0, max_ms = 0.0;
+  int total_points = 0, total_evaluations = 0;
+  std::map<std::string, int> nlopt_results;
+  std::vector<std::string> failures;
+  for (unsigned seed = 1; fields < 100 && seed < 400; ++seed) {
+    Rng rng(1000 + seed);
+    World world(Vec3(8.0, 8.0, 3.0));
+    fillRandomField(world, rng);
+    AstarConfig astar_config;
+    astar_config.clearance = 0.4;
+    astar_config.unknown_is_free = true;
+    const Astar astar(world.occupancy(), world.esdf(), astar_config);
+    // A start and goal at least 4 m apart in open space, joined by an A* path.
+    std::optional<PathResult> found;
+    Vec3 start, goal;
+    for (int tries = 0; tries < 50 && !found; ++tries) {
+      start = Vec3(rng(0.8, 7.2), rng(0.8, 7.2), rng(0.8, 2.2));
+      goal = Vec3(rng(0.8, 7.2), rng(0.8, 7.2), rng(0.8, 2.2));
+      if ((goal - start).norm() < 4.0) continue;
+      if (world.esdf().distance(start) < 0.6 || world.esdf().distance(goal) < 0.6) continue;
+      PathResult r = astar.search(start, goal, 0.0);
+      if (r.status == PathStatus::kFound) found = std::move(r);
+    }
+    ++attempts;
+    if (!found) continue;
+    ++fields;
+    // The path's ends are voxel centres; fly from and to them at rest.
+    const std::vector<Vec3> samples = UniformBspline::resamplePolyline(found->path, 0.3);
+    const UniformBspline init =
+        UniformBspline::fitPath(samples, 0.3 / config.v_max, Vec3::Zero(), Vec3::Zero());
+    total_points += init.numControlPoints();
+
+    OptimizeStats stats;
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto result = traj::optimize(init, world.esdf(), config, &stats);
+    const double ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    total_ms += ms;
+    max_ms = std::max(max_ms, ms);
+    total_evaluations += stats.evaluations;
+    ++nlopt_results[std::to_string(stats.nlopt_result)];
+    if (!result.ok()) {
+      EXPECT_FALSE(result.message().empty());
+      failures.push_back("seed " + std::to_string(seed) + ": " + result.message());
+      continue;
+    }
+    ++successes;
+    // ok() must mean every check holds, by oracles independent of the optimiser's own check.
+    const UniformBspline& s = *result;
+    double v = 0.0, a = 0.0;
+    finiteDifferenceDynamics(s, 4000, v, a);
+    EXPECT_LE(v, config.v_max * 1.05 + 1e-3) << "seed " << seed;
+    EXPECT_LE(a, config.a_max * 1.05 + 1e-2) << "seed " << seed;
+    worst_v = std::max(worst_v, v / config.v_max);
+    worst_a = std::max(worst_a, a / config.a_max);
+    double clearance = std::numeric_limits<double>::infinity();
+    const int n = std::max(2000, static_cast<int>(s.duration() * 400));
+    for (int k = 0; k <= n; ++k)
+      clearance = std::min(clearance, world.boxDistance(s.position(s.duration() * k / n)));
+    // The ESDF interpolates centre distances: allow one voxel of interpolation error.
+    EXPECT_GE(clearance, config.min_clearance - kRes) << "seed " << seed;
+    worst_clearance = std::min(worst_clearance, clearance);
+    // Start and end states are kept.
+    EXPECT_LT((s.position(0.0) - found->path.front()).norm(), 1e-6);
+    EXPECT_LT((s.position(s.duration()) - found->path.back()).norm(), 1e-6);
+    EXPECT_LT(s.evaluate(0.0, 1).norm(), 1e-6);
+    EXPECT_LT(s.evaluate(s.duration(), 1).norm(), 1e-6);
+  }
+  ASSERT_EQ(fields, 100);
+  const double rate = successes / 100.0;
+  std::printf(
+      "[ optimizer ] %d/%d fields succeeded (%.0f %%); worst v/v_max %.4f, a/a_max %.4f, "
+      "min distance to obstacle centres %.3f m\n",
+      successes, fields, 100 * rate, worst_v, worst_a, worst_clearance);
+  std::printf(
+      "[ optimizer ] mean %.2f ms, max %.2f ms per optimisation, mean %.1f control points, "
+      "%.0f cost evaluations\n",
+      total_ms / fields, max_ms, static_cast<double>(total_points) / fields,
+      static_cast<double>(total_evaluations) / fields);
+  for (const auto& [code, count] : nlopt_results)
+    std::printf("[ optimizer ] nlopt result %s: %d\n", code.c_str(), count);
+  for (const std::string& f : failures) std::printf("[ optimizer ] failure: %s\n", f.c_str());
+  EXPECT_GE(rate, 0.8);
+}
+
+TEST(BsplineOptimizer, ImpossibleProblemsFailAndReturnNothing) {
+  World world(Vec3(4.0, 4.0, 2.0));
+  world.addBox(Index3(18, 0, 0), Index3(21, 39, 19));  // a wall across the whole map
+  world.sync();
+  const OptimizerConfig config = optimizerConfig();
+  // Straight through the wall: the unsigned ESDF has no gradient inside it.
+  std::vector<Vec3> line = UniformBspline::resamplePolyline({Vec3(0.5, 2, 1), Vec3(3.5, 2, 1)}, 0.3);
+  const UniformBspline through = UniformBspline::fitPath(line, 0.3, Vec3::Zero(), Vec3::Zero());
+  OptimizeStats stats;
+  auto r = traj::optimize(through, world.esdf(), config, &stats);
+  EXPECT_FALSE(r.ok());
+  EXPECT_LT(stats.min_distance, config.min_clearance);
+  EXPECT_NE(r.message().find("min_clearance"), std::string::npos) << r.message();
+  // A start state faster than v_max: kept as it is, so no result can pass.
+  line = UniformBspline::resamplePolyline({Vec3(0.5, 0.5, 1), Vec3(1.5, 0.5, 1)}, 0.2);
+  const UniformBspline fast = UniformBspline::fitPath(line, 0.2, Vec3(3.0, 0, 0), Vec3::Zero());
+  r = traj::optimize(fast, world.esdf(), config, &stats);
+  EXPECT_FALSE(r.ok());
+  EXPECT_GT(stats.max_velocity, config.v_max * 1.05);
+  EXPECT_NE(r.message().find("v_max"), std::string::npos) << r.message();
+  // Too few control points, bad config, clearance beyond the ESDF's range.
+  EXPECT_FALSE(
+      traj::optimize(UniformBspline(Eigen::MatrixXd::Zero(3, 6), 3, 0.1), world.esdf(), config).ok());
+  OptimizerConfig bad = config;
+  bad.v_max = -1.0;
+  r = traj::optimize(through, world.esdf(), bad);
+  EXPECT_FALSE(r.ok());
+  EXPECT_NE(r.message().find("v_max"), std::string::npos);
+  bad = config;
+  bad.clearance = 1.5;
+  EXPECT_NE(bad.validate(world.esdf().config()).message().find("clearance"), std::string::npos);
+  bad = config;
+  bad.min_clearance = 0.8;
+  EXPECT_NE(bad.validate().message().find("clearance"), std::string::npos);
+  bad = config;
+  bad.max_knot_span = 0.01;
+  EXPECT_NE(bad.validate().message().find("max_knot_span"), std::string::npos);
+  EXPECT_TRUE(config.validate().ok());
+}
+
+TEST(BsplineOptimizer, KeepsMovingBoundaryStates) {
+  World world(Vec3(6.0, 4.0, 2.0));
+  world.sync();
+  const OptimizerConfig config = optimizerConfig();
+  const std::vector<Vec3> line = UniformBspline::resamplePolyline({Vec3(0.5, 2, 1), Vec3(5.5, 2, 1)}, 0.3);
+  const Vec3 v0(1.0, 0.3, 0.0);
+  const UniformBspline init = UniformBspline::fitPath(line, 0.25, v0, Vec3::Zero());
+  const auto r = traj::optimize(init, world.esdf(), config);
+  ASSERT_TRUE(r.ok()) << r.message();
+  EXPECT_LT((r->position(0.0) - init.position(0.0)).norm(), 1e-9);
+  EXPECT_LT((Vec3(r->evaluate(0.0, 1)) - v0).norm(), 1e-9);
+  EXPECT_LT((Vec3(r->evaluate(0.0, 2)) - Vec3(init.evaluate(0.0, 2))).norm(), 1e-6);
+  EXPECT_LT((r->position(r->duration()) - init.position(init.duration())).norm(), 1e-9);
+  // Open space: the time term makes it use the speed limit (with the penalties' margin).
+  EXPECT_GT(r->maxVelocity(), 0.8 * config.v_max);
+  EXPECT_LE(r->maxVelocity(), 1.05 * config.v_max);
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Yaw.
+
+TEST(YawSpline, InterpolatesUnwrappedWaypointsWithinTheRateLimit) {
+  OptimizerConfig config = optimizerConfig();
+  Rng rng(21);
+  for (int trial = 0; trial < 50; ++trial) {
+    config.yaw_rate_max = rng(0.5, 2.0);
+    std::vector<double> yaws;
+    const int k = rng.integer(2, 6);
+    for (int i = 0; i < k; ++i) yaws.push_back(rng(-kPi, kPi));
+    const double duration = rng(0.2, 5.0);
+    const double start_rate = rng(-1.0, 1.0) * config.yaw_rate_max;
+    const auto r = traj::optimizeYaw(yaws, duration, start_rate, config);
+    ASSERT_TRUE(r.ok()) << r.message();
+    const UniformBspline& s = *r;
+    EXPECT_EQ(s.dimension(), 1);
+    EXPECT_GE(s.duration(), duration - 1e-9);
+    const double dt = s.knotSpan();
+    for (int i = 0; i < k; ++i) {
+      EXPECT_NEAR(std::remainder(s.value(i * dt)[0] - yaws[i], 2 * kPi), 0.0, 1e-6);
+      if (i > 0) {
+        EXPECT_LE(std::abs(s.value(i * dt)[0] - s.value((i - 1) * dt)[0]), kPi + 1e-9);
+      }
+    }
+    EXPECT_NEAR(s.evaluate(0.0, 1)[0], start_rate, 1e-6);
+    EXPECT_NEAR(s.evaluate(s.duration(), 1)[0], 0.0, 1e-6);
+    double rate = 0.0;
+    const double h = 1e-5;
+    for (int j = 0; j <= 5000; ++j) {
+      const double t = std::clamp(s.duration() * j / 5000, h, s.duration() - h);
+      rate = std::max(rate, std::abs(s.value(t + h)[0] - s.value(t - h)[0]) / (2 * h));
+    }
+    EXPECT_LE(rate, config.yaw_rate_max * 1.05) << "trial " << trial;
+  }
+  EXPECT_FALSE(traj::optimizeYaw({0.0}, 1.0, 0.0, config).ok());
+  EXPECT_FALSE(traj::optimizeYaw({0.0, 1.0}, 1.0, 3.0 * config.yaw_rate_max, config).ok());
+  EXPECT_FALSE(traj::optimizeYaw({0.0, 1.0}, 0.0, 0.0, config).ok());
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Replanning.
+
+TEST(Replan, EachReasonInPriorityOrder) {
+  const ReplanConfig config;
+  ASSERT_TRUE(config.validate().ok());
+  ReplanInputs in;
+  in.has_trajectory = true;
+  in.time_left = 5.0;
+  in.target_distance_to_end = 0.1;
+  EXPECT_EQ(traj::shouldReplan(in, config), ReplanReason::kNone);
+  ReplanInputs short_left = in;
+  short_left.time_left = 0.5;
+  EXPECT_EQ(traj::shouldReplan(short_left, config), ReplanReason::kShortTimeLeft);
+  ReplanInputs moved = short_left;
+  moved.target_distance_to_end = 0.5;
+  EXPECT_EQ(traj::shouldReplan(moved, config), ReplanReason::kNewTarget);
+  ReplanInputs changed = in;
+  changed.target_changed = true;
+  EXPECT_EQ(traj::shouldReplan(changed, config), ReplanReason::kNewTarget);
+  ReplanInputs collision = moved;
+  collision.collision_time = 1.2;
+  EXPECT_EQ(traj::shouldReplan(collision, config), ReplanReason::kPredictedCollision);
+  ReplanInputs none = collision;
+  none.has_trajectory = false;
+  EXPECT_EQ(traj::shouldReplan(none, config), ReplanReason::kNoTrajectory);
+  EXPECT_STREQ(traj::toString(ReplanReason::kPredictedCollision), "predicted_collision");
+  ReplanConfig bad;
+  bad.target_tolerance = -1.0;
+  EXPECT_NE(bad.validate().message().find("target_tolerance"), std::string::npos);
+}
+
+TEST(Replan, FirstCollisionTimeMatchesFineSampling) {
+  World world(Vec3(6.0, 4.0, 2.0));
+  world.addBox(Index3(30, 0, 0), Index3(32, 39, 19));  // wall at x in [3.0, 3.3]
+  world.sync();
+  const double min_clearance = 0.2;
+  Rng rng(31);
+  for (int trial = 0; trial < 20; ++trial) {
+    const std::vector<Vec3> path = {Vec3(0.5, rng(0.5, 3.5), rng(0.5, 1.5)), Vec3(rng(1.0, 2.0), 2.0, 1.0),
+                                    Vec3(5.5, rng(0.5, 3.5), rng(0.5, 1.5))};
+    const UniformBspline s = UniformBspline::fitPath(UniformBspline::resamplePolyline(path, 0.3),
+                                                     rng(0.1, 0.3), Vec3::Zero(), Vec3::Zero());
+    double oracle = -1.0;
+    for (int k = 0; k <= 200000 && oracle < 0; ++k) {
+      const double t = s.duration() * k / 200000;
+      if (world.esdf().distance(s.position(t)) < min_clearance) oracle = t;
+    }
+    ASSERT_GE(oracle, 0.0);
+    const std::optional<double> t = traj::firstCollisionTime(s, 0.0, world.esdf(), min_clearance, 100.0);
+    ASSERT_TRUE(t.has_value());
+    // Samples are at most half a voxel apart: the found time is within that much travel of the oracle.
+    EXPECT_GE(*t, oracle - 1e-9);
+    EXPECT_LE((s.position(*t) - s.position(oracle)).norm(), 0.5 * kRes + 1e-6);
+    EXPECT_LT(world.esdf().distance(s.position(*t)), min_clearance);
+    // A horizon ending before it, or a start after the wall, sees nothing.
+    EXPECT_FALSE(traj::firstCollisionTime(s, 0.0, world.esdf(), min_clearance, oracle - 0.05).has_value());
+    double after = oracle;
+    while (after < s.duration() && world.esdf().distance(s.position(after)) < 1.5) after += 0.01;
+    EXPECT_FALSE(traj::firstCollisionTime(s, after, world.esdf(), min_clearance, 100.0).has_value());
+  }
+}
+
+TEST(SafeStop, BrakesToRestWithinTheStoppingDistance) {
+  Rng rng(41);
+  for (int trial = 0; trial < 200; ++trial) {
+    const Vec3 p(rng(-5, 5), rng(-5, 5), rng(0, 3));
+    const Vec3 v = Vec3(rng(-1, 1), rng(-1, 1), rng(-1, 1)).normalized() * rng(0.01, 3.0);
+    const double a_max = rng(0.3, 4.0);
+    const UniformBspline s = traj::safeStop(p, v, a_max);
+    const double speed = v.norm(), stop = speed * speed / (2 * a_max);
+    EXPECT_LT((s.position(0.0) - p).norm(), 1e-9);
+    EXPECT_LT((Vec3(s.evaluate(0.0, 1)) - v).norm(), 1e-9);
+    EXPECT_LT(s.evaluate(s.duration(), 1).norm(), 1e-9);
+    EXPECT_LT(s.evaluate(s.duration(), 2).norm(), 1e-9);
+    const Vec3 travel = s.position(s.duration()) - p;
+    EXPECT_LE(travel.norm(), stop + 1e-3);
+    EXPECT_GE(travel.norm(), stop - 1e-9);
+    EXPECT_LT((travel - travel.dot(v / speed) * v / speed).norm(), 1e-9);  // along v
+    EXPECT_LE(s.duration(), speed / a_max + 0.05 + 1e-9);
+    // Acceleration by finite differences of positions, and exactly (piecewise linear: knots suffice).
+    double v_fd = 0.0, a_fd = 0.0;
+    finiteDifferenceDynamics(s, 2000, v_fd, a_fd);
+    EXPECT_LE(a_fd, a_max * (1 + 1e-3) + 1e-3);
+    EXPECT_LE(s.maxDerivativeNorm(2, 1), a_max * (1 + 1e-9));
+    EXPECT_LE(v_fd, speed * (1 + 1e-3) + 1e-6);
+  }
+  const UniformBspline hold = traj::safeStop(Vec3(1, 2, 3), Vec3::Zero(), 1.0);
+  EXPECT_LT((hold.position(0.3) - Vec3(1, 2, 3)).norm(), 1e-12);
+  EXPECT_EQ(hold.maxVelocity(), 0.0);
+}
+
+}  // namespace
