@@ -35,6 +35,7 @@ class LocalPlanner : public nodelet::Nodelet {
     p.get("viewpoints/height_offsets", v.height_offsets).get("viewpoints/clearance", v.clearance);
     p.get("viewpoints/sensor_range", v.sensor_range).get("viewpoints/hfov", v.hfov).get("viewpoints/vfov", v.vfov);
     p.get("viewpoints/min_visible", v.min_visible).get("viewpoints/yaw_samples", v.yaw_samples);
+    p.get("viewpoints/max_evaluated_cells", v.max_evaluated_cells);
     auto& l = local_config_;
     p.get("local/k_frontiers", l.k_frontiers).get("local/top_k", l.top_k).get("local/d_near", l.d_near);
     p.get("local/v_max", l.v_max).get("local/yaw_rate_max", l.yaw_rate_max).get("local/window_size", l.window_size);

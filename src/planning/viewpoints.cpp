@@ -36,6 +36,7 @@ Status ViewpointConfig::validate() const {
   if (!(positiveFinite(vfov) && vfov < kPi)) return err("vfov", "must be in (0, pi)");
   if (min_visible < 0) return err("min_visible", "must be >= 0");
   if (yaw_samples < 1) return err("yaw_samples", "must be >= 1");
+  if (max_evaluated_cells < 0) return err("max_evaluated_cells", "must be >= 0 (0 = all cells)");
   return Status::Ok();
 }
 
@@ -97,8 +98,13 @@ std::vector<frontier::Viewpoint> sampleViewpoints(const frontier::Frontier& fron
   const int n_angles = std::max(1, static_cast<int>(std::lround(2.0 * kPi / config.angular_step)));
 
   std::vector<Vec3> centres;
-  centres.reserve(frontier.cells.size());
-  for (const Index3& idx : frontier.cells) centres.push_back(map.geometry().indexToCoord(idx));
+  const std::size_t n_cells = frontier.cells.size();
+  const std::size_t stride =
+      config.max_evaluated_cells > 0
+          ? (n_cells + config.max_evaluated_cells - 1) / static_cast<std::size_t>(config.max_evaluated_cells)
+          : 1;
+  for (std::size_t i = 0; i < n_cells; i += stride) centres.push_back(map.geometry().indexToCoord(frontier.cells[i]));
+  const double scale = static_cast<double>(n_cells) / static_cast<double>(centres.size());
   std::vector<Vec3> seen;  // centres within range and line of sight of the current position
   seen.reserve(centres.size());
   const double range2 = config.sensor_range * config.sensor_range;
@@ -114,13 +120,13 @@ std::vector<frontier::Viewpoint> sampleViewpoints(const frontier::Frontier& fron
         seen.clear();
         for (const Vec3& c : centres)
           if ((c - p).squaredNorm() <= range2 && lineOfSight(p, c, map)) seen.push_back(c);
-        if (static_cast<int>(seen.size()) < config.min_visible) continue;
+        if (std::lround(seen.size() * scale) < config.min_visible) continue;
         frontier::Viewpoint best;
         best.position = p;
         best.visible_cells = -1;
         for (double yaw : candidateYaws(p, frontier.average, config.yaw_samples)) {
-          const int n = static_cast<int>(std::count_if(
-              seen.begin(), seen.end(), [&](const Vec3& c) { return inView(p, yaw, c, config); }));
+          const int n = static_cast<int>(std::lround(
+              scale * std::count_if(seen.begin(), seen.end(), [&](const Vec3& c) { return inView(p, yaw, c, config); })));
           if (n > best.visible_cells) {
             best.yaw = yaw;
             best.visible_cells = n;

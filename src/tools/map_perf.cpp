@@ -12,6 +12,9 @@
 #include "go_feap/map/voxel_map.h"
 #include "go_feap/planning/astar.h"
 #include "go_feap/planning/global_planner.h"
+#include "go_feap/planning/local_planner.h"
+#include "go_feap/planning/viewpoints.h"
+#include "go_feap/trajectory/bspline_optimizer.h"
 #include "go_feap/sim/depth_camera.h"
 #include "go_feap/world/scene_files.h"
 
@@ -67,6 +70,17 @@ int main(int argc, char** argv) {
   double occ_total = 0, occ_max = 0, esdf_total = 0, esdf_max = 0, fr_total = 0, fr_max = 0, gl_total = 0, gl_max = 0,
          astar_total = 0, astar_max = 0;
   std::size_t tour_total = 0, frontier_total = 0;
+  // Local planning and trajectory optimisation, replanned every 5th frame (3 Hz).
+  planning::AstarConfig fly_config;
+  fly_config.clearance = 0.3;
+  fly_config.unknown_is_free = false;
+  const planning::Astar fly(occupancy, esdf, fly_config);
+  planning::ViewpointConfig vp_config;
+  vp_config.max_evaluated_cells = 120;  // as config/exploration.yaml
+  const planning::LocalPlannerConfig local_config;
+  const trajectory::OptimizerConfig opt_config;
+  double local_total = 0, local_max = 0, traj_total = 0, traj_max = 0;
+  int replans = 0, local_ok = 0, traj_ok = 0, traj_tried = 0;
   int frame = 0;
   std::size_t rays = 0;
   cv::Mat depth;
@@ -120,6 +134,45 @@ int main(int argc, char** argv) {
     fr_max = std::max(fr_max, c), gl_max = std::max(gl_max, g), astar_max = std::max(astar_max, astar_ms);
     frontier_total += summaries.size();
     if (tour) tour_total += tour->frontier_ids.size();
+
+    if (!tour || tour->frontier_ids.empty() || frame % 5 != 0) continue;
+    ++replans;
+    const auto t6 = Clock::now();
+    std::vector<frontier::Frontier> ordered;
+    std::vector<planning::FrontierType> types;
+    for (unsigned id : tour->frontier_ids) {
+      if (static_cast<int>(ordered.size()) >= local_config.k_frontiers) break;
+      const frontier::Frontier* f = finder.find(id);
+      if (!f) continue;
+      frontier::Frontier copy = *f;
+      copy.viewpoints = planning::sampleViewpoints(copy, occupancy, esdf, scene->box.min.z(), scene->box.max.z(),
+                                                   vp_config);
+      if (copy.viewpoints.empty()) continue;
+      types.push_back(planning::classifyFrontier((copy.average - uav).norm(), planning::ObstacleWindow(local_config),
+                                                 local_config));
+      ordered.push_back(std::move(copy));
+    }
+    const double yaw = std::atan2(T.linear()(1, 2), T.linear()(0, 2));  // optical z axis
+    auto local = ordered.empty() ? common::Result<planning::LocalPlan>::Error("no viewpoints")
+                                 : planning::planLocal(uav, yaw, ordered, types, local_config);
+    const auto t7 = Clock::now();
+    const double lm = std::chrono::duration<double, std::milli>(t7 - t6).count();
+    local_total += lm, local_max = std::max(local_max, lm);
+    if (!local) continue;
+    ++local_ok;
+    // Trajectory: A* in known free space to the chosen viewpoint, fit, optimise.
+    const planning::PathResult path = fly.search(uav, local->path.front().position);
+    if (path.status != planning::PathStatus::kFound || path.length < 0.3) continue;
+    ++traj_tried;
+    const auto t8 = Clock::now();
+    const auto samples = trajectory::UniformBspline::resamplePolyline(path.path, 0.3);
+    const double total = std::max(path.length / (0.6 * opt_config.v_max), 2.5 * std::sqrt(path.length / opt_config.a_max));
+    const auto init = trajectory::UniformBspline::fitPath(samples, total / std::max<std::size_t>(1, samples.size() - 1),
+                                                          common::Vec3::Zero(), common::Vec3::Zero());
+    const bool ok = trajectory::optimize(init, esdf, opt_config).ok();
+    const double tm = std::chrono::duration<double, std::milli>(Clock::now() - t8).count();
+    traj_total += tm, traj_max = std::max(traj_max, tm);
+    traj_ok += ok;
   }
   const double n = static_cast<double>(poses.size());
   const std::size_t bytes = occupancy.memoryBytes() + esdf.memoryBytes();
@@ -135,6 +188,10 @@ int main(int argc, char** argv) {
             << " ms per frame (" << tour_total / n << " frontiers per tour on average)\n"
             << "A* path lengths for it (no cache): mean " << astar_total / n << " ms, max " << astar_max
             << " ms per frame\n"
+            << "local planning (viewpoints for <= 3 frontiers + DAG), " << replans << " replans: mean "
+            << local_total / std::max(1, replans) << " ms, max " << local_max << " ms (" << local_ok << " plans)\n"
+            << "trajectory optimisation: mean " << traj_total / std::max(1, traj_tried) << " ms, max " << traj_max
+            << " ms, success " << traj_ok << " of " << traj_tried << "\n"
             << "map: " << geo.dims().transpose() << " voxels (" << volume << " m^3), " << bytes / (1024.0 * 1024.0)
             << " MiB incl. ESDF = " << bytes / volume / 1024.0 << " KiB per m^3; " << occupancy.knownCount()
             << " voxels known\n";

@@ -3,6 +3,8 @@
 // exhaustive enumeration of the ring positions, on random maps.
 #include <gtest/gtest.h>
 
+#include <map>
+
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
@@ -389,3 +391,38 @@ TEST(Viewpoints, OccludedFrontierIsNotSeen) {
 }
 
 }  // namespace
+
+// Counting N_view on a subset of a large frontier's cells approximates the full count.
+TEST(SampleViewpointsSubset, ScaledCountsFollowTheFullCounts) {
+  OccupancyMap m(OccupancyConfig(), {Vec3(0, 0, 0), Vec3(8, 8, 3)});
+  const auto& g = m.geometry();
+  Frontier f;
+  // Known free below x < 4, unknown beyond: a large planar frontier at x = 3.95.
+  for (std::size_t l = 0; l < g.size(); ++l) {
+    const Index3 i = g.unlinear(l);
+    m.setState(i, g.indexToCoord(i).x() < 4.0 ? VoxelState::kFree : VoxelState::kUnknown);
+    const Vec3 c = g.indexToCoord(i);
+    if (std::abs(c.x() - 3.95) < 1e-6 && c.y() > 2.0 && c.y() < 6.0 && c.z() > 0.0 && c.z() < 3.0) f.cells.push_back(i);
+  }
+  for (const Index3& c : f.cells) f.average += g.indexToCoord(c);
+  f.average /= static_cast<double>(f.cells.size());
+  Esdf esdf(g, EsdfConfig());
+  ViewpointConfig all;
+  ViewpointConfig subset = all;
+  subset.max_evaluated_cells = 100;
+  const auto a = sampleViewpoints(f, m, esdf, 0.0, 3.0, all);
+  const auto b = sampleViewpoints(f, m, esdf, 0.0, 3.0, subset);
+  ASSERT_GT(f.cells.size(), 1000u);
+  ASSERT_FALSE(a.empty());
+  ASSERT_EQ(a.size(), b.size());
+  std::map<std::pair<long, long>, int> full;
+  for (const auto& v : a) full[{std::lround(v.position.x() * 100), std::lround(v.position.y() * 100 + v.position.z() * 1e4)}] = v.visible_cells;
+  for (const auto& v : b) {
+    const int n = full[{std::lround(v.position.x() * 100), std::lround(v.position.y() * 100 + v.position.z() * 1e4)}];
+    // 100 of ~1200 cells: the sampling error of a proportion is ~10 % (1 sigma) here.
+    EXPECT_NEAR(v.visible_cells, n, 0.25 * n + 15) << v.position.transpose();
+  }
+  ViewpointConfig bad;
+  bad.max_evaluated_cells = -1;
+  EXPECT_NE(bad.validate().message().find("max_evaluated_cells"), std::string::npos);
+}

@@ -25,6 +25,10 @@ struct ViewpointConfig {
   double vfov = 1.0471975511965976;  ///< rad, vertical field of view (60 deg)
   int min_visible = 10;              ///< viewpoints seeing fewer frontier cells are dropped
   int yaw_samples = 16;              ///< yaws tried per position, evenly spaced over the full turn
+  /// 0: N_view counts every cell. Otherwise a large frontier's N_view is counted on an even
+  /// subset of at most this many of its cells and scaled to the whole frontier (ray casts
+  /// dominate the sampler's cost).
+  int max_evaluated_cells = 0;
 
   /// Checks every key; the message names the bad one, e.g. "viewpoints: hfov must be in (0, pi)".
   common::Status validate() const;
