@@ -11,6 +11,7 @@
 #include "go_feap/FrontierArray.h"
 #include "go_feap/LayerBounds.h"
 #include "go_feap/MapUpdate.h"
+#include "go_feap/ros/conversions.h"
 #include "go_feap/ros/exploration_params.h"
 #include "go_feap/ros/shared_map.h"
 
@@ -99,10 +100,7 @@ class FrontierFinder : public nodelet::Nodelet {
       go_feap::Frontier m;
       m.id = f.id;
       for (const common::Index3& c : f.cells) {
-        const common::Vec3 p = geo.indexToCoord(c);
-        geometry_msgs::Point pt;
-        pt.x = p.x(), pt.y = p.y(), pt.z = p.z();
-        m.cells.push_back(pt);
+        m.cells.push_back(ros_conv::toPoint(geo.indexToCoord(c)));
       }
       m.average.x = f.average.x(), m.average.y = f.average.y(), m.average.z = f.average.z();
       m.aabb_min.x = f.box.min.x(), m.aabb_min.y = f.box.min.y(), m.aabb_min.z = f.box.min.z();

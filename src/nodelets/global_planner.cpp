@@ -17,6 +17,7 @@
 
 #include "go_feap/FrontierArray.h"
 #include "go_feap/GlobalTour.h"
+#include "go_feap/ros/conversions.h"
 #include "go_feap/ros/exploration_params.h"
 #include "go_feap/ros/shared_map.h"
 
@@ -139,14 +140,10 @@ class GlobalPlanner : public nodelet::Nodelet {
     line.pose.orientation.w = 1.0;
     line.scale.x = 0.08;
     line.color.r = 1.0, line.color.g = 0.55, line.color.a = 1.0;
-    geometry_msgs::Point start;
-    start.x = uav_->x(), start.y = uav_->y(), start.z = uav_->z();
-    line.points.push_back(start);
+    line.points.push_back(ros_conv::toPoint(*uav_));
     for (const common::Vec3& w : tour->waypoints) {
-      geometry_msgs::Point p;
-      p.x = w.x(), p.y = w.y(), p.z = w.z();
-      out.waypoints.push_back(p);
-      line.points.push_back(p);
+      out.waypoints.push_back(ros_conv::toPoint(w));
+      line.points.push_back(out.waypoints.back());
     }
     tour_pub_.publish(out);
     marker_pub_.publish(line);

@@ -20,6 +20,7 @@
 #include "go_feap/ViewpointPath.h"
 #include "go_feap/planning/local_planner.h"
 #include "go_feap/planning/viewpoints.h"
+#include "go_feap/ros/conversions.h"
 #include "go_feap/ros/exploration_params.h"
 #include "go_feap/ros/shared_map.h"
 
@@ -73,7 +74,7 @@ class LocalPlanner : public nodelet::Nodelet {
     const auto& p = msg->pose.pose.position;
     const auto& q = msg->pose.pose.orientation;
     const common::Vec3 pos(p.x, p.y, p.z);
-    const double yaw = std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
+    const double yaw = ros_conv::yawOf(q);
     std::lock_guard<std::mutex> lock(mutex_);
     if (!pos.allFinite() || !std::isfinite(yaw)) return;
     position_ = pos;
@@ -157,20 +158,15 @@ class LocalPlanner : public nodelet::Nodelet {
     candidates.color.g = candidates.color.b = 0.8, candidates.color.a = 0.6;
     chosen.scale.x = 0.06;
     chosen.color.g = 1.0, chosen.color.a = 1.0;
-    auto point = [](const common::Vec3& v) {
-      geometry_msgs::Point p;
-      p.x = v.x(), p.y = v.y(), p.z = v.z();
-      return p;
-    };
-    chosen.points.push_back(point(*position_));
+    chosen.points.push_back(ros_conv::toPoint(*position_));
     for (std::size_t i = 0; i < plan->path.size(); ++i) {
-      out.positions.push_back(point(plan->path[i].position));
+      out.positions.push_back(ros_conv::toPoint(plan->path[i].position));
       out.yaws.push_back(plan->path[i].yaw);
       out.frontier_ids.push_back(plan->frontier_ids[i]);
-      chosen.points.push_back(point(plan->path[i].position));
+      chosen.points.push_back(ros_conv::toPoint(plan->path[i].position));
     }
     for (const auto& layer : plan->layers)
-      for (const auto& vp : layer) candidates.points.push_back(point(vp.position));
+      for (const auto& vp : layer) candidates.points.push_back(ros_conv::toPoint(vp.position));
     markers.markers = {candidates, chosen};
     target_pub_.publish(out);
     marker_pub_.publish(markers);

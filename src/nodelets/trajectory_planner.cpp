@@ -15,6 +15,7 @@
 
 #include "go_feap/PositionCommand.h"
 #include "go_feap/ViewpointPath.h"
+#include "go_feap/ros/conversions.h"
 #include "go_feap/ros/bspline_conversion.h"
 #include "go_feap/ros/exploration_params.h"
 #include "go_feap/ros/shared_map.h"
@@ -82,7 +83,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     const common::Vec3 pos(p.x, p.y, p.z);
     if (!pos.allFinite()) return;
     odom_position_ = pos;
-    odom_yaw_ = std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
+    odom_yaw_ = ros_conv::yawOf(q);
   }
   void onCommand(const PositionCommand::ConstPtr& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -217,9 +218,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     line.color.r = 0.2, line.color.g = 0.4, line.color.b = 1.0, line.color.a = 1.0;
     for (double s = 0.0; s <= t.position.duration(); s += 0.05) {
       const common::Vec3 q = t.position.position(s);
-      geometry_msgs::Point pt;
-      pt.x = q.x(), pt.y = q.y(), pt.z = q.z();
-      line.points.push_back(pt);
+      line.points.push_back(ros_conv::toPoint(q));
     }
     marker_pub_.publish(line);
   }

@@ -10,6 +10,7 @@
 #include <optional>
 
 #include "go_feap/PositionCommand.h"
+#include "go_feap/ros/conversions.h"
 #include "go_feap/ros/bspline_conversion.h"
 #include "go_feap/ros/params.h"
 
@@ -47,7 +48,7 @@ class TrajectoryServer : public nodelet::Nodelet {
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return;
     if (!hold_) {  // first pose: hold it until a trajectory arrives
       hold_position_ = Eigen::Vector3d(p.x, p.y, p.z);
-      hold_yaw_ = std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
+      hold_yaw_ = ros_conv::yawOf(q);
       hold_ = true;
     }
   }

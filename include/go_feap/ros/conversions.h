@@ -1,0 +1,28 @@
+// Small message <-> Eigen conversions shared by the nodelets.
+#pragma once
+
+#include <geometry_msgs/Point.h>
+#include <geometry_msgs/Quaternion.h>
+
+#include <cmath>
+
+#include "go_feap/common/grid.h"
+
+namespace go_feap::ros_conv {
+
+inline geometry_msgs::Point toPoint(const common::Vec3& v) {
+  geometry_msgs::Point p;
+  p.x = v.x();
+  p.y = v.y();
+  p.z = v.z();
+  return p;
+}
+
+inline common::Vec3 toVec3(const geometry_msgs::Point& p) { return common::Vec3(p.x, p.y, p.z); }
+
+/// Heading (rad, about world z) of an orientation.
+inline double yawOf(const geometry_msgs::Quaternion& q) {
+  return std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
+}
+
+}  // namespace go_feap::ros_conv
