@@ -67,6 +67,12 @@ class LocalPlanner : public nodelet::Nodelet {
       NODELET_ERROR_STREAM_THROTTLE(10.0, getName() << ": " << map.message());
       return;
     }
+    // Astar's constructor throws on a clearance the ESDF cannot serve: check first.
+    const common::Status st = astar_config_.validate((*map)->map->config().esdf);
+    if (!st.ok()) {
+      NODELET_ERROR_STREAM_THROTTLE(10.0, getName() << ": " << st.message());
+      return;
+    }
     shared_ = *map;
     astar_ = std::make_unique<planning::Astar>(shared_->map->occupancy(), shared_->map->esdf(), astar_config_);
   }
