@@ -126,7 +126,12 @@ class TrajectoryPlanner : public nodelet::Nodelet {
       return;
     target_changed_ = false;
     last_plan_ = now;
-    plan(now, reason);
+    try {
+      plan(now, reason);
+    } catch (const std::exception& e) {  // a core precondition broken by odd input: never crash the manager
+      NODELET_ERROR_STREAM_THROTTLE(1.0, getName() << ": planning aborted: " << e.what());
+      target_.reset();
+    }
   }
 
   // Start state: the commanded state when recent (continuity of the reference), else odometry.
