@@ -62,15 +62,11 @@ class LocalPlanner : public nodelet::Nodelet {
   void onHandle(const boost::shared_ptr<const ros_map::MapHandle>& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
     if (shared_) return;
-    auto map = ros_map::acceptHandle(*msg);
+    auto map = ros_map::acceptHandle(*msg, [&](const map::EsdfConfig& esdf) {
+      return astar_config_.validate(esdf);  // Astar's constructor throws otherwise
+    });
     if (!map) {
       NODELET_ERROR_STREAM_THROTTLE(10.0, getName() << ": " << map.message());
-      return;
-    }
-    // Astar's constructor throws on a clearance the ESDF cannot serve: check first.
-    const common::Status st = astar_config_.validate((*map)->map->config().esdf);
-    if (!st.ok()) {
-      NODELET_ERROR_STREAM_THROTTLE(10.0, getName() << ": " << st.message());
       return;
     }
     shared_ = *map;

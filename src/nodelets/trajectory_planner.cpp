@@ -61,17 +61,13 @@ class TrajectoryPlanner : public nodelet::Nodelet {
   void onHandle(const boost::shared_ptr<const ros_map::MapHandle>& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
     if (shared_) return;
-    auto map = ros_map::acceptHandle(*msg);
+    auto map = ros_map::acceptHandle(*msg, [&](const map::EsdfConfig& esdf) {
+      const common::Status st = optimizer_.validate(esdf);
+      return st.ok() ? astar_config_.validate(esdf) : st;
+    });
     if (!map) {
       NODELET_ERROR_STREAM_THROTTLE(10.0, getName() << ": " << map.message());
       return;
-    }
-    const auto& esdf = (*map)->map->config().esdf;
-    for (const common::Status& st : {optimizer_.validate(esdf), astar_config_.validate(esdf)}) {
-      if (!st.ok()) {
-        NODELET_ERROR_STREAM_THROTTLE(10.0, getName() << ": " << st.message());
-        return;
-      }
     }
     shared_ = *map;
     astar_ = std::make_unique<planning::Astar>(shared_->map->occupancy(), shared_->map->esdf(), astar_config_);

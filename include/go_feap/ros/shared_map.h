@@ -11,6 +11,7 @@
 #include <ros/message_traits.h>
 #include <ros/serialization.h>
 
+#include <functional>
 #include <memory>
 #include <shared_mutex>
 
@@ -31,11 +32,16 @@ struct MapHandle {
 };
 
 /// The map a received handle points to, or an error when it carries none (it came from
-/// another process, where no pointer can travel).
-inline common::Result<std::shared_ptr<SharedMap>> acceptHandle(const MapHandle& handle) {
-  if (!handle.shared)
-    return common::Result<std::shared_ptr<SharedMap>>::Error(
-        "map_handle carries no map: run this nodelet in the EsdfMapper's nodelet manager");
+/// another process, where no pointer can travel) or when `suits` refuses the map's ESDF
+/// (a reader's clearance, say, that the truncated distances cannot serve).
+inline common::Result<std::shared_ptr<SharedMap>> acceptHandle(
+    const MapHandle& handle, const std::function<common::Status(const map::EsdfConfig&)>& suits = {}) {
+  using R = common::Result<std::shared_ptr<SharedMap>>;
+  if (!handle.shared) return R::Error("map_handle carries no map: run this nodelet in the EsdfMapper's nodelet manager");
+  if (suits) {
+    const common::Status st = suits(handle.shared->map->config().esdf);
+    if (!st.ok()) return R::Error(st.message());
+  }
   return handle.shared;
 }
 
