@@ -14,6 +14,7 @@
 
 #include <random>
 
+#include "go_feap/common/config_groups.h"
 #include "go_feap/ros/params.h"
 #include "go_feap/sim/depth_camera.h"
 #include "go_feap/world/scene.h"
@@ -28,12 +29,7 @@ class DepthCamera : public nodelet::Nodelet {
     const std::string me = getName();
     ros_params::ParamReader p(pnh);
     sim::DepthCameraConfig c;
-    p.get("depth_camera/width", c.width).get("depth_camera/height", c.height);
-    p.get("depth_camera/hfov_deg", c.hfov_deg).get("depth_camera/vfov_deg", c.vfov_deg);
-    p.get("depth_camera/fx", c.fx).get("depth_camera/fy", c.fy).get("depth_camera/cx", c.cx).get("depth_camera/cy", c.cy);
-    p.get("depth_camera/min_range", c.min_range).get("depth_camera/max_range", c.max_range);
-    p.get("depth_camera/noise_stddev_per_m", c.noise_stddev_per_m);
-    p.get("depth_camera/dropout_probability", c.dropout_probability);
+    config::readDepthCamera(p, c);
     int seed = 0;
     Eigen::Matrix4d T_B_C;
     p.get("depth_camera/noise_seed", seed).get("depth_camera/rate", rate_);

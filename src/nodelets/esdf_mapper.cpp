@@ -27,6 +27,8 @@
 
 #include "go_feap/MapUpdate.h"
 #include "go_feap/SaveMap.h"
+#include "go_feap/common/config_groups.h"
+#include "go_feap/ros/compute_time.h"
 #include "go_feap/ros/params.h"
 #include "go_feap/ros/shared_map.h"
 
@@ -43,19 +45,13 @@ class EsdfMapper : public nodelet::Nodelet {
     const std::string me = getName();
     ros_params::ParamReader p(pnh);
     map::MapConfig c;
-    auto& o = c.occupancy;
-    p.get("occupancy/resolution", o.resolution).get("occupancy/margin", o.margin);
-    p.get("occupancy/p_hit", o.p_hit).get("occupancy/p_miss", o.p_miss).get("occupancy/p_min", o.p_min);
-    p.get("occupancy/p_max", o.p_max).get("occupancy/p_occupied", o.p_occupied);
-    p.get("occupancy/min_range", o.min_range).get("occupancy/max_range", o.max_range);
-    p.get("occupancy/skip_pixel", o.skip_pixel).get("occupancy/invalid_as_free", o.invalid_as_free);
-    p.get("esdf/max_distance", c.esdf.max_distance).get("esdf/uav_radius", c.esdf.uav_radius);
+    config::readMap(p, c);
     p.get("mapper/sync_mode", sync_mode_).get("mapper/pose_tolerance", pose_tolerance_);
     p.get("mapper/max_pose_jump", max_pose_jump_).get("mapper/world_frame", world_frame_);
     p.get("mapper/cloud_period", cloud_period_).get("mapper/esdf_slice_height", slice_height_);
     p.get("mapper/warn_period", warn_period_);
     common::Aabb box;
-    p.getVec3("exploration_box/min", box.min).getVec3("exploration_box/max", box.max);
+    config::readBox(p, box);
     ros_params::requireOrThrow(p.ok(), me, p.error());
     ros_params::requireOrThrow(c.validate().ok(), me, c.validate().message());
     ros_params::requireOrThrow(box.valid(), me, "parameter '" + p.fullName("exploration_box") + "' needs min < max");
@@ -67,6 +63,7 @@ class EsdfMapper : public nodelet::Nodelet {
                                        "/{pose_tolerance, max_pose_jump, cloud_period, warn_period}' must be >= 0 (> 0 for the last)");
 
     shared_ = std::make_shared<ros_map::SharedMap>(std::make_unique<map::VoxelMap>(c, box));
+    compute_pub_ = nh.advertise<ComputeTime>("compute_time", 20);
     update_pub_ = nh.advertise<MapUpdate>("map_update", 10);
     handle_pub_ = nh.advertise<ros_map::MapHandle>("map_handle", 1, /*latch=*/true);
     cloud_pub_ = nh.advertise<sensor_msgs::PointCloud2>("occupied_cloud", 1);
@@ -158,6 +155,7 @@ class EsdfMapper : public nodelet::Nodelet {
     if (!info) return skip("frame", info.message());
     last_position_ = T_W_C.translation();
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    ros_conv::publishComputeTime(compute_pub_, "mapping", t0);
     if (info->frame.pixels_invalid > 0)
       NODELET_DEBUG_STREAM_THROTTLE(warn_period_, getName() << ": " << info->frame.pixels_invalid
                                                             << " invalid depth pixels in the latest frame");
@@ -273,6 +271,7 @@ class EsdfMapper : public nodelet::Nodelet {
   std::map<std::string, ros::WallTime> last_warn_;
   std::optional<common::Vec3> last_position_;
   ros::Time last_cloud_;
+  ros::Publisher compute_pub_;
   ros::Publisher update_pub_, handle_pub_, cloud_pub_, slice_pub_;
   ros::ServiceServer save_srv_;
   ros::Subscriber info_sub_, depth_only_sub_;

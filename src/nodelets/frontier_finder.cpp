@@ -12,7 +12,9 @@
 #include "go_feap/LayerBounds.h"
 #include "go_feap/MapUpdate.h"
 #include "go_feap/ros/conversions.h"
-#include "go_feap/ros/exploration_params.h"
+#include "go_feap/common/config_groups.h"
+#include "go_feap/ros/compute_time.h"
+#include "go_feap/ros/params.h"
 #include "go_feap/ros/shared_map.h"
 
 namespace go_feap {
@@ -22,14 +24,15 @@ class FrontierFinder : public nodelet::Nodelet {
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
     ros_params::ParamReader p(getPrivateNodeHandle());
-    ros_params::readFrontierConfig(p, config_);
-    ros_params::readOmissionConfig(p, omission_);
-    ros_params::readBox(p, box_);
+    config::readFrontier(p, config_);
+    config::readOmission(p, omission_);
+    config::readBox(p, box_);
     p.get("world_frame", world_frame_);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
     for (const common::Status& st : {config_.validate(), omission_.validate()})
       ros_params::requireOrThrow(st.ok(), getName(), st.message());
     ros_params::requireOrThrow(box_.valid(), getName(), "parameter 'exploration_box' needs min < max");
+    compute_pub_ = nh.advertise<ComputeTime>("compute_time", 20);
     frontier_pub_ = nh.advertise<FrontierArray>("frontiers", 2);
     marker_pub_ = nh.advertise<visualization_msgs::MarkerArray>("frontier_markers", 2);
     handle_sub_ = nh.subscribe("map_handle", 1, &FrontierFinder::onHandle, this);
@@ -60,6 +63,7 @@ class FrontierFinder : public nodelet::Nodelet {
       NODELET_WARN_THROTTLE(5.0, "%s: map_update before map_handle; waiting for the map", getName().c_str());
       return;
     }
+    const auto t_compute = ros_conv::WallClock::now();
     const double now = msg->header.stamp.toSec();
     {
       std::shared_lock<std::shared_mutex> map_lock(shared_->mutex);
@@ -83,6 +87,7 @@ class FrontierFinder : public nodelet::Nodelet {
         finder_->update(occupancy, geo.coordToIndex(lo), geo.coordToIndex(hi), now);
       }
     }
+    ros_conv::publishComputeTime(compute_pub_, "frontier", t_compute);
     last_sequence_ = msg->sequence;
     publish(msg->header.stamp, now);
   }
@@ -155,6 +160,7 @@ class FrontierFinder : public nodelet::Nodelet {
   std::unique_ptr<frontier::FrontierFinder> finder_;
   std::pair<double, double> band_{-1e18, 1e18};
   std::uint64_t last_sequence_ = 0;
+  ros::Publisher compute_pub_;
   ros::Publisher frontier_pub_, marker_pub_;
   ros::Subscriber handle_sub_, update_sub_, layer_sub_;
 };

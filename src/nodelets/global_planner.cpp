@@ -1,8 +1,8 @@
 // GlobalPlanner: orders the frontiers near the UAV with the omission-aware objective.
 // In: frontiers (go_feap/FrontierArray), odom, map_handle. Out: global_tour
 // (go_feap/GlobalTour) and global_tour_marker (line strip from the UAV through the tour).
-// Path lengths come from A* on the shared map; frontier-to-frontier lengths are cached by
-// frontier id pair and dropped when either frontier changes (changed frontiers get new ids).
+// The planning step itself is the core's TourPlanner (A* path lengths on the shared map,
+// cached per frontier pair).
 #include <nav_msgs/Odometry.h>
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
@@ -10,15 +10,16 @@
 #include <visualization_msgs/Marker.h>
 
 #include <chrono>
-#include <map>
 #include <mutex>
 #include <optional>
-#include <set>
 
 #include "go_feap/FrontierArray.h"
 #include "go_feap/GlobalTour.h"
 #include "go_feap/ros/conversions.h"
-#include "go_feap/ros/exploration_params.h"
+#include "go_feap/common/config_groups.h"
+#include "go_feap/ros/compute_time.h"
+#include "go_feap/ros/params.h"
+#include "go_feap/planning/tour_planner.h"
 #include "go_feap/ros/shared_map.h"
 
 namespace go_feap {
@@ -28,12 +29,13 @@ class GlobalPlanner : public nodelet::Nodelet {
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
     ros_params::ParamReader p(getPrivateNodeHandle());
-    ros_params::readGlobalPlannerConfig(p, config_);
-    ros_params::readAstarConfig(p, astar_config_);
+    config::readGlobalPlanner(p, config_);
+    config::readAstar(p, astar_config_);
     p.get("world_frame", world_frame_);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
     for (const common::Status& st : {config_.validate(), astar_config_.validate()})
       ros_params::requireOrThrow(st.ok(), getName(), st.message());
+    compute_pub_ = nh.advertise<ComputeTime>("compute_time", 20);
     tour_pub_ = nh.advertise<GlobalTour>("global_tour", 2);
     marker_pub_ = nh.advertise<visualization_msgs::Marker>("global_tour_marker", 2);
     handle_sub_ = nh.subscribe("map_handle", 1, &GlobalPlanner::onHandle, this);
@@ -52,6 +54,7 @@ class GlobalPlanner : public nodelet::Nodelet {
     }
     shared_ = *map;
     astar_ = std::make_unique<planning::Astar>(shared_->map->occupancy(), shared_->map->esdf(), astar_config_);
+    planner_ = std::make_unique<planning::TourPlanner>(config_, *astar_);
   }
 
   void onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
@@ -71,7 +74,6 @@ class GlobalPlanner : public nodelet::Nodelet {
       return;
     }
     std::vector<planning::FrontierSummary> frontiers;
-    std::set<unsigned> ids;
     for (const auto& f : msg->frontiers) {
       planning::FrontierSummary s;
       s.id = f.id;
@@ -81,40 +83,16 @@ class GlobalPlanner : public nodelet::Nodelet {
       s.n_near = static_cast<int>(f.n_near);
       s.active = f.active;
       frontiers.push_back(s);
-      ids.insert(f.id);
     }
-    // Changed frontiers come back with new ids: drop cached lengths of vanished ones.
-    for (auto it = cache_.begin(); it != cache_.end();)
-      it = ids.count(it->first.first) && ids.count(it->first.second) ? std::next(it) : cache_.erase(it);
-
-    const auto t0 = std::chrono::steady_clock::now();
+    const auto t0 = ros_conv::WallClock::now();
     std::size_t fallbacks = 0;
     common::Result<planning::GlobalTour> tour = common::Result<planning::GlobalTour>::Error("");
     {
       std::shared_lock<std::shared_mutex> map_lock(shared_->mutex);
-      planning::PathDistances d;
-      // Beyond s_near (Euclidean, a lower bound of the path) a frontier cannot be near:
-      // its Euclidean distance only orders the top-up, so no search is spent on it.
-      d.from_uav = [&](std::size_t j) {
-        const double e = (frontiers[j].average - *uav_).norm();
-        if (e >= config_.s_near) return e;
-        const planning::PathDistance pd = planning::pathDistance(*astar_, *uav_, frontiers[j].average);
-        fallbacks += pd.euclidean_fallback;
-        return pd.metres;
-      };
-      d.between = [&](std::size_t i, std::size_t j) {
-        const auto key = std::make_pair(frontiers[i].id, frontiers[j].id);
-        auto it = cache_.find(key);
-        if (it == cache_.end()) {
-          const planning::PathDistance pd = planning::pathDistance(*astar_, frontiers[i].average, frontiers[j].average);
-          it = cache_.emplace(key, pd).first;
-        }
-        fallbacks += it->second.euclidean_fallback;
-        return it->second.metres;
-      };
-      tour = planning::planTour(frontiers, d, config_);
+      tour = planner_->plan(frontiers, *uav_, &fallbacks);
     }
-    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    ros_conv::publishComputeTime(compute_pub_, "global", t0);
+    const double ms = std::chrono::duration<double, std::milli>(ros_conv::WallClock::now() - t0).count();
     if (!tour) {
       NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": no tour: " << tour.message());
       return;
@@ -152,7 +130,8 @@ class GlobalPlanner : public nodelet::Nodelet {
   std::shared_ptr<ros_map::SharedMap> shared_;
   std::unique_ptr<planning::Astar> astar_;
   std::optional<common::Vec3> uav_;
-  std::map<std::pair<unsigned, unsigned>, planning::PathDistance> cache_;
+  std::unique_ptr<planning::TourPlanner> planner_;
+  ros::Publisher compute_pub_;
   ros::Publisher tour_pub_, marker_pub_;
   ros::Subscriber handle_sub_, odom_sub_, frontier_sub_;
 };

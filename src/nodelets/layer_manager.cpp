@@ -19,7 +19,8 @@
 #include "go_feap/LayerBounds.h"
 #include "go_feap/MapUpdate.h"
 #include "go_feap/planning/layer_manager.h"
-#include "go_feap/ros/exploration_params.h"
+#include "go_feap/common/config_groups.h"
+#include "go_feap/ros/params.h"
 
 namespace go_feap {
 
@@ -28,11 +29,10 @@ class LayerManager : public nodelet::Nodelet {
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
     ros_params::ParamReader p(getPrivateNodeHandle());
-    p.get("layers/layer_height", config_.layer_height).get("layers/settle_time", config_.settle_time);
-    p.get("layers/max_retries", config_.max_retries).get("layers/time_limit", config_.time_limit);
-    p.get("layers/stuck_timeout", config_.stuck_timeout).get("layers/rate", rate_);
+    config::readLayers(p, config_);
+    p.get("layers/rate", rate_);
     p.get("layers/auto_start", auto_start_).get("world_frame", world_frame_);
-    ros_params::readBox(p, box_);
+    config::readBox(p, box_);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
     ros_params::requireOrThrow(config_.validate().ok(), getName(), config_.validate().message());
     ros_params::requireOrThrow(box_.valid(), getName(), "parameter 'exploration_box' needs min < max");

@@ -21,7 +21,9 @@
 #include "go_feap/planning/local_planner.h"
 #include "go_feap/planning/viewpoints.h"
 #include "go_feap/ros/conversions.h"
-#include "go_feap/ros/exploration_params.h"
+#include "go_feap/common/config_groups.h"
+#include "go_feap/ros/compute_time.h"
+#include "go_feap/ros/params.h"
 #include "go_feap/ros/shared_map.h"
 
 namespace go_feap {
@@ -32,23 +34,17 @@ class LocalPlanner : public nodelet::Nodelet {
     ros::NodeHandle& nh = getNodeHandle();
     ros_params::ParamReader p(getPrivateNodeHandle());
     auto& v = viewpoint_config_;
-    p.get("viewpoints/ring_radii", v.ring_radii).get("viewpoints/angular_step", v.angular_step);
-    p.get("viewpoints/height_offsets", v.height_offsets).get("viewpoints/clearance", v.clearance);
-    p.get("viewpoints/sensor_range", v.sensor_range).get("viewpoints/hfov", v.hfov).get("viewpoints/vfov", v.vfov);
-    p.get("viewpoints/min_visible", v.min_visible).get("viewpoints/yaw_samples", v.yaw_samples);
-    p.get("viewpoints/max_evaluated_cells", v.max_evaluated_cells);
     auto& l = local_config_;
-    p.get("local/k_frontiers", l.k_frontiers).get("local/top_k", l.top_k).get("local/d_near", l.d_near);
-    p.get("local/v_max", l.v_max).get("local/yaw_rate_max", l.yaw_rate_max).get("local/window_size", l.window_size);
-    p.get("local/clutter_threshold", l.clutter_threshold).get("local/max_range", l.max_range);
-    p.get("local/min_dist", l.min_dist);
-    ros_params::readAstarConfig(p, astar_config_);
+    config::readViewpoints(p, v);
+    config::readLocal(p, l);
+    config::readAstar(p, astar_config_);
     p.get("world_frame", world_frame_);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
     for (const common::Status& st : {v.validate(), l.validate(), astar_config_.validate()})
       ros_params::requireOrThrow(st.ok(), getName(), st.message());
     window_ = std::make_unique<planning::ObstacleWindow>(l.window_size, l.clutter_threshold);
 
+    compute_pub_ = nh.advertise<ComputeTime>("compute_time", 20);
     target_pub_ = nh.advertise<ViewpointPath>("local_target", 2);
     marker_pub_ = nh.advertise<visualization_msgs::MarkerArray>("viewpoint_markers", 2);
     handle_sub_ = nh.subscribe("map_handle", 1, &LocalPlanner::onHandle, this);
@@ -110,14 +106,12 @@ class LocalPlanner : public nodelet::Nodelet {
   void onTour(const GlobalTour::ConstPtr& tour) {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!shared_ || !position_ || !frontiers_) return;
-    std::vector<frontier::Frontier> ordered;
-    std::vector<planning::FrontierType> types;
+    const auto t_compute = ros_conv::WallClock::now();
     std::shared_lock<std::shared_mutex> map_lock(shared_->mutex);
     const map::VoxelMap& m = *shared_->map;
     const auto& geo = m.geometry();
-    int with_viewpoints = 0;
+    std::vector<frontier::Frontier> tour_frontiers;
     for (unsigned id : tour->frontier_ids) {
-      if (with_viewpoints >= local_config_.k_frontiers) break;
       const go_feap::Frontier* msg = nullptr;
       for (const auto& f : frontiers_->frontiers)
         if (f.id == id) msg = &f;
@@ -126,20 +120,13 @@ class LocalPlanner : public nodelet::Nodelet {
       f.id = msg->id;
       f.average = common::Vec3(msg->average.x, msg->average.y, msg->average.z);
       for (const auto& c : msg->cells) f.cells.push_back(geo.coordToIndex(common::Vec3(c.x, c.y, c.z)));
-      f.viewpoints = planning::sampleViewpoints(f, m.occupancy(), m.esdf(), band_.first, band_.second,
-                                                viewpoint_config_);
-      if (f.viewpoints.empty()) continue;
-      ++with_viewpoints;
-      const double d = planning::pathDistance(*astar_, *position_, f.average).metres;
-      types.push_back(planning::classifyFrontier(d, *window_, local_config_));
-      ordered.push_back(std::move(f));
+      tour_frontiers.push_back(std::move(f));
     }
+    auto plan = planning::chooseLocalTarget(*position_, yaw_, std::move(tour_frontiers), band_.first, band_.second,
+                                            m.occupancy(), m.esdf(), *astar_, *window_, viewpoint_config_,
+                                            local_config_);
+    ros_conv::publishComputeTime(compute_pub_, "local", t_compute);
     map_lock.unlock();
-    if (ordered.empty()) {
-      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": no viewpoint found for the first tour frontiers");
-      return;
-    }
-    auto plan = planning::planLocal(*position_, yaw_, ordered, types, local_config_);
     if (!plan) {
       NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": no local plan: " << plan.message());
       return;
@@ -186,6 +173,7 @@ class LocalPlanner : public nodelet::Nodelet {
   double yaw_ = 0.0;
   std::pair<double, double> band_{-1e18, 1e18};
   FrontierArray::ConstPtr frontiers_;
+  ros::Publisher compute_pub_;
   ros::Publisher target_pub_, marker_pub_;
   ros::Subscriber handle_sub_, odom_sub_, depth_sub_, layer_sub_, frontier_sub_, tour_sub_;
 };

@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "go_feap/PositionCommand.h"
+#include "go_feap/common/config_groups.h"
 #include "go_feap/ros/params.h"
 #include "go_feap/sim/vehicle.h"
 #include "go_feap/world/scene.h"
@@ -34,14 +35,9 @@ class QuadrotorSim : public nodelet::Nodelet {
     const std::string me = getName();
     ros_params::ParamReader p(pnh);
     sim::QuadrotorParams q;
-    p.get("quadrotor/mass", q.mass).getVec3("quadrotor/inertia", q.inertia);
-    p.get("quadrotor/arm_length", q.arm_length).get("quadrotor/torque_coefficient", q.torque_coefficient);
-    p.get("quadrotor/motor_min_thrust", q.motor_min_thrust).get("quadrotor/motor_max_thrust", q.motor_max_thrust);
-    p.get("quadrotor/linear_drag", q.linear_drag).get("quadrotor/gravity", q.gravity);
-    p.get("quadrotor/dynamics_rate", q.dynamics_rate);
+    config::readQuadrotor(p, q);
     sim::So3ControllerConfig c;
-    p.getVec3("controller/kx", c.kx).getVec3("controller/kv", c.kv).getVec3("controller/kR", c.kR);
-    p.getVec3("controller/kw", c.kw).get("controller/max_tilt", c.max_tilt);
+    config::readController(p, c);
     p.get("simulation/rate_factor", rate_factor_).get("simulation/odom_rate", odom_rate_);
     p.get("simulation/command_timeout", command_timeout_).get("simulation/publish_clock", publish_clock_);
     p.get("simulation/max_command_acceleration", max_cmd_acc_).get("simulation/max_command_outside", max_cmd_out_);

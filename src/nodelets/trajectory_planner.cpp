@@ -17,10 +17,11 @@
 #include "go_feap/ViewpointPath.h"
 #include "go_feap/ros/conversions.h"
 #include "go_feap/ros/bspline_conversion.h"
-#include "go_feap/ros/exploration_params.h"
+#include "go_feap/common/config_groups.h"
+#include "go_feap/ros/compute_time.h"
+#include "go_feap/ros/params.h"
 #include "go_feap/ros/shared_map.h"
-#include "go_feap/trajectory/bspline_optimizer.h"
-#include "go_feap/trajectory/replan.h"
+#include "go_feap/trajectory/trajectory_planner.h"
 
 namespace go_feap {
 
@@ -30,24 +31,18 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     ros::NodeHandle& nh = getNodeHandle();
     ros_params::ParamReader p(getPrivateNodeHandle());
     auto& o = optimizer_;
-    p.get("optimizer/lambda_smooth", o.lambda_smooth).get("optimizer/lambda_clearance", o.lambda_clearance);
-    p.get("optimizer/lambda_feasibility", o.lambda_feasibility).get("optimizer/lambda_time", o.lambda_time);
-    p.get("optimizer/clearance", o.clearance).get("optimizer/min_clearance", o.min_clearance);
-    p.get("optimizer/v_max", o.v_max).get("optimizer/a_max", o.a_max).get("optimizer/yaw_rate_max", o.yaw_rate_max);
-    p.get("optimizer/feasibility_margin", o.feasibility_margin).get("optimizer/limit_tolerance", o.limit_tolerance);
-    p.get("optimizer/max_iterations", o.max_iterations).get("optimizer/relative_tolerance", o.relative_tolerance);
-    p.get("optimizer/min_knot_span", o.min_knot_span).get("optimizer/max_knot_span", o.max_knot_span);
-    p.get("replan/min_time_left", replan_.min_time_left).get("replan/target_tolerance", replan_.target_tolerance);
-    p.get("planner/rate", rate_).get("planner/path_spacing", spacing_);
-    p.get("planner/collision_horizon", horizon_).get("planner/min_time_between_plans", min_gap_);
-    ros_params::readAstarConfig(p, astar_config_);
+    config::readOptimizer(p, o);
+    config::readReplan(p, replan_);
+    config::readTrajectoryPlanner(p, planner_);
+    p.get("planner/rate", rate_);
+    config::readAstar(p, astar_config_);
     p.get("world_frame", world_frame_);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
-    for (const common::Status& st : {o.validate(), replan_.validate(), astar_config_.validate()})
+    for (const common::Status& st : {o.validate(), replan_.validate(), astar_config_.validate(), planner_.validate()})
       ros_params::requireOrThrow(st.ok(), getName(), st.message());
-    ros_params::requireOrThrow(rate_ > 0.0 && spacing_ > 0.0 && horizon_ > 0.0 && min_gap_ >= 0.0, getName(),
-                               "parameters '" + p.fullName("planner") +
-                                   "/{rate, path_spacing, collision_horizon}' must be > 0");
+    ros_params::requireOrThrow(std::isfinite(rate_) && rate_ > 0.0, getName(),
+                               "parameter '" + p.fullName("planner/rate") + "' must be > 0");
+    compute_pub_ = nh.advertise<ComputeTime>("compute_time", 20);
     bspline_pub_ = nh.advertise<Bspline>("bspline", 5);
     marker_pub_ = nh.advertise<visualization_msgs::Marker>("trajectory_marker", 2);
     failed_pub_ = nh.advertise<std_msgs::UInt32>("frontier_failed", 10);
@@ -101,25 +96,15 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!shared_ || !target_ || !odom_position_) return;
     const ros::Time now = ros::Time::now();
-    if (!last_plan_.isZero() && (now - last_plan_).toSec() < min_gap_) return;
-    trajectory::ReplanInputs in;
+    if (!last_plan_.isZero() && (now - last_plan_).toSec() < planner_.min_time_between_plans) return;
+    trajectory::ReplanReason reason;
     {
       std::shared_lock<std::shared_mutex> map_lock(shared_->mutex);
-      if (current_) {
-        const double t = (now - current_->start_time).toSec();
-        in.has_trajectory = true;
-        in.time_left = current_->duration() - t;
-        in.target_distance_to_end = (current_->position.position(current_->duration()) - *target_).norm();
-        in.collision_time = trajectory::firstCollisionTime(current_->position, std::max(0.0, t),
-                                                           shared_->map->esdf(), optimizer_.min_clearance, horizon_);
-      }
+      reason = trajectory::replanReason(current_ ? &*current_ : nullptr,
+                                        current_ ? (now - current_->start_time).toSec() : 0.0, *target_,
+                                        target_changed_, shared_->map->esdf(), replan_, optimizer_, planner_);
     }
-    in.target_changed = target_changed_;
-    // A trajectory that ended at its target needs no replanning until the target moves.
-    const bool arrived = current_ && in.time_left <= 0.0 && in.target_distance_to_end <= replan_.target_tolerance;
-    const trajectory::ReplanReason reason = trajectory::shouldReplan(in, replan_);
-    if (reason == trajectory::ReplanReason::kNone || (arrived && reason == trajectory::ReplanReason::kShortTimeLeft))
-      return;
+    if (reason == trajectory::ReplanReason::kNone) return;
     target_changed_ = false;
     last_plan_ = now;
     try {
@@ -144,69 +129,35 @@ class TrajectoryPlanner : public nodelet::Nodelet {
   }
 
   void plan(const ros::Time& now, trajectory::ReplanReason reason) {
-    common::Vec3 p0, v0;
-    double yaw0 = 0.0;
-    startState(now, p0, v0, yaw0);
-    std::shared_lock<std::shared_mutex> map_lock(shared_->mutex);
-    const map::Esdf& esdf = shared_->map->esdf();
-    const planning::PathResult path = astar_->search(p0, *target_);
-    common::Result<trajectory::UniformBspline> spline = common::Result<trajectory::UniformBspline>::Error("");
-    if (path.status != planning::PathStatus::kFound) {
-      spline = common::Result<trajectory::UniformBspline>::Error(std::string("no path: ") + planning::toString(path.status));
-    } else {
-      std::vector<common::Vec3> pts = path.path;
-      pts.front() = p0;  // start exactly at the current reference
-      const double length = path.length;
-      const double spacing = std::max(0.05, std::min(spacing_, length / 6.0));
-      const auto samples = trajectory::UniformBspline::resamplePolyline(pts, spacing);
-      // Initial timing within the limits: cruise at 60 % of v_max, but short hops from
-      // (or to) rest need the time an a_max-limited accelerate/brake takes.
-      const double total = std::max({length / (0.6 * optimizer_.v_max), 2.5 * std::sqrt(length / optimizer_.a_max),
-                                     v0.norm() / optimizer_.a_max + 0.5});
-      double dt = total / std::max<std::size_t>(1, samples.size() - 1);
-      // Optimise; when the result breaks a limit, refit slower (the start velocity is kept,
-      // so the reference stays continuous) and try again, then accept a slower fit that
-      // passes the same checks as an optimised one.
-      for (int attempt = 0; attempt < 4; ++attempt) {
-        const auto init = trajectory::UniformBspline::fitPath(samples, dt, v0, common::Vec3::Zero());
-        spline = trajectory::optimize(init, esdf, optimizer_);
-        if (spline) break;
-        if (trajectory::checkTrajectory(init, esdf, optimizer_).ok()) {
-          spline = init;
-          break;
-        }
-        const double f = std::max({1.5, init.maxVelocity() / (0.9 * optimizer_.v_max),
-                                   std::sqrt(init.maxAcceleration() / (0.9 * optimizer_.a_max))});
-        dt *= std::min(f, 4.0);
-      }
+    trajectory::PlanRequest request;
+    startState(now, request.start, request.velocity, request.yaw);
+    request.target = *target_;
+    request.target_yaw = target_yaw_;
+    const auto t_compute = ros_conv::WallClock::now();
+    common::Result<trajectory::Trajectory> planned = common::Result<trajectory::Trajectory>::Error("");
+    {
+      std::shared_lock<std::shared_mutex> map_lock(shared_->mutex);
+      planned = trajectory::planTrajectory(request, *astar_, shared_->map->esdf(), optimizer_, planner_);
     }
-    map_lock.unlock();
-    if (!spline) {
+    ros_conv::publishComputeTime(compute_pub_, "trajectory", t_compute);
+    if (!planned) {
       NODELET_WARN_STREAM(getName() << ": planning to frontier " << target_frontier_ << " failed ("
-                                    << trajectory::toString(reason) << "): " << spline.message() << "; stopping");
+                                    << trajectory::toString(reason) << "): " << planned.message() << "; stopping");
       std_msgs::UInt32 failed;
       failed.data = target_frontier_;
       failed_pub_.publish(failed);
-      publish(now, trajectory::safeStop(p0, v0, optimizer_.a_max), {yaw0, yaw0});
+      publish(now, trajectory::stopTrajectory(request.start, request.velocity, request.yaw, optimizer_));
       target_.reset();  // wait for a new target
       return;
     }
-    publish(now, std::move(spline).value(), {yaw0, target_yaw_});
+    publish(now, std::move(planned).value());
   }
 
-  void publish(const ros::Time& now, trajectory::UniformBspline position, const std::vector<double>& yaws) {
+  void publish(const ros::Time& now, trajectory::Trajectory planned) {
     ros_traj::Trajectory t;
+    static_cast<trajectory::Trajectory&>(t) = std::move(planned);
     t.id = ++trajectory_id_;
     t.start_time = now;
-    t.position = std::move(position);
-    auto yaw = trajectory::optimizeYaw(yaws, std::max(0.1, t.position.duration()), 0.0, optimizer_);
-    if (!yaw) {
-      NODELET_WARN_STREAM(getName() << ": yaw spline failed (" << yaw.message() << "); keeping the heading");
-      yaw = trajectory::optimizeYaw({yaws.front(), yaws.front()}, std::max(0.1, t.position.duration()), 0.0,
-                                    optimizer_);
-      if (!yaw) return;
-    }
-    t.yaw = std::move(yaw).value();
     current_ = t;
     bspline_pub_.publish(ros_traj::toMsg(t));
     visualization_msgs::Marker line;
@@ -227,7 +178,8 @@ class TrajectoryPlanner : public nodelet::Nodelet {
   trajectory::OptimizerConfig optimizer_;
   trajectory::ReplanConfig replan_;
   planning::AstarConfig astar_config_;
-  double rate_ = 10.0, spacing_ = 0.3, horizon_ = 3.0, min_gap_ = 0.3;
+  trajectory::TrajectoryPlannerConfig planner_;
+  double rate_ = 10.0;
   std::string world_frame_;
   std::mutex mutex_;
   std::shared_ptr<ros_map::SharedMap> shared_;
@@ -240,6 +192,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
   std::optional<ros_traj::Trajectory> current_;
   std::int64_t trajectory_id_ = 0;
   ros::Time last_plan_;
+  ros::Publisher compute_pub_;
   ros::Publisher bspline_pub_, marker_pub_, failed_pub_;
   ros::Subscriber handle_sub_, odom_sub_, cmd_sub_, target_sub_;
   ros::Timer timer_;

@@ -62,20 +62,11 @@ class TrajectoryServer : public nodelet::Nodelet {
     Eigen::Vector3d p, v = Eigen::Vector3d::Zero(), a = Eigen::Vector3d::Zero();
     double yaw = hold_yaw_, yaw_dot = 0.0;
     if (current_ && now >= current_->start_time) {
-      const double t = (now - current_->start_time).toSec();
-      const double T = current_->duration();
-      const double tc = std::min(t, T);
-      p = current_->position.evaluate(tc, 0);
-      const double ty = std::min(t, current_->yaw.duration());
-      yaw = current_->yaw.evaluate(ty, 0)(0);
-      if (t <= T) {
-        v = current_->position.evaluate(tc, 1);
-        a = current_->position.evaluate(tc, 2);
-        cmd.trajectory_flag = PositionCommand::TRAJECTORY_STATUS_READY;
-      } else {
-        cmd.trajectory_flag = PositionCommand::TRAJECTORY_STATUS_COMPLETED;
-      }
-      if (t <= current_->yaw.duration()) yaw_dot = current_->yaw.evaluate(ty, 1)(0);
+      const trajectory::TrajectorySample sample = trajectory::sampleTrajectory(*current_, (now - current_->start_time).toSec());
+      p = sample.position, v = sample.velocity, a = sample.acceleration;
+      yaw = sample.yaw, yaw_dot = sample.yaw_dot;
+      cmd.trajectory_flag = sample.completed ? PositionCommand::TRAJECTORY_STATUS_COMPLETED
+                                             : PositionCommand::TRAJECTORY_STATUS_READY;
       cmd.trajectory_id = static_cast<std::uint32_t>(current_->id);
       hold_position_ = p;  // where to hold if the trajectory is dropped
       hold_yaw_ = yaw;

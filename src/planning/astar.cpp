@@ -140,6 +140,11 @@ Astar::Astar(const map::OccupancyMap& occupancy, const map::Esdf& esdf, const As
     throw std::invalid_argument("astar: grids of 2^32 voxels or more are not supported");
   blocked_below_ = config.clearance - kClearanceRounding * geo_.resolution();
   brick_dims_ = (geo_.dims().array() + (kBrickEdge - 1)) / kBrickEdge;
+  const common::Aabb& box = occupancy.box();
+  for (int a = 0; a < 3; ++a) {
+    box_lo_[a] = static_cast<int>(std::ceil((box.min[a] - geo_.origin()[a]) / geo_.resolution() - 0.5 - 1e-9));
+    box_hi_[a] = static_cast<int>(std::floor((box.max[a] - geo_.origin()[a]) / geo_.resolution() - 0.5 + 1e-9));
+  }
 }
 
 bool Astar::traversable(const Index3& idx) const {
@@ -147,6 +152,7 @@ bool Astar::traversable(const Index3& idx) const {
 }
 
 bool Astar::traversable(const Index3& idx, std::size_t linear) const {
+  if ((idx.array() < box_lo_.array()).any() || (idx.array() > box_hi_.array()).any()) return false;
   const VoxelState state = occupancy_.stateAt(linear);
   if (state == VoxelState::kOccupied) return false;
   if (state == VoxelState::kUnknown && !config_.unknown_is_free) return false;

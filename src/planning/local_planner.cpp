@@ -36,6 +36,11 @@ Status LocalPlannerConfig::validate() const {
     return err("clutter_threshold", "must be in [0, 1]");
   if (!positiveFinite(max_range)) return err("max_range", "must be > 0");
   if (!positiveFinite(min_dist)) return err("min_dist", "must be > 0");
+  if (!(commit_time >= 0.0 && std::isfinite(commit_time))) return err("commit_time", "must be finite and >= 0");
+  if (!(min_view_fraction >= 0.0 && min_view_fraction <= 1.0)) return err("min_view_fraction", "must be in [0, 1]");
+  if (!(same_target_distance >= 0.0 && std::isfinite(same_target_distance)))
+    return err("same_target_distance", "must be finite and >= 0");
+  if (!(same_target_yaw >= 0.0 && std::isfinite(same_target_yaw))) return err("same_target_yaw", "must be finite and >= 0");
   return Status::Ok();
 }
 
@@ -102,8 +107,11 @@ std::vector<Viewpoint> filterViewpoints(const std::vector<Viewpoint>& viewpoints
   };
   std::vector<Ranked> ranked;
   ranked.reserve(viewpoints.size());
+  int best = 0;
+  for (const Viewpoint& vp : viewpoints) best = std::max(best, vp.visible_cells);
+  const double floor = type == FrontierType::kNearOrCluttered ? config.min_view_fraction * best : 0.0;
   for (const Viewpoint& vp : viewpoints)
-    ranked.push_back(
+    if (vp.visible_cells >= floor) ranked.push_back(
         {type == FrontierType::kNearOrCluttered ? steeringRate(position, yaw, vp, config) : 0.0, &vp});
   std::stable_sort(ranked.begin(), ranked.end(), [](const Ranked& a, const Ranked& b) {
     if (a.key != b.key) return a.key > b.key;
@@ -178,6 +186,45 @@ Result<LocalPlan> planLocal(const Vec3& position, double yaw, const std::vector<
     plan.path.push_back(plan.layers[i][static_cast<std::size_t>(chosen[i])]);
   plan.frontier_ids = std::move(ids);
   return plan;
+}
+
+TargetDecision decideTarget(const CurrentTarget* current, const frontier::Viewpoint& proposal, double t,
+                            int min_visible, const LocalPlannerConfig& config) {
+  if (!current) return TargetDecision::kSwitch;
+  const bool same = (proposal.position - current->viewpoint.position).norm() <= config.same_target_distance &&
+                    std::abs(wrapAngle(proposal.yaw - current->viewpoint.yaw)) <= config.same_target_yaw;
+  if (same) return current->reached ? TargetDecision::kReachedInVain : TargetDecision::kKeep;
+  if (current->remaining_visible < min_visible || current->reached || t - current->committed_at >= config.commit_time)
+    return TargetDecision::kSwitch;
+  return TargetDecision::kKeep;
+}
+
+int remainingVisible(const frontier::Viewpoint& viewpoint, const std::vector<frontier::Frontier>& frontiers,
+                     const map::OccupancyMap& map, const ViewpointConfig& config, double cluster_extent) {
+  std::vector<common::Index3> cells;
+  const double reach = config.sensor_range + cluster_extent;
+  for (const frontier::Frontier& f : frontiers)
+    if ((f.average - viewpoint.position).norm() <= reach) cells.insert(cells.end(), f.cells.begin(), f.cells.end());
+  return countVisible(viewpoint.position, viewpoint.yaw, cells, map, config);
+}
+
+common::Result<LocalPlan> chooseLocalTarget(const common::Vec3& position, double yaw,
+                                            std::vector<frontier::Frontier> tour, double z_min, double z_max,
+                                            const map::OccupancyMap& map, const map::Esdf& esdf, const Astar& astar,
+                                            const ObstacleWindow& window, const ViewpointConfig& viewpoint_config,
+                                            const LocalPlannerConfig& config) {
+  std::vector<frontier::Frontier> ordered;
+  std::vector<FrontierType> types;
+  for (frontier::Frontier& f : tour) {
+    if (static_cast<int>(ordered.size()) >= config.k_frontiers) break;
+    f.viewpoints = sampleViewpoints(f, map, esdf, z_min, z_max, viewpoint_config);
+    if (f.viewpoints.empty()) continue;
+    const double d = pathDistance(astar, position, f.average).metres;
+    types.push_back(classifyFrontier(d, window, config));
+    ordered.push_back(std::move(f));
+  }
+  if (ordered.empty()) return common::Result<LocalPlan>::Error("no viewpoint found for the first tour frontiers");
+  return planLocal(position, yaw, ordered, types, config);
 }
 
 }  // namespace go_feap::planning

@@ -85,8 +85,9 @@ class Astar {
   /// is never longer than the input, and never shorter than the straight line between its ends.
   std::vector<Vec3> shorten(const std::vector<Vec3>& path) const;
 
-  /// Inside the grid, not occupied, unknown only when config.unknown_is_free, and ESDF distance at least
-  /// config.clearance.
+  /// Inside the grid with its centre inside the map's exploration box (the UAV never leaves the box, and
+  /// distances never cut through the map's margin), not occupied, unknown only when config.unknown_is_free,
+  /// and ESDF distance at least config.clearance.
   bool traversable(const Index3& idx) const;
   /// True when every voxel the segment from a to b touches is traversable (see shorten()).
   bool segmentTraversable(const Vec3& a, const Vec3& b) const;
@@ -138,6 +139,7 @@ class Astar {
   common::GridGeometry geo_;
   double blocked_below_ = 0.0;  // clearance less a rounding margin
   Index3 brick_dims_ = Index3::Zero();
+  Index3 box_lo_ = Index3::Zero(), box_hi_ = Index3::Zero();  ///< voxels whose centres lie in the box, [lo, hi]
 
   // Search scratch: the voxels a search touches, in bricks of 8^3 cells (locality: a voxel's neighbours
   // mostly share its brick) found through an open-addressing table; each cell holds kCellUnseen,

@@ -12,6 +12,8 @@
 #include "go_feap/common/grid.h"
 #include "go_feap/common/result.h"
 #include "go_feap/frontier/frontier_finder.h"
+#include "go_feap/planning/astar.h"
+#include "go_feap/planning/viewpoints.h"
 
 namespace go_feap::planning {
 
@@ -27,6 +29,16 @@ struct LocalPlannerConfig {
   /// m; distances below count as this in the steering rate, so viewpoints at the current position
   /// get a finite rate ranked by how far they turn.
   double min_dist = 0.1;
+  /// s a chosen viewpoint is kept before a different proposal may replace it (unless nothing is left
+  /// to see from it, or it has been reached): stops the target from flickering between near-equal
+  /// viewpoints as the map grows frame by frame.
+  double commit_time = 1.5;
+  /// Near or cluttered frontiers: only viewpoints seeing at least this share of the frontier's best
+  /// N_view are ranked by steering rate, so turning in place never settles for a poor view (0: all).
+  double min_view_fraction = 0.0;
+  /// m and rad: a proposal this close to the current target (position and yaw) is the same target.
+  double same_target_distance = 0.3;
+  double same_target_yaw = 0.3;
 
   /// Checks every key; the message names the bad one, e.g. "local_planner: top_k must be >= 1".
   common::Status validate() const;
@@ -72,8 +84,9 @@ FrontierType classifyFrontier(double path_distance, const ObstacleWindow& window
 double steeringRate(const common::Vec3& position, double yaw, const frontier::Viewpoint& viewpoint,
                     const LocalPlannerConfig& config);
 
-/// The top_k viewpoints for a frontier of the given type. kNearOrCluttered: the highest steering rate
-/// first (turning in place rather than flying, paper Fig. 6), ties by visible_cells; kOpen: the most
+/// The top_k viewpoints for a frontier of the given type. kNearOrCluttered: among the viewpoints seeing at
+/// least min_view_fraction of the best visible_cells, the highest steering rate first (turning in place
+/// rather than flying, paper Fig. 6), ties by visible_cells; kOpen: the most
 /// visible_cells first. Further ties keep the input order.
 std::vector<frontier::Viewpoint> filterViewpoints(const std::vector<frontier::Viewpoint>& viewpoints,
                                                   FrontierType type, const common::Vec3& position, double yaw,
@@ -103,5 +116,41 @@ common::Result<LocalPlan> planLocal(const common::Vec3& position, double yaw,
                                     const std::vector<frontier::Frontier>& tour,
                                     const std::vector<FrontierType>& types, const LocalPlannerConfig& config,
                                     const DistanceFn& distance = DistanceFn());
+
+/// The viewpoint being flown to, as the target hysteresis sees it.
+struct CurrentTarget {
+  frontier::Viewpoint viewpoint;
+  double committed_at = 0.0;  ///< s, when it was chosen
+  int remaining_visible = 0;  ///< frontier cells still visible from it now (countVisible over nearby frontiers)
+  bool reached = false;       ///< the vehicle got there (trajectory done, within tolerance)
+};
+
+/// kReachedInVain: the current target was reached and is proposed again, so its frontier is not being
+/// cleared from there; the caller reports that frontier as failed (blacklisted after bounded retries)
+/// and drops the target.
+enum class TargetDecision { kKeep, kSwitch, kReachedInVain };
+/// Whether `proposal` (the planner's newest first viewpoint) replaces `current` at time t: always when
+/// there is no current target; when the proposal is the same target (within same_target_distance and
+/// same_target_yaw), keep it unless it was reached (kReachedInVain); otherwise switch when nothing is left
+/// to see from the current one (remaining_visible < min_visible), when it was reached, or when it has
+/// been kept for commit_time.
+TargetDecision decideTarget(const CurrentTarget* current, const frontier::Viewpoint& proposal, double t,
+                            int min_visible, const LocalPlannerConfig& config);
+
+/// Frontier cells of `frontiers` (those whose average lies within sensor_range + max_cluster_extent of the
+/// viewpoint) that the viewpoint sees: its remaining value.
+int remainingVisible(const frontier::Viewpoint& viewpoint, const std::vector<frontier::Frontier>& frontiers,
+                     const map::OccupancyMap& map, const ViewpointConfig& config, double cluster_extent);
+
+/// The local planning step on a map: for the frontiers of the tour, in tour order, samples viewpoints
+/// (sampleViewpoints() in the band [z_min, z_max]) until k_frontiers have some, types each by its A*
+/// path distance from `position` (pathDistance() on `astar`) and the obstacle window, and runs
+/// planLocal(). `tour` holds the frontiers' cells and averages; their viewpoints are ignored and
+/// replaced. Errors as planLocal(), or "no viewpoint" when no tour frontier has one.
+common::Result<LocalPlan> chooseLocalTarget(const common::Vec3& position, double yaw,
+                                            std::vector<frontier::Frontier> tour, double z_min, double z_max,
+                                            const map::OccupancyMap& map, const map::Esdf& esdf, const Astar& astar,
+                                            const ObstacleWindow& window, const ViewpointConfig& viewpoint_config,
+                                            const LocalPlannerConfig& config);
 
 }  // namespace go_feap::planning

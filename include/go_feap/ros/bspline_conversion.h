@@ -5,17 +5,14 @@
 
 #include "go_feap/Bspline.h"
 #include "go_feap/common/result.h"
-#include "go_feap/trajectory/bspline.h"
+#include "go_feap/trajectory/trajectory_planner.h"
 
 namespace go_feap::ros_traj {
 
-/// A position spline and a yaw spline that start together.
-struct Trajectory {
+/// A core trajectory with the id and start time the message carries.
+struct Trajectory : trajectory::Trajectory {
   std::int64_t id = 0;
   ros::Time start_time;
-  trajectory::UniformBspline position;  ///< 3-D
-  trajectory::UniformBspline yaw;       ///< 1-D
-  double duration() const { return position.duration(); }
 };
 
 /// knots = the uniform knot vector (u_i = (i - p) dt); yaw_dt = the yaw spline's knot span.

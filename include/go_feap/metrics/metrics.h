@@ -1,0 +1,106 @@
+// Exploration metrics (DESIGN §3.9): coverage against the scene's observable set, collisions
+// against ground truth, a time series, per-block compute times, and the files every run writes:
+// summary.json, metrics.csv and coverage.png. Used by the MetricsRecorder nodelet and the bench.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "go_feap/common/grid.h"
+#include "go_feap/common/result.h"
+#include "go_feap/map/occupancy_map.h"
+#include "go_feap/world/scene.h"
+
+namespace go_feap::metrics {
+
+/// Distance (m) from `p` to the nearest occupied ground-truth voxel cube, looking no farther than
+/// `radius` (m): `radius` when none is that close; 0 inside an obstacle.
+double obstacleDistance(const world::Scene& scene, const common::Vec3& p, double radius);
+
+/// Counts how much of the scene's observable set a map has classified.
+class CoverageTracker {
+ public:
+  /// Computes the observable set of `scene` and where its voxels fall in maps of geometry `map_geometry`
+  /// (voxels the map does not cover stay unknown for ever).
+  CoverageTracker(const world::Scene& scene, const common::GridGeometry& map_geometry);
+  /// |known ∩ observable| / |observable| of `map` (same geometry as given to the constructor).
+  double coverage(const map::OccupancyMap& map) const;
+  std::size_t observableCount() const { return observable_total_; }
+
+ private:
+  std::vector<std::size_t> in_map_;  ///< map linear index of each observable voxel the map covers
+  std::size_t observable_total_ = 0;
+};
+
+/// Mean and max of a block's compute times (ms).
+struct BlockTime {
+  double total_ms = 0.0, max_ms = 0.0;
+  std::size_t count = 0;
+  void add(double ms) {
+    total_ms += ms;
+    max_ms = std::max(max_ms, ms);
+    ++count;
+  }
+  double mean() const { return count ? total_ms / static_cast<double>(count) : 0.0; }
+};
+
+/// One row of metrics.csv.
+struct Sample {
+  double t = 0.0;              ///< s since the trigger
+  double coverage = 0.0;       ///< share of the observable set, [0, 1] (negative: unknown, e.g. onboard)
+  double explored_m3 = 0.0;    ///< known volume
+  double distance = 0.0;       ///< m flown
+  int layer = 0;               ///< current band index
+  int frontiers = 0;           ///< frontier count
+  common::Vec3 position = common::Vec3::Zero();  ///< m, UAV position (the flown path)
+};
+
+/// What summary.json holds.
+struct Summary {
+  std::string scene, planner, finish_reason;
+  std::uint64_t seed = 0;
+  double exploration_time_s = 0.0;
+  double flight_distance_m = 0.0;
+  double coverage = 0.0;
+  int collisions = 0;
+  double min_obstacle_distance_m = 0.0;  ///< closest approach of the UAV centre to ground truth
+  double wall_time_s = 0.0;
+  std::map<std::string, BlockTime> compute;  ///< per block: mapping, frontier, global, local, trajectory
+  std::map<std::string, double> extra;       ///< other figures (memory, speed-up, ...)
+};
+
+/// Collects the time series and timings of a run and writes its files.
+class Recorder {
+ public:
+  void addSample(const Sample& s) { samples_.push_back(s); }
+  void addTime(const std::string& block, double ms) { summary_.compute[block].add(ms); }
+  Summary& summary() { return summary_; }
+  const Summary& summary() const { return summary_; }
+  const std::vector<Sample>& samples() const { return samples_; }
+
+  /// summary.json: scene, seed, planner, finish_reason, exploration_time_s, flight_distance_m,
+  /// coverage, collisions, min_obstacle_distance_m, wall_time_s, compute_ms {block: {mean, max, count}}
+  /// with "total" = the sum of the planning blocks' means (frontier, global, local, trajectory), and
+  /// the extra figures.
+  common::Status writeSummary(const std::string& path) const;
+  /// metrics.csv: t,coverage,explored_m3,distance,layer,frontiers,x,y,z.
+  common::Status writeCsv(const std::string& path) const;
+  /// coverage.png: coverage (%) against time (s), the paper's Fig. 9 style.
+  common::Status writePlot(const std::string& path, const std::string& title) const;
+  /// The three files into `dir` (created if missing).
+  common::Status writeAll(const std::string& dir) const;
+
+ private:
+  Summary summary_;
+  std::vector<Sample> samples_;
+};
+
+/// Plots coverage (%) against time (s) for one or more named series into a PNG (OpenCV).
+common::Status plotCoverage(const std::vector<std::pair<std::string, std::vector<Sample>>>& series,
+                            const std::string& title, const std::string& path);
+
+/// summary.json as written by Recorder::writeSummary, as a string.
+std::string summaryJson(const Summary& summary);
+
+}  // namespace go_feap::metrics

@@ -1,0 +1,41 @@
+// The global planning step with its path-length cache (DESIGN §3.4, §3.5): frontier summaries
+// and the UAV position in, ordered tour out. Path lengths come from A* on the inflated map;
+// frontier-to-frontier lengths are cached per id pair until either frontier changes (a changed
+// frontier gets a new id). Shared by the GlobalPlanner nodelet and the lock-step bench.
+#pragma once
+
+#include <map>
+#include <utility>
+#include <vector>
+
+#include "go_feap/frontier/frontier_finder.h"
+#include "go_feap/planning/astar.h"
+#include "go_feap/planning/global_planner.h"
+
+namespace go_feap::planning {
+
+/// Table I fields the global planner uses, taken from a frontier at time `now` (s).
+FrontierSummary summarize(const frontier::Frontier& frontier, double now);
+
+class TourPlanner {
+ public:
+  /// Keeps a reference to `astar` (and so to its map): the caller holds the map still during plan().
+  TourPlanner(const GlobalPlannerConfig& config, const Astar& astar) : config_(config), astar_(astar) {}
+
+  /// planTour() over `frontiers` from `uav`. Beyond s_near (Euclidean, a lower bound of the path) a
+  /// frontier cannot be near: its Euclidean distance only orders the top-up, so no search is spent on
+  /// it. Cached lengths of frontiers no longer listed are dropped first. `fallbacks` (when not null)
+  /// counts the distances that fell back to Euclidean.
+  common::Result<GlobalTour> plan(const std::vector<FrontierSummary>& frontiers, const Vec3& uav,
+                                  std::size_t* fallbacks = nullptr);
+
+  const GlobalPlannerConfig& config() const { return config_; }
+  std::size_t cacheSize() const { return cache_.size(); }
+
+ private:
+  GlobalPlannerConfig config_;
+  const Astar& astar_;
+  std::map<std::pair<unsigned, unsigned>, PathDistance> cache_;
+};
+
+}  // namespace go_feap::planning

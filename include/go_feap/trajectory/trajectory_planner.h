@@ -1,0 +1,89 @@
+// From a start state and a target viewpoint to a flyable trajectory (DESIGN §3.7): A* in
+// known free space, a cubic B-spline fitted to the path and optimised with NLopt (refitted
+// slower when the optimum breaks a limit), and a yaw spline. Shared by the TrajectoryPlanner
+// nodelet, the trajectory server and the lock-step bench, so both run the same code.
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include "go_feap/common/grid.h"
+#include "go_feap/common/result.h"
+#include "go_feap/planning/astar.h"
+#include "go_feap/trajectory/bspline_optimizer.h"
+#include "go_feap/trajectory/replan.h"
+
+namespace go_feap::trajectory {
+
+/// A position spline (3-D) and a yaw spline (1-D) that start together at t = 0.
+struct Trajectory {
+  UniformBspline position;
+  UniformBspline yaw;
+  double duration() const { return position.duration(); }
+};
+
+/// The reference a trajectory gives at a time: what the trajectory server sends.
+struct TrajectorySample {
+  Vec3 position = Vec3::Zero();      ///< m
+  Vec3 velocity = Vec3::Zero();      ///< m/s (zero after the end)
+  Vec3 acceleration = Vec3::Zero();  ///< m/s^2 (zero after the end)
+  double yaw = 0.0;                  ///< rad, wrapped to (-pi, pi]
+  double yaw_dot = 0.0;              ///< rad/s (zero after the yaw spline's end)
+  bool completed = false;            ///< t is past the position spline's end: holding its last point
+};
+
+/// Samples `trajectory` at t (s since its start; negative counts as 0). Past the end it holds the
+/// final position and yaw at rest.
+TrajectorySample sampleTrajectory(const Trajectory& trajectory, double t);
+
+struct TrajectoryPlannerConfig {
+  double path_spacing = 0.3;            ///< m between the A* path samples the spline is fitted to
+  double collision_horizon = 3.0;       ///< s of the current trajectory checked against new obstacles
+  double min_time_between_plans = 0.3;  ///< s
+  double cruise_fraction = 0.6;         ///< share of v_max the initial timing assumes
+  int max_refits = 4;                   ///< slower refits tried when the optimum breaks a limit
+  /// Checks every key; the message names the bad one, e.g. "planner: path_spacing must be > 0".
+  common::Status validate() const;
+};
+
+/// Start state and goal of one plan.
+struct PlanRequest {
+  Vec3 start = Vec3::Zero();     ///< m, where the reference is now
+  Vec3 velocity = Vec3::Zero();  ///< m/s, the reference's velocity (kept, for continuity)
+  double yaw = 0.0;              ///< rad, the reference's heading
+  Vec3 target = Vec3::Zero();    ///< m, viewpoint position
+  double target_yaw = 0.0;       ///< rad, viewpoint heading
+};
+
+/// What plan() did, for logs and benchmarks.
+struct PlanReport {
+  int refits = 0;              ///< slower refits needed
+  bool used_fit = false;       ///< the unoptimised (refitted) spline was kept: it passed the checks
+  planning::PathStatus path_status = planning::PathStatus::kNoPath;
+  double path_length = 0.0;    ///< m
+  bool yaw_fallback = false;   ///< the yaw spline could not reach the target yaw in time: heading kept
+};
+
+/// Plans a trajectory for `request`: A* (known free space, the astar's clearance), spline fit through
+/// the resampled path starting exactly at request.start with request.velocity and ending at rest,
+/// optimize() (refitted slower up to max_refits times while the optimum or the fit breaks a limit),
+/// then optimizeYaw() from request.yaw to target_yaw over the position's duration. Errors name the
+/// reason: no path (with the A* status), optimisation failure (with the last check's message).
+/// `astar` and `esdf` must describe the same map; the caller holds the map still while this runs.
+common::Result<Trajectory> planTrajectory(const PlanRequest& request, const planning::Astar& astar,
+                                          const map::Esdf& esdf, const OptimizerConfig& optimizer,
+                                          const TrajectoryPlannerConfig& config, PlanReport* report = nullptr);
+
+/// A trajectory that brakes from (p, v) at a_max to a stop and holds yaw: what is flown when
+/// planning fails.
+Trajectory stopTrajectory(const Vec3& p, const Vec3& v, double yaw, const OptimizerConfig& optimizer);
+
+/// The replanning decision for a trajectory being flown (DESIGN §3.7). `current` is null when none is
+/// flown; t is the time since its start; target_changed is the caller's own notion of a new target.
+/// A trajectory that ends at its target needs no replanning for running out of time: short time left is
+/// a reason only when its end is not the target.
+ReplanReason replanReason(const Trajectory* current, double t, const Vec3& target, bool target_changed,
+                          const map::Esdf& esdf, const ReplanConfig& replan, const OptimizerConfig& optimizer,
+                          const TrajectoryPlannerConfig& config);
+
+}  // namespace go_feap::trajectory

@@ -1,0 +1,383 @@
+#include "go_feap/bench/exploration_run.h"
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <iomanip>
+#include <sstream>
+#include <stdexcept>
+
+#include "go_feap/common/config_groups.h"
+#include "go_feap/common/yaml_reader.h"
+
+namespace go_feap::bench {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+bool positiveFinite(double v) { return std::isfinite(v) && v > 0.0; }
+
+}  // namespace
+
+common::Status LoopConfig::validate() const {
+  if (!positiveFinite(control_rate)) return common::Status::Error("loop: control_rate must be finite and > 0");
+  if (!positiveFinite(plan_rate)) return common::Status::Error("loop: plan_rate must be finite and > 0");
+  if (!positiveFinite(sample_rate)) return common::Status::Error("loop: sample_rate must be finite and > 0");
+  if (!std::isfinite(collision_distance) || collision_distance < 0.0)
+    return common::Status::Error("loop: collision_distance must be finite and >= 0");
+  return common::Status::Ok();
+}
+
+common::Status ExplorationConfig::validate() const {
+  for (const common::Status& st :
+       {quadrotor.validate(), controller.validate(), camera.validate(), map.validate(), frontier.validate(),
+        global.validate(), distance_astar.validate(map.esdf), layers.validate(), viewpoints.validate(),
+        local.validate(), optimizer.validate(map.esdf), replan.validate(), planner.validate(),
+        flight_astar.validate(map.esdf), loop.validate()})
+    if (!st.ok()) return st;
+  if (!positiveFinite(camera_rate) || camera_rate > 100.0)
+    return common::Status::Error("depth_camera: rate must be in (0, 100] Hz");
+  if (!positiveFinite(layer_rate)) return common::Status::Error("layers: rate must be finite and > 0");
+  if (!positiveFinite(planner_rate)) return common::Status::Error("planner: rate must be finite and > 0");
+  const Eigen::Matrix3d R = T_B_C.linear();
+  if (!(R.transpose() * R).isApprox(Eigen::Matrix3d::Identity(), 1e-6) || R.determinant() <= 0.0)
+    return common::Status::Error("depth_camera: T_B_C must be a rigid transform");
+  return common::Status::Ok();
+}
+
+common::Result<ExplorationConfig> loadExplorationConfig(const std::string& config_dir, const std::string& planner) {
+  using R = common::Result<ExplorationConfig>;
+  const std::string mode = config_dir + "/modes/" + planner + ".yaml";
+  if (!std::filesystem::exists(mode))
+    return R::Error("unknown planner '" + planner + "' (no " + mode + "; modes: go_feap, fuel, nearest)");
+  ExplorationConfig c;
+  common::YamlReader sim(config_dir + "/sim.yaml");
+  config::readQuadrotor(sim, c.quadrotor);
+  config::readController(sim, c.controller);
+  config::readDepthCamera(sim, c.camera);
+  Eigen::Matrix4d T_B_C = Eigen::Matrix4d::Identity();
+  sim.get("depth_camera/rate", c.camera_rate).getMatrix4("depth_camera/T_B_C", T_B_C);
+  if (!sim.ok()) return sim.status();
+  if (!T_B_C.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1)))
+    return R::Error(config_dir + "/sim.yaml: parameter 'depth_camera/T_B_C' must end with the row 0 0 0 1");
+  c.T_B_C.matrix() = T_B_C;
+  common::YamlReader mapping(config_dir + "/mapping.yaml");
+  config::readMap(mapping, c.map);
+  if (!mapping.ok()) return mapping.status();
+  common::YamlReader exploration({config_dir + "/exploration.yaml", mode});
+  config::readFrontier(exploration, c.frontier);
+  config::readGlobalPlanner(exploration, c.global);
+  config::readAstar(exploration, c.distance_astar);
+  config::readLayers(exploration, c.layers);
+  exploration.get("layers/rate", c.layer_rate);
+  config::readViewpoints(exploration, c.viewpoints);
+  config::readLocal(exploration, c.local);
+  if (!exploration.ok()) return exploration.status();
+  common::YamlReader traj({config_dir + "/trajectory.yaml", mode});
+  config::readOptimizer(traj, c.optimizer);
+  config::readReplan(traj, c.replan);
+  config::readTrajectoryPlanner(traj, c.planner);
+  traj.get("planner/rate", c.planner_rate);
+  config::readAstar(traj, c.flight_astar);
+  if (!traj.ok()) return traj.status();
+  common::YamlReader bench(config_dir + "/bench.yaml");
+  bench.get("loop/control_rate", c.loop.control_rate).get("loop/plan_rate", c.loop.plan_rate);
+  bench.get("loop/sample_rate", c.loop.sample_rate).get("loop/collision_distance", c.loop.collision_distance);
+  if (!bench.ok()) return bench.status();
+  const common::Status st = c.validate();
+  if (!st.ok()) return st;
+  return c;
+}
+
+ExplorationRun::ExplorationRun(const world::Scene& scene, const ExplorationConfig& config, const std::string& planner,
+                               double max_sim_time)
+    : scene_(scene),
+      config_(config),
+      max_sim_time_(max_sim_time),
+      vehicle_(config.quadrotor, config.controller),
+      renderer_(config.camera, scene),
+      window_(config.local) {
+  for (const common::Status& st : {config.validate(), world::validateScene(scene)})
+    if (!st.ok()) throw std::invalid_argument(st.message());
+  if (!positiveFinite(max_sim_time)) throw std::invalid_argument("max_sim_time must be finite and > 0");
+  const auto K = config.camera.intrinsics();
+  intrinsics_ = {K.width, K.height, K.fx, K.fy, K.cx, K.cy};
+  map_ = std::make_unique<map::VoxelMap>(config.map, scene.box);
+  finder_ = std::make_unique<frontier::FrontierFinder>(config.frontier, map_->geometry(), scene.box);
+  distance_astar_ = std::make_unique<planning::Astar>(map_->occupancy(), map_->esdf(), config.distance_astar);
+  flight_astar_ = std::make_unique<planning::Astar>(map_->occupancy(), map_->esdf(), config.flight_astar);
+  tour_planner_ = std::make_unique<planning::TourPlanner>(config.global, *distance_astar_);
+  layers_ = std::make_unique<planning::LayerManager>(config.layers, scene.box, scene.start.position.z());
+  coverage_ = std::make_unique<metrics::CoverageTracker>(scene, map_->geometry());
+  vehicle_.reset(scene.start.position, scene.start.yaw);
+  hold_position_ = last_position_ = scene.start.position;
+  hold_yaw_ = scene.start.yaw;
+  metrics::Summary& s = recorder_.summary();
+  s.scene = scene.name;
+  s.seed = scene.seed;
+  s.planner = planner;
+  s.min_obstacle_distance_m = metrics::obstacleDistance(scene, scene.start.position, 1.0);
+}
+
+ExplorationRun::~ExplorationRun() = default;
+
+double ExplorationRun::yaw() const {
+  const Eigen::Matrix3d R = vehicle_.state().attitude.toRotationMatrix();
+  return std::atan2(R(1, 0), R(0, 0));
+}
+
+void ExplorationRun::log(const std::string& what) {
+  std::ostringstream line;
+  line << std::fixed << std::setprecision(2) << t_ << " " << what;
+  events_.push_back(line.str());
+}
+
+Progress ExplorationRun::progress() const {
+  Progress p;
+  p.t = t_;
+  p.coverage = coverage_now_;
+  p.distance = distance_;
+  p.state = layer_out_.state;
+  p.band = layer_out_.band.index;
+  p.frontiers = static_cast<int>(finder_->frontiers().size());
+  return p;
+}
+
+void ExplorationRun::frame() {
+  const sim::QuadrotorState& s = vehicle_.state();
+  Eigen::Isometry3d T_W_B = Eigen::Isometry3d::Identity();
+  T_W_B.linear() = s.attitude.toRotationMatrix();
+  T_W_B.translation() = s.position;
+  const Eigen::Isometry3d T_W_C = T_W_B * config_.T_B_C;
+  renderer_.render(T_W_C, depth_);
+  if (const auto ratio = planning::obstacleRatio(depth_, config_.local.max_range)) window_.push(*ratio);
+  auto t0 = Clock::now();
+  auto update = map_->integrate(depth_, intrinsics_, T_W_C);
+  recorder_.addTime("mapping", msSince(t0));
+  if (!update) return;  // cannot happen with the renderer's own images; skipped like the nodelet would
+  if (update->frame.any_change) {
+    ++map_progress_;
+    t0 = Clock::now();
+    finder_->update(map_->occupancy(), update->frame.changed, t_);
+    recorder_.addTime("frontier", msSince(t0));
+  }
+}
+
+void ExplorationRun::layerStep() {
+  planning::LayerInputs in;
+  in.trigger = !triggered_;
+  triggered_ = true;
+  in.failed.swap(failed_);
+  in.map_progress = map_progress_;
+  for (const frontier::Frontier& f : finder_->frontiers()) {
+    in.all_frontiers.push_back(f.id);
+    if (f.average.z() >= layer_out_.band.z_min && f.average.z() <= layer_out_.band.z_max)
+      in.band_frontiers.push_back(f.id);
+  }
+  const planning::Band before = layer_out_.band;
+  layer_out_ = layers_->step(in, t_);
+  for (const planning::Transition& tr : layer_out_.transitions)
+    log(std::string(planning::toString(tr.from)) + "(" + std::to_string(tr.band_from) + ") -> " +
+        planning::toString(tr.to) + "(" + std::to_string(tr.band_to) + "): " + tr.why);
+  if (layer_out_.band.z_min != before.z_min || layer_out_.band.z_max != before.z_max || !layer_out_.transitions.empty())
+    finder_->setActiveBand(layer_out_.band.z_min, layer_out_.band.z_max);
+  if (layer_out_.state == planning::ExplorationState::kFinished) finish(planning::toString(layer_out_.reason));
+}
+
+void ExplorationRun::planStep() {
+  if (layer_out_.state != planning::ExplorationState::kExplore &&
+      layer_out_.state != planning::ExplorationState::kFinalPass)
+    return;
+  const common::Vec3 position = vehicle_.state().position;
+  std::vector<planning::FrontierSummary> summaries;
+  for (const frontier::Frontier& f : finder_->frontiers())
+    if (!layers_->isBlacklisted(f.id)) summaries.push_back(planning::summarize(f, t_));
+  auto t0 = Clock::now();
+  auto tour = tour_planner_->plan(summaries, position);
+  recorder_.addTime("global", msSince(t0));
+  if (!tour || tour->frontier_ids.empty()) {
+    if (!tour) log("no tour: " + tour.message());
+    return;
+  }
+  std::vector<frontier::Frontier> ordered;
+  for (unsigned id : tour->frontier_ids)
+    if (const frontier::Frontier* f = finder_->find(id)) ordered.push_back(*f);
+  t0 = Clock::now();
+  auto plan = planning::chooseLocalTarget(position, yaw(), std::move(ordered), layer_out_.band.z_min,
+                                          layer_out_.band.z_max, map_->occupancy(), map_->esdf(), *distance_astar_,
+                                          window_, config_.viewpoints, config_.local);
+  recorder_.addTime("local", msSince(t0));
+  if (!plan) {
+    log("no local plan: " + plan.message());
+    return;
+  }
+  const frontier::Viewpoint& vp = plan->path.front();
+  std::optional<planning::CurrentTarget> current;
+  if (target_) {
+    current.emplace();
+    current->viewpoint.position = target_->position;
+    current->viewpoint.yaw = target_->yaw;
+    current->committed_at = target_->committed_at;
+    // Reached: the whole trajectory (position and yaw) flown, a frame integrated since, and close by.
+    current->reached = trajectory_ &&
+                       t_ - trajectory_start_ >= std::max(trajectory_->duration(), trajectory_->yaw.duration()) +
+                                                     1.0 / config_.camera_rate &&
+                       (position - target_->position).norm() <= config_.replan.target_tolerance;
+    // The remaining value only matters while the commitment holds.
+    current->remaining_visible = config_.viewpoints.min_visible;
+    if (!current->reached && t_ - target_->committed_at < config_.local.commit_time)
+      current->remaining_visible = planning::remainingVisible(current->viewpoint, finder_->frontiers(), map_->occupancy(),
+                                                              config_.viewpoints, config_.frontier.max_cluster_extent);
+  }
+  const planning::TargetDecision decision =
+      planning::decideTarget(current ? &*current : nullptr, vp, t_, config_.viewpoints.min_visible, config_.local);
+  if (decision == planning::TargetDecision::kKeep) return;
+  if (decision == planning::TargetDecision::kReachedInVain) {
+    log("frontier " + std::to_string(target_->frontier) + " not cleared from its reached viewpoint: failed attempt");
+    failed_.push_back(target_->frontier);
+    target_.reset();
+    return;
+  }
+  const bool changed = !target_ || (vp.position - target_->position).norm() > config_.replan.target_tolerance;
+  target_changed_ = target_changed_ || changed;
+  if (changed) {
+    std::ostringstream what;
+    what << "target frontier " << plan->frontier_ids.front() << " viewpoint " << vp.position.transpose() << " yaw "
+         << vp.yaw << " (tour of " << tour->frontier_ids.size() << ", " << summaries.size() << " frontiers)";
+    log(what.str());
+  }
+  target_ = Target{vp.position, vp.yaw, plan->frontier_ids.front(), t_};
+}
+
+void ExplorationRun::trajectoryStep() {
+  if (!target_ || t_ - last_plan_ < config_.planner.min_time_between_plans) return;
+  const trajectory::Trajectory* current = trajectory_ ? &*trajectory_ : nullptr;
+  const trajectory::ReplanReason reason =
+      trajectory::replanReason(current, t_ - trajectory_start_, target_->position, target_changed_, map_->esdf(),
+                               config_.replan, config_.optimizer, config_.planner);
+  if (reason == trajectory::ReplanReason::kNone) return;
+  target_changed_ = false;
+  last_plan_ = t_;
+  // Start from the reference being flown (continuity), as the nodelet starts from the last command.
+  trajectory::PlanRequest request;
+  if (trajectory_) {
+    const trajectory::TrajectorySample s = trajectory::sampleTrajectory(*trajectory_, t_ - trajectory_start_);
+    request.start = s.position, request.velocity = s.velocity, request.yaw = s.yaw;
+  } else {
+    request.start = hold_position_, request.yaw = hold_yaw_;
+  }
+  request.target = target_->position;
+  request.target_yaw = target_->yaw;
+  const auto t0 = Clock::now();
+  auto planned = trajectory::planTrajectory(request, *flight_astar_, map_->esdf(), config_.optimizer, config_.planner);
+  recorder_.addTime("trajectory", msSince(t0));
+  trajectory_start_ = t_;
+  if (planned) {
+    trajectory_ = std::move(planned).value();
+    return;
+  }
+  log(std::string("plan to frontier ") + std::to_string(target_->frontier) + " failed (" + trajectory::toString(reason) +
+      "): " + planned.message());
+  failed_.push_back(target_->frontier);
+  trajectory_ = trajectory::stopTrajectory(request.start, request.velocity, request.yaw, config_.optimizer);
+  target_.reset();
+}
+
+void ExplorationRun::sample() {
+  coverage_now_ = coverage_->coverage(map_->occupancy());
+  metrics::Sample s;
+  s.t = t_;
+  s.coverage = coverage_now_;
+  const double res = map_->geometry().resolution();
+  s.explored_m3 = static_cast<double>(map_->occupancy().knownCount()) * res * res * res;
+  s.distance = distance_;
+  s.layer = layer_out_.band.index;
+  s.frontiers = static_cast<int>(finder_->frontiers().size());
+  s.position = vehicle_.state().position;
+  recorder_.addSample(s);
+}
+
+void ExplorationRun::finish(const std::string& reason) {
+  if (ended_) return;
+  ended_ = true;
+  sample();
+  metrics::Summary& s = recorder_.summary();
+  s.finish_reason = reason;
+  s.exploration_time_s = t_;
+  s.flight_distance_m = distance_;
+  s.coverage = coverage_now_;
+  s.extra["map_memory_mb"] = static_cast<double>(map_->memoryBytes()) / (1024.0 * 1024.0);
+}
+
+bool ExplorationRun::step() {
+  if (ended_) return false;
+  const double dt = 1.0 / config_.loop.control_rate;
+  if (t_ >= next_layer_) {
+    layerStep();
+    next_layer_ += 1.0 / config_.layer_rate;
+    if (ended_) return false;
+  }
+  if (t_ >= next_frame_) {
+    frame();
+    next_frame_ += 1.0 / config_.camera_rate;
+  }
+  if (t_ >= next_plan_) {
+    planStep();
+    next_plan_ += 1.0 / config_.loop.plan_rate;
+  }
+  if (t_ >= next_replan_) {
+    trajectoryStep();
+    next_replan_ += 1.0 / config_.planner_rate;
+  }
+  if (t_ >= next_sample_) {
+    sample();
+    next_sample_ += 1.0 / config_.loop.sample_rate;
+  }
+  sim::PositionReference ref;
+  if (trajectory_) {
+    const trajectory::TrajectorySample s = trajectory::sampleTrajectory(*trajectory_, t_ - trajectory_start_);
+    ref.position = s.position, ref.velocity = s.velocity, ref.acceleration = s.acceleration;
+    ref.yaw = s.yaw, ref.yaw_dot = s.yaw_dot;
+    hold_position_ = s.position, hold_yaw_ = s.yaw;
+  } else {
+    ref.position = hold_position_, ref.yaw = hold_yaw_;
+  }
+  vehicle_.advance(dt, ref);
+  ++tick_;
+  t_ = static_cast<double>(tick_) * dt;
+  const common::Vec3 p = vehicle_.state().position;
+  distance_ += (p - last_position_).norm();
+  last_position_ = p;
+  const double clearance = metrics::obstacleDistance(scene_, p, 1.0);
+  metrics::Summary& s = recorder_.summary();
+  s.min_obstacle_distance_m = std::min(s.min_obstacle_distance_m, clearance);
+  const bool colliding = clearance < config_.loop.collision_distance;
+  if (colliding && !in_collision_) {
+    ++s.collisions;
+    std::ostringstream what;
+    what << "collision at " << p.transpose() << " (" << clearance << " m from ground truth)";
+    log(what.str());
+  }
+  in_collision_ = colliding;
+  if (t_ >= max_sim_time_) finish("max_sim_time");
+  return !ended_;
+}
+
+void ExplorationRun::run(const std::function<void(const Progress&)>& progress) {
+  const auto t0 = Clock::now();
+  double next_report = 0.0;
+  while (step()) {
+    if (progress && t_ >= next_report) {
+      progress(this->progress());
+      next_report += 1.0;
+    }
+  }
+  if (progress) progress(this->progress());
+  recorder_.summary().wall_time_s = msSince(t0) / 1000.0;
+}
+
+}  // namespace go_feap::bench

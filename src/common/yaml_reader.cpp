@@ -1,0 +1,94 @@
+#include "go_feap/common/yaml_reader.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <optional>
+#include <sstream>
+
+namespace go_feap::common {
+
+struct YamlReader::Impl {
+  std::vector<std::pair<std::string, YAML::Node>> files;
+};
+
+YamlReader::YamlReader(const std::vector<std::string>& paths) : impl_(std::make_unique<Impl>()) {
+  for (const std::string& path : paths) {
+    try {
+      impl_->files.emplace_back(path, YAML::LoadFile(path));
+    } catch (const std::exception& e) {
+      if (error_.empty()) error_ = path + ": cannot be read as YAML (" + e.what() + ")";
+    }
+  }
+  if (paths.empty()) error_ = "no YAML file given";
+}
+
+YamlReader::~YamlReader() = default;
+YamlReader::YamlReader(YamlReader&&) noexcept = default;
+
+void YamlReader::fail(const std::string& key, const std::string& why) {
+  if (!error_.empty()) return;
+  std::string files;
+  for (const auto& f : impl_->files) files += (files.empty() ? "" : " + ") + f.first;
+  error_ = files + ": parameter '" + key + "' " + why;
+}
+
+template <typename T>
+YamlReader& YamlReader::read(const std::string& key, T& out) {
+  if (!error_.empty()) return *this;
+  // Walk "a/b/c" through nested maps of each file, the last file first, on private copies
+  // (assigning to a YAML::Node handle would overwrite the node it refers to).
+  std::optional<YAML::Node> found;
+  for (auto f = impl_->files.rbegin(); f != impl_->files.rend() && !found; ++f) {
+    YAML::Node node = YAML::Clone(f->second);
+    std::stringstream parts(key);
+    std::string part;
+    bool present = true;
+    while (present && std::getline(parts, part, '/')) {
+      if (!node.IsMap() || !node[part]) {
+        present = false;
+      } else {
+        YAML::Node child = node[part];
+        node.reset(child);
+      }
+    }
+    if (present) found = node;
+  }
+  if (!found) {
+    fail(key, "is missing");
+    return *this;
+  }
+  const YAML::Node& node = *found;
+  try {
+    out = node.as<T>();
+  } catch (const std::exception&) {
+    fail(key, "has the wrong type");
+  }
+  return *this;
+}
+
+YamlReader& YamlReader::get(const std::string& key, double& out) { return read(key, out); }
+YamlReader& YamlReader::get(const std::string& key, int& out) { return read(key, out); }
+YamlReader& YamlReader::get(const std::string& key, bool& out) { return read(key, out); }
+YamlReader& YamlReader::get(const std::string& key, std::string& out) { return read(key, out); }
+YamlReader& YamlReader::get(const std::string& key, std::vector<double>& out) { return read(key, out); }
+
+YamlReader& YamlReader::getVec3(const std::string& key, Eigen::Vector3d& out) {
+  std::vector<double> v;
+  read(key, v);
+  if (!ok()) return *this;
+  if (v.size() != 3) return fail(key, "must hold 3 numbers"), *this;
+  out = Eigen::Vector3d(v[0], v[1], v[2]);
+  return *this;
+}
+
+YamlReader& YamlReader::getMatrix4(const std::string& key, Eigen::Matrix4d& out) {
+  std::vector<double> v;
+  read(key, v);
+  if (!ok()) return *this;
+  if (v.size() != 16) return fail(key, "must hold 16 numbers (row-major 4x4)"), *this;
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) out(r, c) = v[4 * r + c];
+  return *this;
+}
+
+}  // namespace go_feap::common

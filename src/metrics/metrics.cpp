@@ -1,0 +1,183 @@
+#include "go_feap/metrics/metrics.h"
+
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+
+namespace go_feap::metrics {
+
+double obstacleDistance(const world::Scene& scene, const common::Vec3& p, double radius) {
+  const common::GridGeometry& geo = scene.geometry();
+  const double res = geo.resolution();
+  const common::Index3 lo = geo.coordToIndex(p - common::Vec3::Constant(radius));
+  const common::Index3 hi = geo.coordToIndex(p + common::Vec3::Constant(radius));
+  double best = radius;
+  for (int z = lo.z(); z <= hi.z(); ++z)
+    for (int y = lo.y(); y <= hi.y(); ++y)
+      for (int x = lo.x(); x <= hi.x(); ++x) {
+        const common::Index3 idx(x, y, z);
+        if (!scene.isOccupied(idx)) continue;
+        // Distance from p to the voxel's cube.
+        const common::Vec3 cmin = geo.origin() + idx.cast<double>() * res;
+        const common::Vec3 d = (cmin - p).cwiseMax(p - (cmin + common::Vec3::Constant(res))).cwiseMax(0.0);
+        best = std::min(best, d.norm());
+      }
+  return best;
+}
+
+CoverageTracker::CoverageTracker(const world::Scene& scene, const common::GridGeometry& map_geometry) {
+  const world::ObservableSet observable = world::computeObservableSet(scene);
+  observable_total_ = observable.total();
+  const auto& geo = observable.mask.geometry();
+  for (std::size_t l = 0; l < observable.mask.size(); ++l) {
+    if (!observable.mask[l]) continue;
+    const common::Index3 idx = map_geometry.coordToIndex(geo.indexToCoord(geo.unlinear(l)));
+    if (map_geometry.inside(idx)) in_map_.push_back(map_geometry.linear(idx));
+  }
+}
+
+double CoverageTracker::coverage(const map::OccupancyMap& map) const {
+  if (observable_total_ == 0) return 0.0;
+  std::size_t known = 0;
+  for (std::size_t l : in_map_) known += map.stateAt(l) != map::VoxelState::kUnknown;
+  return static_cast<double>(known) / static_cast<double>(observable_total_);
+}
+
+namespace {
+
+nlohmann::json toJson(const Summary& s) {
+  nlohmann::json j;
+  j["scene"] = s.scene;
+  j["seed"] = s.seed;
+  j["planner"] = s.planner;
+  j["finish_reason"] = s.finish_reason;
+  j["exploration_time_s"] = s.exploration_time_s;
+  j["flight_distance_m"] = s.flight_distance_m;
+  j["coverage"] = s.coverage;
+  j["collisions"] = s.collisions;
+  j["min_obstacle_distance_m"] = s.min_obstacle_distance_m;
+  j["wall_time_s"] = s.wall_time_s;
+  nlohmann::json compute = nlohmann::json::object();
+  double total = 0.0;
+  for (const auto& [name, b] : s.compute) {
+    compute[name] = {{"mean", b.mean()}, {"max", b.max_ms}, {"count", b.count}};
+    if (name == "frontier" || name == "global" || name == "local" || name == "trajectory") total += b.mean();
+  }
+  compute["total"] = {{"mean", total}};
+  j["compute_ms"] = compute;
+  for (const auto& [k, v] : s.extra) j[k] = v;
+  return j;
+}
+
+}  // namespace
+
+std::string summaryJson(const Summary& summary) { return toJson(summary).dump(2); }
+
+common::Status Recorder::writeSummary(const std::string& path) const {
+  std::ofstream out(path);
+  if (!out) return common::Status::Error(path + ": cannot be written");
+  out << summaryJson(summary_) << "\n";
+  return out ? common::Status::Ok() : common::Status::Error(path + ": write failed");
+}
+
+common::Status Recorder::writeCsv(const std::string& path) const {
+  std::ofstream out(path);
+  if (!out) return common::Status::Error(path + ": cannot be written");
+  out << "t,coverage,explored_m3,distance,layer,frontiers,x,y,z\n" << std::fixed;
+  for (const Sample& s : samples_)
+    out << std::setprecision(2) << s.t << "," << std::setprecision(5) << s.coverage << "," << std::setprecision(3)
+        << s.explored_m3 << "," << s.distance << "," << s.layer << "," << s.frontiers << "," << s.position.x() << ","
+        << s.position.y() << "," << s.position.z() << "\n";
+  return out ? common::Status::Ok() : common::Status::Error(path + ": write failed");
+}
+
+common::Status Recorder::writePlot(const std::string& path, const std::string& title) const {
+  return plotCoverage({{summary_.planner, samples_}}, title, path);
+}
+
+common::Status Recorder::writeAll(const std::string& dir) const {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) return common::Status::Error(dir + ": cannot be created (" + ec.message() + ")");
+  for (const common::Status& st :
+       {writeSummary(dir + "/summary.json"), writeCsv(dir + "/metrics.csv"),
+        writePlot(dir + "/coverage.png", summary_.scene + " (seed " + std::to_string(summary_.seed) + ")")})
+    if (!st.ok()) return st;
+  return common::Status::Ok();
+}
+
+namespace {
+
+// A "nice" axis step: 1, 2 or 5 times a power of ten, giving about `ticks` intervals over `range`.
+double niceStep(double range, int ticks) {
+  const double raw = range / std::max(1, ticks);
+  const double p = std::pow(10.0, std::floor(std::log10(raw)));
+  for (double m : {1.0, 2.0, 5.0, 10.0})
+    if (m * p >= raw) return m * p;
+  return 10.0 * p;
+}
+
+std::string fmt(double v) {
+  std::ostringstream s;
+  s << std::setprecision(4) << v;
+  return s.str();
+}
+
+}  // namespace
+
+common::Status plotCoverage(const std::vector<std::pair<std::string, std::vector<Sample>>>& series,
+                            const std::string& title, const std::string& path) {
+  const int W = 800, H = 500, left = 70, right = 20, top = 40, bottom = 55;
+  cv::Mat img(H, W, CV_8UC3, cv::Scalar(255, 255, 255));
+  double t_max = 1.0;
+  for (const auto& [name, samples] : series)
+    for (const Sample& s : samples) t_max = std::max(t_max, s.t);
+  const double t_step = niceStep(t_max, 8);
+  t_max = std::ceil(t_max / t_step) * t_step;
+  const int pw = W - left - right, ph = H - top - bottom;
+  auto px = [&](double t, double c) {
+    return cv::Point(left + static_cast<int>(std::lround(t / t_max * pw)),
+                     top + ph - static_cast<int>(std::lround(std::clamp(c, 0.0, 100.0) / 100.0 * ph)));
+  };
+  const cv::Scalar grid(225, 225, 225), axis(60, 60, 60), text(30, 30, 30);
+  const int font = cv::FONT_HERSHEY_SIMPLEX;
+  for (double c = 0; c <= 100.0 + 1e-9; c += 20.0) {
+    cv::line(img, px(0, c), px(t_max, c), grid, 1);
+    cv::putText(img, fmt(c), px(0, c) + cv::Point(-40, 5), font, 0.45, text, 1, cv::LINE_AA);
+  }
+  for (double t = 0; t <= t_max + 1e-9; t += t_step) {
+    cv::line(img, px(t, 0), px(t, 100), grid, 1);
+    cv::putText(img, fmt(t), px(t, 0) + cv::Point(-10, 20), font, 0.45, text, 1, cv::LINE_AA);
+  }
+  cv::rectangle(img, px(0, 100), px(t_max, 0), axis, 1);
+  cv::putText(img, "time (s)", cv::Point(left + pw / 2 - 30, H - 12), font, 0.5, text, 1, cv::LINE_AA);
+  cv::putText(img, "coverage (%)", cv::Point(8, top - 12), font, 0.5, text, 1, cv::LINE_AA);
+  cv::putText(img, title, cv::Point(left + 120, top - 12), font, 0.55, text, 1, cv::LINE_AA);
+  const cv::Scalar colours[] = {{200, 90, 20}, {40, 40, 220}, {40, 160, 40}, {160, 40, 160}, {20, 160, 200}};
+  for (std::size_t k = 0; k < series.size(); ++k) {
+    const cv::Scalar colour = colours[k % 5];
+    const auto& samples = series[k].second;
+    for (std::size_t i = 1; i < samples.size(); ++i)
+      if (samples[i - 1].coverage >= 0 && samples[i].coverage >= 0)
+        cv::line(img, px(samples[i - 1].t, 100.0 * samples[i - 1].coverage), px(samples[i].t, 100.0 * samples[i].coverage),
+                 colour, 2, cv::LINE_AA);
+    const cv::Point legend(left + pw - 150, top + ph - 20 - 20 * static_cast<int>(series.size() - 1 - k));
+    cv::line(img, legend, legend + cv::Point(25, 0), colour, 2, cv::LINE_AA);
+    cv::putText(img, series[k].first, legend + cv::Point(32, 5), font, 0.45, text, 1, cv::LINE_AA);
+  }
+  try {
+    if (!cv::imwrite(path, img)) return common::Status::Error(path + ": cannot be written");
+  } catch (const cv::Exception& e) {
+    return common::Status::Error(path + ": " + e.what());
+  }
+  return common::Status::Ok();
+}
+
+}  // namespace go_feap::metrics

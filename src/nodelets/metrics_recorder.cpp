@@ -1,0 +1,234 @@
+// MetricsRecorder: measures a run of the chain. Coverage of the scene's observable set and
+// collisions against ground truth (simulation: private `scene` and `seed`; with `scene` empty,
+// onboard, both are unknown), explored volume and flight distance, the per-block compute
+// times the nodelets report, and the layer manager's state. Logs a progress line, publishes a
+// status text for rviz, and when exploration finishes writes summary.json, metrics.csv and
+// coverage.png to `metrics/output_dir` (if set) and, with `metrics/shutdown_on_finish`, ends
+// the process so a headless run returns. In: map_handle, odom, status, compute_time.
+// Out: status_text (visualization_msgs/Marker), coverage (std_msgs/Float64).
+#include <nav_msgs/Odometry.h>
+#include <nodelet/nodelet.h>
+#include <pluginlib/class_list_macros.hpp>
+#include <ros/ros.h>
+#include <std_msgs/Float64.h>
+#include <visualization_msgs/Marker.h>
+
+#include <iomanip>
+#include <mutex>
+#include <optional>
+#include <sstream>
+
+#include "go_feap/ComputeTime.h"
+#include "go_feap/ExplorationStatus.h"
+#include "go_feap/metrics/metrics.h"
+#include "go_feap/ros/params.h"
+#include "go_feap/ros/shared_map.h"
+#include "go_feap/world/scene.h"
+
+namespace go_feap {
+
+class MetricsRecorder : public nodelet::Nodelet {
+ private:
+  void onInit() override {
+    ros::NodeHandle& nh = getNodeHandle();
+    ros::NodeHandle& pnh = getPrivateNodeHandle();
+    ros_params::ParamReader p(pnh);
+    std::string scene_spec;
+    p.get("scene", scene_spec).get("metrics/sample_rate", sample_rate_);
+    p.get("metrics/collision_distance", collision_distance_).get("metrics/output_dir", output_dir_);
+    p.get("metrics/planner", planner_).get("metrics/shutdown_on_finish", shutdown_on_finish_);
+    p.get("metrics/progress_period", progress_period_).get("world_frame", world_frame_);
+    ros_params::requireOrThrow(p.ok(), getName(), p.error());
+    ros_params::requireOrThrow(std::isfinite(sample_rate_) && sample_rate_ > 0.0, getName(),
+                               "parameter '" + p.fullName("metrics/sample_rate") + "' must be > 0");
+    ros_params::requireOrThrow(std::isfinite(collision_distance_) && collision_distance_ >= 0.0, getName(),
+                               "parameter '" + p.fullName("metrics/collision_distance") + "' must be >= 0");
+    ros_params::requireOrThrow(std::isfinite(progress_period_) && progress_period_ > 0.0, getName(),
+                               "parameter '" + p.fullName("metrics/progress_period") + "' must be > 0");
+    metrics::Summary& s = recorder_.summary();
+    s.planner = planner_;
+    s.coverage = -1.0;
+    if (!scene_spec.empty()) {
+      scene_ = std::make_unique<world::Scene>(ros_params::loadScene(pnh, getName()));
+      s.scene = scene_->name;
+      s.seed = scene_->seed;
+      s.min_obstacle_distance_m = 1.0;
+    } else {
+      s.scene = "onboard";
+    }
+    text_pub_ = nh.advertise<visualization_msgs::Marker>("status_text", 2);
+    coverage_pub_ = nh.advertise<std_msgs::Float64>("coverage", 2);
+    handle_sub_ = nh.subscribe("map_handle", 1, &MetricsRecorder::onHandle, this);
+    odom_sub_ = nh.subscribe("odom", 20, &MetricsRecorder::onOdom, this);
+    status_sub_ = nh.subscribe("status", 5, &MetricsRecorder::onStatus, this);
+    compute_sub_ = nh.subscribe("compute_time", 50, &MetricsRecorder::onCompute, this);
+    timer_ = nh.createTimer(ros::Duration(1.0 / sample_rate_), &MetricsRecorder::onTimer, this);
+  }
+
+  void onHandle(const boost::shared_ptr<const ros_map::MapHandle>& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (shared_) return;
+    auto map = ros_map::acceptHandle(*msg);
+    if (!map) {
+      NODELET_ERROR_STREAM_THROTTLE(10.0, getName() << ": " << map.message());
+      return;
+    }
+    shared_ = *map;
+    if (scene_) coverage_ = std::make_unique<metrics::CoverageTracker>(*scene_, shared_->map->geometry());
+  }
+
+  void onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
+    const auto& q = msg->pose.pose.position;
+    const common::Vec3 p(q.x, q.y, q.z);
+    if (!p.allFinite()) return;
+    std::lock_guard<std::mutex> lock(mutex_);
+    position_ = p;
+    if (!started() || finished_) return;
+    if (last_position_) distance_ += (p - *last_position_).norm();
+    last_position_ = p;
+    if (!scene_) return;
+    const double clearance = metrics::obstacleDistance(*scene_, p, 1.0);
+    metrics::Summary& s = recorder_.summary();
+    s.min_obstacle_distance_m = std::min(s.min_obstacle_distance_m, clearance);
+    const bool colliding = clearance < collision_distance_;
+    if (colliding && !in_collision_) {
+      ++s.collisions;
+      NODELET_WARN_STREAM(getName() << ": collision at " << p.transpose() << " (" << clearance
+                                    << " m from a ground-truth obstacle)");
+    }
+    in_collision_ = colliding;
+  }
+
+  void onCompute(const ComputeTime::ConstPtr& msg) {
+    if (!std::isfinite(msg->ms) || msg->ms < 0.0) return;
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (started() && !finished_) recorder_.addTime(msg->block, msg->ms);
+  }
+
+  void onStatus(const ExplorationStatus::ConstPtr& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    status_ = msg;
+    if (msg->state == ExplorationStatus::FINISHED && !finished_ && started_at_) finishRun(msg);
+    if (msg->state != ExplorationStatus::WAIT_TRIGGER && !started_at_) started_at_ = ros::Time::now() - ros::Duration(msg->elapsed);
+  }
+
+  bool started() const { return started_at_.has_value(); }
+
+  double currentCoverage() const {
+    if (!coverage_ || !shared_) return -1.0;
+    std::shared_lock<std::shared_mutex> map_lock(shared_->mutex);
+    return coverage_->coverage(shared_->map->occupancy());
+  }
+
+  void addSample() {
+    metrics::Sample s;
+    s.t = status_ ? status_->elapsed : 0.0;
+    s.coverage = currentCoverage();
+    if (shared_) {
+      std::shared_lock<std::shared_mutex> map_lock(shared_->mutex);
+      const double res = shared_->map->geometry().resolution();
+      s.explored_m3 = static_cast<double>(shared_->map->occupancy().knownCount()) * res * res * res;
+    }
+    s.distance = distance_;
+    s.layer = status_ ? static_cast<int>(status_->layer) : 0;
+    s.frontiers = status_ ? static_cast<int>(status_->frontier_count) : 0;
+    if (position_) s.position = *position_;
+    recorder_.addSample(s);
+    last_sample_ = s;
+  }
+
+  void onTimer(const ros::TimerEvent&) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!started() || finished_) {
+      publishText();
+      return;
+    }
+    addSample();
+    std_msgs::Float64 c;
+    c.data = last_sample_.coverage;
+    coverage_pub_.publish(c);
+    publishText();
+    if (last_sample_.t >= next_progress_) {
+      next_progress_ = last_sample_.t + progress_period_;
+      NODELET_INFO_STREAM(getName() << ": [progress] " << progressLine());
+    }
+  }
+
+  std::string progressLine() const {
+    std::ostringstream line;
+    line << std::fixed << std::setprecision(1);
+    line << (status_ ? status_->state_name : std::string("WAIT_TRIGGER"));
+    if (status_) line << " band " << status_->layer;
+    line << " coverage ";
+    if (last_sample_.coverage >= 0.0)
+      line << 100.0 * last_sample_.coverage << " %";
+    else
+      line << "n/a";
+    line << " t " << last_sample_.t << " s distance " << distance_ << " m";
+    if (scene_) line << " collisions " << recorder_.summary().collisions;
+    return line.str();
+  }
+
+  void publishText() {
+    if (!position_) return;
+    visualization_msgs::Marker text;
+    text.header.stamp = ros::Time::now();
+    text.header.frame_id = world_frame_;
+    text.ns = "status";
+    text.type = visualization_msgs::Marker::TEXT_VIEW_FACING;
+    text.pose.position.x = position_->x();
+    text.pose.position.y = position_->y();
+    text.pose.position.z = position_->z() + 1.0;
+    text.pose.orientation.w = 1.0;
+    text.scale.z = 0.35;
+    text.color.r = text.color.g = text.color.b = 1.0;
+    text.color.a = 1.0;
+    text.text = progressLine();
+    text_pub_.publish(text);
+  }
+
+  void finishRun(const ExplorationStatus::ConstPtr& msg) {
+    finished_ = true;
+    addSample();
+    metrics::Summary& s = recorder_.summary();
+    s.finish_reason = msg->finish_reason;
+    s.exploration_time_s = msg->elapsed;
+    s.flight_distance_m = distance_;
+    s.coverage = last_sample_.coverage;
+    s.wall_time_s = (ros::WallTime::now() - wall_start_).toSec();
+    if (shared_) s.extra["map_memory_mb"] = static_cast<double>(shared_->map->memoryBytes()) / (1024.0 * 1024.0);
+    NODELET_INFO_STREAM(getName() << ": finished (" << s.finish_reason << "): " << progressLine());
+    if (!output_dir_.empty()) {
+      const common::Status st = recorder_.writeAll(output_dir_);
+      if (st.ok())
+        NODELET_INFO_STREAM(getName() << ": results written to " << output_dir_);
+      else
+        NODELET_ERROR_STREAM(getName() << ": " << st.message());
+    }
+    NODELET_INFO_STREAM(getName() << ": [summary] " << metrics::summaryJson(s));
+    if (shutdown_on_finish_) ros::requestShutdown();
+  }
+
+  double sample_rate_ = 2.0, collision_distance_ = 0.1, progress_period_ = 5.0;
+  std::string output_dir_, planner_, world_frame_;
+  bool shutdown_on_finish_ = false;
+  std::mutex mutex_;
+  std::unique_ptr<world::Scene> scene_;
+  std::shared_ptr<ros_map::SharedMap> shared_;
+  std::unique_ptr<metrics::CoverageTracker> coverage_;
+  metrics::Recorder recorder_;
+  metrics::Sample last_sample_;
+  ExplorationStatus::ConstPtr status_;
+  std::optional<ros::Time> started_at_;
+  std::optional<common::Vec3> position_, last_position_;
+  double distance_ = 0.0, next_progress_ = 0.0;
+  bool in_collision_ = false, finished_ = false;
+  ros::WallTime wall_start_ = ros::WallTime::now();
+  ros::Publisher text_pub_, coverage_pub_;
+  ros::Subscriber handle_sub_, odom_sub_, status_sub_, compute_sub_;
+  ros::Timer timer_;
+};
+
+}  // namespace go_feap
+
+PLUGINLIB_EXPORT_CLASS(go_feap::MetricsRecorder, nodelet::Nodelet)

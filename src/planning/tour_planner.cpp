@@ -1,0 +1,45 @@
+#include "go_feap/planning/tour_planner.h"
+
+#include <set>
+
+namespace go_feap::planning {
+
+FrontierSummary summarize(const frontier::Frontier& frontier, double now) {
+  FrontierSummary s;
+  s.id = frontier.id;
+  s.average = frontier.average;
+  s.cell_count = static_cast<int>(frontier.cells.size());
+  s.duration = frontier.duration(now);
+  s.n_near = frontier.n_near;
+  s.active = frontier.active;
+  return s;
+}
+
+common::Result<GlobalTour> TourPlanner::plan(const std::vector<FrontierSummary>& frontiers, const Vec3& uav,
+                                             std::size_t* fallbacks) {
+  std::set<unsigned> ids;
+  for (const FrontierSummary& f : frontiers) ids.insert(f.id);
+  for (auto it = cache_.begin(); it != cache_.end();)
+    it = ids.count(it->first.first) && ids.count(it->first.second) ? std::next(it) : cache_.erase(it);
+  std::size_t local_fallbacks = 0;
+  PathDistances d;
+  d.from_uav = [&](std::size_t j) {
+    const double e = (frontiers[j].average - uav).norm();
+    if (e >= config_.s_near) return e;
+    const PathDistance pd = pathDistance(astar_, uav, frontiers[j].average);
+    local_fallbacks += pd.euclidean_fallback;
+    return pd.metres;
+  };
+  d.between = [&](std::size_t i, std::size_t j) {
+    const auto key = std::make_pair(frontiers[i].id, frontiers[j].id);
+    auto it = cache_.find(key);
+    if (it == cache_.end()) it = cache_.emplace(key, pathDistance(astar_, frontiers[i].average, frontiers[j].average)).first;
+    local_fallbacks += it->second.euclidean_fallback;
+    return it->second.metres;
+  };
+  auto tour = planTour(frontiers, d, config_);
+  if (fallbacks) *fallbacks = local_fallbacks;
+  return tour;
+}
+
+}  // namespace go_feap::planning

@@ -1,0 +1,244 @@
+// go_feap_bench: headless lock-step exploration runs (the core classes the nodelets wrap, in
+// simulated time, as fast as the CPU allows) for several scenes, planner modes and seeds, with
+// per-run results and the aggregate tables of the paper (Tables II–IV).
+#include <sys/resource.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <mutex>
+#include <sstream>
+#include <thread>
+
+#include "cli_args.h"
+#include "go_feap/bench/exploration_run.h"
+#include "go_feap/metrics/table.h"
+#include "go_feap/world/scene_files.h"
+
+#ifndef GO_FEAP_CONFIG_DIR
+#error "GO_FEAP_CONFIG_DIR must name the package's config directory"
+#endif
+
+namespace {
+
+using namespace go_feap;
+
+int usage(const char* why) {
+  if (why) std::cerr << "go_feap_bench: " << why << "\n";
+  std::cerr
+      << "usage: go_feap_bench [--scene maze|powerplant|PATH.yaml[,...]] [--seed S] [--runs N]\n"
+         "                     [--planner go_feap|fuel|nearest[,...]] [--max-sim-time T] [--out DIR]\n"
+         "                     [--jobs J] [--perf] [--config DIR]\n"
+         "Runs N explorations per scene and planner (seeds S .. S+N-1) in simulated lock-step time and\n"
+         "writes DIR/<scene>/<planner>/seed<k>/{summary.json,metrics.csv,coverage.png}, DIR/table.md,\n"
+         "DIR/table.json and DIR/<scene>_coverage.png. Defaults: maze, seed 0, 1 run, go_feap,\n"
+         "900 s, results/bench-<UTC time>, 1 job, config " GO_FEAP_CONFIG_DIR ".\n"
+         "--perf prints per-block timings and the speed-up over simulated time.\n";
+  return 2;
+}
+
+std::vector<std::string> split(const std::string& s) {
+  std::vector<std::string> out;
+  std::stringstream in(s);
+  std::string item;
+  while (std::getline(in, item, ','))
+    if (!item.empty()) out.push_back(item);
+  return out;
+}
+
+std::string sceneName(const std::string& spec) {
+  std::string name = std::filesystem::path(spec).stem().string();
+  return name.empty() ? spec : name;
+}
+
+struct Job {
+  std::string scene_spec, planner;
+  std::uint64_t seed = 0;
+};
+
+struct Outcome {
+  bool ok = false;
+  std::string error;
+  metrics::Summary summary;
+  std::vector<metrics::Sample> samples;
+};
+
+double peakRssMb() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return static_cast<double>(u.ru_maxrss) / 1024.0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::map<std::string, std::string> args;
+  bool help = false;
+  const std::string error = tools::parseArgs(argc, argv,
+                                             {{"--scene", true}, {"--seed", true}, {"--runs", true}, {"--planner", true},
+                                              {"--max-sim-time", true}, {"--out", true}, {"--jobs", true},
+                                              {"--perf", false}, {"--config", true}},
+                                             args, help);
+  if (help) return usage(nullptr), 0;
+  if (!error.empty()) return usage(error.c_str());
+  const std::vector<std::string> scenes = split(args.count("--scene") ? args["--scene"] : "maze");
+  const std::vector<std::string> planners = split(args.count("--planner") ? args["--planner"] : "go_feap");
+  unsigned long long seed = 0, runs = 1, jobs = 1;
+  if (args.count("--seed") && !tools::parseCount(args["--seed"], seed)) return usage("--seed must be an integer >= 0");
+  if (args.count("--runs") && (!tools::parseCount(args["--runs"], runs) || runs == 0))
+    return usage("--runs must be a positive integer");
+  if (args.count("--jobs") && (!tools::parseCount(args["--jobs"], jobs) || jobs == 0))
+    return usage("--jobs must be a positive integer");
+  double max_sim_time = 900.0;
+  if (args.count("--max-sim-time")) {
+    try {
+      max_sim_time = std::stod(args["--max-sim-time"]);
+    } catch (const std::exception&) {
+      max_sim_time = -1.0;
+    }
+    if (!(max_sim_time > 0.0) || !std::isfinite(max_sim_time)) return usage("--max-sim-time must be a number > 0");
+  }
+  if (scenes.empty() || planners.empty()) return usage("--scene and --planner need at least one name");
+  const std::string config_dir = args.count("--config") ? args["--config"] : GO_FEAP_CONFIG_DIR;
+  std::string out_dir = args["--out"];
+  if (out_dir.empty()) {
+    const std::time_t now = std::time(nullptr);
+    std::ostringstream name;
+    name << "results/bench-" << std::put_time(std::gmtime(&now), "%Y%m%dT%H%M%SZ");
+    out_dir = name.str();
+  }
+  const bool perf = args.count("--perf") > 0;
+
+  // Check every configuration and scene before the first run starts.
+  std::map<std::string, bench::ExplorationConfig> configs;
+  for (const std::string& p : planners) {
+    auto c = bench::loadExplorationConfig(config_dir, p);
+    if (!c) {
+      std::cerr << "go_feap_bench: " << c.message() << "\n";
+      return 1;
+    }
+    configs.emplace(p, *c);
+  }
+  std::vector<Job> queue;
+  for (const std::string& s : scenes) {
+    auto scene = world::makeScene(s, seed);
+    if (!scene) {
+      std::cerr << "go_feap_bench: scene '" << s << "': " << scene.message() << "\n";
+      return 1;
+    }
+    for (const std::string& p : planners)
+      for (unsigned long long r = 0; r < runs; ++r) queue.push_back({s, p, seed + r});
+  }
+
+  std::vector<Outcome> outcomes(queue.size());
+  std::atomic<std::size_t> next{0}, done{0};
+  std::mutex print_mutex;
+  std::vector<double> sim_time(jobs, 0.0);
+  const auto wall0 = std::chrono::steady_clock::now();
+  auto last_report = std::chrono::steady_clock::now() - std::chrono::seconds(1);
+  auto report = [&](bool force = false) {
+    const auto now = std::chrono::steady_clock::now();
+    if (!force && now - last_report < std::chrono::milliseconds(500)) return;
+    last_report = now;
+    std::ostringstream line;
+    line << "\r[" << done.load() << "/" << queue.size() << " runs]";
+    for (std::size_t j = 0; j < sim_time.size(); ++j) line << " job" << j << " t=" << std::fixed << std::setprecision(0) << sim_time[j] << "s";
+    line << "   ";
+    std::cerr << line.str() << std::flush;
+  };
+  auto worker = [&](std::size_t job_index) {
+    for (std::size_t i; (i = next++) < queue.size();) {
+      const Job& job = queue[i];
+      Outcome& out = outcomes[i];
+      try {
+        auto scene = world::makeScene(job.scene_spec, job.seed);
+        if (!scene) throw std::runtime_error(scene.message());
+        bench::ExplorationRun run(*scene, configs.at(job.planner), job.planner, max_sim_time);
+        run.run([&](const bench::Progress& p) {
+          std::lock_guard<std::mutex> lock(print_mutex);
+          sim_time[job_index] = p.t;
+          report();
+        });
+        out.summary = run.recorder().summary();
+        out.samples = run.recorder().samples();
+        std::ostringstream dir;
+        dir << out_dir << "/" << sceneName(job.scene_spec) << "/" << job.planner << "/seed" << job.seed;
+        const common::Status st = run.recorder().writeAll(dir.str());
+        if (!st.ok()) throw std::runtime_error(st.message());
+        std::ofstream events(dir.str() + "/events.log");
+        for (const std::string& e : run.events()) events << e << "\n";
+        out.ok = true;
+      } catch (const std::exception& e) {
+        out.error = e.what();
+      }
+      ++done;
+      std::lock_guard<std::mutex> lock(print_mutex);
+      report(true);
+    }
+  };
+  std::vector<std::thread> threads;
+  for (std::size_t j = 0; j < jobs; ++j) threads.emplace_back(worker, j);
+  for (auto& t : threads) t.join();
+  std::cerr << "\n";
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+
+  std::vector<metrics::Summary> summaries;
+  int failures = 0;
+  for (std::size_t i = 0; i < queue.size(); ++i) {
+    const Outcome& o = outcomes[i];
+    if (!o.ok) {
+      ++failures;
+      std::cerr << "go_feap_bench: " << queue[i].scene_spec << " / " << queue[i].planner << " / seed " << queue[i].seed
+                << " failed: " << o.error << "\n";
+      continue;
+    }
+    summaries.push_back(o.summary);
+    const metrics::Summary& s = o.summary;
+    std::cout << std::fixed << std::setprecision(1) << s.scene << " " << s.planner << " seed " << s.seed << ": "
+              << s.finish_reason << ", " << s.exploration_time_s << " s, " << s.flight_distance_m << " m, coverage "
+              << 100.0 * s.coverage << " %, collisions " << s.collisions << ", wall " << s.wall_time_s << " s ("
+              << s.exploration_time_s / std::max(1e-9, s.wall_time_s) << "x real time)\n";
+  }
+  const auto rows = metrics::aggregate(summaries);
+  std::filesystem::create_directories(out_dir);
+  std::ofstream(out_dir + "/table.json") << metrics::tableJson(rows) << "\n";
+  const std::string md = metrics::tableMarkdown(rows);
+  std::ofstream(out_dir + "/table.md") << md;
+  // Side-by-side coverage curves per scene (first seed of each planner).
+  for (const std::string& s : scenes) {
+    std::vector<std::pair<std::string, std::vector<metrics::Sample>>> series;
+    for (std::size_t i = 0; i < queue.size(); ++i)
+      if (outcomes[i].ok && queue[i].scene_spec == s && queue[i].seed == seed)
+        series.emplace_back(queue[i].planner, outcomes[i].samples);
+    if (!series.empty())
+      metrics::plotCoverage(series, sceneName(s) + " (seed " + std::to_string(seed) + ")",
+                            out_dir + "/" + sceneName(s) + "_coverage.png");
+  }
+  std::cout << "\n" << md << "\nresults: " << out_dir << "\n";
+  if (perf) {
+    std::cout << "\nperf (mean / max ms per call, over all runs):\n";
+    std::map<std::string, metrics::BlockTime> blocks;
+    double sim = 0.0, run_wall = 0.0;
+    for (const metrics::Summary& s : summaries) {
+      for (const auto& [name, b] : s.compute) {
+        blocks[name].total_ms += b.total_ms;
+        blocks[name].count += b.count;
+        blocks[name].max_ms = std::max(blocks[name].max_ms, b.max_ms);
+      }
+      sim += s.exploration_time_s;
+      run_wall += s.wall_time_s;
+    }
+    for (const auto& [name, b] : blocks)
+      std::cout << "  " << std::left << std::setw(11) << name << std::right << std::setprecision(2) << std::setw(9)
+                << b.mean() << " / " << std::setw(9) << b.max_ms << "  (" << b.count << " calls)\n";
+    std::cout << std::setprecision(1) << "  simulated " << sim << " s in " << run_wall << " s of run wall time: "
+              << sim / std::max(1e-9, run_wall) << "x real time; total wall " << wall << " s with " << jobs
+              << " job(s); peak memory " << peakRssMb() << " MB\n";
+  }
+  return failures == 0 ? 0 : 1;
+}

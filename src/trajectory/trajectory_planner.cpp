@@ -1,0 +1,136 @@
+#include "go_feap/trajectory/trajectory_planner.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace go_feap::trajectory {
+
+TrajectorySample sampleTrajectory(const Trajectory& trajectory, double t) {
+  TrajectorySample s;
+  t = std::max(0.0, t);
+  const double T = trajectory.position.duration();
+  const double tc = std::min(t, T);
+  s.position = trajectory.position.evaluate(tc, 0);
+  s.completed = t > T;
+  if (!s.completed) {
+    s.velocity = trajectory.position.evaluate(tc, 1);
+    s.acceleration = trajectory.position.evaluate(tc, 2);
+  }
+  const double Ty = trajectory.yaw.duration();
+  const double ty = std::min(t, Ty);
+  const double yaw = trajectory.yaw.evaluate(ty, 0)(0);
+  s.yaw = std::atan2(std::sin(yaw), std::cos(yaw));
+  if (t <= Ty) s.yaw_dot = trajectory.yaw.evaluate(ty, 1)(0);
+  return s;
+}
+
+common::Status TrajectoryPlannerConfig::validate() const {
+  auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
+  if (!positive(path_spacing)) return common::Status::Error("planner: path_spacing must be finite and > 0");
+  if (!positive(collision_horizon))
+    return common::Status::Error("planner: collision_horizon must be finite and > 0");
+  if (!std::isfinite(min_time_between_plans) || min_time_between_plans < 0.0)
+    return common::Status::Error("planner: min_time_between_plans must be finite and >= 0");
+  if (!positive(cruise_fraction) || cruise_fraction > 1.0)
+    return common::Status::Error("planner: cruise_fraction must be in (0, 1]");
+  if (max_refits < 0) return common::Status::Error("planner: max_refits must be >= 0");
+  return common::Status::Ok();
+}
+
+namespace {
+
+// Yaw spline over `duration` from yaw0 to yaw1; when the yaw-rate limit cannot be met, the heading is
+// kept (report->yaw_fallback).
+common::Result<UniformBspline> yawSpline(double yaw0, double yaw1, double duration, const OptimizerConfig& optimizer,
+                                         PlanReport* report) {
+  duration = std::max(0.1, duration);
+  auto yaw = optimizeYaw({yaw0, yaw1}, duration, 0.0, optimizer);
+  if (yaw) return yaw;
+  if (report) report->yaw_fallback = true;
+  return optimizeYaw({yaw0, yaw0}, duration, 0.0, optimizer);
+}
+
+}  // namespace
+
+common::Result<Trajectory> planTrajectory(const PlanRequest& request, const planning::Astar& astar,
+                                          const map::Esdf& esdf, const OptimizerConfig& optimizer,
+                                          const TrajectoryPlannerConfig& config, PlanReport* report) {
+  using R = common::Result<Trajectory>;
+  PlanReport local;
+  PlanReport& rep = report ? *report : local;
+  rep = PlanReport();
+  if (!request.start.allFinite() || !request.velocity.allFinite() || !request.target.allFinite() ||
+      !std::isfinite(request.yaw) || !std::isfinite(request.target_yaw))
+    return R::Error("plan request is not finite");
+  const planning::PathResult path = astar.search(request.start, request.target);
+  rep.path_status = path.status;
+  if (path.status != planning::PathStatus::kFound)
+    return R::Error(std::string("no path: ") + planning::toString(path.status));
+  rep.path_length = path.length;
+  std::vector<Vec3> points = path.path;
+  points.front() = request.start;  // start exactly at the current reference
+  const double length = path.length;
+  const double spacing = std::max(0.05, std::min(config.path_spacing, length / 6.0));
+  const auto samples = UniformBspline::resamplePolyline(points, spacing);
+  // Initial timing within the limits: cruise at a share of v_max, but short hops from (or to) rest
+  // need the time an a_max-limited accelerate/brake takes.
+  const double v0 = request.velocity.norm();
+  const double total = std::max({length / (config.cruise_fraction * optimizer.v_max),
+                                 2.5 * std::sqrt(length / optimizer.a_max), v0 / optimizer.a_max + 0.5});
+  double dt = total / static_cast<double>(std::max<std::size_t>(1, samples.size() - 1));
+  common::Result<UniformBspline> spline = common::Result<UniformBspline>::Error("not planned");
+  // Optimise; when the result breaks a limit, refit slower (the start velocity is kept, so the
+  // reference stays continuous) and try again; a refit that passes the same checks as an optimised
+  // spline is accepted as it is.
+  for (int attempt = 0; attempt <= config.max_refits; ++attempt) {
+    rep.refits = attempt;
+    const UniformBspline init = UniformBspline::fitPath(samples, dt, request.velocity, Vec3::Zero());
+    spline = optimize(init, esdf, optimizer);
+    if (spline) break;
+    if (checkTrajectory(init, esdf, optimizer).ok()) {
+      spline = init;
+      rep.used_fit = true;
+      break;
+    }
+    const double f = std::max({1.5, init.maxVelocity() / (0.9 * optimizer.v_max),
+                               std::sqrt(init.maxAcceleration() / (0.9 * optimizer.a_max))});
+    dt *= std::min(f, 4.0);
+  }
+  if (!spline) return R::Error("optimisation failed: " + spline.message());
+  Trajectory out;
+  out.position = std::move(spline).value();
+  auto yaw = yawSpline(request.yaw, request.target_yaw, out.position.duration(), optimizer, &rep);
+  if (!yaw) return R::Error("yaw spline failed: " + yaw.message());
+  out.yaw = std::move(yaw).value();
+  return out;
+}
+
+Trajectory stopTrajectory(const Vec3& p, const Vec3& v, double yaw, const OptimizerConfig& optimizer) {
+  Trajectory out;
+  out.position = safeStop(p, v, optimizer.a_max);
+  auto y = optimizeYaw({yaw, yaw}, std::max(0.1, out.position.duration()), 0.0, optimizer);
+  // A constant yaw always meets the rate limit; keep a valid spline even if it did not.
+  out.yaw = y ? std::move(y).value() : UniformBspline(Eigen::MatrixXd::Constant(1, 4, yaw), 3, 0.1);
+  return out;
+}
+
+ReplanReason replanReason(const Trajectory* current, double t, const Vec3& target, bool target_changed,
+                          const map::Esdf& esdf, const ReplanConfig& replan, const OptimizerConfig& optimizer,
+                          const TrajectoryPlannerConfig& config) {
+  ReplanInputs in;
+  in.target_changed = target_changed;
+  if (current) {
+    in.has_trajectory = true;
+    in.time_left = current->duration() - t;
+    in.target_distance_to_end = (current->position.position(current->duration()) - target).norm();
+    in.collision_time =
+        firstCollisionTime(current->position, std::max(0.0, t), esdf, optimizer.min_clearance, config.collision_horizon);
+  }
+  const ReplanReason reason = shouldReplan(in, replan);
+  // A trajectory that ends at its target needs no replanning for running out: it arrives.
+  const bool ends_at_target = current && in.target_distance_to_end <= replan.target_tolerance;
+  if (ends_at_target && reason == ReplanReason::kShortTimeLeft) return ReplanReason::kNone;
+  return reason;
+}
+
+}  // namespace go_feap::trajectory
