@@ -71,11 +71,13 @@ common::Result<ExplorationConfig> loadExplorationConfig(const std::string& confi
   common::YamlReader exploration({config_dir + "/exploration.yaml", mode});
   config::readFrontier(exploration, c.frontier);
   config::readGlobalPlanner(exploration, c.global);
+  exploration.get("global/rate", c.loop.plan_rate);
   config::readAstar(exploration, c.distance_astar);
   config::readLayers(exploration, c.layers);
   exploration.get("layers/rate", c.layer_rate);
   config::readViewpoints(exploration, c.viewpoints);
   config::readLocal(exploration, c.local);
+  exploration.get("metrics/sample_rate", c.loop.sample_rate).get("metrics/collision_distance", c.loop.collision_distance);
   if (!exploration.ok()) return exploration.status();
   common::YamlReader traj({config_dir + "/trajectory.yaml", mode});
   config::readOptimizer(traj, c.optimizer);
@@ -85,8 +87,7 @@ common::Result<ExplorationConfig> loadExplorationConfig(const std::string& confi
   config::readAstar(traj, c.flight_astar);
   if (!traj.ok()) return traj.status();
   common::YamlReader bench(config_dir + "/bench.yaml");
-  bench.get("loop/control_rate", c.loop.control_rate).get("loop/plan_rate", c.loop.plan_rate);
-  bench.get("loop/sample_rate", c.loop.sample_rate).get("loop/collision_distance", c.loop.collision_distance);
+  bench.get("loop/control_rate", c.loop.control_rate);
   if (!bench.ok()) return bench.status();
   const common::Status st = c.validate();
   if (!st.ok()) return st;
@@ -222,11 +223,9 @@ void ExplorationRun::planStep() {
     current->viewpoint.position = target_->position;
     current->viewpoint.yaw = target_->yaw;
     current->committed_at = target_->committed_at;
-    // Reached: the whole trajectory (position and yaw) flown, a frame integrated since, and close by.
-    current->reached = trajectory_ &&
-                       t_ - trajectory_start_ >= std::max(trajectory_->duration(), trajectory_->yaw.duration()) +
-                                                     1.0 / config_.camera_rate &&
-                       (position - target_->position).norm() <= config_.replan.target_tolerance;
+    current->reached = planning::targetReached(position, yaw(), vehicle_.state().velocity.norm(), current->viewpoint,
+                                               config_.local);
+    current->cost = planning::edgeCost((position - target_->position).norm(), yaw(), target_->yaw, config_.local);
     // The remaining value only matters while the commitment holds.
     current->remaining_visible = config_.viewpoints.min_visible;
     if (!current->reached && t_ - target_->committed_at < config_.local.commit_time)
@@ -234,7 +233,9 @@ void ExplorationRun::planStep() {
                                                               config_.viewpoints, config_.frontier.max_cluster_extent);
   }
   const planning::TargetDecision decision =
-      planning::decideTarget(current ? &*current : nullptr, vp, t_, config_.viewpoints.min_visible, config_.local);
+      planning::decideTarget(current ? &*current : nullptr, vp,
+                             planning::edgeCost((position - vp.position).norm(), yaw(), vp.yaw, config_.local), t_,
+                             config_.viewpoints.min_visible, config_.local);
   if (decision == planning::TargetDecision::kKeep) return;
   if (decision == planning::TargetDecision::kReachedInVain) {
     log("frontier " + std::to_string(target_->frontier) + " not cleared from its reached viewpoint: failed attempt");
@@ -242,7 +243,8 @@ void ExplorationRun::planStep() {
     target_.reset();
     return;
   }
-  const bool changed = !target_ || (vp.position - target_->position).norm() > config_.replan.target_tolerance;
+  const bool changed =
+      !target_ || trajectory::targetMoved(target_->position, target_->yaw, vp.position, vp.yaw, config_.replan);
   target_changed_ = target_changed_ || changed;
   if (changed) {
     std::ostringstream what;
@@ -273,7 +275,9 @@ void ExplorationRun::trajectoryStep() {
   request.target = target_->position;
   request.target_yaw = target_->yaw;
   const auto t0 = Clock::now();
-  auto planned = trajectory::planTrajectory(request, *flight_astar_, map_->esdf(), config_.optimizer, config_.planner);
+  trajectory::PlanReport report;
+  auto planned =
+      trajectory::planTrajectory(request, *flight_astar_, map_->esdf(), config_.optimizer, config_.planner, &report);
   recorder_.addTime("trajectory", msSince(t0));
   trajectory_start_ = t_;
   if (planned) {
@@ -282,7 +286,8 @@ void ExplorationRun::trajectoryStep() {
   }
   log(std::string("plan to frontier ") + std::to_string(target_->frontier) + " failed (" + trajectory::toString(reason) +
       "): " + planned.message());
-  failed_.push_back(target_->frontier);
+  // A start the search cannot leave is the vehicle's predicament, not the frontier's fault.
+  if (report.path_status != planning::PathStatus::kStartBlocked) failed_.push_back(target_->frontier);
   trajectory_ = trajectory::stopTrajectory(request.start, request.velocity, request.yaw, config_.optimizer);
   target_.reset();
 }

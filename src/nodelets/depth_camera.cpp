@@ -33,9 +33,12 @@ class DepthCamera : public nodelet::Nodelet {
     int seed = 0;
     Eigen::Matrix4d T_B_C;
     p.get("depth_camera/noise_seed", seed).get("depth_camera/rate", rate_);
+    p.get("depth_camera/encoding", encoding_);
     p.get("depth_camera/camera_frame", camera_frame_).getMatrix4("depth_camera/T_B_C", T_B_C);
     p.get("simulation/world_frame", world_frame_).get("simulation/body_frame", body_frame_);
     ros_params::requireOrThrow(p.ok(), me, p.error());
+    ros_params::requireOrThrow(encoding_ == "32FC1" || encoding_ == "16UC1", me,
+                               "parameter '" + p.fullName("depth_camera/encoding") + "' must be 32FC1 or 16UC1");
     ros_params::requireOrThrow(c.validate().ok(), me, c.validate().message());
     ros_params::requireOrThrow(rate_ > 0.0 && rate_ <= 100.0, me,
                                "parameter '" + p.fullName("depth_camera/rate") + "' must be in (0, 100] Hz");
@@ -88,6 +91,12 @@ class DepthCamera : public nodelet::Nodelet {
     image.encoding = sensor_msgs::image_encodings::TYPE_32FC1;
     renderer_->render(T_W_C, image.image);
     if (config_.noise_stddev_per_m > 0.0 || config_.dropout_probability > 0.0) renderer_->addNoise(image.image, rng_);
+    if (encoding_ == "16UC1") {  // as a RealSense publishes it: millimetres, 0 = no return
+      cv::Mat mm;
+      image.image.convertTo(mm, CV_16UC1, 1000.0);
+      image.image = mm;
+      image.encoding = sensor_msgs::image_encodings::TYPE_16UC1;
+    }
 
     sensor_msgs::CameraInfo info;
     info.header = image.header;
@@ -112,7 +121,7 @@ class DepthCamera : public nodelet::Nodelet {
   sim::DepthCameraConfig config_;
   sim::CameraIntrinsics intrinsics_;
   double rate_ = 15.0;
-  std::string world_frame_, body_frame_, camera_frame_;
+  std::string world_frame_, body_frame_, camera_frame_, encoding_;
   Eigen::Isometry3d T_B_C_ = Eigen::Isometry3d::Identity();
   std::unique_ptr<world::Scene> scene_;
   std::unique_ptr<sim::DepthRenderer> renderer_;

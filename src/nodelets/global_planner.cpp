@@ -12,6 +12,8 @@
 #include <chrono>
 #include <mutex>
 #include <optional>
+#include <set>
+#include <std_msgs/UInt32MultiArray.h>
 
 #include "go_feap/FrontierArray.h"
 #include "go_feap/GlobalTour.h"
@@ -30,9 +32,12 @@ class GlobalPlanner : public nodelet::Nodelet {
     ros::NodeHandle& nh = getNodeHandle();
     ros_params::ParamReader p(getPrivateNodeHandle());
     config::readGlobalPlanner(p, config_);
+    p.get("global/rate", rate_);
     config::readAstar(p, astar_config_);
     p.get("world_frame", world_frame_);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
+    ros_params::requireOrThrow(std::isfinite(rate_) && rate_ > 0.0, getName(),
+                               "parameter '" + p.fullName("global/rate") + "' must be > 0");
     for (const common::Status& st : {config_.validate(), astar_config_.validate()})
       ros_params::requireOrThrow(st.ok(), getName(), st.message());
     compute_pub_ = nh.advertise<ComputeTime>("compute_time", 20);
@@ -41,6 +46,7 @@ class GlobalPlanner : public nodelet::Nodelet {
     handle_sub_ = nh.subscribe("map_handle", 1, &GlobalPlanner::onHandle, this);
     odom_sub_ = nh.subscribe("odom", 5, &GlobalPlanner::onOdom, this);
     frontier_sub_ = nh.subscribe("frontiers", 2, &GlobalPlanner::onFrontiers, this);
+    blacklist_sub_ = nh.subscribe("blacklist", 1, &GlobalPlanner::onBlacklist, this);
   }
 
   void onHandle(const boost::shared_ptr<const ros_map::MapHandle>& msg) {
@@ -67,14 +73,25 @@ class GlobalPlanner : public nodelet::Nodelet {
     uav_ = common::Vec3(p.x, p.y, p.z);
   }
 
+  void onBlacklist(const std_msgs::UInt32MultiArray::ConstPtr& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    blacklist_.clear();
+    blacklist_.insert(msg->data.begin(), msg->data.end());
+  }
+
   void onFrontiers(const FrontierArray::ConstPtr& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!shared_ || !uav_) {
       NODELET_WARN_THROTTLE(5.0, "%s: waiting for %s", getName().c_str(), !shared_ ? "map_handle" : "odom");
       return;
     }
+    // Plan at most at global/rate (frontiers arrive with every depth frame).
+    const ros::Time now = ros::Time::now();
+    if (!last_plan_.isZero() && (now - last_plan_).toSec() < 1.0 / rate_ - 1e-6) return;
+    last_plan_ = now;
     std::vector<planning::FrontierSummary> frontiers;
     for (const auto& f : msg->frontiers) {
+      if (blacklist_.count(f.id)) continue;  // the layer manager gave up on it
       planning::FrontierSummary s;
       s.id = f.id;
       s.average = common::Vec3(f.average.x, f.average.y, f.average.z);
@@ -131,9 +148,12 @@ class GlobalPlanner : public nodelet::Nodelet {
   std::unique_ptr<planning::Astar> astar_;
   std::optional<common::Vec3> uav_;
   std::unique_ptr<planning::TourPlanner> planner_;
+  std::set<std::uint32_t> blacklist_;
+  double rate_ = 5.0;
+  ros::Time last_plan_;
   ros::Publisher compute_pub_;
   ros::Publisher tour_pub_, marker_pub_;
-  ros::Subscriber handle_sub_, odom_sub_, frontier_sub_;
+  ros::Subscriber handle_sub_, odom_sub_, frontier_sub_, blacklist_sub_;
 };
 
 }  // namespace go_feap

@@ -2,13 +2,17 @@
 // In: frontiers, map_update (progress), frontier_failed (std_msgs/UInt32 from planners),
 // trigger (std_srvs/Trigger service, or a goal on move_base_simple/goal from rviz's 2D Nav
 // Goal, or layers/auto_start). Out: layer (go_feap/LayerBounds), status
-// (go_feap/ExplorationStatus). Every transition is logged.
+// (go_feap/ExplorationStatus), blacklist (std_msgs/UInt32MultiArray, latched: frontiers the
+// planners must skip), layer_marker (the band as a translucent slab for rviz). Every
+// transition is logged.
 #include <geometry_msgs/PoseStamped.h>
 #include <nav_msgs/Odometry.h>
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
 #include <ros/ros.h>
 #include <std_msgs/UInt32.h>
+#include <std_msgs/UInt32MultiArray.h>
+#include <visualization_msgs/Marker.h>
 #include <std_srvs/Trigger.h>
 
 #include <mutex>
@@ -40,6 +44,8 @@ class LayerManager : public nodelet::Nodelet {
 
     layer_pub_ = nh.advertise<LayerBounds>("layer", 1, /*latch=*/true);
     status_pub_ = nh.advertise<ExplorationStatus>("status", 5, /*latch=*/true);
+    blacklist_pub_ = nh.advertise<std_msgs::UInt32MultiArray>("blacklist", 1, /*latch=*/true);
+    marker_pub_ = nh.advertise<visualization_msgs::Marker>("layer_marker", 1, /*latch=*/true);
     frontier_sub_ = nh.subscribe("frontiers", 2, &LayerManager::onFrontiers, this);
     update_sub_ = nh.subscribe("map_update", 20, &LayerManager::onMapUpdate, this);
     failed_sub_ = nh.subscribe("frontier_failed", 20, &LayerManager::onFailed, this);
@@ -138,7 +144,29 @@ class LayerManager : public nodelet::Nodelet {
     layer.z_min = out.band.z_min;
     layer.z_max = out.band.z_max;
     layer.final_pass = out.band.final_pass;
-    if (!out.transitions.empty() || !published_) layer_pub_.publish(layer);
+    if (!out.transitions.empty() || !published_) {
+      layer_pub_.publish(layer);
+      visualization_msgs::Marker slab;
+      slab.header = layer.header;
+      slab.ns = "altitude_band";
+      slab.type = visualization_msgs::Marker::CUBE;
+      slab.pose.position.x = 0.5 * (box_.min.x() + box_.max.x());
+      slab.pose.position.y = 0.5 * (box_.min.y() + box_.max.y());
+      slab.pose.position.z = 0.5 * (out.band.z_min + out.band.z_max);
+      slab.pose.orientation.w = 1.0;
+      slab.scale.x = box_.max.x() - box_.min.x();
+      slab.scale.y = box_.max.y() - box_.min.y();
+      slab.scale.z = std::max(0.01, out.band.z_max - out.band.z_min);
+      slab.color.r = 0.3, slab.color.g = 0.6, slab.color.b = 1.0, slab.color.a = 0.08;
+      marker_pub_.publish(slab);
+    }
+    if (manager_ && manager_->blacklist().size() != blacklisted_) {
+      blacklisted_ = manager_->blacklist().size();
+      std_msgs::UInt32MultiArray list;
+      list.data.assign(manager_->blacklist().begin(), manager_->blacklist().end());
+      blacklist_pub_.publish(list);
+      NODELET_WARN_STREAM(getName() << ": " << blacklisted_ << " frontier(s) blacklisted after repeated failures");
+    }
     published_ = true;
     ExplorationStatus status;
     status.header = layer.header;
@@ -168,7 +196,8 @@ class LayerManager : public nodelet::Nodelet {
   std::optional<ros::Time> t_start_;
   std::optional<common::Vec3> last_position_;
   double distance_ = 0.0;
-  ros::Publisher layer_pub_, status_pub_;
+  ros::Publisher layer_pub_, status_pub_, blacklist_pub_, marker_pub_;
+  std::size_t blacklisted_ = 0;
   ros::Subscriber frontier_sub_, update_sub_, failed_sub_, odom_sub_, goal_sub_;
   ros::ServiceServer trigger_srv_;
   ros::Timer timer_;

@@ -12,6 +12,7 @@
 #include <visualization_msgs/MarkerArray.h>
 
 #include <mutex>
+#include <std_msgs/UInt32.h>
 #include <optional>
 
 #include "go_feap/FrontierArray.h"
@@ -37,6 +38,7 @@ class LocalPlanner : public nodelet::Nodelet {
     auto& l = local_config_;
     config::readViewpoints(p, v);
     config::readLocal(p, l);
+    p.get("frontier/max_cluster_extent", frontier_extent_);
     config::readAstar(p, astar_config_);
     p.get("world_frame", world_frame_);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
@@ -53,6 +55,7 @@ class LocalPlanner : public nodelet::Nodelet {
     layer_sub_ = nh.subscribe("layer", 1, &LocalPlanner::onLayer, this);
     frontier_sub_ = nh.subscribe("frontiers", 2, &LocalPlanner::onFrontiers, this);
     tour_sub_ = nh.subscribe("global_tour", 2, &LocalPlanner::onTour, this);
+    failed_pub_ = nh.advertise<std_msgs::UInt32>("frontier_failed", 10);
   }
 
   void onHandle(const boost::shared_ptr<const ros_map::MapHandle>& msg) {
@@ -77,6 +80,9 @@ class LocalPlanner : public nodelet::Nodelet {
     if (!pos.allFinite() || !std::isfinite(yaw)) return;
     position_ = pos;
     yaw_ = yaw;
+    const auto& v = msg->twist.twist.linear;
+    speed_ = std::sqrt(v.x * v.x + v.y * v.y + v.z * v.z);  // a norm: the same in the body or world frame
+    if (!std::isfinite(speed_)) speed_ = 0.0;
   }
   void onDepth(const sensor_msgs::Image::ConstPtr& msg) {
     cv_bridge::CvImageConstPtr image;
@@ -110,7 +116,14 @@ class LocalPlanner : public nodelet::Nodelet {
     std::shared_lock<std::shared_mutex> map_lock(shared_->mutex);
     const map::VoxelMap& m = *shared_->map;
     const auto& geo = m.geometry();
-    std::vector<frontier::Frontier> tour_frontiers;
+    std::vector<frontier::Frontier> all, tour_frontiers;
+    for (const auto& msg : frontiers_->frontiers) {
+      frontier::Frontier f;
+      f.id = msg.id;
+      f.average = common::Vec3(msg.average.x, msg.average.y, msg.average.z);
+      for (const auto& c : msg.cells) f.cells.push_back(geo.coordToIndex(common::Vec3(c.x, c.y, c.z)));
+      all.push_back(std::move(f));
+    }
     for (unsigned id : tour->frontier_ids) {
       const go_feap::Frontier* msg = nullptr;
       for (const auto& f : frontiers_->frontiers)
@@ -125,12 +138,47 @@ class LocalPlanner : public nodelet::Nodelet {
     auto plan = planning::chooseLocalTarget(*position_, yaw_, std::move(tour_frontiers), band_.first, band_.second,
                                             m.occupancy(), m.esdf(), *astar_, *window_, viewpoint_config_,
                                             local_config_);
-    ros_conv::publishComputeTime(compute_pub_, "local", t_compute);
-    map_lock.unlock();
     if (!plan) {
+      ros_conv::publishComputeTime(compute_pub_, "local", t_compute);
       NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": no local plan: " << plan.message());
       return;
     }
+    // Target hysteresis (the same rule as go_feap_bench): keep the current viewpoint while it is
+    // worth flying to; report a frontier that its reached viewpoint does not clear.
+    const double now = ros::Time::now().toSec();
+    const frontier::Viewpoint& proposal = plan->path.front();
+    std::optional<planning::CurrentTarget> current;
+    if (target_) {
+      current.emplace();
+      current->viewpoint = *target_;
+      current->committed_at = committed_at_;
+      current->reached = planning::targetReached(*position_, yaw_, speed_, *target_, local_config_);
+      current->cost = planning::edgeCost((*position_ - target_->position).norm(), yaw_, target_->yaw, local_config_);
+      current->remaining_visible = viewpoint_config_.min_visible;
+      if (!current->reached && now - committed_at_ < local_config_.commit_time) {
+        current->remaining_visible = planning::remainingVisible(*target_, all, m.occupancy(), viewpoint_config_,
+                                                                frontier_extent_);
+      }
+    }
+    ros_conv::publishComputeTime(compute_pub_, "local", t_compute);
+    map_lock.unlock();
+    const planning::TargetDecision decision = planning::decideTarget(
+        current ? &*current : nullptr, proposal,
+        planning::edgeCost((*position_ - proposal.position).norm(), yaw_, proposal.yaw, local_config_), now,
+        viewpoint_config_.min_visible, local_config_);
+    if (decision == planning::TargetDecision::kKeep) return;
+    if (decision == planning::TargetDecision::kReachedInVain) {
+      NODELET_INFO_STREAM(getName() << ": frontier " << target_frontier_
+                                    << " not cleared from its reached viewpoint: failed attempt");
+      std_msgs::UInt32 failed;
+      failed.data = target_frontier_;
+      failed_pub_.publish(failed);
+      target_.reset();
+      return;
+    }
+    target_ = proposal;
+    target_frontier_ = plan->frontier_ids.front();
+    committed_at_ = now;
     ViewpointPath out;
     out.header.stamp = tour->header.stamp;
     out.header.frame_id = world_frame_;
@@ -174,7 +222,10 @@ class LocalPlanner : public nodelet::Nodelet {
   std::pair<double, double> band_{-1e18, 1e18};
   FrontierArray::ConstPtr frontiers_;
   ros::Publisher compute_pub_;
-  ros::Publisher target_pub_, marker_pub_;
+  ros::Publisher target_pub_, marker_pub_, failed_pub_;
+  std::optional<frontier::Viewpoint> target_;
+  std::uint32_t target_frontier_ = 0;
+  double committed_at_ = 0.0, speed_ = 0.0, frontier_extent_ = 2.0;
   ros::Subscriber handle_sub_, odom_sub_, depth_sub_, layer_sub_, frontier_sub_, tour_sub_;
 };
 

@@ -5,8 +5,10 @@
 // status text for rviz, and when exploration finishes writes summary.json, metrics.csv and
 // coverage.png to `metrics/output_dir` (if set) and, with `metrics/shutdown_on_finish`, ends
 // the process so a headless run returns. In: map_handle, odom, status, compute_time.
-// Out: status_text (visualization_msgs/Marker), coverage (std_msgs/Float64).
+// Out: status_text (visualization_msgs/Marker), coverage (std_msgs/Float64), flown_path
+// (nav_msgs/Path, one pose per sample).
 #include <nav_msgs/Odometry.h>
+#include <nav_msgs/Path.h>
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
 #include <ros/ros.h>
@@ -58,6 +60,8 @@ class MetricsRecorder : public nodelet::Nodelet {
     }
     text_pub_ = nh.advertise<visualization_msgs::Marker>("status_text", 2);
     coverage_pub_ = nh.advertise<std_msgs::Float64>("coverage", 2);
+    path_pub_ = nh.advertise<nav_msgs::Path>("flown_path", 1);
+    path_.header.frame_id = world_frame_;
     handle_sub_ = nh.subscribe("map_handle", 1, &MetricsRecorder::onHandle, this);
     odom_sub_ = nh.subscribe("odom", 20, &MetricsRecorder::onOdom, this);
     status_sub_ = nh.subscribe("status", 5, &MetricsRecorder::onStatus, this);
@@ -144,6 +148,16 @@ class MetricsRecorder : public nodelet::Nodelet {
       return;
     }
     addSample();
+    if (position_) {
+      geometry_msgs::PoseStamped pose;
+      pose.header.stamp = ros::Time::now();
+      pose.header.frame_id = world_frame_;
+      pose.pose.position.x = position_->x(), pose.pose.position.y = position_->y(), pose.pose.position.z = position_->z();
+      pose.pose.orientation.w = 1.0;
+      path_.poses.push_back(pose);
+      path_.header.stamp = pose.header.stamp;
+      path_pub_.publish(path_);
+    }
     std_msgs::Float64 c;
     c.data = last_sample_.coverage;
     coverage_pub_.publish(c);
@@ -224,7 +238,8 @@ class MetricsRecorder : public nodelet::Nodelet {
   double distance_ = 0.0, next_progress_ = 0.0;
   bool in_collision_ = false, finished_ = false;
   ros::WallTime wall_start_ = ros::WallTime::now();
-  ros::Publisher text_pub_, coverage_pub_;
+  ros::Publisher text_pub_, coverage_pub_, path_pub_;
+  nav_msgs::Path path_;
   ros::Subscriber handle_sub_, odom_sub_, status_sub_, compute_sub_;
   ros::Timer timer_;
 };

@@ -34,7 +34,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     config::readOptimizer(p, o);
     config::readReplan(p, replan_);
     config::readTrajectoryPlanner(p, planner_);
-    p.get("planner/rate", rate_);
+    p.get("planner/rate", rate_).get("planner/odom_timeout", odom_timeout_);
     config::readAstar(p, astar_config_);
     p.get("world_frame", world_frame_);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
@@ -42,6 +42,8 @@ class TrajectoryPlanner : public nodelet::Nodelet {
       ros_params::requireOrThrow(st.ok(), getName(), st.message());
     ros_params::requireOrThrow(std::isfinite(rate_) && rate_ > 0.0, getName(),
                                "parameter '" + p.fullName("planner/rate") + "' must be > 0");
+    ros_params::requireOrThrow(std::isfinite(odom_timeout_) && odom_timeout_ > 0.0, getName(),
+                               "parameter '" + p.fullName("planner/odom_timeout") + "' must be > 0");
     compute_pub_ = nh.advertise<ComputeTime>("compute_time", 20);
     bspline_pub_ = nh.advertise<Bspline>("bspline", 5);
     marker_pub_ = nh.advertise<visualization_msgs::Marker>("trajectory_marker", 2);
@@ -74,6 +76,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     const common::Vec3 pos(p.x, p.y, p.z);
     if (!pos.allFinite()) return;
     odom_position_ = pos;
+    odom_time_ = ros::Time::now();
     odom_yaw_ = ros_conv::yawOf(q);
   }
   void onCommand(const PositionCommand::ConstPtr& msg) {
@@ -86,7 +89,8 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     const auto& p = msg->positions.front();
     const common::Vec3 target(p.x, p.y, p.z);
     if (!target.allFinite() || !std::isfinite(msg->yaws.front())) return;
-    target_changed_ = !target_ || (target - *target_).norm() > replan_.target_tolerance;
+    target_changed_ = target_changed_ || !target_ ||
+                      trajectory::targetMoved(*target_, target_yaw_, target, msg->yaws.front(), replan_);
     target_ = target;
     target_yaw_ = msg->yaws.front();
     target_frontier_ = msg->frontier_ids.empty() ? 0 : msg->frontier_ids.front();
@@ -96,6 +100,19 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!shared_ || !target_ || !odom_position_) return;
     const ros::Time now = ros::Time::now();
+    // An odometry gap: the server holds position; plan nothing until odometry is back, then start
+    // from scratch (the old trajectory was dropped).
+    if ((now - odom_time_).toSec() > odom_timeout_) {
+      if (!odom_gap_) NODELET_WARN_STREAM(getName() << ": no odometry for " << (now - odom_time_).toSec() << " s: not planning");
+      odom_gap_ = true;
+      current_.reset();
+      return;
+    }
+    if (odom_gap_) {
+      NODELET_WARN_STREAM(getName() << ": odometry is back: replanning");
+      odom_gap_ = false;
+      target_changed_ = true;
+    }
     if (!last_plan_.isZero() && (now - last_plan_).toSec() < planner_.min_time_between_plans) return;
     trajectory::ReplanReason reason;
     {
@@ -135,17 +152,21 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     request.target_yaw = target_yaw_;
     const auto t_compute = ros_conv::WallClock::now();
     common::Result<trajectory::Trajectory> planned = common::Result<trajectory::Trajectory>::Error("");
+    trajectory::PlanReport report;
     {
       std::shared_lock<std::shared_mutex> map_lock(shared_->mutex);
-      planned = trajectory::planTrajectory(request, *astar_, shared_->map->esdf(), optimizer_, planner_);
+      planned = trajectory::planTrajectory(request, *astar_, shared_->map->esdf(), optimizer_, planner_, &report);
     }
     ros_conv::publishComputeTime(compute_pub_, "trajectory", t_compute);
     if (!planned) {
       NODELET_WARN_STREAM(getName() << ": planning to frontier " << target_frontier_ << " failed ("
                                     << trajectory::toString(reason) << "): " << planned.message() << "; stopping");
-      std_msgs::UInt32 failed;
-      failed.data = target_frontier_;
-      failed_pub_.publish(failed);
+      // A start the search cannot leave is the vehicle's predicament, not the frontier's fault.
+      if (report.path_status != planning::PathStatus::kStartBlocked) {
+        std_msgs::UInt32 failed;
+        failed.data = target_frontier_;
+        failed_pub_.publish(failed);
+      }
       publish(now, trajectory::stopTrajectory(request.start, request.velocity, request.yaw, optimizer_));
       target_.reset();  // wait for a new target
       return;
@@ -179,7 +200,9 @@ class TrajectoryPlanner : public nodelet::Nodelet {
   trajectory::ReplanConfig replan_;
   planning::AstarConfig astar_config_;
   trajectory::TrajectoryPlannerConfig planner_;
-  double rate_ = 10.0;
+  double rate_ = 10.0, odom_timeout_ = 0.5;
+  ros::Time odom_time_;
+  bool odom_gap_ = false;
   std::string world_frame_;
   std::mutex mutex_;
   std::shared_ptr<ros_map::SharedMap> shared_;

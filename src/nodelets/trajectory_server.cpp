@@ -1,6 +1,9 @@
 // TrajectoryServer: samples the current B-spline trajectory into position commands at a
 // fixed rate. In: bspline, odom. Out: position_cmd (go_feap/PositionCommand). Holds the
 // position where the last trajectory ended, or where the vehicle was, when none is active.
+// When odometry stops for longer than server/odom_timeout the current trajectory is dropped
+// and the reference holds where it was; the next trajectory resumes (the planner replans once
+// odometry is back).
 #include <nav_msgs/Odometry.h>
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
@@ -21,10 +24,12 @@ class TrajectoryServer : public nodelet::Nodelet {
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
     ros_params::ParamReader p(getPrivateNodeHandle());
-    p.get("server/rate", rate_).get("world_frame", world_frame_);
+    p.get("server/rate", rate_).get("server/odom_timeout", odom_timeout_).get("world_frame", world_frame_);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
     ros_params::requireOrThrow(rate_ >= 10.0 && rate_ <= 1000.0, getName(),
                                "parameter '" + p.fullName("server/rate") + "' must be in [10, 1000] Hz");
+    ros_params::requireOrThrow(std::isfinite(odom_timeout_) && odom_timeout_ > 0.0, getName(),
+                               "parameter '" + p.fullName("server/odom_timeout") + "' must be > 0");
     cmd_pub_ = nh.advertise<PositionCommand>("position_cmd", 10);
     bspline_sub_ = nh.subscribe("bspline", 5, &TrajectoryServer::onBspline, this);
     odom_sub_ = nh.subscribe("odom", 5, &TrajectoryServer::onOdom, this);
@@ -46,6 +51,11 @@ class TrajectoryServer : public nodelet::Nodelet {
     const auto& q = msg->pose.pose.orientation;
     std::lock_guard<std::mutex> lock(mutex_);
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return;
+    last_odom_ = ros::Time::now();
+    if (odom_gap_) {
+      odom_gap_ = false;
+      NODELET_WARN_STREAM(getName() << ": odometry is back; following the next trajectory");
+    }
     if (!hold_) {  // first pose: hold it until a trajectory arrives
       hold_position_ = Eigen::Vector3d(p.x, p.y, p.z);
       hold_yaw_ = ros_conv::yawOf(q);
@@ -56,6 +66,12 @@ class TrajectoryServer : public nodelet::Nodelet {
   void onTimer(const ros::TimerEvent&) {
     std::lock_guard<std::mutex> lock(mutex_);
     const ros::Time now = ros::Time::now();
+    if (!last_odom_.isZero() && !odom_gap_ && (now - last_odom_).toSec() > odom_timeout_) {
+      odom_gap_ = true;
+      current_.reset();  // hold_position_ is where the reference was
+      NODELET_WARN_STREAM(getName() << ": no odometry for " << (now - last_odom_).toSec()
+                                    << " s: trajectory dropped, holding position");
+    }
     PositionCommand cmd;
     cmd.header.stamp = now;
     cmd.header.frame_id = world_frame_;
@@ -84,7 +100,9 @@ class TrajectoryServer : public nodelet::Nodelet {
     cmd_pub_.publish(cmd);
   }
 
-  double rate_ = 100.0;
+  double rate_ = 100.0, odom_timeout_ = 0.5;
+  ros::Time last_odom_;
+  bool odom_gap_ = false;
   std::string world_frame_;
   std::mutex mutex_;
   std::optional<ros_traj::Trajectory> current_;

@@ -142,8 +142,9 @@ Astar::Astar(const map::OccupancyMap& occupancy, const map::Esdf& esdf, const As
   brick_dims_ = (geo_.dims().array() + (kBrickEdge - 1)) / kBrickEdge;
   const common::Aabb& box = occupancy.box();
   for (int a = 0; a < 3; ++a) {
-    box_lo_[a] = static_cast<int>(std::ceil((box.min[a] - geo_.origin()[a]) / geo_.resolution() - 0.5 - 1e-9));
-    box_hi_[a] = static_cast<int>(std::floor((box.max[a] - geo_.origin()[a]) / geo_.resolution() - 0.5 + 1e-9));
+    const double lo = box.min[a] + config.clearance, hi = box.max[a] - config.clearance;
+    box_lo_[a] = static_cast<int>(std::ceil((lo - geo_.origin()[a]) / geo_.resolution() - 0.5 - 1e-9));
+    box_hi_[a] = static_cast<int>(std::floor((hi - geo_.origin()[a]) / geo_.resolution() - 0.5 + 1e-9));
   }
 }
 

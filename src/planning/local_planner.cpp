@@ -188,14 +188,20 @@ Result<LocalPlan> planLocal(const Vec3& position, double yaw, const std::vector<
   return plan;
 }
 
-TargetDecision decideTarget(const CurrentTarget* current, const frontier::Viewpoint& proposal, double t,
-                            int min_visible, const LocalPlannerConfig& config) {
+bool targetReached(const common::Vec3& position, double yaw, double speed, const frontier::Viewpoint& target,
+                   const LocalPlannerConfig& config) {
+  return (position - target.position).norm() <= config.same_target_distance &&
+         std::abs(wrapAngle(yaw - target.yaw)) <= config.same_target_yaw && speed < 0.1;
+}
+
+TargetDecision decideTarget(const CurrentTarget* current, const frontier::Viewpoint& proposal, double proposal_cost,
+                            double t, int min_visible, const LocalPlannerConfig& config) {
   if (!current) return TargetDecision::kSwitch;
   const bool same = (proposal.position - current->viewpoint.position).norm() <= config.same_target_distance &&
                     std::abs(wrapAngle(proposal.yaw - current->viewpoint.yaw)) <= config.same_target_yaw;
   if (same) return current->reached ? TargetDecision::kReachedInVain : TargetDecision::kKeep;
-  if (current->remaining_visible < min_visible || current->reached || t - current->committed_at >= config.commit_time)
-    return TargetDecision::kSwitch;
+  if (current->remaining_visible < min_visible || current->reached) return TargetDecision::kSwitch;
+  if (t - current->committed_at >= config.commit_time && proposal_cost < current->cost) return TargetDecision::kSwitch;
   return TargetDecision::kKeep;
 }
 

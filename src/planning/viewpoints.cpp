@@ -89,6 +89,13 @@ std::vector<frontier::Viewpoint> sampleViewpoints(const frontier::Frontier& fron
   std::vector<frontier::Viewpoint> out;
   if (!config.validate() || !(z_min <= z_max) || frontier.cells.empty()) return out;
 
+  // The vehicle stays inside the exploration box, clear of its faces (the floor and the top are often
+  // unknown right under or over it, so the ESDF alone cannot keep it off them).
+  const common::Aabb& box = map.box();
+  const Vec3 lo = box.min + Vec3::Constant(config.clearance), hi = box.max - Vec3::Constant(config.clearance);
+  z_min = std::max(z_min, lo.z());
+  z_max = std::min(z_max, hi.z());
+  if (!(z_min <= z_max)) return out;
   std::vector<double> heights;
   for (double off : config.height_offsets) {
     const double z = std::clamp(frontier.average.z() + off, z_min, z_max);
@@ -115,6 +122,7 @@ std::vector<frontier::Viewpoint> sampleViewpoints(const frontier::Frontier& fron
       for (double z : heights) {
         const Vec3 p(frontier.average.x() + r * std::cos(theta), frontier.average.y() + r * std::sin(theta),
                      z);
+        if ((p.array() < lo.array()).any() || (p.array() > hi.array()).any()) continue;
         if (map.state(p) != map::VoxelState::kFree || !(esdf.distance(p) >= config.clearance)) continue;
         // Range and line of sight do not depend on the yaw: cast each ray once per position.
         seen.clear();

@@ -30,7 +30,15 @@ Status ReplanConfig::validate() const {
     return Status::Error("replan: min_time_left must be finite and >= 0");
   if (!(target_tolerance >= 0.0 && std::isfinite(target_tolerance)))
     return Status::Error("replan: target_tolerance must be finite and >= 0");
+  if (!(yaw_tolerance >= 0.0 && std::isfinite(yaw_tolerance)))
+    return Status::Error("replan: yaw_tolerance must be finite and >= 0");
   return Status::Ok();
+}
+
+bool targetMoved(const Vec3& old_position, double old_yaw, const Vec3& new_position, double new_yaw,
+                 const ReplanConfig& config) {
+  const double turn = std::remainder(new_yaw - old_yaw, 2.0 * M_PI);
+  return (new_position - old_position).norm() > config.target_tolerance || std::abs(turn) > config.yaw_tolerance;
 }
 
 ReplanReason shouldReplan(const ReplanInputs& inputs, const ReplanConfig& config) {

@@ -34,6 +34,8 @@ common::Status TrajectoryPlannerConfig::validate() const {
   if (!positive(cruise_fraction) || cruise_fraction > 1.0)
     return common::Status::Error("planner: cruise_fraction must be in (0, 1]");
   if (max_refits < 0) return common::Status::Error("planner: max_refits must be >= 0");
+  if (!std::isfinite(snap_radius) || snap_radius < 0.0)
+    return common::Status::Error("planner: snap_radius must be finite and >= 0");
   return common::Status::Ok();
 }
 
@@ -62,7 +64,7 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
   if (!request.start.allFinite() || !request.velocity.allFinite() || !request.target.allFinite() ||
       !std::isfinite(request.yaw) || !std::isfinite(request.target_yaw))
     return R::Error("plan request is not finite");
-  const planning::PathResult path = astar.search(request.start, request.target);
+  const planning::PathResult path = astar.search(request.start, request.target, config.snap_radius);
   rep.path_status = path.status;
   if (path.status != planning::PathStatus::kFound)
     return R::Error(std::string("no path: ") + planning::toString(path.status));

@@ -175,11 +175,53 @@ common::Result<Scene> loadSceneYaml(const std::string& yaml_path) {
   return scene;
 }
 
+namespace {
+
+// A scene YAML whose `scene.generator` is `maze`: the procedural maze with the sizes given under
+// `scene.maze` (size_x, size_y, height, cell_size; each optional, the defaults otherwise) and a name.
+common::Result<Scene> loadGeneratedYaml(const std::string& yaml_path, const YAML::Node& s, std::uint64_t seed) {
+  using R = common::Result<Scene>;
+  try {
+    const YAML::Node generator = require(s, "generator", "scene.");
+    if (!generator.IsScalar() || generator.Scalar() != "maze")
+      throw KeyError{"key 'scene.generator' must be 'maze' (the only generator a YAML can size)"};
+    MazeConfig config;
+    if (const YAML::Node m = s["maze"]) {
+      if (!m.IsMap()) throw KeyError{"key 'scene.maze' must be a map"};
+      if (m["size_x"]) config.size_x = number(m["size_x"], "scene.maze.size_x");
+      if (m["size_y"]) config.size_y = number(m["size_y"], "scene.maze.size_y");
+      if (m["height"]) config.height = number(m["height"], "scene.maze.height");
+      if (m["cell_size"]) config.cell_size = number(m["cell_size"], "scene.maze.cell_size");
+    }
+    if (auto st = config.validate(); !st) throw KeyError{st.message()};
+    auto scene = generateMaze(config, seed);
+    if (!scene) return R::Error(yaml_path + ": " + scene.message());
+    if (s["name"]) scene->name = s["name"].as<std::string>();
+    return scene;
+  } catch (const KeyError& e) {
+    return R::Error(yaml_path + ": " + e.message);
+  } catch (const YAML::Exception& e) {
+    return R::Error(yaml_path + ": malformed scene description (" + e.what() + ")");
+  }
+}
+
+}  // namespace
+
 common::Result<Scene> makeScene(const std::string& spec, std::uint64_t seed) {
   if (spec == "maze") return generateMaze(MazeConfig(), seed);
   if (spec == "powerplant") return generatePowerplant(PowerplantConfig(), seed);
   const std::string ext = lower(fs::path(spec).extension().string());
-  if (ext == ".yaml" || ext == ".yml") return loadSceneYaml(spec);
+  if (ext == ".yaml" || ext == ".yml") {
+    YAML::Node root;
+    try {
+      root = YAML::LoadFile(spec);
+    } catch (const std::exception& e) {
+      return common::Result<Scene>::Error(spec + ": cannot be read as YAML (" + e.what() + ")");
+    }
+    if (root.IsMap() && root["scene"] && root["scene"].IsMap() && root["scene"]["generator"])
+      return loadGeneratedYaml(spec, root["scene"], seed);
+    return loadSceneYaml(spec);
+  }
   return common::Result<Scene>::Error("unknown scene '" + spec +
                                       "': expected maze, powerplant or the path of a scene .yaml");
 }

@@ -27,10 +27,11 @@
 
 namespace go_feap::bench {
 
-/// Rates of the lock-step loop and the collision criterion (config/bench.yaml).
+/// Rates of the lock-step loop (config/bench.yaml) and the metrics' sample rate and collision criterion
+/// (exploration.yaml metrics/).
 struct LoopConfig {
   double control_rate = 100.0;      ///< Hz: position commands (the controller runs at the dynamics rate)
-  double plan_rate = 5.0;           ///< Hz: global tour and local viewpoint
+  double plan_rate = 5.0;           ///< Hz: global tour and local viewpoint (exploration.yaml global/rate)
   double sample_rate = 2.0;         ///< Hz: metrics.csv rows
   double collision_distance = 0.1;  ///< m: the UAV centre closer than this to ground truth is a collision
   common::Status validate() const;

@@ -105,6 +105,7 @@ void readOptimizer(R& p, trajectory::OptimizerConfig& o) {
 template <class R>
 void readReplan(R& p, trajectory::ReplanConfig& c) {
   p.get("replan/min_time_left", c.min_time_left).get("replan/target_tolerance", c.target_tolerance);
+  p.get("replan/yaw_tolerance", c.yaw_tolerance);
 }
 
 template <class R>
@@ -112,6 +113,7 @@ void readTrajectoryPlanner(R& p, trajectory::TrajectoryPlannerConfig& c) {
   p.get("planner/path_spacing", c.path_spacing).get("planner/collision_horizon", c.collision_horizon);
   p.get("planner/min_time_between_plans", c.min_time_between_plans);
   p.get("planner/cruise_fraction", c.cruise_fraction).get("planner/max_refits", c.max_refits);
+  p.get("planner/snap_radius", c.snap_radius);
 }
 
 template <class R>

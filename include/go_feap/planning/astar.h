@@ -85,8 +85,8 @@ class Astar {
   /// is never longer than the input, and never shorter than the straight line between its ends.
   std::vector<Vec3> shorten(const std::vector<Vec3>& path) const;
 
-  /// Inside the grid with its centre inside the map's exploration box (the UAV never leaves the box, and
-  /// distances never cut through the map's margin), not occupied, unknown only when config.unknown_is_free,
+  /// Inside the grid with its centre inside the map's exploration box shrunk by config.clearance (the UAV
+  /// never leaves the box nor touches its faces, and distances never cut through the map's margin), not occupied, unknown only when config.unknown_is_free,
   /// and ESDF distance at least config.clearance.
   bool traversable(const Index3& idx) const;
   /// True when every voxel the segment from a to b touches is traversable (see shorten()).

@@ -122,8 +122,14 @@ struct CurrentTarget {
   frontier::Viewpoint viewpoint;
   double committed_at = 0.0;  ///< s, when it was chosen
   int remaining_visible = 0;  ///< frontier cells still visible from it now (countVisible over nearby frontiers)
-  bool reached = false;       ///< the vehicle got there (trajectory done, within tolerance)
+  bool reached = false;       ///< the vehicle got there (targetReached())
+  double cost = 0.0;          ///< s, edgeCost() from the vehicle's pose to it now
 };
+
+/// The vehicle is at the target: within same_target_distance and same_target_yaw of it, and slower than
+/// 0.1 m/s (so the frame taken there has been integrated).
+bool targetReached(const common::Vec3& position, double yaw, double speed, const frontier::Viewpoint& target,
+                   const LocalPlannerConfig& config);
 
 /// kReachedInVain: the current target was reached and is proposed again, so its frontier is not being
 /// cleared from there; the caller reports that frontier as failed (blacklisted after bounded retries)
@@ -133,9 +139,10 @@ enum class TargetDecision { kKeep, kSwitch, kReachedInVain };
 /// there is no current target; when the proposal is the same target (within same_target_distance and
 /// same_target_yaw), keep it unless it was reached (kReachedInVain); otherwise switch when nothing is left
 /// to see from the current one (remaining_visible < min_visible), when it was reached, or when it has
-/// been kept for commit_time.
-TargetDecision decideTarget(const CurrentTarget* current, const frontier::Viewpoint& proposal, double t,
-                            int min_visible, const LocalPlannerConfig& config);
+/// been kept for commit_time and the proposal is quicker to reach (proposal_cost < current->cost, both
+/// edgeCost() from the vehicle's pose), which keeps two similar targets from taking turns.
+TargetDecision decideTarget(const CurrentTarget* current, const frontier::Viewpoint& proposal, double proposal_cost,
+                            double t, int min_visible, const LocalPlannerConfig& config);
 
 /// Frontier cells of `frontiers` (those whose average lies within sensor_range + max_cluster_extent of the
 /// viewpoint) that the viewpoint sees: its remaining value.

@@ -61,8 +61,8 @@ int countVisible(const common::Vec3& position, double yaw, const std::vector<com
                  const map::OccupancyMap& map, const ViewpointConfig& config);
 
 /// Candidate viewpoints of `frontier`: for every ring radius, ring angle and clamped height offset a
-/// position around frontier.average that is known free, has ESDF distance >= clearance and lies in
-/// [z_min, z_max]; its yaw is the candidateYaws() entry with the largest countVisible() (the earliest
+/// position around frontier.average that is known free, has ESDF distance >= clearance, lies in
+/// [z_min, z_max] and inside the map's exploration box shrunk by clearance on every side; its yaw is the candidateYaws() entry with the largest countVisible() (the earliest
 /// on ties, so the one facing the frontier wins). Viewpoints seeing fewer than min_visible cells are
 /// dropped; the rest are sorted by visible_cells, descending (ties in sampling order: radius, then
 /// angle, then height). The frontier's cells must be indices of map's grid; `esdf` must share it.

@@ -18,6 +18,7 @@ const char* toString(ReplanReason reason);
 struct ReplanConfig {
   double min_time_left = 1.0;     ///< s; replan when less than this is left of the current trajectory
   double target_tolerance = 0.3;  ///< m; a target farther than this from the trajectory's end counts as new
+  double yaw_tolerance = 0.3;     ///< rad; a target heading that turns more than this counts as new
 
   /// Checks every key; the message names the bad one, e.g. "replan: min_time_left must be finite and >= 0".
   common::Status validate() const;
@@ -37,6 +38,10 @@ struct ReplanInputs {
 /// (time_left < min_time_left); kNone otherwise.
 ReplanReason shouldReplan(const ReplanInputs& inputs, const ReplanConfig& config);
 
+/// A new target, not the current one moved a little: its position moved more than target_tolerance or its
+/// heading turned more than yaw_tolerance (wrapped).
+bool targetMoved(const Vec3& old_position, double old_yaw, const Vec3& new_position, double new_yaw,
+                 const ReplanConfig& config);
 /// First time in [t_now, min(t_now + horizon, duration)] at which `trajectory` (3-D) comes closer than
 /// min_clearance to an obstacle of the ESDF, sampled at most half a voxel apart (the step comes from a
 /// bound on the speed: the largest control-polygon velocity). Points outside the ESDF's grid count as

@@ -42,6 +42,7 @@ struct TrajectoryPlannerConfig {
   double min_time_between_plans = 0.3;  ///< s
   double cruise_fraction = 0.6;         ///< share of v_max the initial timing assumes
   int max_refits = 4;                   ///< slower refits tried when the optimum breaks a limit
+  double snap_radius = 1.0;             ///< m: a blocked start or goal moves to free space this close
   /// Checks every key; the message names the bad one, e.g. "planner: path_spacing must be > 0".
   common::Status validate() const;
 };

@@ -1,0 +1,64 @@
+// OdometryTf: republishes an odometry stream (e.g. VINS-Fusion's) as the TF world -> body, so the
+// mapper can look up the camera pose at each depth stamp (mapper/sync_mode: tf) on a real drone.
+// Odometry with a non-finite pose or a non-unit orientation is refused (counted, logged once per
+// warn period). In: odom. Out: TF `world_frame` -> `body_frame`.
+#include <geometry_msgs/TransformStamped.h>
+#include <nav_msgs/Odometry.h>
+#include <nodelet/nodelet.h>
+#include <pluginlib/class_list_macros.hpp>
+#include <ros/ros.h>
+#include <tf2_ros/transform_broadcaster.h>
+
+#include <cmath>
+
+#include "go_feap/ros/params.h"
+
+namespace go_feap {
+
+class OdometryTf : public nodelet::Nodelet {
+ private:
+  void onInit() override {
+    ros_params::ParamReader p(getPrivateNodeHandle());
+    p.get("world_frame", world_frame_).get("body_frame", body_frame_).get("warn_period", warn_period_);
+    ros_params::requireOrThrow(p.ok(), getName(), p.error());
+    ros_params::requireOrThrow(!world_frame_.empty() && !body_frame_.empty() && world_frame_ != body_frame_, getName(),
+                               "parameters 'world_frame' and 'body_frame' must name two different frames");
+    ros_params::requireOrThrow(std::isfinite(warn_period_) && warn_period_ > 0.0, getName(),
+                               "parameter '" + p.fullName("warn_period") + "' must be > 0");
+    broadcaster_ = std::make_unique<tf2_ros::TransformBroadcaster>();
+    odom_sub_ = getNodeHandle().subscribe("odom", 20, &OdometryTf::onOdom, this);
+  }
+
+  void onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
+    const auto& p = msg->pose.pose.position;
+    const auto& q = msg->pose.pose.orientation;
+    const double norm = std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w);
+    if (!std::isfinite(p.x + p.y + p.z) || !std::isfinite(norm) || std::abs(norm - 1.0) > 1e-3) {
+      ++refused_;
+      NODELET_WARN_STREAM_THROTTLE(warn_period_, getName() << ": odometry with a non-finite position or a non-unit "
+                                                              "orientation refused ("
+                                                           << refused_ << " so far)");
+      return;
+    }
+    if (msg->header.stamp == last_stamp_) return;  // TF refuses repeated stamps
+    last_stamp_ = msg->header.stamp;
+    geometry_msgs::TransformStamped t;
+    t.header.stamp = msg->header.stamp;
+    t.header.frame_id = world_frame_;
+    t.child_frame_id = body_frame_;
+    t.transform.translation.x = p.x, t.transform.translation.y = p.y, t.transform.translation.z = p.z;
+    t.transform.rotation = q;
+    broadcaster_->sendTransform(t);
+  }
+
+  std::string world_frame_, body_frame_;
+  double warn_period_ = 2.0;
+  std::uint64_t refused_ = 0;
+  ros::Time last_stamp_;
+  std::unique_ptr<tf2_ros::TransformBroadcaster> broadcaster_;
+  ros::Subscriber odom_sub_;
+};
+
+}  // namespace go_feap
+
+PLUGINLIB_EXPORT_CLASS(go_feap::OdometryTf, nodelet::Nodelet)
