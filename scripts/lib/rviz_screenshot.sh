@@ -62,15 +62,18 @@ cfg="$1"; out="$2"; secs="$3"
 rviz -d "$cfg" &
 rpid=$!
 stop_rviz() {
-  kill -0 "$rpid" 2>/dev/null || return 0
-  kill -TERM "$rpid" 2>/dev/null || true
-  for _ in 1 2 3 4 5 6 7 8 9 10; do kill -0 "$rpid" 2>/dev/null || break; sleep 0.5; done
-  kill -KILL "$rpid" 2>/dev/null || true
+  local sig _
+  for sig in INT TERM KILL; do  # INT first: rviz then unregisters from the master
+    kill -0 "$rpid" 2>/dev/null || break
+    kill -"$sig" "$rpid" 2>/dev/null || true
+    for _ in 1 2 3 4 5 6 7 8 9 10; do kill -0 "$rpid" 2>/dev/null || break; sleep 0.5; done
+  done
   wait "$rpid" 2>/dev/null || true
 }
 trap stop_rviz EXIT
 trap "exit 130" INT TERM
-sleep "$secs"
+sleep "$secs" &
+wait $!  # unlike a foreground sleep, wait lets the TERM trap run at once
 if ! kill -0 "$rpid" 2>/dev/null; then
   wait "$rpid"; rc=$?
   echo "[rviz_screenshot] rviz exited (status $rc) before the screenshot" >&2
@@ -85,10 +88,18 @@ cleanup() {
   local rc=$?
   trap - EXIT INT TERM
   if [ -n "$XPID" ] && kill -0 "$XPID" 2>/dev/null; then
-    # xvfb-run runs in its own process group (setsid): stop rviz, the inner shell and Xvfb.
-    kill -TERM -- "-$XPID" 2>/dev/null || true
-    for _ in 1 2 3 4 5 6 7 8 9 10; do kill -0 "$XPID" 2>/dev/null || break; sleep 0.5; done
-    kill -KILL -- "-$XPID" 2>/dev/null || true
+    # First the inner shell: it stops rviz (which unregisters from the master), then
+    # xvfb-run stops Xvfb and removes its lock and auth files.
+    local inner _
+    inner="$(pgrep -P "$XPID" -x bash || true)"
+    if [ -n "$inner" ]; then kill -TERM "$inner" 2>/dev/null || true; fi
+    for _ in $(seq 40); do kill -0 "$XPID" 2>/dev/null || break; sleep 0.5; done
+    # Then anything left in xvfb-run's process group (setsid made it the leader).
+    if kill -0 "$XPID" 2>/dev/null; then
+      kill -TERM -- "-$XPID" 2>/dev/null || true
+      for _ in $(seq 10); do kill -0 "$XPID" 2>/dev/null || break; sleep 0.5; done
+      kill -KILL -- "-$XPID" 2>/dev/null || true
+    fi
   fi
   exit "$rc"
 }
@@ -104,7 +115,9 @@ status=0
 wait "$XPID" || status=$?
 XPID=""
 
-errors="$(grep -E '\[ ?ERROR\]|^ERROR|[Ee]rror:' "$RVIZ_LOG" || true)"
+# rospack's "no such package media_export" (rviz looking for plugin media) is harmless noise.
+errors="$(sed 's/\x1b\[[0-9;]*m//g' "$RVIZ_LOG" | grep -E '\[ ?ERROR\]|^ERROR|[Ee]rror:' |
+  grep -v -E 'no such package media_export' || true)"
 if [ -n "$errors" ]; then
   log "rviz ERROR lines ($(printf '%s\n' "$errors" | wc -l)):"
   printf '%s\n' "$errors"

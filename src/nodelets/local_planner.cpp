@@ -166,7 +166,11 @@ class LocalPlanner : public nodelet::Nodelet {
         current ? &*current : nullptr, proposal,
         planning::edgeCost((*position_ - proposal.position).norm(), yaw_, proposal.yaw, local_config_), now,
         viewpoint_config_.min_visible, local_config_);
-    if (decision == planning::TargetDecision::kKeep) return;
+    if (decision == planning::TargetDecision::kKeep) {
+      // Repeat the kept target: a subscriber that started late (or missed it) still gets it.
+      if (last_out_) target_pub_.publish(*last_out_);
+      return;
+    }
     if (decision == planning::TargetDecision::kReachedInVain) {
       NODELET_INFO_STREAM(getName() << ": frontier " << target_frontier_
                                     << " not cleared from its reached viewpoint: failed attempt");
@@ -174,6 +178,7 @@ class LocalPlanner : public nodelet::Nodelet {
       failed.data = target_frontier_;
       failed_pub_.publish(failed);
       target_.reset();
+      last_out_.reset();
       return;
     }
     target_ = proposal;
@@ -206,6 +211,7 @@ class LocalPlanner : public nodelet::Nodelet {
       for (const auto& vp : layer) candidates.points.push_back(ros_conv::toPoint(vp.position));
     markers.markers = {candidates, chosen};
     target_pub_.publish(out);
+    last_out_ = out;
     marker_pub_.publish(markers);
   }
 
@@ -224,6 +230,7 @@ class LocalPlanner : public nodelet::Nodelet {
   ros::Publisher compute_pub_;
   ros::Publisher target_pub_, marker_pub_, failed_pub_;
   std::optional<frontier::Viewpoint> target_;
+  std::optional<ViewpointPath> last_out_;
   std::uint32_t target_frontier_ = 0;
   double committed_at_ = 0.0, speed_ = 0.0, frontier_extent_ = 2.0;
   ros::Subscriber handle_sub_, odom_sub_, depth_sub_, layer_sub_, frontier_sub_, tour_sub_;
