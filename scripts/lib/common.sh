@@ -15,7 +15,7 @@ GO_FEAP_APT_PACKAGES=(
   ros-geometry-msgs ros-nav-msgs ros-sensor-msgs ros-visualization-msgs ros-std-msgs ros-std-srvs
   libpcl-dev libopencv-dev libnlopt-cxx-dev liboctomap-dev libeigen3-dev libgtest-dev
   libyaml-cpp-dev nlohmann-json3-dev
-  rviz librviz-dev xvfb python3-matplotlib
+  rviz librviz-dev xvfb imagemagick python3-matplotlib
 )
 
 log() { printf '[go_feap] %s\n' "$*" >&2; }

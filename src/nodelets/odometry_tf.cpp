@@ -1,13 +1,18 @@
-// OdometryTf: republishes an odometry stream (e.g. VINS-Fusion's) as the TF world -> body, so the
-// mapper can look up the camera pose at each depth stamp (mapper/sync_mode: tf) on a real drone.
-// Odometry with a non-finite pose or a non-unit orientation is refused (counted, logged once per
-// warn period). In: odom. Out: TF `world_frame` -> `body_frame`.
+// OdometryTf: republishes an odometry stream (e.g. VINS-Fusion's) as the TF world -> body, and the
+// camera extrinsic (config/d435i.yaml T_B_C) as the static TF body -> camera, so the mapper can look
+// up the camera pose at each depth stamp (mapper/sync_mode: tf) on a real drone. Odometry with a
+// non-finite pose or a non-unit orientation is refused (counted, logged once per warn period).
+// In: odom. Out: TF `world_frame` -> `body_frame`, static TF `body_frame` -> `camera_frame`.
 #include <geometry_msgs/TransformStamped.h>
 #include <nav_msgs/Odometry.h>
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
 #include <ros/ros.h>
+#include <tf2_eigen/tf2_eigen.h>
+#include <tf2_ros/static_transform_broadcaster.h>
 #include <tf2_ros/transform_broadcaster.h>
+
+#include <Eigen/Geometry>
 
 #include <cmath>
 
@@ -19,8 +24,25 @@ class OdometryTf : public nodelet::Nodelet {
  private:
   void onInit() override {
     ros_params::ParamReader p(getPrivateNodeHandle());
+    std::string camera_frame;
+    Eigen::Matrix4d T_B_C;
     p.get("world_frame", world_frame_).get("body_frame", body_frame_).get("warn_period", warn_period_);
+    p.get("camera_frame", camera_frame).getMatrix4("T_B_C", T_B_C);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
+    const Eigen::Matrix3d R = T_B_C.topLeftCorner<3, 3>();
+    ros_params::requireOrThrow(T_B_C.allFinite() && T_B_C.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1)) &&
+                                   (R.transpose() * R).isApprox(Eigen::Matrix3d::Identity(), 1e-6) &&
+                                   R.determinant() > 0.0,
+                               getName(), "parameter '" + p.fullName("T_B_C") + "' must be a rigid transform");
+    ros_params::requireOrThrow(!camera_frame.empty() && camera_frame != body_frame_, getName(),
+                               "parameter '" + p.fullName("camera_frame") + "' must name a frame other than the body");
+    Eigen::Isometry3d extrinsic;
+    extrinsic.matrix() = T_B_C;
+    geometry_msgs::TransformStamped camera = tf2::eigenToTransform(extrinsic);
+    camera.header.stamp = ros::Time::now();
+    camera.header.frame_id = body_frame_;
+    camera.child_frame_id = camera_frame;
+    static_broadcaster_.sendTransform(camera);
     ros_params::requireOrThrow(!world_frame_.empty() && !body_frame_.empty() && world_frame_ != body_frame_, getName(),
                                "parameters 'world_frame' and 'body_frame' must name two different frames");
     ros_params::requireOrThrow(std::isfinite(warn_period_) && warn_period_ > 0.0, getName(),
@@ -56,6 +78,7 @@ class OdometryTf : public nodelet::Nodelet {
   std::uint64_t refused_ = 0;
   ros::Time last_stamp_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> broadcaster_;
+  tf2_ros::StaticTransformBroadcaster static_broadcaster_;
   ros::Subscriber odom_sub_;
 };
 

@@ -1,0 +1,101 @@
+// Record and replay, through the launch files a user runs: record_flight.launch records a short
+// simulated maze flight with the onboard topic names (16UC1 depth, camera_info, odometry, TF);
+// replay.launch plays it through the mapper and planners and saves the map. The map must hold the
+// walls the flight saw: many occupied voxels, nearly all of them ground-truth obstacles. A bag
+// without depth is refused with the missing topic named. Each launch gets its own ROS master.
+#include <gtest/gtest.h>
+#include <octomap/OcTree.h>
+#include <rosbag/bag.h>
+#include <nav_msgs/Odometry.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include "go_feap/world/scene_files.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// Runs a shell command; returns its output (stdout and stderr).
+std::string run(const std::string& command) {
+  std::string output;
+  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen((command + " 2>&1").c_str(), "r"), pclose);
+  if (!pipe) return "popen failed";
+  std::array<char, 4096> buffer;
+  while (fgets(buffer.data(), buffer.size(), pipe.get())) output += buffer.data();
+  return output;
+}
+
+class Replay : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("go_feap_replay_test_" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  // roslaunch with a private master on `port`, logs under dir_.
+  std::string launch(int port, const std::string& args, int timeout_s) {
+    const std::string env = "ROS_MASTER_URI=http://localhost:" + std::to_string(port) + " ROS_HOME=" + dir_.string() +
+                            " ROS_LOG_DIR=" + dir_.string() + "/log ROSCONSOLE_STDOUT_LINE_BUFFERED=1";
+    return run(env + " timeout --signal=INT --kill-after=20 " + std::to_string(timeout_s) + " roslaunch -p " +
+               std::to_string(port) + " go_feap " + args);
+  }
+  fs::path dir_;
+};
+
+TEST_F(Replay, RecordedFlightRebuildsTheWallsItSaw) {
+  const std::string bag = (dir_ / "flight.bag").string(), bt = (dir_ / "replay.bt").string();
+  const std::string rec = launch(11821, "record_flight.launch bag:=" + bag + " duration:=12", 240);
+  ASSERT_TRUE(fs::exists(bag)) << rec.substr(rec.size() > 3000 ? rec.size() - 3000 : 0);
+  const std::string rep = launch(11822, "replay.launch bag:=" + bag + " save_map:=" + bt, 240);
+  ASSERT_NE(rep.find("replay: save_map: wrote"), std::string::npos) << rep.substr(rep.size() > 3000 ? rep.size() - 3000 : 0);
+  ASSERT_TRUE(fs::exists(bt));
+
+  auto scene = go_feap::world::makeScene("maze", 0);
+  ASSERT_TRUE(scene) << scene.message();
+  octomap::OcTree tree(bt);
+  std::size_t occupied = 0, on_walls = 0, free_cells = 0;
+  for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) {
+    if (!tree.isNodeOccupied(*it)) {
+      ++free_cells;
+      continue;
+    }
+    ++occupied;
+    // A mapped obstacle voxel: a ground-truth obstacle within one voxel (depth quantised to mm and
+    // rays ending on voxel faces may put a return in the neighbour).
+    const go_feap::common::Vec3 c(it.getX(), it.getY(), it.getZ());
+    bool near = false;
+    for (double dx : {-0.1, 0.0, 0.1})
+      for (double dy : {-0.1, 0.0, 0.1})
+        for (double dz : {-0.1, 0.0, 0.1}) near = near || scene->isOccupied(go_feap::common::Vec3(c + go_feap::common::Vec3(dx, dy, dz)));
+    on_walls += near;
+  }
+  std::cout << occupied << " occupied voxels, " << on_walls << " on ground-truth walls, " << free_cells
+            << " free leaves\n";
+  EXPECT_GT(occupied, 1000u) << "the flight saw walls: the replayed map must hold them";
+  EXPECT_GE(static_cast<double>(on_walls), 0.98 * static_cast<double>(occupied));
+  EXPECT_GT(free_cells, 100u);
+}
+
+TEST_F(Replay, ABagWithoutDepthIsRefusedNamingTheMissingTopic) {
+  const std::string bag = (dir_ / "odom_only.bag").string();
+  {
+    rosbag::Bag out(bag, rosbag::bagmode::Write);
+    nav_msgs::Odometry odom;
+    odom.header.frame_id = "world";
+    odom.pose.pose.orientation.w = 1.0;
+    for (int i = 1; i <= 20; ++i) {
+      odom.header.stamp = ros::Time(i * 0.1);
+      out.write("/vins_estimator/odometry", odom.header.stamp, odom);
+    }
+  }
+  const std::string rep = launch(11823, "replay.launch bag:=" + bag, 120);
+  EXPECT_NE(rep.find("lacks the topic(s) /camera/depth/image_rect_raw, /camera/depth/camera_info"), std::string::npos)
+      << rep.substr(rep.size() > 3000 ? rep.size() - 3000 : 0);
+}
+
+}  // namespace
