@@ -1,0 +1,62 @@
+// rviz/exploration.rviz loads in rviz under Xvfb without errors (scripts/lib/rviz_screenshot.sh on
+// a private master), and the screenshot taken then is a real, non-blank picture.
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/core.hpp>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#ifndef GO_FEAP_SOURCE_DIR
+#error "GO_FEAP_SOURCE_DIR must name the package's source directory"
+#endif
+
+namespace {
+
+namespace fs = std::filesystem;
+
+std::pair<int, std::string> run(const std::string& command) {
+  std::string output;
+  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
+  if (!pipe) return {-1, "popen failed"};
+  std::array<char, 4096> buffer;
+  while (fgets(buffer.data(), buffer.size(), pipe)) output += buffer.data();
+  const int status = pclose(pipe);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+}
+
+TEST(RvizConfig, LoadsUnderXvfbWithoutErrors) {
+  const fs::path dir = fs::temp_directory_path() / ("go_feap_rviz_test_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const std::string env = "ROS_MASTER_URI=http://localhost:11841 ROS_HOME=" + dir.string() + " ROS_LOG_DIR=" +
+                          dir.string() + "/log";
+  // A private master for the duration of the check.
+  ASSERT_EQ(std::system((env + " roscore -p 11841 >" + dir.string() + "/roscore.log 2>&1 & echo $! >" + dir.string() +
+                         "/roscore.pid")
+                            .c_str()),
+            0);
+  const auto [rc, output] =
+      run("export " + env + "; for i in $(seq 60); do rosnode list >/dev/null 2>&1 && break; sleep 0.5; done; timeout 180 " GO_FEAP_SOURCE_DIR "/scripts/lib/rviz_screenshot.sh " + (dir / "rviz.png").string() + " 12");
+  std::system(("kill $(cat " + dir.string() + "/roscore.pid) 2>/dev/null; sleep 1").c_str());
+  EXPECT_EQ(rc, 0) << output;
+  EXPECT_NE(output.find("rviz printed no ERROR lines"), std::string::npos) << output;
+  std::string log;
+  if (FILE* f = fopen((dir / "rviz.rviz.log").c_str(), "r")) {
+    std::array<char, 4096> buffer;
+    while (fgets(buffer.data(), buffer.size(), f)) log += buffer.data();
+    fclose(f);
+  }
+  EXPECT_EQ(log.find("[ERROR]"), std::string::npos) << log;
+  const cv::Mat shot = cv::imread((dir / "rviz.png").string());
+  ASSERT_FALSE(shot.empty()) << "no screenshot";
+  EXPECT_EQ(shot.cols, 1280);
+  cv::Scalar mean, stddev;
+  cv::meanStdDev(shot, mean, stddev);
+  EXPECT_GT(stddev[0] + stddev[1] + stddev[2], 10.0) << "the screenshot is blank";
+  fs::remove_all(dir);
+}
+
+}  // namespace
