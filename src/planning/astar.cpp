@@ -140,6 +140,7 @@ Astar::Astar(const map::OccupancyMap& occupancy, const map::Esdf& esdf, const As
     throw std::invalid_argument("astar: grids of 2^32 voxels or more are not supported");
   blocked_below_ = config.clearance - kClearanceRounding * geo_.resolution();
   brick_dims_ = (geo_.dims().array() + (kBrickEdge - 1)) / kBrickEdge;
+  clearance_voxels_ = std::max(1, static_cast<int>(std::ceil(config.clearance / geo_.resolution() - 1e-9)));
   const common::Aabb& box = occupancy.box();
   for (int a = 0; a < 3; ++a) {
     const double lo = box.min[a] + config.clearance, hi = box.max[a] - config.clearance;
@@ -157,6 +158,14 @@ bool Astar::traversable(const Index3& idx, std::size_t linear) const {
   const VoxelState state = occupancy_.stateAt(linear);
   if (state == VoxelState::kOccupied) return false;
   if (state == VoxelState::kUnknown && !config_.unknown_is_free) return false;
+  if (config_.known_clearance) {
+    for (int a = 0; a < 3; ++a)
+      for (int s : {-clearance_voxels_, clearance_voxels_}) {
+        Index3 n = idx;
+        n[a] += s;
+        if (occupancy_.state(n) == VoxelState::kUnknown) return false;
+      }
+  }
   return esdf_.distance(idx) >= blocked_below_;
 }
 

@@ -62,6 +62,7 @@ void readGlobalPlanner(R& p, planning::GlobalPlannerConfig& c) {
 template <class R>
 void readAstar(R& p, planning::AstarConfig& c) {
   p.get("astar/clearance", c.clearance).get("astar/unknown_is_free", c.unknown_is_free);
+  p.get("astar/known_clearance", c.known_clearance);
   p.get("astar/max_expansions", c.max_expansions).get("astar/tie_breaker", c.tie_breaker);
 }
 

@@ -23,6 +23,10 @@ struct AstarConfig {
   /// true: unknown voxels are traversable (optimistic distance estimates between frontiers); false: only
   /// known-free voxels (safe paths to fly).
   bool unknown_is_free = true;
+  /// true: a voxel is traversable only when the voxels `clearance` away along each axis are known too, so
+  /// a flight path never hugs space it has not seen (a wall seen edge-on is not in the ESDF yet). Only
+  /// meaningful with unknown_is_free false.
+  bool known_clearance = false;
   /// Search budget: voxels expanded before giving up, at most 5e7.
   int max_expansions = 200000;
   /// Weight on the heuristic. 1 gives shortest paths; w > 1 may return a path up to w times longer than
@@ -139,7 +143,8 @@ class Astar {
   common::GridGeometry geo_;
   double blocked_below_ = 0.0;  // clearance less a rounding margin
   Index3 brick_dims_ = Index3::Zero();
-  Index3 box_lo_ = Index3::Zero(), box_hi_ = Index3::Zero();  ///< voxels whose centres lie in the box, [lo, hi]
+  Index3 box_lo_ = Index3::Zero(), box_hi_ = Index3::Zero();
+  int clearance_voxels_ = 0;  ///< known_clearance: offset (voxels) of the neighbours that must be known  ///< voxels whose centres lie in the box, [lo, hi]
 
   // Search scratch: the voxels a search touches, in bricks of 8^3 cells (locality: a voxel's neighbours
   // mostly share its brick) found through an open-addressing table; each cell holds kCellUnseen,

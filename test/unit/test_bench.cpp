@@ -1,0 +1,81 @@
+// The lock-step exploration loop (go_feap_bench's core) on the small maze: every planner mode
+// explores it to FINISHED(complete) with at least 95 % coverage and no collision, and the same
+// seed and options give the same run.
+#include <gtest/gtest.h>
+
+#include "go_feap/bench/exploration_run.h"
+#include "go_feap/world/scene_files.h"
+
+#ifndef GO_FEAP_CONFIG_DIR
+#error "GO_FEAP_CONFIG_DIR must name the package's config directory"
+#endif
+
+namespace {
+
+namespace bench = go_feap::bench;
+
+const std::string kSmallMaze = GO_FEAP_CONFIG_DIR "/scenes/maze_small.yaml";
+
+struct Outcome {
+  go_feap::metrics::Summary summary;
+  std::vector<go_feap::metrics::Sample> samples;
+  std::vector<std::string> events;
+};
+
+Outcome explore(const std::string& planner, std::uint64_t seed, double max_sim_time) {
+  auto config = bench::loadExplorationConfig(GO_FEAP_CONFIG_DIR, planner);
+  EXPECT_TRUE(config) << config.message();
+  auto scene = go_feap::world::makeScene(kSmallMaze, seed);
+  EXPECT_TRUE(scene) << scene.message();
+  bench::ExplorationRun run(*scene, *config, planner, max_sim_time);
+  run.run();
+  return {run.recorder().summary(), run.recorder().samples(), run.events()};
+}
+
+class PlannerModes : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(PlannerModes, ExploreTheSmallMazeCompletely) {
+  const Outcome o = explore(GetParam(), 0, 300.0);
+  const auto& s = o.summary;
+  std::cout << GetParam() << ": " << s.finish_reason << " after " << s.exploration_time_s << " s, "
+            << s.flight_distance_m << " m, coverage " << 100.0 * s.coverage << " %, closest approach "
+            << s.min_obstacle_distance_m << " m\n";
+  EXPECT_EQ(s.finish_reason, "complete");
+  EXPECT_GE(s.coverage, 0.95);
+  EXPECT_EQ(s.collisions, 0);
+  EXPECT_GT(s.min_obstacle_distance_m, 0.1);
+  EXPECT_GT(s.flight_distance_m, 5.0);
+  // The time series ends where the summary does and coverage never decreases.
+  ASSERT_FALSE(o.samples.empty());
+  EXPECT_DOUBLE_EQ(o.samples.back().coverage, s.coverage);
+  for (std::size_t i = 1; i < o.samples.size(); ++i) EXPECT_GE(o.samples[i].coverage, o.samples[i - 1].coverage);
+}
+
+INSTANTIATE_TEST_SUITE_P(Bench, PlannerModes, ::testing::Values("go_feap", "fuel", "nearest"));
+
+TEST(Bench, SameSeedAndOptionsGiveTheSameRun) {
+  const Outcome a = explore("go_feap", 1, 40.0), b = explore("go_feap", 1, 40.0);
+  EXPECT_EQ(a.summary.finish_reason, b.summary.finish_reason);
+  EXPECT_EQ(a.summary.exploration_time_s, b.summary.exploration_time_s);
+  EXPECT_EQ(a.summary.flight_distance_m, b.summary.flight_distance_m);
+  EXPECT_EQ(a.summary.coverage, b.summary.coverage);
+  EXPECT_EQ(a.events, b.events);
+  ASSERT_EQ(a.samples.size(), b.samples.size());
+  for (std::size_t i = 0; i < a.samples.size(); ++i) {
+    EXPECT_EQ(a.samples[i].position, b.samples[i].position) << i;
+    EXPECT_EQ(a.samples[i].coverage, b.samples[i].coverage) << i;
+  }
+  // A different maze (seed) gives a different run.
+  const Outcome c = explore("go_feap", 2, 40.0);
+  EXPECT_NE(a.samples.back().position, c.samples.back().position);
+}
+
+TEST(Bench, ConfigErrorsNameTheModeOrKey) {
+  auto unknown = bench::loadExplorationConfig(GO_FEAP_CONFIG_DIR, "warp");
+  ASSERT_FALSE(unknown);
+  EXPECT_NE(unknown.message().find("unknown planner 'warp'"), std::string::npos) << unknown.message();
+  auto missing = bench::loadExplorationConfig("/nonexistent", "go_feap");
+  EXPECT_FALSE(missing);
+}
+
+}  // namespace

@@ -1,0 +1,229 @@
+// Metrics, tables, YAML parameter reading and the target hysteresis, against hand-computed values
+// and brute force.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "go_feap/common/yaml_reader.h"
+#include "go_feap/metrics/metrics.h"
+#include "go_feap/metrics/table.h"
+#include "go_feap/planning/local_planner.h"
+#include "go_feap/world/generators.h"
+
+namespace {
+
+using go_feap::common::Vec3;
+namespace fs = std::filesystem;
+namespace metrics = go_feap::metrics;
+
+go_feap::metrics::Summary summary(const std::string& scene, const std::string& planner, double time, double distance,
+                                  double coverage, int collisions, const std::string& reason, double global_ms) {
+  metrics::Summary s;
+  s.scene = scene;
+  s.planner = planner;
+  s.exploration_time_s = time;
+  s.flight_distance_m = distance;
+  s.coverage = coverage;
+  s.collisions = collisions;
+  s.finish_reason = reason;
+  s.compute["global"].add(global_ms);
+  s.compute["global"].add(3.0 * global_ms);  // mean 2 * global_ms
+  s.compute["mapping"].add(1.0);
+  return s;
+}
+
+TEST(Table, AggregatesPerSceneAndPlannerWithPopulationStd) {
+  const std::vector<metrics::Summary> runs = {
+      summary("maze", "go_feap", 100, 200, 0.99, 0, "complete", 1.0),
+      summary("maze", "fuel", 150, 250, 1.00, 1, "complete", 5.0),
+      summary("maze", "go_feap", 120, 220, 0.97, 0, "time_limit", 2.0),
+      summary("maze", "go_feap", 110, 210, 1.00, 2, "complete", 3.0),
+  };
+  const auto rows = metrics::aggregate(runs);
+  ASSERT_EQ(rows.size(), 2u);
+  const metrics::TableRow& g = rows[0];
+  EXPECT_EQ(g.planner, "go_feap");
+  EXPECT_EQ(g.runs, 3);
+  EXPECT_EQ(g.finished, 2);
+  EXPECT_DOUBLE_EQ(g.exploration_time_s.avg, 110.0);
+  EXPECT_NEAR(g.exploration_time_s.std, std::sqrt(200.0 / 3.0), 1e-12);  // deviations -10, 10, 0
+  EXPECT_DOUBLE_EQ(g.exploration_time_s.max, 120.0);
+  EXPECT_DOUBLE_EQ(g.exploration_time_s.min, 100.0);
+  EXPECT_DOUBLE_EQ(g.flight_distance_m.avg, 210.0);
+  EXPECT_NEAR(g.coverage_avg, (0.99 + 0.97 + 1.0) / 3.0, 1e-12);
+  EXPECT_DOUBLE_EQ(g.coverage_min, 0.97);
+  EXPECT_EQ(g.collisions, 2);
+  EXPECT_DOUBLE_EQ(g.compute_ms.at("global"), (2.0 + 4.0 + 6.0) / 3.0);
+  EXPECT_DOUBLE_EQ(g.compute_ms.at("mapping"), 1.0);
+  EXPECT_DOUBLE_EQ(g.compute_ms.at("total"), 4.0);  // mapping is not a planning block
+  EXPECT_EQ(rows[1].planner, "fuel");
+  EXPECT_EQ(rows[1].runs, 1);
+  EXPECT_DOUBLE_EQ(rows[1].exploration_time_s.std, 0.0);
+
+  const nlohmann::json j = nlohmann::json::parse(metrics::tableJson(rows));
+  ASSERT_TRUE(j.is_array());
+  ASSERT_EQ(j.size(), 2u);
+  EXPECT_EQ(j[0]["scene"], "maze");
+  EXPECT_EQ(j[0]["runs"], 3);
+  EXPECT_EQ(j[0]["finished"], 2);
+  EXPECT_DOUBLE_EQ(j[0]["exploration_time_s"]["avg"].get<double>(), 110.0);
+  EXPECT_DOUBLE_EQ(j[0]["flight_distance_m"]["min"].get<double>(), 200.0);
+  EXPECT_DOUBLE_EQ(j[0]["coverage"]["min"].get<double>(), 0.97);
+  EXPECT_EQ(j[0]["collisions"], 2);
+  EXPECT_DOUBLE_EQ(j[0]["compute_ms"]["total"].get<double>(), 4.0);
+  const std::string md = metrics::tableMarkdown(rows);
+  EXPECT_NE(md.find("| maze | go_feap | 3 | 2 | 110.0 |"), std::string::npos) << md;
+}
+
+TEST(Metrics, ObstacleDistanceMatchesBruteForceOverVoxelCubes) {
+  go_feap::world::MazeConfig config;
+  config.size_x = 6.0;
+  config.size_y = 4.0;
+  auto scene = go_feap::world::generateMaze(config, 3);
+  ASSERT_TRUE(scene) << scene.message();
+  const auto& geo = scene->geometry();
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> ux(-3, 3), uy(-2, 2), uz(0.2, 2.8);
+  for (int k = 0; k < 200; ++k) {
+    const Vec3 p(ux(rng), uy(rng), uz(rng));
+    double brute = 0.6;
+    for (std::size_t l = 0; l < geo.size(); ++l) {
+      if (!scene->occupied[l]) continue;
+      const Vec3 lo = geo.origin() + geo.unlinear(l).cast<double>() * geo.resolution();
+      const Vec3 d = (lo - p).cwiseMax(p - (lo + Vec3::Constant(geo.resolution()))).cwiseMax(0.0);
+      brute = std::min(brute, d.norm());
+    }
+    EXPECT_NEAR(metrics::obstacleDistance(*scene, p, 0.6), brute, 1e-12) << p.transpose();
+  }
+}
+
+TEST(Metrics, CoverageTrackerEqualsTheWorldDefinition) {
+  go_feap::world::MazeConfig config;
+  config.size_x = 6.0;
+  config.size_y = 4.0;
+  auto scene = go_feap::world::generateMaze(config, 1);
+  ASSERT_TRUE(scene);
+  go_feap::map::OccupancyMap map(go_feap::map::OccupancyConfig(), scene->box);
+  std::mt19937 rng(2);
+  const auto& geo = map.geometry();
+  for (int k = 0; k < 20000; ++k) {
+    const go_feap::common::Index3 idx(rng() % geo.dims().x(), rng() % geo.dims().y(), rng() % geo.dims().z());
+    map.setState(idx, k % 3 ? go_feap::map::VoxelState::kFree : go_feap::map::VoxelState::kOccupied);
+  }
+  const metrics::CoverageTracker tracker(*scene, geo);
+  const auto observable = go_feap::world::computeObservableSet(*scene);
+  const double expected = go_feap::world::coverage(
+      observable, [&](const Vec3& c) { return map.state(c) != go_feap::map::VoxelState::kUnknown; });
+  EXPECT_GT(expected, 0.0);
+  EXPECT_DOUBLE_EQ(tracker.coverage(map), expected);
+  EXPECT_EQ(tracker.observableCount(), observable.total());
+}
+
+TEST(Metrics, RecorderWritesSummaryCsvAndPlot) {
+  metrics::Recorder r;
+  r.summary() = summary("maze", "go_feap", 10.0, 12.5, 0.5, 1, "complete", 2.0);
+  for (int i = 0; i <= 10; ++i) {
+    metrics::Sample s;
+    s.t = i;
+    s.coverage = 0.05 * i;
+    s.distance = 1.25 * i;
+    s.position = Vec3(i, 0, 1);
+    r.addSample(s);
+  }
+  const fs::path dir = fs::temp_directory_path() / "go_feap_test_recorder";
+  fs::remove_all(dir);
+  ASSERT_TRUE(r.writeAll(dir.string()).ok());
+  const nlohmann::json j = nlohmann::json::parse(std::ifstream(dir / "summary.json"));
+  for (const char* key : {"scene", "seed", "planner", "finish_reason", "exploration_time_s", "flight_distance_m",
+                          "coverage", "collisions", "compute_ms"})
+    EXPECT_TRUE(j.contains(key)) << key;
+  EXPECT_DOUBLE_EQ(j["compute_ms"]["global"]["mean"].get<double>(), 4.0);
+  EXPECT_DOUBLE_EQ(j["compute_ms"]["global"]["max"].get<double>(), 6.0);
+  std::ifstream csv(dir / "metrics.csv");
+  std::string header, line;
+  std::getline(csv, header);
+  EXPECT_EQ(header, "t,coverage,explored_m3,distance,layer,frontiers,x,y,z");
+  int rows = 0;
+  while (std::getline(csv, line)) ++rows;
+  EXPECT_EQ(rows, 11);
+  const cv::Mat plot = cv::imread((dir / "coverage.png").string());
+  EXPECT_EQ(plot.cols, 800);
+  EXPECT_EQ(plot.rows, 500);
+  EXPECT_FALSE(r.writeAll("/proc/go_feap_no_such_dir").ok());
+  fs::remove_all(dir);
+}
+
+TEST(YamlReader, ReadsNestedKeysOverlaysAndNamesBadOnes) {
+  const fs::path dir = fs::temp_directory_path() / "go_feap_test_yaml";
+  fs::create_directories(dir);
+  std::ofstream(dir / "base.yaml") << "a:\n  x: 1.5\n  n: 3\n  v: [1, 2, 3]\n  s: word\nflag: true\n";
+  std::ofstream(dir / "over.yaml") << "a:\n  x: 2.5\n";
+  go_feap::common::YamlReader r({(dir / "base.yaml").string(), (dir / "over.yaml").string()});
+  double x = 0;
+  int n = 0;
+  bool flag = false;
+  std::string s;
+  Eigen::Vector3d v;
+  r.get("a/x", x).get("a/n", n).get("flag", flag).get("a/s", s).getVec3("a/v", v);
+  ASSERT_TRUE(r.ok()) << r.error();
+  EXPECT_DOUBLE_EQ(x, 2.5);  // the overlay wins
+  EXPECT_EQ(n, 3);           // the base still answers what the overlay lacks
+  EXPECT_TRUE(flag);
+  EXPECT_EQ(s, "word");
+  EXPECT_EQ(v, Eigen::Vector3d(1, 2, 3));
+  double missing = 0;
+  r.get("a/missing", missing);
+  EXPECT_FALSE(r.ok());
+  EXPECT_NE(r.error().find("parameter 'a/missing' is missing"), std::string::npos) << r.error();
+  go_feap::common::YamlReader typed((dir / "base.yaml").string());
+  int wrong = 0;
+  typed.get("a/s", wrong);
+  EXPECT_NE(typed.error().find("parameter 'a/s' has the wrong type"), std::string::npos) << typed.error();
+  go_feap::common::YamlReader none((dir / "nope.yaml").string());
+  EXPECT_FALSE(none.ok());
+  EXPECT_NE(none.error().find("nope.yaml"), std::string::npos);
+  fs::remove_all(dir);
+}
+
+TEST(TargetHysteresis, KeepsSwitchesAndReportsTargetsReachedInVain) {
+  go_feap::planning::LocalPlannerConfig c;
+  c.commit_time = 1.5;
+  go_feap::frontier::Viewpoint a, b;
+  a.position = Vec3(0, 0, 1);
+  a.yaw = 0.0;
+  b.position = Vec3(3, 0, 1);
+  b.yaw = 1.0;
+  using go_feap::planning::TargetDecision;
+  EXPECT_EQ(go_feap::planning::decideTarget(nullptr, b, 1.0, 0.0, 10, c), TargetDecision::kSwitch);
+  go_feap::planning::CurrentTarget cur;
+  cur.viewpoint = a;
+  cur.committed_at = 0.0;
+  cur.remaining_visible = 50;
+  cur.cost = 2.0;
+  // Within the commitment: kept, unless nothing is left to see or it was reached.
+  EXPECT_EQ(go_feap::planning::decideTarget(&cur, b, 1.0, 1.0, 10, c), TargetDecision::kKeep);
+  cur.remaining_visible = 5;
+  EXPECT_EQ(go_feap::planning::decideTarget(&cur, b, 1.0, 1.0, 10, c), TargetDecision::kSwitch);
+  cur.remaining_visible = 50;
+  // After it: only a quicker proposal replaces it (no taking turns between two targets).
+  EXPECT_EQ(go_feap::planning::decideTarget(&cur, b, 3.0, 2.0, 10, c), TargetDecision::kKeep);
+  EXPECT_EQ(go_feap::planning::decideTarget(&cur, b, 1.0, 2.0, 10, c), TargetDecision::kSwitch);
+  // The same target proposed again: kept while flying, reported once reached.
+  go_feap::frontier::Viewpoint same = a;
+  same.position.x() += 0.1;
+  EXPECT_EQ(go_feap::planning::decideTarget(&cur, same, 0.0, 5.0, 10, c), TargetDecision::kKeep);
+  cur.reached = true;
+  EXPECT_EQ(go_feap::planning::decideTarget(&cur, same, 0.0, 5.0, 10, c), TargetDecision::kReachedInVain);
+  EXPECT_EQ(go_feap::planning::decideTarget(&cur, b, 3.0, 1.0, 10, c), TargetDecision::kSwitch);
+  // Reached means close, facing it and slow.
+  EXPECT_TRUE(go_feap::planning::targetReached(Vec3(0.1, 0, 1), 0.1, 0.05, a, c));
+  EXPECT_FALSE(go_feap::planning::targetReached(Vec3(0.1, 0, 1), 0.1, 0.5, a, c));
+  EXPECT_FALSE(go_feap::planning::targetReached(Vec3(0.1, 0, 1), 1.0, 0.05, a, c));
+  EXPECT_FALSE(go_feap::planning::targetReached(Vec3(1.0, 0, 1), 0.0, 0.0, a, c));
+}
+
+}  // namespace
