@@ -2,7 +2,9 @@
 // FINISHED(complete) within the simulated-time budget; the coverage of the observable set,
 // computed here from the mapper's own OctoMap export (independently of the metrics recorder),
 // must be at least 95 %; the flown path, sampled from odometry, must never come within 0.1 m of
-// a ground-truth obstacle (brute-force lattice check); and the recorder's summary.json must agree.
+// a ground-truth obstacle (brute-force lattice check); the recorder's summary.json must agree; and
+// go_feap_bench's lock-step loop on the same scene and configuration must reach the same coverage
+// within 3 %.
 #include <gtest/gtest.h>
 #include <nav_msgs/Odometry.h>
 #include <octomap/OcTree.h>
@@ -14,6 +16,7 @@
 
 #include "go_feap/ExplorationStatus.h"
 #include "go_feap/SaveMap.h"
+#include "go_feap/bench/exploration_run.h"
 #include "go_feap/world/scene_files.h"
 #include "ros_test_util.h"
 
@@ -87,6 +90,19 @@ TEST(Exploration, SmallMazeFinishesCompleteWithFullCoverageAndNoCollision) {
   EXPECT_NEAR(summary["coverage"].get<double>(), coverage, 0.02);
   for (const char* key : {"scene", "seed", "planner", "exploration_time_s", "flight_distance_m", "compute_ms"})
     EXPECT_TRUE(summary.contains(key)) << key;
+
+  // The bench runs the same core classes in lock-step simulated time: same outcome within tolerance.
+  std::string config_dir;
+  ASSERT_TRUE(pnh.getParam("config_dir", config_dir));
+  auto config = go_feap::bench::loadExplorationConfig(config_dir, "go_feap");
+  ASSERT_TRUE(config) << config.message();
+  go_feap::bench::ExplorationRun bench(*scene, *config, "go_feap", 240.0);
+  bench.run();
+  const auto& b = bench.recorder().summary();
+  std::cout << "bench: " << b.finish_reason << " after " << b.exploration_time_s << " s, coverage "
+            << 100.0 * b.coverage << " %\n";
+  EXPECT_EQ(b.finish_reason, "complete");
+  EXPECT_NEAR(b.coverage, coverage, 0.03);
 }
 
 }  // namespace

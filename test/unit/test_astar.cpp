@@ -131,9 +131,24 @@ std::vector<std::uint8_t> bruteForceTraversable(const World& world, const AstarC
     const VoxelState s = world.occupancy().stateAt(l);
     if (s == VoxelState::kOccupied || (s == VoxelState::kUnknown && !config.unknown_is_free)) continue;
     const Index3 v = g.unlinear(l);
+    // The vehicle stays inside the exploration box, `clearance` away from its faces.
+    const Vec3 c = g.indexToCoord(v);
+    const Aabb& box = world.occupancy().box();
+    if ((c.array() < box.min.array() + config.clearance - 1e-9).any() ||
+        (c.array() > box.max.array() - config.clearance + 1e-9).any())
+      continue;
     double nearest = esdfConfig().max_distance;
     for (const Index3& o : obstacles) nearest = std::min(nearest, kRes * (o - v).cast<double>().norm());
     ok[l] = nearest >= config.clearance - 1e-9;
+    if (ok[l] && config.known_clearance) {  // the voxels `clearance` away along each axis are known
+      const int k = std::max(1, static_cast<int>(std::ceil(config.clearance / kRes - 1e-9)));
+      for (int a = 0; a < 3; ++a)
+        for (int sgn : {-1, 1}) {
+          Index3 n = v;
+          n[a] += sgn * k;
+          if (world.occupancy().state(n) == VoxelState::kUnknown) ok[l] = 0;
+        }
+    }
   }
   return ok;
 }
@@ -275,8 +290,10 @@ TEST(Astar, TraversableFollowsTheBlockingRule) {
     addRandomBoxes(world, rng, 8, VoxelState::kUnknown);
     addRandomBoxes(world, rng, 10, VoxelState::kOccupied);
     for (double clearance : {0.0, 0.1, 0.2, 0.25})
-      for (bool unknown_is_free : {true, false}) {
-        const AstarConfig config = astarConfig(clearance, unknown_is_free);
+      for (int mode = 0; mode < 3; ++mode) {
+        // unknown free; unknown blocked; unknown blocked and kept `clearance` away (flight paths)
+        AstarConfig config = astarConfig(clearance, mode == 0);
+        config.known_clearance = mode == 2;
         const Astar astar(world.occupancy(), world.esdf(), config);
         const std::vector<std::uint8_t> want = bruteForceTraversable(world, config);
         std::size_t mismatches = 0, traversable = 0;
@@ -500,10 +517,11 @@ TEST(Astar, BlockedEndsSnapToTheNearestTraversableVoxel) {
   ASSERT_EQ(reverse.status, PathStatus::kFound);
   EXPECT_EQ(reverse.path.back(), r.path.front());
 
-  // A start just outside the grid snaps inside; one far away does not.
+  // A start just outside the grid snaps inside, to the first voxel clearance (0.1 m) from the box's
+  // face; one far away does not.
   const PathResult outside = astar.search(Vec3(-0.2, 0.55, 0.55), goal, 0.5);
   ASSERT_EQ(outside.status, PathStatus::kFound);
-  EXPECT_EQ(g.coordToIndex(outside.path.front()), Index3(0, 5, 5));
+  EXPECT_EQ(g.coordToIndex(outside.path.front()), Index3(1, 5, 5));
   EXPECT_EQ(astar.search(Vec3(-50.0, 0.5, 0.5), goal, 0.5).status, PathStatus::kStartBlocked);
   EXPECT_EQ(astar.search(Vec3(std::nan(""), 0.5, 0.5), goal, 0.5).status, PathStatus::kStartBlocked);
 }
@@ -512,7 +530,7 @@ TEST(Astar, OpenSpaceGoesStraightToTheGoal) {
   World world(Index3(60, 40, 20));
   world.fill(VoxelState::kFree);
   const Astar astar(world.occupancy(), world.esdf(), AstarConfig());
-  const Index3 start(1, 2, 3), goal(57, 31, 16);
+  const Index3 start(2, 2, 3), goal(57, 31, 16);  // both 0.2 m (the clearance) inside the box
   const PathResult r = astar.search(world.geo().indexToCoord(start), world.geo().indexToCoord(goal));
   expectWellFormed(astar, r, start, goal);
   // The heuristic is exact here and ties go towards the goal: only path voxels are expanded.

@@ -322,6 +322,9 @@ TEST(Viewpoints, SampledViewpointsMatchExhaustiveEnumeration) {
       EXPECT_GE(w.esdf().distance(vp.position), cfg.clearance);
       EXPECT_GE(vp.position.z(), z_min);
       EXPECT_LE(vp.position.z(), z_max);
+      EXPECT_TRUE((vp.position.array() >= w.map().box().min.array() + cfg.clearance - 1e-9).all() &&
+                  (vp.position.array() <= w.map().box().max.array() - cfg.clearance + 1e-9).all())
+          << "viewpoint " << vp.position.transpose() << " closer than the clearance to the box's faces";
       EXPECT_GE(vp.visible_cells, cfg.min_visible);
       if (i > 0) {
         EXPECT_GE(vps[i - 1].visible_cells, vp.visible_cells);
@@ -343,7 +346,13 @@ TEST(Viewpoints, SampledViewpointsMatchExhaustiveEnumeration) {
         for (double off : cfg.height_offsets) {
           const double theta = 2 * kPi * a / n_angles;
           const Vec3 p = f.average + Vec3(r * std::cos(theta), r * std::sin(theta), 0.0);
-          const Vec3 q(p.x(), p.y(), std::clamp(f.average.z() + off, z_min, z_max));
+          // Heights are clamped to the band and to the box shrunk by the clearance.
+          const double lo = std::max(z_min, w.map().box().min.z() + cfg.clearance);
+          const double hi = std::min(z_max, w.map().box().max.z() - cfg.clearance);
+          const Vec3 q(p.x(), p.y(), std::clamp(f.average.z() + off, lo, hi));
+          if ((q.array() < w.map().box().min.array() + cfg.clearance).any() ||
+              (q.array() > w.map().box().max.array() - cfg.clearance).any())
+            continue;
           if (w.map().state(q) != VoxelState::kFree || w.esdf().distance(q) < cfg.clearance) continue;
           const std::vector<int> counts =
               oracleCounts(w, q, candidateYaws(q, f.average, cfg.yaw_samples), f.cells, cfg);
