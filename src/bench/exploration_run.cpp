@@ -204,16 +204,27 @@ void ExplorationRun::planStep() {
     if (!tour) log("no tour: " + tour.message());
     return;
   }
+  std::vector<std::uint32_t> ids;
+  for (const frontier::Frontier& f : finder_->frontiers()) ids.push_back(f.id);
+  viewpoint_cache_.retain(ids);
   std::vector<frontier::Frontier> ordered;
   for (unsigned id : tour->frontier_ids)
     if (const frontier::Frontier* f = finder_->find(id)) ordered.push_back(*f);
   t0 = Clock::now();
   auto plan = planning::chooseLocalTarget(position, yaw(), std::move(ordered), layer_out_.band.z_min,
                                           layer_out_.band.z_max, map_->occupancy(), map_->esdf(), *distance_astar_,
-                                          window_, config_.viewpoints, config_.local);
+                                          window_, config_.viewpoints, config_.local, &viewpoint_cache_);
   recorder_.addTime("local", msSince(t0));
   if (!plan) {
-    log("no local plan: " + plan.message());
+    // Nothing to fly to: look around, unless already flying somewhere or turning.
+    const bool idle = !target_ || planning::targetReached(position, yaw(), vehicle_.state().velocity.norm(),
+                                                          {target_->position, target_->yaw, 0}, config_.local);
+    if (idle) {
+      const frontier::Viewpoint scan = planning::scanTarget(position, yaw(), config_.local);
+      log("no local plan (" + plan.message() + "): turning in place to look around");
+      target_ = Target{scan.position, scan.yaw, 0, t_};
+      target_changed_ = true;
+    }
     return;
   }
   const frontier::Viewpoint& vp = plan->path.front();

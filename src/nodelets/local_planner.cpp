@@ -135,12 +135,31 @@ class LocalPlanner : public nodelet::Nodelet {
       for (const auto& c : msg->cells) f.cells.push_back(geo.coordToIndex(common::Vec3(c.x, c.y, c.z)));
       tour_frontiers.push_back(std::move(f));
     }
+    std::vector<std::uint32_t> ids;
+    for (const auto& f : frontiers_->frontiers) ids.push_back(f.id);
+    cache_.retain(ids);
     auto plan = planning::chooseLocalTarget(*position_, yaw_, std::move(tour_frontiers), band_.first, band_.second,
                                             m.occupancy(), m.esdf(), *astar_, *window_, viewpoint_config_,
-                                            local_config_);
+                                            local_config_, &cache_);
     if (!plan) {
       ros_conv::publishComputeTime(compute_pub_, "local", t_compute);
-      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": no local plan: " << plan.message());
+      map_lock.unlock();
+      // Nothing to fly to: look around, unless already flying somewhere or turning.
+      if (!target_ || planning::targetReached(*position_, yaw_, speed_, *target_, local_config_)) {
+        NODELET_INFO_STREAM_THROTTLE(2.0, getName() << ": no local plan (" << plan.message()
+                                                    << "): turning in place to look around");
+        target_ = planning::scanTarget(*position_, yaw_, local_config_);
+        target_frontier_ = 0;
+        committed_at_ = ros::Time::now().toSec();
+        ViewpointPath out;
+        out.header.stamp = tour->header.stamp;
+        out.header.frame_id = world_frame_;
+        out.positions.push_back(ros_conv::toPoint(target_->position));
+        out.yaws.push_back(target_->yaw);
+        out.frontier_ids.push_back(0);
+        target_pub_.publish(out);
+        last_out_ = out;
+      }
       return;
     }
     // Target hysteresis (the same rule as go_feap_bench): keep the current viewpoint while it is
@@ -231,6 +250,7 @@ class LocalPlanner : public nodelet::Nodelet {
   ros::Publisher target_pub_, marker_pub_, failed_pub_;
   std::optional<frontier::Viewpoint> target_;
   std::optional<ViewpointPath> last_out_;
+  planning::ViewpointCache cache_;
   std::uint32_t target_frontier_ = 0;
   double committed_at_ = 0.0, speed_ = 0.0, frontier_extent_ = 2.0;
   ros::Subscriber handle_sub_, odom_sub_, depth_sub_, layer_sub_, frontier_sub_, tour_sub_;

@@ -41,6 +41,7 @@ Status LocalPlannerConfig::validate() const {
   if (!(same_target_distance >= 0.0 && std::isfinite(same_target_distance)))
     return err("same_target_distance", "must be finite and >= 0");
   if (!(same_target_yaw >= 0.0 && std::isfinite(same_target_yaw))) return err("same_target_yaw", "must be finite and >= 0");
+  if (!(scan_step > 0.0 && scan_step < 3.14159)) return err("scan_step", "must be in (0, pi)");
   return Status::Ok();
 }
 
@@ -188,6 +189,13 @@ Result<LocalPlan> planLocal(const Vec3& position, double yaw, const std::vector<
   return plan;
 }
 
+frontier::Viewpoint scanTarget(const common::Vec3& position, double yaw, const LocalPlannerConfig& config) {
+  frontier::Viewpoint vp;
+  vp.position = position;
+  vp.yaw = wrapAngle(yaw + config.scan_step);
+  return vp;
+}
+
 bool targetReached(const common::Vec3& position, double yaw, double speed, const frontier::Viewpoint& target,
                    const LocalPlannerConfig& config) {
   return (position - target.position).norm() <= config.same_target_distance &&
@@ -214,16 +222,49 @@ int remainingVisible(const frontier::Viewpoint& viewpoint, const std::vector<fro
   return countVisible(viewpoint.position, viewpoint.yaw, cells, map, config);
 }
 
+const std::vector<frontier::Viewpoint>& ViewpointCache::get(const frontier::Frontier& frontier,
+                                                            const map::OccupancyMap& map, const map::Esdf& esdf,
+                                                            double z_min, double z_max, const ViewpointConfig& config) {
+  auto it = entries_.find(frontier.id);
+  if (it != entries_.end() && it->second.z_min == z_min && it->second.z_max == z_max) {
+    ++hits_;
+    auto& vps = it->second.viewpoints;
+    vps.erase(std::remove_if(vps.begin(), vps.end(),
+                             [&](const frontier::Viewpoint& vp) {
+                               return map.state(vp.position) != map::VoxelState::kFree ||
+                                      !(esdf.distance(vp.position) >= config.clearance);
+                             }),
+              vps.end());
+    return vps;
+  }
+  ++misses_;
+  Entry& e = entries_[frontier.id];
+  e.z_min = z_min;
+  e.z_max = z_max;
+  e.viewpoints = sampleViewpoints(frontier, map, esdf, z_min, z_max, config);
+  return e.viewpoints;
+}
+
+void ViewpointCache::retain(const std::vector<std::uint32_t>& ids) {
+  std::unordered_map<std::uint32_t, Entry> kept;
+  for (std::uint32_t id : ids) {
+    auto it = entries_.find(id);
+    if (it != entries_.end()) kept.emplace(id, std::move(it->second));
+  }
+  entries_.swap(kept);
+}
+
 common::Result<LocalPlan> chooseLocalTarget(const common::Vec3& position, double yaw,
                                             std::vector<frontier::Frontier> tour, double z_min, double z_max,
                                             const map::OccupancyMap& map, const map::Esdf& esdf, const Astar& astar,
                                             const ObstacleWindow& window, const ViewpointConfig& viewpoint_config,
-                                            const LocalPlannerConfig& config) {
+                                            const LocalPlannerConfig& config, ViewpointCache* cache) {
   std::vector<frontier::Frontier> ordered;
   std::vector<FrontierType> types;
   for (frontier::Frontier& f : tour) {
     if (static_cast<int>(ordered.size()) >= config.k_frontiers) break;
-    f.viewpoints = sampleViewpoints(f, map, esdf, z_min, z_max, viewpoint_config);
+    f.viewpoints = cache ? cache->get(f, map, esdf, z_min, z_max, viewpoint_config)
+                         : sampleViewpoints(f, map, esdf, z_min, z_max, viewpoint_config);
     if (f.viewpoints.empty()) continue;
     const double d = pathDistance(astar, position, f.average).metres;
     types.push_back(classifyFrontier(d, window, config));

@@ -64,6 +64,16 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
   if (!request.start.allFinite() || !request.velocity.allFinite() || !request.target.allFinite() ||
       !std::isfinite(request.yaw) || !std::isfinite(request.target_yaw))
     return R::Error("plan request is not finite");
+  // A target where the reference already is: turn in place (braking first if moving).
+  if ((request.target - request.start).norm() < 0.5 * astar.geometry().resolution()) {
+    Trajectory out;
+    out.position = safeStop(request.start, request.velocity, optimizer.a_max);
+    rep.path_status = planning::PathStatus::kFound;
+    auto yaw = yawSpline(request.yaw, request.target_yaw, out.position.duration(), optimizer, &rep);
+    if (!yaw) return R::Error("yaw spline failed: " + yaw.message());
+    out.yaw = std::move(yaw).value();
+    return out;
+  }
   const planning::PathResult path = astar.search(request.start, request.target, config.snap_radius);
   rep.path_status = path.status;
   if (path.status != planning::PathStatus::kFound)

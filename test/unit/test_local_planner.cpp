@@ -372,7 +372,7 @@ TEST(PlanLocal, Errors) {
   EXPECT_NE(bad.message().find("top_k"), std::string::npos);
   cfg.top_k = 2;
   const auto ok = planLocal(Vec3::Zero(), 0.0, {f}, {FrontierType::kOpen}, cfg);
-  ASSERT_TRUE(ok.ok());
+  ASSERT_TRUE(ok.ok()) << ok.message();
   EXPECT_NEAR(ok->cost, 0.5, 1e-12);  // 1 m at 2 m/s, no turn
 }
 

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "go_feap/planning/local_planner.h"
 #include "go_feap/planning/viewpoints.h"
 
 using go_feap::common::Aabb;
@@ -434,4 +435,48 @@ TEST(SampleViewpointsSubset, ScaledCountsFollowTheFullCounts) {
   ViewpointConfig bad;
   bad.max_evaluated_cells = -1;
   EXPECT_NE(bad.validate().message().find("max_evaluated_cells"), std::string::npos);
+}
+
+TEST(Viewpoints, CacheGivesTheSampledViewpointsAndDropsThoseTheMapHasFilled) {
+  const ViewpointConfig cfg = testConfig();
+  const double z_min = 0.4, z_max = 1.4;
+  World w(Index3(40, 40, 20));
+  Rng rng(21);
+  randomise(w, rng, 30, 0);
+  const Index3 lo(rng(12, 22), rng(12, 22), 4);
+  w.set(lo, lo + Index3(5, 5, 8), VoxelState::kUnknown);
+  Frontier f = frontierOf(w);
+  f.id = 7;
+  const std::vector<Viewpoint> sampled = sampleViewpoints(f, w.map(), w.esdf(), z_min, z_max, cfg);
+  ASSERT_GE(sampled.size(), 2u);
+  go_feap::planning::ViewpointCache cache;
+  auto same = [](const std::vector<Viewpoint>& a, const std::vector<Viewpoint>& b) {
+    if (a.size() != b.size()) return false;
+    for (std::size_t i = 0; i < a.size(); ++i)
+      if (a[i].position != b[i].position || a[i].yaw != b[i].yaw || a[i].visible_cells != b[i].visible_cells)
+        return false;
+    return true;
+  };
+  EXPECT_TRUE(same(cache.get(f, w.map(), w.esdf(), z_min, z_max, cfg), sampled));
+  EXPECT_TRUE(same(cache.get(f, w.map(), w.esdf(), z_min, z_max, cfg), sampled));
+  EXPECT_EQ(cache.misses(), 1u);
+  EXPECT_EQ(cache.hits(), 1u);
+  // An obstacle appears at the best viewpoint: the cached list loses it (and every viewpoint now
+  // too close to it), the others stay.
+  const Index3 at = w.geo().coordToIndex(sampled.front().position);
+  w.set(at, at, VoxelState::kOccupied);
+  const std::vector<Viewpoint> after = cache.get(f, w.map(), w.esdf(), z_min, z_max, cfg);
+  EXPECT_LT(after.size(), sampled.size());
+  for (const Viewpoint& vp : after) {
+    EXPECT_EQ(w.map().state(vp.position), VoxelState::kFree);
+    EXPECT_GE(w.esdf().distance(vp.position), cfg.clearance);
+    EXPECT_TRUE(std::any_of(sampled.begin(), sampled.end(), [&](const Viewpoint& s) { return s.position == vp.position; }));
+  }
+  // Another band, or a forgotten frontier, is sampled afresh.
+  cache.get(f, w.map(), w.esdf(), z_min, z_max + 0.5, cfg);
+  EXPECT_EQ(cache.misses(), 2u);
+  cache.retain({});
+  EXPECT_EQ(cache.size(), 0u);
+  cache.get(f, w.map(), w.esdf(), z_min, z_max, cfg);
+  EXPECT_EQ(cache.misses(), 3u);
 }

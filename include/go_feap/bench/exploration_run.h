@@ -121,6 +121,7 @@ class ExplorationRun {
   std::unique_ptr<planning::Astar> distance_astar_, flight_astar_;
   std::unique_ptr<planning::TourPlanner> tour_planner_;
   planning::ObstacleWindow window_;
+  planning::ViewpointCache viewpoint_cache_;
   std::unique_ptr<planning::LayerManager> layers_;
   std::unique_ptr<metrics::CoverageTracker> coverage_;
   metrics::Recorder recorder_;

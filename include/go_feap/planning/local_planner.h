@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <deque>
 #include <functional>
+#include <unordered_map>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -39,6 +40,9 @@ struct LocalPlannerConfig {
   /// m and rad: a proposal this close to the current target (position and yaw) is the same target.
   double same_target_distance = 0.3;
   double same_target_yaw = 0.3;
+  /// rad: when no viewpoint can be planned (at the start, facing a wall, nothing known around), the
+  /// vehicle turns in place by this much to look around (scanTarget()).
+  double scan_step = 2.0943951023931953;
 
   /// Checks every key; the message names the bad one, e.g. "local_planner: top_k must be >= 1".
   common::Status validate() const;
@@ -126,6 +130,9 @@ struct CurrentTarget {
   double cost = 0.0;          ///< s, edgeCost() from the vehicle's pose to it now
 };
 
+/// Where to look when no viewpoint can be planned: here, turned by scan_step.
+frontier::Viewpoint scanTarget(const common::Vec3& position, double yaw, const LocalPlannerConfig& config);
+
 /// The vehicle is at the target: within same_target_distance and same_target_yaw of it, and slower than
 /// 0.1 m/s (so the frame taken there has been integrated).
 bool targetReached(const common::Vec3& position, double yaw, double speed, const frontier::Viewpoint& target,
@@ -149,15 +156,42 @@ TargetDecision decideTarget(const CurrentTarget* current, const frontier::Viewpo
 int remainingVisible(const frontier::Viewpoint& viewpoint, const std::vector<frontier::Frontier>& frontiers,
                      const map::OccupancyMap& map, const ViewpointConfig& config, double cluster_extent);
 
+/// Candidate viewpoints kept per frontier between planning steps (FUEL keeps them in the frontier
+/// the same way): a frontier keeps its id only while its cells are unchanged, so its viewpoints stay
+/// what sampleViewpoints() gave, except where the map has since filled in; get() re-checks each
+/// cached position (still known free, ESDF clearance) and drops those that fail. Entries of frontiers
+/// that no longer exist, or sampled for another band, are replaced.
+class ViewpointCache {
+ public:
+  /// The viewpoints of `frontier` in the band [z_min, z_max]: cached, re-checked, or sampled now.
+  const std::vector<frontier::Viewpoint>& get(const frontier::Frontier& frontier, const map::OccupancyMap& map,
+                                              const map::Esdf& esdf, double z_min, double z_max,
+                                              const ViewpointConfig& config);
+  /// Forgets every frontier not in `ids` (call with the current frontier ids).
+  void retain(const std::vector<std::uint32_t>& ids);
+  std::size_t size() const { return entries_.size(); }
+  std::size_t hits() const { return hits_; }
+  std::size_t misses() const { return misses_; }
+
+ private:
+  struct Entry {
+    double z_min, z_max;
+    std::vector<frontier::Viewpoint> viewpoints;
+  };
+  std::unordered_map<std::uint32_t, Entry> entries_;
+  std::size_t hits_ = 0, misses_ = 0;
+};
+
 /// The local planning step on a map: for the frontiers of the tour, in tour order, samples viewpoints
 /// (sampleViewpoints() in the band [z_min, z_max]) until k_frontiers have some, types each by its A*
 /// path distance from `position` (pathDistance() on `astar`) and the obstacle window, and runs
 /// planLocal(). `tour` holds the frontiers' cells and averages; their viewpoints are ignored and
-/// replaced. Errors as planLocal(), or "no viewpoint" when no tour frontier has one.
+/// replaced. Errors as planLocal(), or "no viewpoint" when no tour frontier has one. With a `cache`,
+/// viewpoints come from it (ViewpointCache::get()) instead of being sampled every time.
 common::Result<LocalPlan> chooseLocalTarget(const common::Vec3& position, double yaw,
                                             std::vector<frontier::Frontier> tour, double z_min, double z_max,
                                             const map::OccupancyMap& map, const map::Esdf& esdf, const Astar& astar,
                                             const ObstacleWindow& window, const ViewpointConfig& viewpoint_config,
-                                            const LocalPlannerConfig& config);
+                                            const LocalPlannerConfig& config, ViewpointCache* cache = nullptr);
 
 }  // namespace go_feap::planning

@@ -65,7 +65,9 @@ struct PlanReport {
   bool yaw_fallback = false;   ///< the yaw spline could not reach the target yaw in time: heading kept
 };
 
-/// Plans a trajectory for `request`: A* (known free space, the astar's clearance), spline fit through
+/// Plans a trajectory for `request`. A target within half a voxel of the start is a turn in place: the
+/// position brakes to rest there (safeStop) and the yaw spline turns to target_yaw. Otherwise: A* (known
+/// free space, the astar's clearance), spline fit through
 /// the resampled path starting exactly at request.start with request.velocity and ending at rest,
 /// optimize() (refitted slower up to max_refits times while the optimum or the fit breaks a limit),
 /// then optimizeYaw() from request.yaw to target_yaw over the position's duration. Errors name the
