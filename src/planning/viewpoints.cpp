@@ -83,6 +83,22 @@ int countVisible(const Vec3& position, double yaw, const std::vector<Index3>& ce
   return n;
 }
 
+namespace {
+
+// The voxels `clearance` away from p along each axis are known (free or occupied).
+bool surroundingsKnown(const Vec3& p, const map::OccupancyMap& map, double clearance) {
+  const double step = std::max(clearance, map.geometry().resolution());
+  for (int a = 0; a < 3; ++a)
+    for (double s : {-step, step}) {
+      Vec3 q = p;
+      q[a] += s;
+      if (map.state(q) == map::VoxelState::kUnknown) return false;
+    }
+  return true;
+}
+
+}  // namespace
+
 std::vector<frontier::Viewpoint> sampleViewpoints(const frontier::Frontier& frontier,
                                                   const map::OccupancyMap& map, const map::Esdf& esdf,
                                                   double z_min, double z_max, const ViewpointConfig& config) {
@@ -124,6 +140,7 @@ std::vector<frontier::Viewpoint> sampleViewpoints(const frontier::Frontier& fron
                      z);
         if ((p.array() < lo.array()).any() || (p.array() > hi.array()).any()) continue;
         if (map.state(p) != map::VoxelState::kFree || !(esdf.distance(p) >= config.clearance)) continue;
+        if (config.known_clearance && !surroundingsKnown(p, map, config.clearance)) continue;
         // Range and line of sight do not depend on the yaw: cast each ray once per position.
         seen.clear();
         for (const Vec3& c : centres)

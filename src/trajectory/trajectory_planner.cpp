@@ -36,6 +36,8 @@ common::Status TrajectoryPlannerConfig::validate() const {
   if (max_refits < 0) return common::Status::Error("planner: max_refits must be >= 0");
   if (!std::isfinite(snap_radius) || snap_radius < 0.0)
     return common::Status::Error("planner: snap_radius must be finite and >= 0");
+  if (!std::isfinite(goal_tolerance) || goal_tolerance < 0.0)
+    return common::Status::Error("planner: goal_tolerance must be finite and >= 0");
   return common::Status::Ok();
 }
 
@@ -79,6 +81,12 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
   if (path.status != planning::PathStatus::kFound)
     return R::Error(std::string("no path: ") + planning::toString(path.status));
   rep.path_length = path.length;
+  // The start may snap out of a blocked voxel; the goal may not wander off the viewpoint.
+  if ((path.path.back() - request.target).norm() > config.goal_tolerance) {
+    rep.path_status = planning::PathStatus::kGoalBlocked;
+    return R::Error("no path: goal_blocked (the nearest flyable voxel is " +
+                    std::to_string((path.path.back() - request.target).norm()) + " m from the target)");
+  }
   std::vector<Vec3> points = path.path;
   points.front() = request.start;  // start exactly at the current reference
   const double length = path.length;

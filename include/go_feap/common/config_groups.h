@@ -79,7 +79,7 @@ void readViewpoints(R& p, planning::ViewpointConfig& v) {
   p.get("viewpoints/height_offsets", v.height_offsets).get("viewpoints/clearance", v.clearance);
   p.get("viewpoints/sensor_range", v.sensor_range).get("viewpoints/hfov", v.hfov).get("viewpoints/vfov", v.vfov);
   p.get("viewpoints/min_visible", v.min_visible).get("viewpoints/yaw_samples", v.yaw_samples);
-  p.get("viewpoints/max_evaluated_cells", v.max_evaluated_cells);
+  p.get("viewpoints/max_evaluated_cells", v.max_evaluated_cells).get("viewpoints/known_clearance", v.known_clearance);
 }
 
 template <class R>
@@ -114,7 +114,7 @@ void readTrajectoryPlanner(R& p, trajectory::TrajectoryPlannerConfig& c) {
   p.get("planner/path_spacing", c.path_spacing).get("planner/collision_horizon", c.collision_horizon);
   p.get("planner/min_time_between_plans", c.min_time_between_plans);
   p.get("planner/cruise_fraction", c.cruise_fraction).get("planner/max_refits", c.max_refits);
-  p.get("planner/snap_radius", c.snap_radius);
+  p.get("planner/snap_radius", c.snap_radius).get("planner/goal_tolerance", c.goal_tolerance);
 }
 
 template <class R>

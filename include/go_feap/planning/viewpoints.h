@@ -29,6 +29,9 @@ struct ViewpointConfig {
   /// subset of at most this many of its cells and scaled to the whole frontier (ray casts
   /// dominate the sampler's cost).
   int max_evaluated_cells = 0;
+  /// true: a viewpoint also needs the voxels `clearance` away along each axis to be known, as the flight
+  /// path search does (astar/known_clearance), so every viewpoint is a goal a flight can end at.
+  bool known_clearance = false;
 
   /// Checks every key; the message names the bad one, e.g. "viewpoints: hfov must be in (0, pi)".
   common::Status validate() const;

@@ -42,7 +42,9 @@ struct TrajectoryPlannerConfig {
   double min_time_between_plans = 0.3;  ///< s
   double cruise_fraction = 0.6;         ///< share of v_max the initial timing assumes
   int max_refits = 4;                   ///< slower refits tried when the optimum breaks a limit
-  double snap_radius = 1.0;             ///< m: a blocked start or goal moves to free space this close
+  double snap_radius = 1.0;             ///< m: a blocked start (or goal) moves to free space this close
+  /// m: a path may end at most this far from the target (a goal that had to snap farther is blocked)
+  double goal_tolerance = 0.3;
   /// Checks every key; the message names the bad one, e.g. "planner: path_spacing must be > 0".
   common::Status validate() const;
 };
