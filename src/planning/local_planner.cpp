@@ -266,7 +266,10 @@ common::Result<LocalPlan> chooseLocalTarget(const common::Vec3& position, double
     f.viewpoints = cache ? cache->get(f, map, esdf, z_min, z_max, viewpoint_config)
                          : sampleViewpoints(f, map, esdf, z_min, z_max, viewpoint_config);
     if (f.viewpoints.empty()) continue;
-    const double d = pathDistance(astar, position, f.average).metres;
+    // A path is never shorter than the straight line: only a frontier within d_near of the UAV in a
+    // straight line needs the search to be typed.
+    const double straight = (f.average - position).norm();
+    const double d = straight >= config.d_near ? straight : pathDistance(astar, position, f.average).metres;
     types.push_back(classifyFrontier(d, window, config));
     ordered.push_back(std::move(f));
   }

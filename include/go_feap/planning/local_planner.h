@@ -184,7 +184,8 @@ class ViewpointCache {
 
 /// The local planning step on a map: for the frontiers of the tour, in tour order, samples viewpoints
 /// (sampleViewpoints() in the band [z_min, z_max]) until k_frontiers have some, types each by its A*
-/// path distance from `position` (pathDistance() on `astar`) and the obstacle window, and runs
+/// path distance from `position` (pathDistance() on `astar`, searched only when the straight line is
+/// shorter than d_near: a path is never shorter) and the obstacle window, and runs
 /// planLocal(). `tour` holds the frontiers' cells and averages; their viewpoints are ignored and
 /// replaced. Errors as planLocal(), or "no viewpoint" when no tour frontier has one. With a `cache`,
 /// viewpoints come from it (ViewpointCache::get()) instead of being sampled every time.
