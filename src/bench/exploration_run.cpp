@@ -101,7 +101,8 @@ ExplorationRun::ExplorationRun(const world::Scene& scene, const ExplorationConfi
       max_sim_time_(max_sim_time),
       vehicle_(config.quadrotor, config.controller),
       renderer_(config.camera, scene),
-      window_(config.local) {
+      window_(config.local),
+      collisions_(scene, config.loop.collision_distance) {
   for (const common::Status& st : {config.validate(), world::validateScene(scene)})
     if (!st.ok()) throw std::invalid_argument(st.message());
   if (!positiveFinite(max_sim_time)) throw std::invalid_argument("max_sim_time must be finite and > 0");
@@ -121,7 +122,8 @@ ExplorationRun::ExplorationRun(const world::Scene& scene, const ExplorationConfi
   s.scene = scene.name;
   s.seed = scene.seed;
   s.planner = planner;
-  s.min_obstacle_distance_m = metrics::obstacleDistance(scene, scene.start.position, 1.0);
+  collisions_.update(scene.start.position);
+  s.min_obstacle_distance_m = collisions_.closestApproach();
 }
 
 ExplorationRun::~ExplorationRun() = default;
@@ -229,20 +231,10 @@ void ExplorationRun::planStep() {
   }
   const frontier::Viewpoint& vp = plan->path.front();
   std::optional<planning::CurrentTarget> current;
-  if (target_) {
-    current.emplace();
-    current->viewpoint.position = target_->position;
-    current->viewpoint.yaw = target_->yaw;
-    current->committed_at = target_->committed_at;
-    current->reached = planning::targetReached(position, yaw(), vehicle_.state().velocity.norm(), current->viewpoint,
-                                               config_.local);
-    current->cost = planning::edgeCost((position - target_->position).norm(), yaw(), target_->yaw, config_.local);
-    // The remaining value only matters while the commitment holds.
-    current->remaining_visible = config_.viewpoints.min_visible;
-    if (!current->reached && t_ - target_->committed_at < config_.local.commit_time)
-      current->remaining_visible = planning::remainingVisible(current->viewpoint, finder_->frontiers(), map_->occupancy(),
-                                                              config_.viewpoints, config_.frontier.max_cluster_extent);
-  }
+  if (target_)
+    current = planning::assessTarget({target_->position, target_->yaw, 0}, target_->committed_at, position, yaw(),
+                                     vehicle_.state().velocity.norm(), t_, finder_->frontiers(), map_->occupancy(),
+                                     config_.viewpoints, config_.frontier.max_cluster_extent, config_.local);
   const planning::TargetDecision decision =
       planning::decideTarget(current ? &*current : nullptr, vp,
                              planning::edgeCost((position - vp.position).norm(), yaw(), vp.yaw, config_.local), t_,
@@ -368,17 +360,14 @@ bool ExplorationRun::step() {
   const common::Vec3 p = vehicle_.state().position;
   distance_ += (p - last_position_).norm();
   last_position_ = p;
-  const double clearance = metrics::obstacleDistance(scene_, p, 1.0);
-  metrics::Summary& s = recorder_.summary();
-  s.min_obstacle_distance_m = std::min(s.min_obstacle_distance_m, clearance);
-  const bool colliding = clearance < config_.loop.collision_distance;
-  if (colliding && !in_collision_) {
-    ++s.collisions;
+  if (collisions_.update(p)) {
     std::ostringstream what;
-    what << "collision at " << p.transpose() << " (" << clearance << " m from ground truth)";
+    what << "collision at " << p.transpose() << " (" << collisions_.lastClearance() << " m from ground truth)";
     log(what.str());
   }
-  in_collision_ = colliding;
+  metrics::Summary& s = recorder_.summary();
+  s.collisions = collisions_.collisions();
+  s.min_obstacle_distance_m = collisions_.closestApproach();
   if (t_ >= max_sim_time_) finish("max_sim_time");
   return !ended_;
 }

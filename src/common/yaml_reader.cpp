@@ -35,19 +35,21 @@ void YamlReader::fail(const std::string& key, const std::string& why) {
 template <typename T>
 YamlReader& YamlReader::read(const std::string& key, T& out) {
   if (!error_.empty()) return *this;
-  // Walk "a/b/c" through nested maps of each file, the last file first, on private copies
-  // (assigning to a YAML::Node handle would overwrite the node it refers to).
+  // Walk "a/b/c" through nested maps of each file, the last file first. Lookups go through const
+  // handles (which never create keys) and reset() rebinds the handle instead of assigning through it.
   std::optional<YAML::Node> found;
   for (auto f = impl_->files.rbegin(); f != impl_->files.rend() && !found; ++f) {
-    YAML::Node node = YAML::Clone(f->second);
+    YAML::Node node;
+    node.reset(f->second);
     std::stringstream parts(key);
     std::string part;
     bool present = true;
     while (present && std::getline(parts, part, '/')) {
-      if (!node.IsMap() || !node[part]) {
+      const YAML::Node& here = node;
+      const YAML::Node child = here.IsMap() ? here[part] : YAML::Node();
+      if (!child) {
         present = false;
       } else {
-        YAML::Node child = node[part];
         node.reset(child);
       }
     }

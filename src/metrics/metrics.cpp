@@ -32,6 +32,16 @@ double obstacleDistance(const world::Scene& scene, const common::Vec3& p, double
   return best;
 }
 
+bool CollisionMonitor::update(const common::Vec3& p) {
+  last_ = obstacleDistance(scene_, p, kHorizon);
+  closest_ = std::min(closest_, last_);
+  const bool colliding = last_ < collision_distance_;
+  const bool entered = colliding && !inside_;
+  collisions_ += entered;
+  inside_ = colliding;
+  return entered;
+}
+
 CoverageTracker::CoverageTracker(const world::Scene& scene, const common::GridGeometry& map_geometry) {
   const world::ObservableSet observable = world::computeObservableSet(scene);
   observable_total_ = observable.total();

@@ -11,6 +11,7 @@
 #include <sensor_msgs/Image.h>
 #include <visualization_msgs/MarkerArray.h>
 
+#include <algorithm>
 #include <mutex>
 #include <std_msgs/UInt32.h>
 #include <optional>
@@ -125,15 +126,8 @@ class LocalPlanner : public nodelet::Nodelet {
       all.push_back(std::move(f));
     }
     for (unsigned id : tour->frontier_ids) {
-      const go_feap::Frontier* msg = nullptr;
-      for (const auto& f : frontiers_->frontiers)
-        if (f.id == id) msg = &f;
-      if (!msg) continue;  // the frontier changed since the tour was planned
-      frontier::Frontier f;
-      f.id = msg->id;
-      f.average = common::Vec3(msg->average.x, msg->average.y, msg->average.z);
-      for (const auto& c : msg->cells) f.cells.push_back(geo.coordToIndex(common::Vec3(c.x, c.y, c.z)));
-      tour_frontiers.push_back(std::move(f));
+      const auto it = std::find_if(all.begin(), all.end(), [&](const frontier::Frontier& f) { return f.id == id; });
+      if (it != all.end()) tour_frontiers.push_back(*it);  // else: it changed since the tour was planned
     }
     std::vector<std::uint32_t> ids;
     for (const auto& f : frontiers_->frontiers) ids.push_back(f.id);
@@ -167,18 +161,9 @@ class LocalPlanner : public nodelet::Nodelet {
     const double now = ros::Time::now().toSec();
     const frontier::Viewpoint& proposal = plan->path.front();
     std::optional<planning::CurrentTarget> current;
-    if (target_) {
-      current.emplace();
-      current->viewpoint = *target_;
-      current->committed_at = committed_at_;
-      current->reached = planning::targetReached(*position_, yaw_, speed_, *target_, local_config_);
-      current->cost = planning::edgeCost((*position_ - target_->position).norm(), yaw_, target_->yaw, local_config_);
-      current->remaining_visible = viewpoint_config_.min_visible;
-      if (!current->reached && now - committed_at_ < local_config_.commit_time) {
-        current->remaining_visible = planning::remainingVisible(*target_, all, m.occupancy(), viewpoint_config_,
-                                                                frontier_extent_);
-      }
-    }
+    if (target_)
+      current = planning::assessTarget(*target_, committed_at_, *position_, yaw_, speed_, now, all, m.occupancy(),
+                                       viewpoint_config_, frontier_extent_, local_config_);
     ros_conv::publishComputeTime(compute_pub_, "local", t_compute);
     map_lock.unlock();
     const planning::TargetDecision decision = planning::decideTarget(

@@ -54,7 +54,8 @@ class MetricsRecorder : public nodelet::Nodelet {
       scene_ = std::make_unique<world::Scene>(ros_params::loadScene(pnh, getName()));
       s.scene = scene_->name;
       s.seed = scene_->seed;
-      s.min_obstacle_distance_m = 1.0;
+      s.min_obstacle_distance_m = metrics::CollisionMonitor::kHorizon;
+      collisions_ = std::make_unique<metrics::CollisionMonitor>(*scene_, collision_distance_);
     } else {
       s.scene = "onboard";
     }
@@ -90,17 +91,13 @@ class MetricsRecorder : public nodelet::Nodelet {
     if (!started() || finished_) return;
     if (last_position_) distance_ += (p - *last_position_).norm();
     last_position_ = p;
-    if (!scene_) return;
-    const double clearance = metrics::obstacleDistance(*scene_, p, 1.0);
-    metrics::Summary& s = recorder_.summary();
-    s.min_obstacle_distance_m = std::min(s.min_obstacle_distance_m, clearance);
-    const bool colliding = clearance < collision_distance_;
-    if (colliding && !in_collision_) {
-      ++s.collisions;
-      NODELET_WARN_STREAM(getName() << ": collision at " << p.transpose() << " (" << clearance
+    if (!collisions_) return;
+    if (collisions_->update(p))
+      NODELET_WARN_STREAM(getName() << ": collision at " << p.transpose() << " (" << collisions_->lastClearance()
                                     << " m from a ground-truth obstacle)");
-    }
-    in_collision_ = colliding;
+    metrics::Summary& s = recorder_.summary();
+    s.collisions = collisions_->collisions();
+    s.min_obstacle_distance_m = collisions_->closestApproach();
   }
 
   void onCompute(const ComputeTime::ConstPtr& msg) {
@@ -236,7 +233,8 @@ class MetricsRecorder : public nodelet::Nodelet {
   std::optional<ros::Time> started_at_;
   std::optional<common::Vec3> position_, last_position_;
   double distance_ = 0.0, next_progress_ = 0.0;
-  bool in_collision_ = false, finished_ = false;
+  std::unique_ptr<metrics::CollisionMonitor> collisions_;
+  bool finished_ = false;
   ros::WallTime wall_start_ = ros::WallTime::now();
   ros::Publisher text_pub_, coverage_pub_, path_pub_;
   nav_msgs::Path path_;

@@ -8,6 +8,7 @@
 #include <cmath>
 
 #include "go_feap/PositionCommand.h"
+#include "go_feap/world/scene.h"
 
 namespace go_feap::test {
 
@@ -21,6 +22,19 @@ bool spinUntil(Pred pred, double wall_timeout) {
     ros::WallDuration(0.005).sleep();
   }
   return pred();
+}
+
+/// Smallest distance (m) from p to an occupied ground-truth voxel, sampled on a 2.5 cm lattice up to
+/// `limit` (a brute-force oracle for the metrics' obstacle distance).
+inline double latticeClearance(const world::Scene& scene, const Eigen::Vector3d& p, double limit) {
+  double best = limit;
+  for (double dx = -limit; dx <= limit + 1e-9; dx += 0.025)
+    for (double dy = -limit; dy <= limit + 1e-9; dy += 0.025)
+      for (double dz = -limit; dz <= limit + 1e-9; dz += 0.025) {
+        const Eigen::Vector3d d(dx, dy, dz);
+        if (d.norm() < best && scene.isOccupied(Eigen::Vector3d(p + d))) best = d.norm();
+      }
+  return best;
 }
 
 /// A command holding `position` with heading `yaw` (rad) turning at `yaw_dot` (rad/s).

@@ -13,19 +13,8 @@
 namespace {
 
 using go_feap::common::Vec3;
+using go_feap::test::latticeClearance;
 using go_feap::test::spinUntil;
-
-// Smallest distance (m, sampled on a 2.5 cm lattice up to `limit`) from p to an occupied voxel.
-double clearance(const go_feap::world::Scene& scene, const Vec3& p, double limit) {
-  double best = limit;
-  for (double dx = -limit; dx <= limit + 1e-9; dx += 0.025)
-    for (double dy = -limit; dy <= limit + 1e-9; dy += 0.025)
-      for (double dz = -limit; dz <= limit + 1e-9; dz += 0.025) {
-        const Vec3 d(dx, dy, dz);
-        if (d.norm() < best && scene.isOccupied(Vec3(p + d))) best = d.norm();
-      }
-  return best;
-}
 
 TEST(Chain, FliesToAViewpointWithoutCollision) {
   ros::NodeHandle nh, pnh("~");
@@ -70,7 +59,8 @@ TEST(Chain, FliesToAViewpointWithoutCollision) {
   ASSERT_TRUE(spinUntil(reached, 200.0)) << targets.size() << " targets; vehicle at "
                                          << (path.empty() ? Vec3::Zero() : path.back()).transpose();
   double min_clearance = 1.0;
-  for (std::size_t i = 0; i < path.size(); i += 2) min_clearance = std::min(min_clearance, clearance(*scene, path[i], 0.3));
+  for (std::size_t i = 0; i < path.size(); i += 2)
+    min_clearance = std::min(min_clearance, latticeClearance(*scene, path[i], 0.3));
   std::cout << "flew " << path.size() << " odom samples; closest approach to an obstacle " << min_clearance
             << " m; largest command step " << max_cmd_jump << " m, velocity step " << max_cmd_vel_jump << " m/s\n";
   EXPECT_GT(min_clearance, 0.1) << "collision";

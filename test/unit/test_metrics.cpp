@@ -36,6 +36,14 @@ go_feap::metrics::Summary summary(const std::string& scene, const std::string& p
   return s;
 }
 
+// A 6 x 4 x 3 m maze.
+go_feap::common::Result<go_feap::world::Scene> smallMaze(std::uint64_t seed) {
+  go_feap::world::MazeConfig config;
+  config.size_x = 6.0;
+  config.size_y = 4.0;
+  return go_feap::world::generateMaze(config, seed);
+}
+
 TEST(Table, AggregatesPerSceneAndPlannerWithPopulationStd) {
   const std::vector<metrics::Summary> runs = {
       summary("maze", "go_feap", 100, 200, 0.99, 0, "complete", 1.0),
@@ -80,10 +88,7 @@ TEST(Table, AggregatesPerSceneAndPlannerWithPopulationStd) {
 }
 
 TEST(Metrics, ObstacleDistanceMatchesBruteForceOverVoxelCubes) {
-  go_feap::world::MazeConfig config;
-  config.size_x = 6.0;
-  config.size_y = 4.0;
-  auto scene = go_feap::world::generateMaze(config, 3);
+  auto scene = smallMaze(3);
   ASSERT_TRUE(scene) << scene.message();
   const auto& geo = scene->geometry();
   std::mt19937 rng(5);
@@ -101,11 +106,33 @@ TEST(Metrics, ObstacleDistanceMatchesBruteForceOverVoxelCubes) {
   }
 }
 
+TEST(Metrics, CollisionMonitorCountsEachEntryAndKeepsTheClosestApproach) {
+  auto scene = smallMaze(3);
+  ASSERT_TRUE(scene) << scene.message();
+  // Along a line that crosses walls: every entry into the 0.1 m zone is one collision.
+  metrics::CollisionMonitor monitor(*scene, 0.1);
+  int entries = 0;
+  bool inside = false;
+  double closest = metrics::CollisionMonitor::kHorizon;
+  for (int k = 0; k < 4 * 581; ++k) {
+    // Four lines along x, at y = -1.5, -0.5, 0.5, 1.5, walked one after the other.
+    const Vec3 p(-2.9 + 0.01 * (k % 581), -1.5 + (k / 581), 1.0);
+    const double d = metrics::obstacleDistance(*scene, p, metrics::CollisionMonitor::kHorizon);
+    closest = std::min(closest, d);
+    const bool now = d < 0.1;
+    const bool entered = now && !inside;
+    entries += entered;
+    inside = now;
+    EXPECT_EQ(monitor.update(p), entered) << p.transpose();
+    EXPECT_DOUBLE_EQ(monitor.lastClearance(), d);
+  }
+  EXPECT_GT(entries, 0) << "the line must cross a wall in this fixture";
+  EXPECT_EQ(monitor.collisions(), entries);
+  EXPECT_DOUBLE_EQ(monitor.closestApproach(), closest);
+}
+
 TEST(Metrics, CoverageTrackerEqualsTheWorldDefinition) {
-  go_feap::world::MazeConfig config;
-  config.size_x = 6.0;
-  config.size_y = 4.0;
-  auto scene = go_feap::world::generateMaze(config, 1);
+  auto scene = smallMaze(1);
   ASSERT_TRUE(scene);
   go_feap::map::OccupancyMap map(go_feap::map::OccupancyConfig(), scene->box);
   std::mt19937 rng(2);

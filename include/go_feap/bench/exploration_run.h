@@ -125,6 +125,7 @@ class ExplorationRun {
   std::unique_ptr<planning::LayerManager> layers_;
   std::unique_ptr<metrics::CoverageTracker> coverage_;
   metrics::Recorder recorder_;
+  metrics::CollisionMonitor collisions_;
 
   std::uint64_t tick_ = 0;
   double t_ = 0.0;
@@ -150,7 +151,6 @@ class ExplorationRun {
 
   common::Vec3 last_position_;
   double distance_ = 0.0;
-  bool in_collision_ = false;
   double coverage_now_ = 0.0;
   std::vector<std::string> events_;
 };

@@ -18,6 +18,28 @@ namespace go_feap::metrics {
 /// `radius` (m): `radius` when none is that close; 0 inside an obstacle.
 double obstacleDistance(const world::Scene& scene, const common::Vec3& p, double radius);
 
+/// Collisions and the closest approach along a flown path (DESIGN §3.9: a collision is the UAV centre
+/// closer than collision_distance to a ground-truth obstacle; one collision per entry into that zone).
+class CollisionMonitor {
+ public:
+  /// m: clearances are looked up this far at most; a closest approach beyond it reads as this.
+  static constexpr double kHorizon = 0.5;
+  CollisionMonitor(const world::Scene& scene, double collision_distance)
+      : scene_(scene), collision_distance_(collision_distance) {}
+  /// Checks the next position of the path; true when it starts a new collision.
+  bool update(const common::Vec3& p);
+  int collisions() const { return collisions_; }
+  double closestApproach() const { return closest_; }  ///< m
+  double lastClearance() const { return last_; }       ///< m, of the latest position
+
+ private:
+  const world::Scene& scene_;
+  double collision_distance_;
+  int collisions_ = 0;
+  double closest_ = kHorizon, last_ = kHorizon;
+  bool inside_ = false;
+};
+
 /// Counts how much of the scene's observable set a map has classified.
 class CoverageTracker {
  public:

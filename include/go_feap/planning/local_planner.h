@@ -130,6 +130,15 @@ struct CurrentTarget {
   double cost = 0.0;          ///< s, edgeCost() from the vehicle's pose to it now
 };
 
+/// The current target as decideTarget() needs it, assessed from the vehicle's pose and speed at time t:
+/// reached (targetReached()), cost (edgeCost() from the vehicle), and the frontier cells still visible
+/// from it (remainingVisible() over `frontiers`), counted only while the commitment holds (not reached,
+/// kept for less than commit_time; min_visible otherwise, as the count decides nothing then).
+CurrentTarget assessTarget(const frontier::Viewpoint& target, double committed_at, const common::Vec3& position,
+                           double yaw, double speed, double t, const std::vector<frontier::Frontier>& frontiers,
+                           const map::OccupancyMap& map, const ViewpointConfig& viewpoint_config,
+                           double cluster_extent, const LocalPlannerConfig& config);
+
 /// Where to look when no viewpoint can be planned: here, turned by scan_step.
 frontier::Viewpoint scanTarget(const common::Vec3& position, double yaw, const LocalPlannerConfig& config);
 
