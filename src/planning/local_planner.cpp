@@ -234,7 +234,7 @@ int remainingVisible(const frontier::Viewpoint& viewpoint, const std::vector<fro
   const double reach = config.sensor_range + cluster_extent;
   for (const frontier::Frontier& f : frontiers)
     if ((f.average - viewpoint.position).norm() <= reach) cells.insert(cells.end(), f.cells.begin(), f.cells.end());
-  return countVisible(viewpoint.position, viewpoint.yaw, cells, map, config);
+  return countVisible(viewpoint.position, viewpoint.yaw, cells, map, config, config.min_visible);
 }
 
 const std::vector<frontier::Viewpoint>& ViewpointCache::get(const frontier::Frontier& frontier,

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <string>
 
 namespace go_feap::planning {
@@ -54,15 +55,37 @@ std::vector<double> candidateYaws(const Vec3& position, const Vec3& target, int 
   return yaws;
 }
 
+namespace {
+
+// inView() for one camera pose, with its trigonometry done once instead of once per cell.
+class Frustum {
+ public:
+  Frustum(const Vec3& position, double yaw, const ViewpointConfig& config)
+      : position_(position),
+        cos_(std::cos(yaw)),
+        sin_(std::sin(yaw)),
+        tan_h_(std::tan(0.5 * config.hfov)),
+        tan_v_(std::tan(0.5 * config.vfov)),
+        range2_(config.sensor_range * config.sensor_range) {}
+
+  bool contains(const Vec3& cell_centre) const {
+    const Vec3 d = cell_centre - position_;
+    if (d.squaredNorm() > range2_) return false;
+    const double forward = cos_ * d.x() + sin_ * d.y();
+    if (forward <= 0.0) return false;
+    const double lateral = -sin_ * d.x() + cos_ * d.y();
+    return std::abs(lateral) <= forward * tan_h_ && std::abs(d.z()) <= forward * tan_v_;
+  }
+
+ private:
+  Vec3 position_;
+  double cos_, sin_, tan_h_, tan_v_, range2_;
+};
+
+}  // namespace
+
 bool inView(const Vec3& position, double yaw, const Vec3& cell_centre, const ViewpointConfig& config) {
-  const Vec3 d = cell_centre - position;
-  if (d.squaredNorm() > config.sensor_range * config.sensor_range) return false;
-  const double c = std::cos(yaw), s = std::sin(yaw);
-  const double forward = c * d.x() + s * d.y();
-  if (forward <= 0.0) return false;
-  const double lateral = -s * d.x() + c * d.y();
-  return std::abs(lateral) <= forward * std::tan(0.5 * config.hfov) &&
-         std::abs(d.z()) <= forward * std::tan(0.5 * config.vfov);
+  return Frustum(position, yaw, config).contains(cell_centre);
 }
 
 bool lineOfSight(const Vec3& position, const Vec3& cell_centre, const map::OccupancyMap& map) {
@@ -73,12 +96,13 @@ bool lineOfSight(const Vec3& position, const Vec3& cell_centre, const map::Occup
 }
 
 int countVisible(const Vec3& position, double yaw, const std::vector<Index3>& cells,
-                 const map::OccupancyMap& map, const ViewpointConfig& config) {
+                 const map::OccupancyMap& map, const ViewpointConfig& config, int stop_at) {
+  const Frustum frustum(position, yaw, config);
   int n = 0;
   for (const Index3& idx : cells) {
     const Vec3 c = map.geometry().indexToCoord(idx);
     // The view test is cheap, the ray is not: test it first.
-    if (inView(position, yaw, c, config) && lineOfSight(position, c, map)) ++n;
+    if (frustum.contains(c) && lineOfSight(position, c, map) && ++n == stop_at) break;
   }
   return n;
 }
@@ -128,8 +152,10 @@ std::vector<frontier::Viewpoint> sampleViewpoints(const frontier::Frontier& fron
           : 1;
   for (std::size_t i = 0; i < n_cells; i += stride) centres.push_back(map.geometry().indexToCoord(frontier.cells[i]));
   const double scale = static_cast<double>(n_cells) / static_cast<double>(centres.size());
-  std::vector<Vec3> seen;  // centres within range and line of sight of the current position
-  seen.reserve(centres.size());
+  std::vector<Vec3> near;             // centres within range of the current position
+  std::vector<std::int8_t> sight;     // per near centre: -1 not cast yet, 0 blocked, 1 in line of sight
+  std::vector<std::uint8_t> in_view;  // yaw-major: near centre i is in the frustum of yaw k
+  std::vector<int> bound, order;      // per yaw: centres in its frustum (occlusion ignored), and yaws by it
   const double range2 = config.sensor_range * config.sensor_range;
 
   for (double r : config.ring_radii) {
@@ -141,22 +167,43 @@ std::vector<frontier::Viewpoint> sampleViewpoints(const frontier::Frontier& fron
         if ((p.array() < lo.array()).any() || (p.array() > hi.array()).any()) continue;
         if (map.state(p) != map::VoxelState::kFree || !(esdf.distance(p) >= config.clearance)) continue;
         if (config.known_clearance && !surroundingsKnown(p, map, config.clearance)) continue;
-        // Range and line of sight do not depend on the yaw: cast each ray once per position.
-        seen.clear();
+        near.clear();
         for (const Vec3& c : centres)
-          if ((c - p).squaredNorm() <= range2 && lineOfSight(p, c, map)) seen.push_back(c);
-        if (std::lround(seen.size() * scale) < config.min_visible) continue;
+          if ((c - p).squaredNorm() <= range2) near.push_back(c);
+        if (std::lround(near.size() * scale) < config.min_visible) continue;
+        // The best yaw sees the most centres in line of sight. The count ignoring occlusion bounds each
+        // yaw's count from above, so yaws are tried in decreasing bound and the rays cast lazily, once
+        // per centre: a yaw whose bound cannot beat the best so far (or tie it from an earlier place in
+        // the yaw order, which wins ties) is skipped without casting its rays.
+        const std::vector<double> yaws = candidateYaws(p, frontier.average, config.yaw_samples);
+        const std::size_t n = near.size();
+        in_view.assign(yaws.size() * n, 0);
+        bound.assign(yaws.size(), 0);
+        for (std::size_t k = 0; k < yaws.size(); ++k) {
+          const Frustum frustum(p, yaws[k], config);
+          for (std::size_t i = 0; i < n; ++i)
+            if (frustum.contains(near[i])) in_view[k * n + i] = 1, ++bound[k];
+        }
+        order.resize(yaws.size());
+        for (std::size_t k = 0; k < yaws.size(); ++k) order[k] = static_cast<int>(k);
+        std::stable_sort(order.begin(), order.end(), [&](int x, int y) { return bound[x] > bound[y]; });
+        sight.assign(n, -1);
+        int best_count = -1, best_k = -1;
+        for (int k : order) {
+          if (bound[k] < best_count) break;                    // nor can any later yaw (sorted by bound)
+          if (bound[k] == best_count && k > best_k) continue;  // could only tie, and would lose the tie
+          int count = 0;
+          for (std::size_t i = 0; i < n; ++i) {
+            if (!in_view[k * n + i]) continue;
+            if (sight[i] < 0) sight[i] = lineOfSight(p, near[i], map) ? 1 : 0;
+            count += sight[i];
+          }
+          if (count > best_count || (count == best_count && k < best_k)) best_count = count, best_k = k;
+        }
         frontier::Viewpoint best;
         best.position = p;
-        best.visible_cells = -1;
-        for (double yaw : candidateYaws(p, frontier.average, config.yaw_samples)) {
-          const int n = static_cast<int>(std::lround(
-              scale * std::count_if(seen.begin(), seen.end(), [&](const Vec3& c) { return inView(p, yaw, c, config); })));
-          if (n > best.visible_cells) {
-            best.yaw = yaw;
-            best.visible_cells = n;
-          }
-        }
+        best.yaw = yaws[static_cast<std::size_t>(best_k)];
+        best.visible_cells = static_cast<int>(std::lround(scale * best_count));
         if (best.visible_cells >= config.min_visible) out.push_back(best);
       }
     }

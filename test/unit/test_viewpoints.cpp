@@ -294,6 +294,10 @@ TEST(Viewpoints, CountVisibleMatchesBruteForce) {
       for (std::size_t k = 0; k < yaws.size(); ++k) {
         ASSERT_EQ(countVisible(p, yaws[k], cells, w.map(), cfg), expected[k])
             << "seed " << seed << " i " << i;
+        // Stopping at a threshold gives the count clipped there.
+        for (int stop_at : {1, 5, 20})
+          ASSERT_EQ(countVisible(p, yaws[k], cells, w.map(), cfg, stop_at), std::min(expected[k], stop_at))
+              << "seed " << seed << " i " << i << " stop_at " << stop_at;
         total += expected[k];
         blocked_some += expected[k] < in_fov_only[k];
       }

@@ -125,7 +125,7 @@ common::Result<LocalPlan> planLocal(const common::Vec3& position, double yaw,
 struct CurrentTarget {
   frontier::Viewpoint viewpoint;
   double committed_at = 0.0;  ///< s, when it was chosen
-  int remaining_visible = 0;  ///< frontier cells still visible from it now (countVisible over nearby frontiers)
+  int remaining_visible = 0;  ///< frontier cells still visible from it now (remainingVisible(): counted up to min_visible)
   bool reached = false;       ///< the vehicle got there (targetReached())
   double cost = 0.0;          ///< s, edgeCost() from the vehicle's pose to it now
 };
@@ -161,7 +161,8 @@ TargetDecision decideTarget(const CurrentTarget* current, const frontier::Viewpo
                             double t, int min_visible, const LocalPlannerConfig& config);
 
 /// Frontier cells of `frontiers` (those whose average lies within sensor_range + max_cluster_extent of the
-/// viewpoint) that the viewpoint sees: its remaining value.
+/// viewpoint) that the viewpoint sees: its remaining value, counted up to min_visible (the only
+/// threshold it is compared with; the count stops there).
 int remainingVisible(const frontier::Viewpoint& viewpoint, const std::vector<frontier::Frontier>& frontiers,
                      const map::OccupancyMap& map, const ViewpointConfig& config, double cluster_extent);
 

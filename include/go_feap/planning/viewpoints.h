@@ -59,9 +59,10 @@ bool inView(const common::Vec3& position, double yaw, const common::Vec3& cell_c
 bool lineOfSight(const common::Vec3& position, const common::Vec3& cell_centre, const map::OccupancyMap& map);
 
 /// N_view: the cells (indices of map's grid) that are inView() and in lineOfSight() from `position`
-/// looking along `yaw`.
+/// looking along `yaw`. With stop_at > 0 the count stops there (the result is min(N_view, stop_at)):
+/// callers that only compare it with a threshold save the remaining ray casts.
 int countVisible(const common::Vec3& position, double yaw, const std::vector<common::Index3>& cells,
-                 const map::OccupancyMap& map, const ViewpointConfig& config);
+                 const map::OccupancyMap& map, const ViewpointConfig& config, int stop_at = 0);
 
 /// Candidate viewpoints of `frontier`: for every ring radius, ring angle and clamped height offset a
 /// position around frontier.average that is known free, has ESDF distance >= clearance, lies in
