@@ -115,6 +115,7 @@ ExplorationRun::ExplorationRun(const world::Scene& scene, const ExplorationConfi
   tour_planner_ = std::make_unique<planning::TourPlanner>(config.global, *distance_astar_);
   layers_ = std::make_unique<planning::LayerManager>(config.layers, scene.box, scene.start.position.z());
   coverage_ = std::make_unique<metrics::CoverageTracker>(scene, map_->geometry());
+  coverage_->reset(map_->occupancy());
   vehicle_.reset(scene.start.position, scene.start.yaw);
   hold_position_ = last_position_ = scene.start.position;
   hold_yaw_ = scene.start.yaw;
@@ -164,6 +165,7 @@ void ExplorationRun::frame() {
   if (!update) return;  // cannot happen with the renderer's own images; skipped like the nodelet would
   if (update->frame.any_change) {
     ++map_progress_;
+    coverage_->update(map_->occupancy(), update->frame.changed);
     t0 = Clock::now();
     finder_->update(map_->occupancy(), update->frame.changed, t_);
     recorder_.addTime("frontier", msSince(t0));
@@ -296,7 +298,7 @@ void ExplorationRun::trajectoryStep() {
 }
 
 void ExplorationRun::sample() {
-  coverage_now_ = coverage_->coverage(map_->occupancy());
+  coverage_now_ = coverage_->current();
   metrics::Sample s;
   s.t = t_;
   s.coverage = coverage_now_;

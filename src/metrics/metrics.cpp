@@ -42,22 +42,63 @@ bool CollisionMonitor::update(const common::Vec3& p) {
   return entered;
 }
 
-CoverageTracker::CoverageTracker(const world::Scene& scene, const common::GridGeometry& map_geometry) {
+CoverageTracker::CoverageTracker(const world::Scene& scene, const common::GridGeometry& map_geometry)
+    : observable_((map_geometry.size() + 63) / 64, 0) {
   const world::ObservableSet observable = world::computeObservableSet(scene);
   observable_total_ = observable.total();
   const auto& geo = observable.mask.geometry();
   for (std::size_t l = 0; l < observable.mask.size(); ++l) {
     if (!observable.mask[l]) continue;
     const common::Index3 idx = map_geometry.coordToIndex(geo.indexToCoord(geo.unlinear(l)));
-    if (map_geometry.inside(idx)) in_map_.push_back(map_geometry.linear(idx));
+    if (!map_geometry.inside(idx)) continue;
+    const std::size_t m = map_geometry.linear(idx);
+    if (bit(observable_, m))
+      ++extra_weight_[m];
+    else
+      observable_[m >> 6] |= std::uint64_t{1} << (m & 63);
   }
+  pending_ = observable_;
+}
+
+std::size_t CoverageTracker::weight(std::size_t l) const {
+  if (extra_weight_.empty()) return 1;
+  const auto it = extra_weight_.find(l);
+  return it == extra_weight_.end() ? 1 : 1 + it->second;
 }
 
 double CoverageTracker::coverage(const map::OccupancyMap& map) const {
   if (observable_total_ == 0) return 0.0;
   std::size_t known = 0;
-  for (std::size_t l : in_map_) known += map.stateAt(l) != map::VoxelState::kUnknown;
+  for (std::size_t w = 0; w < observable_.size(); ++w)
+    for (std::uint64_t bits = observable_[w]; bits; bits &= bits - 1) {
+      const std::size_t l = (w << 6) + static_cast<std::size_t>(__builtin_ctzll(bits));
+      if (map.stateAt(l) != map::VoxelState::kUnknown) known += weight(l);
+    }
   return static_cast<double>(known) / static_cast<double>(observable_total_);
+}
+
+void CoverageTracker::reset(const map::OccupancyMap& map) {
+  pending_ = observable_;
+  known_ = 0;
+  for (std::size_t w = 0; w < pending_.size(); ++w)
+    for (std::uint64_t bits = pending_[w]; bits; bits &= bits - 1) {
+      const std::size_t l = (w << 6) + static_cast<std::size_t>(__builtin_ctzll(bits));
+      if (map.stateAt(l) == map::VoxelState::kUnknown) continue;
+      pending_[w] &= ~(std::uint64_t{1} << (l & 63));
+      known_ += weight(l);
+    }
+}
+
+void CoverageTracker::update(const map::OccupancyMap& map, const std::vector<std::size_t>& changed) {
+  for (std::size_t l : changed) {
+    if ((l >> 6) >= pending_.size() || !bit(pending_, l) || map.stateAt(l) == map::VoxelState::kUnknown) continue;
+    pending_[l >> 6] &= ~(std::uint64_t{1} << (l & 63));
+    known_ += weight(l);
+  }
+}
+
+double CoverageTracker::current() const {
+  return observable_total_ == 0 ? 0.0 : static_cast<double>(known_) / static_cast<double>(observable_total_);
 }
 
 namespace {

@@ -3,8 +3,10 @@
 // summary.json, metrics.csv and coverage.png. Used by the MetricsRecorder nodelet and the bench.
 #pragma once
 
+#include <cstdint>
 #include <map>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "go_feap/common/grid.h"
@@ -40,7 +42,10 @@ class CollisionMonitor {
   bool inside_ = false;
 };
 
-/// Counts how much of the scene's observable set a map has classified.
+/// Counts how much of the scene's observable set a map has classified: in full (coverage()), or
+/// incrementally from the voxels each integrated frame changed (reset(), then update() per frame, read
+/// with current()), which costs the frame's changes instead of a pass over the observable set. A map
+/// voxel never returns to unknown, so the two agree.
 class CoverageTracker {
  public:
   /// Computes the observable set of `scene` and where its voxels fall in maps of geometry `map_geometry`
@@ -48,11 +53,25 @@ class CoverageTracker {
   CoverageTracker(const world::Scene& scene, const common::GridGeometry& map_geometry);
   /// |known ∩ observable| / |observable| of `map` (same geometry as given to the constructor).
   double coverage(const map::OccupancyMap& map) const;
+  /// Starts the incremental count from `map` (a full count).
+  void reset(const map::OccupancyMap& map);
+  /// Adds the observable voxels among `changed` (linear indices whose state changed in `map`, as
+  /// FrameChange::changed gives them) that are now known.
+  void update(const map::OccupancyMap& map, const std::vector<std::size_t>& changed);
+  /// The incremental coverage: equals coverage(map) after reset(map) and update() with every frame since.
+  double current() const;
   std::size_t observableCount() const { return observable_total_; }
 
  private:
-  std::vector<std::size_t> in_map_;  ///< map linear index of each observable voxel the map covers
+  bool bit(const std::vector<std::uint64_t>& bits, std::size_t l) const { return (bits[l >> 6] >> (l & 63)) & 1u; }
+  /// Observable voxels in map voxel l (1 unless the scene's grid is finer than the map's).
+  std::size_t weight(std::size_t l) const;
+
+  std::vector<std::uint64_t> observable_;  ///< one bit per map voxel: holds an observable voxel
+  std::vector<std::uint64_t> pending_;     ///< observable map voxels not yet counted known (incremental)
+  std::unordered_map<std::size_t, std::size_t> extra_weight_;  ///< map voxels holding more than one
   std::size_t observable_total_ = 0;
+  std::size_t known_ = 0;  ///< incremental count of known observable voxels
 };
 
 /// Mean and max of a block's compute times (ms).
