@@ -181,16 +181,22 @@ FrontierDelta FrontierFinder::regrow(std::unordered_set<std::uint32_t> affected,
   };
   for (std::uint32_t id : affected) markRemoved(id);
 
-  // 4. Flood fill (26-connected) over frontier cells from the seeds: whole regions.
-  std::unordered_set<std::size_t> visited;
+  // 4. Flood fill (26-connected) over frontier cells from the seeds: whole regions. Visited cells are
+  // marked in scratch_ (all clear between updates) and cleared again afterwards.
+  std::vector<std::size_t> visited;
+  auto visit = [&](std::size_t l) {
+    if ((scratch_[l >> 6] >> (l & 63)) & 1u) return false;
+    scratch_[l >> 6] |= std::uint64_t{1} << (l & 63);
+    visited.push_back(l);
+    return true;
+  };
   std::vector<std::vector<Index3>> regions;
   std::unordered_map<std::size_t, std::uint32_t> old_owner;  // cells of removed clusters
   std::sort(seeds.begin(), seeds.end());
   for (std::size_t s : seeds) {
-    if (visited.count(s)) continue;
+    if (!visit(s)) continue;
     std::vector<Index3> region;
     std::vector<std::size_t> stack{s};
-    visited.insert(s);
     while (!stack.empty()) {
       const std::size_t l = stack.back();
       stack.pop_back();
@@ -209,11 +215,12 @@ FrontierDelta FrontierFinder::regrow(std::unordered_set<std::uint32_t> affected,
             const Index3 nb = c + Index3(dx, dy, dz);
             if ((dx == 0 && dy == 0 && dz == 0) || !isFrontierCell(nb)) continue;
             const std::size_t ln = geo_.linear(nb);
-            if (visited.insert(ln).second) stack.push_back(ln);
+            if (visit(ln)) stack.push_back(ln);
           }
     }
     regions.push_back(std::move(region));
   }
+  for (std::size_t l : visited) scratch_[l >> 6] &= ~(std::uint64_t{1} << (l & 63));
   // Cells of removed clusters lose their owner.
   for (std::uint32_t id : affected) {
     const Frontier* f = find(id);
