@@ -113,7 +113,10 @@ ExplorationRun::ExplorationRun(const world::Scene& scene, const ExplorationConfi
   distance_astar_ = std::make_unique<planning::Astar>(map_->occupancy(), map_->esdf(), config.distance_astar);
   flight_astar_ = std::make_unique<planning::Astar>(map_->occupancy(), map_->esdf(), config.flight_astar);
   tour_planner_ = std::make_unique<planning::TourPlanner>(config.global, *distance_astar_);
-  layers_ = std::make_unique<planning::LayerManager>(config.layers, scene.box, scene.start.position.z());
+  // The run's simulated-time budget is the exploration's time limit (layers/time_limit is the ROS chain's).
+  planning::LayerManagerConfig layers = config.layers;
+  layers.time_limit = max_sim_time;
+  layers_ = std::make_unique<planning::LayerManager>(layers, scene.box, scene.start.position.z());
   coverage_ = std::make_unique<metrics::CoverageTracker>(scene, map_->geometry());
   coverage_->reset(map_->occupancy());
   vehicle_.reset(scene.start.position, scene.start.yaw);
@@ -370,7 +373,9 @@ bool ExplorationRun::step() {
   metrics::Summary& s = recorder_.summary();
   s.collisions = collisions_.collisions();
   s.min_obstacle_distance_m = collisions_.closestApproach();
-  if (t_ >= max_sim_time_) finish("max_sim_time");
+  // The layer manager ends the run at its time limit (max_sim_time) on its next step; this only guards
+  // against a state machine that would not.
+  if (t_ >= max_sim_time_ + 2.0 / config_.layer_rate) finish("max_sim_time");
   return !ended_;
 }
 

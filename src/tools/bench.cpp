@@ -38,6 +38,7 @@ int usage(const char* why) {
          "writes DIR/<scene>/<planner>/seed<k>/{summary.json,metrics.csv,coverage.png}, DIR/table.md,\n"
          "DIR/table.json and DIR/<scene>_coverage.png. Defaults: maze, seed 0, 1 run, go_feap,\n"
          "900 s, results/bench-<UTC time>, 1 job, config " GO_FEAP_CONFIG_DIR ".\n"
+         "--max-sim-time is each run's time limit in simulated seconds (FINISHED(time_limit) there).\n"
          "--perf prints per-block timings and the speed-up over simulated time.\n";
   return 2;
 }

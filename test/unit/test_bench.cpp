@@ -60,6 +60,10 @@ TEST(Bench, SameSeedAndOptionsGiveTheSameRun) {
   EXPECT_EQ(a.summary.flight_distance_m, b.summary.flight_distance_m);
   EXPECT_EQ(a.summary.coverage, b.summary.coverage);
   EXPECT_EQ(a.events, b.events);
+  // The run's budget is the exploration's time limit (not exploration.yaml's layers/time_limit): the
+  // layer manager ends it there, at its next step.
+  EXPECT_EQ(a.summary.finish_reason, "time_limit");
+  EXPECT_NEAR(a.summary.exploration_time_s, 40.0, 0.25);
   ASSERT_EQ(a.samples.size(), b.samples.size());
   for (std::size_t i = 0; i < a.samples.size(); ++i) {
     EXPECT_EQ(a.samples[i].position, b.samples[i].position) << i;

@@ -81,6 +81,7 @@ class ExplorationRun {
  public:
   /// The scene must pass world::validateScene; the config must validate (throws std::invalid_argument
   /// otherwise, with the message). The run starts hovering at the scene's start and is triggered at t = 0.
+  /// max_sim_time (s) is the exploration's time limit: it replaces config.layers.time_limit.
   ExplorationRun(const world::Scene& scene, const ExplorationConfig& config, const std::string& planner,
                  double max_sim_time);
   ~ExplorationRun();
