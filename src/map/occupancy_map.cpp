@@ -189,6 +189,7 @@ common::Result<FrameChange> OccupancyMap::integrate(const cv::Mat& depth, const 
     clearBit(free_bits_, l);
     const VoxelState after = stateOf(logodds_[l]);
     if (after == before) continue;
+    known_ += before == VoxelState::kUnknown;
     const Index3 idx = geo_.unlinear(l);
     if (!change.any_change) {
       change.changed_min = change.changed_max = idx;
@@ -207,7 +208,10 @@ common::Result<FrameChange> OccupancyMap::integrate(const cv::Mat& depth, const 
 
 void OccupancyMap::setState(const Index3& idx, VoxelState s) {
   if (!geo_.inside(idx)) return;
-  logodds_[geo_.linear(idx)] = s == VoxelState::kUnknown ? kUnknown : (s == VoxelState::kOccupied ? max_ : min_);
+  std::int8_t& v = logodds_[geo_.linear(idx)];
+  known_ -= v != kUnknown;
+  v = s == VoxelState::kUnknown ? kUnknown : (s == VoxelState::kOccupied ? max_ : min_);
+  known_ += v != kUnknown;
 }
 
 bool OccupancyMap::isLineFree(const Vec3& a, const Vec3& b, bool unknown_blocks) const {
@@ -221,10 +225,6 @@ bool OccupancyMap::isLineFree(const Vec3& a, const Vec3& b, bool unknown_blocks)
 std::size_t OccupancyMap::memoryBytes() const {
   return logodds_.capacity() + 8 * (hit_bits_.capacity() + free_bits_.capacity() + end_bits_.capacity()) +
          sizeof(std::size_t) * touched_.capacity();
-}
-
-std::size_t OccupancyMap::knownCount() const {
-  return static_cast<std::size_t>(std::count_if(logodds_.begin(), logodds_.end(), [](std::int8_t v) { return v != kUnknown; }));
 }
 
 }  // namespace go_feap::map

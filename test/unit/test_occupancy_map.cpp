@@ -112,6 +112,17 @@ TEST(OccupancyMap, RenderedMazeMatchesGroundTruthSurfaceAndFreeSpace) {
   // The ESDF follows the occupancy exactly.
   for (std::size_t l = 0; l < geo.size(); ++l)
     ASSERT_EQ(m.esdf().isObstacle(geo.unlinear(l)), m.occupancy().stateAt(l) == VoxelState::kOccupied);
+  // The kept count of known voxels is the count of free and occupied ones, and setState() keeps it.
+  EXPECT_EQ(m.occupancy().knownCount(), occ + free);
+  map::OccupancyMap copy = m.occupancy();
+  const Index3 known_voxel = geo.unlinear(*seen.begin()), corner = geo.dims() - Index3::Ones();
+  const std::size_t base = occ + free - 1 + (copy.state(corner) == VoxelState::kUnknown ? 1 : 0);
+  copy.setState(known_voxel, VoxelState::kUnknown);
+  copy.setState(corner, VoxelState::kFree);
+  EXPECT_EQ(copy.knownCount(), base);
+  copy.setState(corner, VoxelState::kOccupied);
+  copy.setState(known_voxel, VoxelState::kUnknown);
+  EXPECT_EQ(copy.knownCount(), base);
 }
 
 TEST(OccupancyMap, MillimetreAndMetreEncodingsGiveTheSameMap) {

@@ -89,7 +89,8 @@ class OccupancyMap {
   bool isLineFree(const Vec3& a, const Vec3& b, bool unknown_blocks) const;
 
   std::size_t memoryBytes() const;
-  std::size_t knownCount() const;
+  /// Voxels that are free or occupied (kept up to date by integrate() and setState(), not counted).
+  std::size_t knownCount() const { return known_; }
 
  private:
   static constexpr std::int8_t kUnknown = -128;
@@ -107,6 +108,7 @@ class OccupancyMap {
   Aabb box_;
   common::GridGeometry geo_;
   std::vector<std::int8_t> logodds_;
+  std::size_t known_ = 0;  ///< voxels whose logodds_ is not kUnknown
   std::int8_t hit_, miss_, min_, max_, occupied_;
   // Per-frame scratch: one bit per voxel, cleared where set.
   std::vector<std::uint64_t> hit_bits_, free_bits_, end_bits_;
