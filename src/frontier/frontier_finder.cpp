@@ -2,6 +2,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <cmath>
 #include <unordered_set>
 
 namespace go_feap::frontier {
@@ -18,7 +19,8 @@ FrontierFinder::FrontierFinder(const FrontierConfig& config, const common::GridG
       geo_(geometry),
       box_(box),
       is_frontier_((geometry.size() + 63) / 64, 0),
-      scratch_((geometry.size() + 63) / 64, 0) {
+      scratch_((geometry.size() + 63) / 64, 0),
+      owner_(geometry.size(), 0) {
   geo_.centreRange(box, box_lo_, box_hi_);
 }
 
@@ -202,12 +204,11 @@ FrontierDelta FrontierFinder::regrow(std::unordered_set<std::uint32_t> affected,
       stack.pop_back();
       const Index3 c = geo_.unlinear(l);
       region.push_back(c);
-      auto own = owner_.find(l);
-      if (own != owner_.end()) {
+      if (const std::uint32_t own = owner_[l]) {
         // A cell of a cluster not yet marked affected: its region is being rebuilt, so it
         // goes too (robustness; regions never cross R unaffected).
-        if (affected.insert(own->second).second) markRemoved(own->second);
-        old_owner[l] = own->second;
+        if (affected.insert(own).second) markRemoved(own);
+        old_owner[l] = own;
       }
       for (int dz = -1; dz <= 1; ++dz)
         for (int dy = -1; dy <= 1; ++dy)
@@ -226,8 +227,8 @@ FrontierDelta FrontierFinder::regrow(std::unordered_set<std::uint32_t> affected,
     const Frontier* f = find(id);
     if (!f) continue;
     for (const Index3& c : f->cells) {
-      auto it = owner_.find(geo_.linear(c));
-      if (it != owner_.end() && it->second == id) owner_.erase(it);
+      std::uint32_t& own = owner_[geo_.linear(c)];
+      if (own == id) own = 0;
     }
     delta.removed.push_back(id);
   }
@@ -240,30 +241,35 @@ FrontierDelta FrontierFinder::regrow(std::unordered_set<std::uint32_t> affected,
   const double h = 0.5 * geo_.resolution();
   for (auto& region : regions) {
     if (static_cast<int>(region.size()) < config_.min_cluster_cells) continue;
-    // Sorted cells make the split independent of the order the flood fill found them in.
+    // Sorted cells make the split independent of the order the flood fill found them in; the split
+    // keeps the order, so every piece is sorted too.
     std::sort(region.begin(), region.end(),
               [&](const Index3& p, const Index3& q) { return geo_.linear(p) < geo_.linear(q); });
-    std::vector<std::vector<Index3>> pieces;
-    splitInto(std::move(region), pieces);
-    for (auto& cells : pieces) {
-      std::sort(cells.begin(), cells.end(),
-                [&](const Index3& p, const Index3& q) { return geo_.linear(p) < geo_.linear(q); });
+    std::vector<Cell> with_centres;
+    with_centres.reserve(region.size());
+    for (const Index3& c : region) with_centres.push_back({c, geo_.indexToCoord(c)});
+    std::vector<std::vector<Cell>> pieces;
+    splitInto(std::move(with_centres), pieces);
+    for (const auto& piece : pieces) {
       Frontier f;
       f.id = next_id_++;
       f.first_seen = now;
       f.box = {Vec3::Constant(1e18), Vec3::Constant(-1e18)};
-      for (const Index3& c : cells) {
-        const Vec3 p = geo_.indexToCoord(c);
-        f.average += p;
-        f.box.min = f.box.min.cwiseMin(p - Vec3::Constant(h));
-        f.box.max = f.box.max.cwiseMax(p + Vec3::Constant(h));
-        auto it = old_owner.find(geo_.linear(c));
-        if (it != old_owner.end()) f.first_seen = std::min(f.first_seen, first_seen[it->second]);
-        owner_[geo_.linear(c)] = f.id;
+      f.cells.reserve(piece.size());
+      for (const Cell& c : piece) {
+        const std::size_t l = geo_.linear(c.index);
+        f.average += c.centre;
+        f.box.min = f.box.min.cwiseMin(c.centre - Vec3::Constant(h));
+        f.box.max = f.box.max.cwiseMax(c.centre + Vec3::Constant(h));
+        if (!old_owner.empty()) {
+          auto it = old_owner.find(l);
+          if (it != old_owner.end()) f.first_seen = std::min(f.first_seen, first_seen[it->second]);
+        }
+        owner_[l] = f.id;
+        f.cells.push_back(c.index);
       }
-      f.average /= static_cast<double>(cells.size());
+      f.average /= static_cast<double>(piece.size());
       f.active = f.average.z() >= band_min_ && f.average.z() <= band_max_;
-      f.cells = std::move(cells);
       delta.added.push_back(f.id);
       frontiers_.push_back(std::move(f));
     }
@@ -272,25 +278,25 @@ FrontierDelta FrontierFinder::regrow(std::unordered_set<std::uint32_t> affected,
   return delta;
 }
 
-void FrontierFinder::splitInto(std::vector<Index3> cells, std::vector<std::vector<Index3>>& out) const {
+void FrontierFinder::splitInto(std::vector<Cell> cells, std::vector<std::vector<Cell>>& out) const {
   Vec3 mean = Vec3::Zero();
-  for (const Index3& c : cells) mean += geo_.indexToCoord(c);
+  for (const Cell& c : cells) mean += c.centre;
   mean /= static_cast<double>(cells.size());
-  double spread = 0.0;
-  for (const Index3& c : cells) spread = std::max(spread, (geo_.indexToCoord(c) - mean).norm());
-  if (spread <= config_.max_cluster_extent || cells.size() < 2) {
+  double spread2 = 0.0;
+  for (const Cell& c : cells) spread2 = std::max(spread2, (c.centre - mean).squaredNorm());
+  if (std::sqrt(spread2) <= config_.max_cluster_extent || cells.size() < 2) {
     out.push_back(std::move(cells));
     return;
   }
   Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (const Index3& c : cells) {
-    const Vec3 d = geo_.indexToCoord(c) - mean;
+  for (const Cell& c : cells) {
+    const Vec3 d = c.centre - mean;
     cov += d * d.transpose();
   }
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
   const Vec3 axis = eig.eigenvectors().col(2);  // largest eigenvalue
-  std::vector<Index3> a, b;
-  for (const Index3& c : cells) ((geo_.indexToCoord(c) - mean).dot(axis) >= 0.0 ? a : b).push_back(c);
+  std::vector<Cell> a, b;
+  for (const Cell& c : cells) ((c.centre - mean).dot(axis) >= 0.0 ? a : b).push_back(c);
   if (a.empty() || b.empty()) {
     out.push_back(std::move(cells));
     return;

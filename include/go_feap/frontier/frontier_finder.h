@@ -82,7 +82,11 @@ class FrontierFinder {
   bool computeFrontierCell(const map::OccupancyMap& map, const Index3& idx) const;
   FrontierDelta rebuild(const map::OccupancyMap& map, const Index3& lo, const Index3& hi, double now);
   FrontierDelta regrow(std::unordered_set<std::uint32_t> affected, std::vector<std::size_t> seeds, double now);
-  void splitInto(std::vector<Index3> cells, std::vector<std::vector<Index3>>& out) const;
+  struct Cell {
+    Index3 index;
+    Vec3 centre;
+  };
+  void splitInto(std::vector<Cell> cells, std::vector<std::vector<Cell>>& out) const;
   void refreshNeighbourCounts();
   bool inBox(const Index3& idx) const {
     return (idx.array() >= box_lo_.array()).all() && (idx.array() < box_hi_.array()).all();
@@ -94,7 +98,10 @@ class FrontierFinder {
   Index3 box_lo_, box_hi_;  ///< voxel range of the box, [lo, hi)
   std::vector<std::uint64_t> is_frontier_;                   ///< one bit per voxel
   std::vector<std::uint64_t> scratch_;                       ///< per-update marks, cleared after use
-  std::unordered_map<std::size_t, std::uint32_t> owner_;     ///< cell -> frontier id (kept clusters only)
+  /// Per voxel: the id of the kept cluster holding it, 0 for none (ids start at 1). Dense, 4 bytes per
+  /// voxel: the flood fill looks up every cell of every rebuilt region, a hash map made that the finder's
+  /// main cost in large scenes.
+  std::vector<std::uint32_t> owner_;
   std::vector<Frontier> frontiers_;                          ///< sorted by id
   std::uint32_t next_id_ = 1;
   double band_min_ = -1e18, band_max_ = 1e18;
