@@ -229,6 +229,9 @@ void ExplorationRun::planStep() {
     if (idle) {
       const frontier::Viewpoint scan = planning::scanTarget(position, yaw(), config_.local);
       log("no local plan (" + plan.message() + "): turning in place to look around");
+      // Each look around is a failed attempt for the tour's frontiers (none had a viewpoint): a frontier
+      // that stays unchanged through max_retries of them is blacklisted instead of scanned for ever.
+      failed_.insert(failed_.end(), tour->frontier_ids.begin(), tour->frontier_ids.end());
       target_ = Target{scan.position, scan.yaw, 0, t_};
       target_changed_ = true;
     }

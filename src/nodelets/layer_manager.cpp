@@ -48,7 +48,7 @@ class LayerManager : public nodelet::Nodelet {
     marker_pub_ = nh.advertise<visualization_msgs::Marker>("layer_marker", 1, /*latch=*/true);
     frontier_sub_ = nh.subscribe("frontiers", 2, &LayerManager::onFrontiers, this);
     update_sub_ = nh.subscribe("map_update", 20, &LayerManager::onMapUpdate, this);
-    failed_sub_ = nh.subscribe("frontier_failed", 20, &LayerManager::onFailed, this);
+    failed_sub_ = nh.subscribe("frontier_failed", 100, &LayerManager::onFailed, this);
     odom_sub_ = nh.subscribe("odom", 2, &LayerManager::onOdom, this);
     goal_sub_ = nh.subscribe("move_base_simple/goal", 1, &LayerManager::onGoal, this);
     trigger_srv_ = nh.advertiseService("trigger", &LayerManager::onTrigger, this);

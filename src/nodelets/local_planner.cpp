@@ -56,7 +56,7 @@ class LocalPlanner : public nodelet::Nodelet {
     layer_sub_ = nh.subscribe("layer", 1, &LocalPlanner::onLayer, this);
     frontier_sub_ = nh.subscribe("frontiers", 2, &LocalPlanner::onFrontiers, this);
     tour_sub_ = nh.subscribe("global_tour", 2, &LocalPlanner::onTour, this);
-    failed_pub_ = nh.advertise<std_msgs::UInt32>("frontier_failed", 10);
+    failed_pub_ = nh.advertise<std_msgs::UInt32>("frontier_failed", 100);
   }
 
   void onHandle(const boost::shared_ptr<const ros_map::MapHandle>& msg) {
@@ -144,6 +144,13 @@ class LocalPlanner : public nodelet::Nodelet {
                                                     << "): turning in place to look around");
         target_ = planning::scanTarget(*position_, yaw_, local_config_);
         target_frontier_ = 0;
+        // Each look around is a failed attempt for the tour's frontiers (none had a viewpoint): a
+        // frontier that stays unchanged through max_retries of them is blacklisted, not scanned for ever.
+        for (unsigned id : tour->frontier_ids) {
+          std_msgs::UInt32 failed;
+          failed.data = id;
+          failed_pub_.publish(failed);
+        }
         committed_at_ = ros::Time::now().toSec();
         ViewpointPath out;
         out.header.stamp = tour->header.stamp;
