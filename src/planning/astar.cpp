@@ -153,8 +153,22 @@ bool Astar::traversable(const Index3& idx) const {
   return geo_.inside(idx) && traversable(idx, geo_.linear(idx));
 }
 
+bool Astar::traversableWith(const Index3& idx, double min_distance) const {
+  if (!geo_.inside(idx)) return false;
+  const Vec3 c = geo_.indexToCoord(idx);
+  const common::Aabb& box = occupancy_.box();
+  if ((c.array() < box.min.array() + min_distance).any() || (c.array() > box.max.array() - min_distance).any())
+    return false;
+  const std::size_t linear = geo_.linear(idx);
+  return freeAndKnown(idx, linear) && esdf_.distance(idx) >= min_distance;
+}
+
 bool Astar::traversable(const Index3& idx, std::size_t linear) const {
   if ((idx.array() < box_lo_.array()).any() || (idx.array() > box_hi_.array()).any()) return false;
+  return freeAndKnown(idx, linear) && esdf_.distance(idx) >= blocked_below_;
+}
+
+bool Astar::freeAndKnown(const Index3& idx, std::size_t linear) const {
   const VoxelState state = occupancy_.stateAt(linear);
   if (state == VoxelState::kOccupied) return false;
   if (state == VoxelState::kUnknown && !config_.unknown_is_free) return false;
@@ -166,7 +180,7 @@ bool Astar::traversable(const Index3& idx, std::size_t linear) const {
         if (occupancy_.state(n) == VoxelState::kUnknown) return false;
       }
   }
-  return esdf_.distance(idx) >= blocked_below_;
+  return true;
 }
 
 bool Astar::snap(const Vec3& p, double radius, Index3& out) const {

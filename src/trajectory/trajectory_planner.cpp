@@ -56,6 +56,19 @@ common::Result<UniformBspline> yawSpline(double yaw0, double yaw1, double durati
 
 }  // namespace
 
+bool staysFlyable(const UniformBspline& spline, const planning::Astar& astar, double min_distance) {
+  const common::GridGeometry& geo = astar.geometry();
+  // Samples at most a quarter voxel apart along the curve.
+  const double step = std::max(1e-3, 0.25 * geo.resolution() / std::max(spline.maxVelocity(), 1e-3));
+  bool left_start = false;
+  for (double t = 0.0;; t = std::min(t + step, spline.duration())) {
+    const bool ok = astar.traversableWith(geo.coordToIndex(spline.position(t)), min_distance);
+    if (ok) left_start = true;
+    else if (left_start) return false;
+    if (t >= spline.duration()) return left_start;
+  }
+}
+
 common::Result<Trajectory> planTrajectory(const PlanRequest& request, const planning::Astar& astar,
                                           const map::Esdf& esdf, const OptimizerConfig& optimizer,
                                           const TrajectoryPlannerConfig& config, PlanReport* report) {
@@ -67,7 +80,7 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
       !std::isfinite(request.yaw) || !std::isfinite(request.target_yaw))
     return R::Error("plan request is not finite");
   // A target where the reference already is: turn in place (braking first if moving).
-  if ((request.target - request.start).norm() < 0.5 * astar.geometry().resolution()) {
+  auto turnInPlace = [&]() -> R {
     Trajectory out;
     out.position = safeStop(request.start, request.velocity, optimizer.a_max);
     rep.path_status = planning::PathStatus::kFound;
@@ -75,7 +88,8 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
     if (!yaw) return R::Error("yaw spline failed: " + yaw.message());
     out.yaw = std::move(yaw).value();
     return out;
-  }
+  };
+  if ((request.target - request.start).norm() < 0.5 * astar.geometry().resolution()) return turnInPlace();
   const planning::PathResult path = astar.search(request.start, request.target, config.snap_radius);
   rep.path_status = path.status;
   if (path.status != planning::PathStatus::kFound)
@@ -89,8 +103,16 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
   }
   std::vector<Vec3> points = path.path;
   points.front() = request.start;  // start exactly at the current reference
-  const double length = path.length;
-  const double spacing = std::max(0.05, std::min(config.path_spacing, length / 6.0));
+  double length = 0.0;
+  for (std::size_t i = 1; i < points.size(); ++i) length += (points[i] - points[i - 1]).norm();
+  // Start and goal in one voxel: the path is that voxel; hop straight to the target inside it.
+  if (length < 1e-3) {
+    if (!astar.segmentTraversable(request.start, request.target)) return turnInPlace();
+    points = {request.start, request.target};
+    length = (request.target - request.start).norm();
+  }
+  // At least 6 segments, however short the hop: the optimiser needs 7 control points.
+  const double spacing = std::min(config.path_spacing, length / 6.0);
   const auto samples = UniformBspline::resamplePolyline(points, spacing);
   // Initial timing within the limits: cruise at a share of v_max, but short hops from (or to) rest
   // need the time an a_max-limited accelerate/brake takes.
@@ -99,6 +121,8 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
                                  2.5 * std::sqrt(length / optimizer.a_max), v0 / optimizer.a_max + 0.5});
   double dt = total / static_cast<double>(std::max<std::size_t>(1, samples.size() - 1));
   common::Result<UniformBspline> spline = common::Result<UniformBspline>::Error("not planned");
+  // The optimiser checks min_clearance along the curve; a voxel's centre may be half a diagonal farther.
+  const double voxel_clearance = optimizer.min_clearance - 0.5 * std::sqrt(3.0) * astar.geometry().resolution();
   // Optimise; when the result breaks a limit, refit slower (the start velocity is kept, so the
   // reference stays continuous) and try again; a refit that passes the same checks as an optimised
   // spline is accepted as it is.
@@ -106,8 +130,14 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
     rep.refits = attempt;
     const UniformBspline init = UniformBspline::fitPath(samples, dt, request.velocity, Vec3::Zero());
     spline = optimize(init, esdf, optimizer);
+    // The optimum must also stay where the path search may go: the ESDF knows only mapped obstacles,
+    // and a smoothed corner can cut through space nobody has seen (or over the box's clearance).
+    if (spline && !staysFlyable(*spline, astar, voxel_clearance)) {
+      spline = common::Result<UniformBspline>::Error("the optimised trajectory leaves known flyable space");
+      ++rep.left_flyable;
+    }
     if (spline) break;
-    if (checkTrajectory(init, esdf, optimizer).ok()) {
+    if (checkTrajectory(init, esdf, optimizer).ok() && staysFlyable(init, astar, voxel_clearance)) {
       spline = init;
       rep.used_fit = true;
       break;

@@ -1,6 +1,7 @@
 // B-spline optimiser: every cost term's gradient against central differences, optimised trajectories on
 // random obstacle fields against finite-difference dynamics and analytic distances to the obstacle boxes,
-// the yaw spline, the replanning rule, collision prediction and the safe stop.
+// the yaw spline, the replanning rule, collision prediction, the safe stop, and whole plans from a start
+// state to a target (short hops included).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -21,6 +22,7 @@
 #include "go_feap/trajectory/bspline.h"
 #include "go_feap/trajectory/bspline_optimizer.h"
 #include "go_feap/trajectory/replan.h"
+#include "go_feap/trajectory/trajectory_planner.h"
 
 using go_feap::common::Aabb;
 using go_feap::common::GridGeometry;
@@ -94,6 +96,13 @@ class World {
           pending_.push_back(geo().linear(Index3(x, y, z)));
         }
     centre_boxes_.push_back({geo().indexToCoord(lo), geo().indexToCoord(hi)});
+  }
+  void setUnknown(const Index3& idx) { occupancy_.setState(idx, VoxelState::kUnknown); }
+  /// Marks the voxels of an inclusive box free (mapped empty space).
+  void setFree(const Index3& lo, const Index3& hi) {
+    for (int z = lo.z(); z <= hi.z(); ++z)
+      for (int y = lo.y(); y <= hi.y(); ++y)
+        for (int x = lo.x(); x <= hi.x(); ++x) occupancy_.setState(Index3(x, y, z), VoxelState::kFree);
   }
   void sync() {
     esdf_.update(pending_, {});
@@ -492,6 +501,101 @@ TEST(SafeStop, BrakesToRestWithinTheStoppingDistance) {
   const UniformBspline hold = traj::safeStop(Vec3(1, 2, 3), Vec3::Zero(), 1.0);
   EXPECT_LT((hold.position(0.3) - Vec3(1, 2, 3)).norm(), 1e-12);
   EXPECT_EQ(hold.maxVelocity(), 0.0);
+}
+
+
+// planTrajectory from rest to targets from 6 cm to 3 m away (the shortest within one voxel of the start,
+// where the A* path is a single voxel) in an empty room: every plan succeeds, starts exactly at the
+// start at rest, ends at rest within a voxel's half-diagonal of the target with the target's yaw, and
+// keeps v_max and a_max (finite differences of positions, 5 % slack).
+TEST(TrajectoryPlanner, HopsOfEveryLengthReachTheTargetWithinTheLimits) {
+  World world(Vec3(8, 8, 3));
+  const Index3 dims = world.geo().dims();
+  world.addBox(Index3(0, 0, 0), Index3(dims.x() - 1, dims.y() - 1, 0));
+  world.addBox(Index3(0, 0, dims.z() - 1), Index3(dims.x() - 1, dims.y() - 1, dims.z() - 1));
+  world.sync();
+  AstarConfig astar_config;
+  astar_config.unknown_is_free = true;  // the room is unmapped apart from floor and ceiling
+  const Astar astar(world.occupancy(), world.esdf(), astar_config);
+  const OptimizerConfig optimizer = optimizerConfig();
+  const traj::TrajectoryPlannerConfig planner;
+  Rng rng(7);
+  int plans = 0;
+  for (double distance : {0.06, 0.09, 0.12, 0.15, 0.2, 0.25, 0.3, 0.5, 1.0, 3.0}) {
+    for (int trial = 0; trial < 6; ++trial) {
+      traj::PlanRequest request;
+      request.start = Vec3(4.0 + rng(-0.05, 0.05), 4.0 + rng(-0.05, 0.05), 1.5 + rng(-0.05, 0.05));
+      do {  // targets stay clear of the floor and the ceiling
+        request.target = request.start + distance * Vec3(rng(-1, 1), rng(-1, 1), rng(-0.5, 0.5)).normalized();
+      } while (std::abs(request.target.z() - 1.5) > 0.7);
+      request.yaw = rng(-kPi, kPi);
+      request.target_yaw = rng(-kPi, kPi);
+      traj::PlanReport report;
+      const auto planned = traj::planTrajectory(request, astar, world.esdf(), optimizer, planner, &report);
+      ASSERT_TRUE(planned) << "distance " << distance << " trial " << trial << ": " << planned.message();
+      const traj::Trajectory& t = *planned;
+      const traj::TrajectorySample first = traj::sampleTrajectory(t, 0.0), last = traj::sampleTrajectory(t, t.duration());
+      EXPECT_LT((first.position - request.start).norm(), 1e-9);
+      EXPECT_LT(first.velocity.norm(), 1e-9);
+      EXPECT_LT((last.position - request.target).norm(), 0.5 * std::sqrt(3.0) * kRes + 1e-9)
+          << "distance " << distance << " trial " << trial;
+      EXPECT_LT(last.velocity.norm(), 1e-9);
+      const traj::TrajectorySample settled = traj::sampleTrajectory(t, t.duration() + t.yaw.duration() + 1.0);
+      EXPECT_NEAR(std::remainder(settled.yaw - request.target_yaw, 2 * kPi), 0.0, 1e-6);
+      double v = 0.0, a = 0.0;
+      finiteDifferenceDynamics(t.position, 2000, v, a);
+      EXPECT_LE(v, 1.05 * optimizer.v_max);
+      EXPECT_LE(a, 1.05 * optimizer.a_max);
+      ++plans;
+    }
+  }
+  EXPECT_EQ(plans, 60);
+}
+
+// staysFlyable(): a spline through mapped free space passes; the same spline fails once a voxel it
+// crosses is unknown, or lies within min_distance of the box's faces; a start outside flyable space (a
+// snapped start) is allowed until the curve first enters it.
+TEST(TrajectoryPlanner, StaysFlyableFollowsTheSearchRulesWithTheGivenClearance) {
+  World world(Vec3(6, 4, 3));
+  const Index3 dims = world.geo().dims();
+  world.setFree(Index3::Zero(), dims - Index3::Ones());
+  world.sync();
+  AstarConfig config;
+  config.unknown_is_free = false;
+  config.known_clearance = true;
+  config.clearance = 0.3;
+  const Astar astar(world.occupancy(), world.esdf(), config);
+  std::vector<Vec3> line;
+  for (int i = 0; i <= 10; ++i) line.push_back(Vec3(1.0 + 0.4 * i, 2.0, 1.5));
+  const UniformBspline spline = UniformBspline::fitPath(line, 0.3, Vec3::Zero(), Vec3::Zero());
+  EXPECT_TRUE(traj::staysFlyable(spline, astar, 0.2));
+  // An unknown voxel on the way.
+  World holed(Vec3(6, 4, 3));
+  holed.setFree(Index3::Zero(), dims - Index3::Ones());
+  holed.setUnknown(holed.geo().coordToIndex(Vec3(3.0, 2.0, 1.5)));
+  holed.sync();
+  const Astar holed_astar(holed.occupancy(), holed.esdf(), config);
+  EXPECT_FALSE(traj::staysFlyable(spline, holed_astar, 0.2));
+  // Along the top face: 0.65 m below it passes with 0.6 m of clearance, not with 0.8 m.
+  std::vector<Vec3> high = line;
+  for (Vec3& p : high) p.z() = 2.3;
+  const UniformBspline high_spline = UniformBspline::fitPath(high, 0.3, Vec3::Zero(), Vec3::Zero());
+  EXPECT_TRUE(traj::staysFlyable(high_spline, astar, 0.6));
+  EXPECT_FALSE(traj::staysFlyable(high_spline, astar, 0.8));
+  // Leaving an obstacle's inflation (a start that had to snap out) is allowed; entering it is not.
+  World walled(Vec3(6, 4, 3));
+  walled.setFree(Index3::Zero(), dims - Index3::Ones());
+  walled.addBox(Index3(26, 15, 10), Index3(28, 25, 20));
+  walled.sync();
+  const Astar walled_astar(walled.occupancy(), walled.esdf(), config);
+  std::vector<Vec3> away, towards;
+  for (int i = 0; i <= 6; ++i) away.push_back(Vec3(3.0 + 0.2 * i, 2.0, 1.5));
+  towards.assign(away.rbegin(), away.rend());
+  EXPECT_TRUE(traj::staysFlyable(UniformBspline::fitPath(away, 0.2, Vec3::Zero(), Vec3::Zero()), walled_astar, 0.25));
+  EXPECT_FALSE(traj::staysFlyable(UniformBspline::fitPath(towards, 0.2, Vec3::Zero(), Vec3::Zero()), walled_astar, 0.25));
+  // A curve that never enters flyable space fails.
+  std::vector<Vec3> inside{Vec3(3.0, 2.0, 1.5), Vec3(3.0, 2.05, 1.5), Vec3(3.0, 2.1, 1.5), Vec3(3.0, 2.15, 1.5)};
+  EXPECT_FALSE(traj::staysFlyable(UniformBspline::fitPath(inside, 0.2, Vec3::Zero(), Vec3::Zero()), walled_astar, 0.25));
 }
 
 }  // namespace

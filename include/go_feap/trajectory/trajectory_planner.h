@@ -65,14 +65,23 @@ struct PlanReport {
   planning::PathStatus path_status = planning::PathStatus::kNoPath;
   double path_length = 0.0;    ///< m
   bool yaw_fallback = false;   ///< the yaw spline could not reach the target yaw in time: heading kept
+  int left_flyable = 0;        ///< optimised splines refused by staysFlyable()
 };
+
+/// True when `spline`, sampled at most a quarter voxel apart, stays in voxels astar.traversableWith(.,
+/// min_distance) accepts (known free with known surroundings and clear of the box's faces, as the path
+/// search requires, and at least min_distance from mapped obstacles) from its first such sample on: a
+/// start that had to snap out of a blocked voxel may begin outside (a curve that never enters fails).
+bool staysFlyable(const UniformBspline& spline, const planning::Astar& astar, double min_distance);
 
 /// Plans a trajectory for `request`. A target within half a voxel of the start is a turn in place: the
 /// position brakes to rest there (safeStop) and the yaw spline turns to target_yaw. Otherwise: A* (known
 /// free space, the astar's clearance), spline fit through
 /// the resampled path starting exactly at request.start with request.velocity and ending at rest,
-/// optimize() (refitted slower up to max_refits times while the optimum or the fit breaks a limit),
-/// then optimizeYaw() from request.yaw to target_yaw over the position's duration. Errors name the
+/// optimize() (refitted slower up to max_refits times while the optimum or the fit breaks a limit or
+/// leaves flyable space, staysFlyable()),
+/// then optimizeYaw() from request.yaw to target_yaw over the position's duration. A target in the start's
+/// voxel (a one-voxel path) is flown to straight; a hop of any length gets at least 6 path segments. Errors name the
 /// reason: no path (with the A* status), optimisation failure (with the last check's message).
 /// `astar` and `esdf` must describe the same map; the caller holds the map still while this runs.
 common::Result<Trajectory> planTrajectory(const PlanRequest& request, const planning::Astar& astar,
