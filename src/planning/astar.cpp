@@ -160,19 +160,19 @@ bool Astar::traversableWith(const Index3& idx, double min_distance) const {
   if ((c.array() < box.min.array() + min_distance).any() || (c.array() > box.max.array() - min_distance).any())
     return false;
   const std::size_t linear = geo_.linear(idx);
-  return freeAndKnown(idx, linear) && esdf_.distance(idx) >= min_distance;
+  return freeAndKnown(idx, linear, false) && esdf_.distance(idx) >= min_distance;
 }
 
 bool Astar::traversable(const Index3& idx, std::size_t linear) const {
   if ((idx.array() < box_lo_.array()).any() || (idx.array() > box_hi_.array()).any()) return false;
-  return freeAndKnown(idx, linear) && esdf_.distance(idx) >= blocked_below_;
+  return freeAndKnown(idx, linear, true) && esdf_.distance(idx) >= blocked_below_;
 }
 
-bool Astar::freeAndKnown(const Index3& idx, std::size_t linear) const {
+bool Astar::freeAndKnown(const Index3& idx, std::size_t linear, bool surroundings) const {
   const VoxelState state = occupancy_.stateAt(linear);
   if (state == VoxelState::kOccupied) return false;
   if (state == VoxelState::kUnknown && !config_.unknown_is_free) return false;
-  if (config_.known_clearance) {
+  if (surroundings && config_.known_clearance) {
     for (int a = 0; a < 3; ++a)
       for (int s : {-clearance_voxels_, clearance_voxels_}) {
         Index3 n = idx;

@@ -56,16 +56,16 @@ common::Result<UniformBspline> yawSpline(double yaw0, double yaw1, double durati
 
 }  // namespace
 
-bool staysFlyable(const UniformBspline& spline, const planning::Astar& astar, double min_distance) {
+bool staysFlyable(const UniformBspline& spline, const planning::Astar& astar, double min_distance,
+                  double exempt_radius) {
   const common::GridGeometry& geo = astar.geometry();
   // Samples at most a quarter voxel apart along the curve.
   const double step = std::max(1e-3, 0.25 * geo.resolution() / std::max(spline.maxVelocity(), 1e-3));
-  bool left_start = false;
+  const Vec3 start = spline.position(0.0);
   for (double t = 0.0;; t = std::min(t + step, spline.duration())) {
-    const bool ok = astar.traversableWith(geo.coordToIndex(spline.position(t)), min_distance);
-    if (ok) left_start = true;
-    else if (left_start) return false;
-    if (t >= spline.duration()) return left_start;
+    const Vec3 p = spline.position(t);
+    if ((p - start).norm() > exempt_radius && !astar.traversableWith(geo.coordToIndex(p), min_distance)) return false;
+    if (t >= spline.duration()) return astar.traversableWith(geo.coordToIndex(p), min_distance);
   }
 }
 
@@ -132,12 +132,12 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
     spline = optimize(init, esdf, optimizer);
     // The optimum must also stay where the path search may go: the ESDF knows only mapped obstacles,
     // and a smoothed corner can cut through space nobody has seen (or over the box's clearance).
-    if (spline && !staysFlyable(*spline, astar, voxel_clearance)) {
+    if (spline && !staysFlyable(*spline, astar, voxel_clearance, config.snap_radius)) {
       spline = common::Result<UniformBspline>::Error("the optimised trajectory leaves known flyable space");
       ++rep.left_flyable;
     }
     if (spline) break;
-    if (checkTrajectory(init, esdf, optimizer).ok() && staysFlyable(init, astar, voxel_clearance)) {
+    if (checkTrajectory(init, esdf, optimizer).ok() && staysFlyable(init, astar, voxel_clearance, config.snap_radius)) {
       spline = init;
       rep.used_fit = true;
       break;

@@ -553,8 +553,8 @@ TEST(TrajectoryPlanner, HopsOfEveryLengthReachTheTargetWithinTheLimits) {
 }
 
 // staysFlyable(): a spline through mapped free space passes; the same spline fails once a voxel it
-// crosses is unknown, or lies within min_distance of the box's faces; a start outside flyable space (a
-// snapped start) is allowed until the curve first enters it.
+// crosses is unknown, or lies within min_distance of the box's faces or of a mapped obstacle, except
+// within exempt_radius of its start.
 TEST(TrajectoryPlanner, StaysFlyableFollowsTheSearchRulesWithTheGivenClearance) {
   World world(Vec3(6, 4, 3));
   const Index3 dims = world.geo().dims();
@@ -568,21 +568,21 @@ TEST(TrajectoryPlanner, StaysFlyableFollowsTheSearchRulesWithTheGivenClearance) 
   std::vector<Vec3> line;
   for (int i = 0; i <= 10; ++i) line.push_back(Vec3(1.0 + 0.4 * i, 2.0, 1.5));
   const UniformBspline spline = UniformBspline::fitPath(line, 0.3, Vec3::Zero(), Vec3::Zero());
-  EXPECT_TRUE(traj::staysFlyable(spline, astar, 0.2));
+  EXPECT_TRUE(traj::staysFlyable(spline, astar, 0.2, 0.5));
   // An unknown voxel on the way.
   World holed(Vec3(6, 4, 3));
   holed.setFree(Index3::Zero(), dims - Index3::Ones());
   holed.setUnknown(holed.geo().coordToIndex(Vec3(3.0, 2.0, 1.5)));
   holed.sync();
   const Astar holed_astar(holed.occupancy(), holed.esdf(), config);
-  EXPECT_FALSE(traj::staysFlyable(spline, holed_astar, 0.2));
+  EXPECT_FALSE(traj::staysFlyable(spline, holed_astar, 0.2, 0.5));
   // Along the top face: 0.65 m below it passes with 0.6 m of clearance, not with 0.8 m.
   std::vector<Vec3> high = line;
   for (Vec3& p : high) p.z() = 2.3;
   const UniformBspline high_spline = UniformBspline::fitPath(high, 0.3, Vec3::Zero(), Vec3::Zero());
-  EXPECT_TRUE(traj::staysFlyable(high_spline, astar, 0.6));
-  EXPECT_FALSE(traj::staysFlyable(high_spline, astar, 0.8));
-  // Leaving an obstacle's inflation (a start that had to snap out) is allowed; entering it is not.
+  EXPECT_TRUE(traj::staysFlyable(high_spline, astar, 0.6, 0.5));
+  EXPECT_FALSE(traj::staysFlyable(high_spline, astar, 0.8, 0.5));
+  // Near a mapped obstacle: within exempt_radius of the start it is allowed, farther out it is not.
   World walled(Vec3(6, 4, 3));
   walled.setFree(Index3::Zero(), dims - Index3::Ones());
   walled.addBox(Index3(26, 15, 10), Index3(28, 25, 20));
@@ -591,11 +591,12 @@ TEST(TrajectoryPlanner, StaysFlyableFollowsTheSearchRulesWithTheGivenClearance) 
   std::vector<Vec3> away, towards;
   for (int i = 0; i <= 6; ++i) away.push_back(Vec3(3.0 + 0.2 * i, 2.0, 1.5));
   towards.assign(away.rbegin(), away.rend());
-  EXPECT_TRUE(traj::staysFlyable(UniformBspline::fitPath(away, 0.2, Vec3::Zero(), Vec3::Zero()), walled_astar, 0.25));
-  EXPECT_FALSE(traj::staysFlyable(UniformBspline::fitPath(towards, 0.2, Vec3::Zero(), Vec3::Zero()), walled_astar, 0.25));
-  // A curve that never enters flyable space fails.
-  std::vector<Vec3> inside{Vec3(3.0, 2.0, 1.5), Vec3(3.0, 2.05, 1.5), Vec3(3.0, 2.1, 1.5), Vec3(3.0, 2.15, 1.5)};
-  EXPECT_FALSE(traj::staysFlyable(UniformBspline::fitPath(inside, 0.2, Vec3::Zero(), Vec3::Zero()), walled_astar, 0.25));
+  const UniformBspline away_spline = UniformBspline::fitPath(away, 0.2, Vec3::Zero(), Vec3::Zero());
+  EXPECT_TRUE(traj::staysFlyable(away_spline, walled_astar, 0.25, 0.3));
+  EXPECT_FALSE(traj::staysFlyable(away_spline, walled_astar, 0.25, 0.0));
+  EXPECT_FALSE(traj::staysFlyable(UniformBspline::fitPath(towards, 0.2, Vec3::Zero(), Vec3::Zero()), walled_astar, 0.25, 0.3));
+  // Unknown space within the exempt radius is allowed too, not at the end.
+  EXPECT_TRUE(traj::staysFlyable(spline, holed_astar, 0.2, 2.5));
 }
 
 }  // namespace

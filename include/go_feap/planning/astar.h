@@ -94,8 +94,9 @@ class Astar {
   /// and ESDF distance at least config.clearance.
   bool traversable(const Index3& idx) const;
   /// traversable() with `min_distance` (m) in place of config.clearance, from mapped obstacles (ESDF) and
-  /// from the box's faces; the known and known-surroundings rules are unchanged. The test for a trajectory
-  /// that the optimiser bent away from the path (its own clearance limit is checked separately).
+  /// from the box's faces, and without the known-surroundings rule (the voxel itself must still be free,
+  /// or unknown when config.unknown_is_free). The test for a trajectory that the optimiser bent away from
+  /// the path: it may graze the edge of the known region the path hugs, never cross unseen space.
   bool traversableWith(const Index3& idx, double min_distance) const;
   /// True when every voxel the segment from a to b touches is traversable (see shorten()).
   bool segmentTraversable(const Vec3& a, const Vec3& b) const;
@@ -128,8 +129,9 @@ class Astar {
   };
 
   bool traversable(const Index3& idx, std::size_t linear) const;
-  /// Not occupied, unknown only when config.unknown_is_free, surroundings known when config.known_clearance.
-  bool freeAndKnown(const Index3& idx, std::size_t linear) const;
+  /// Not occupied, unknown only when config.unknown_is_free, and (with `surroundings` and
+  /// config.known_clearance) the voxels config.clearance away along each axis known.
+  bool freeAndKnown(const Index3& idx, std::size_t linear, bool surroundings) const;
   /// Nearest traversable voxel to p whose centre is within `radius` of it; false when none.
   bool snap(const Vec3& p, double radius, Index3& out) const;
   void resetScratch() const;

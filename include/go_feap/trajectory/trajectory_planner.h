@@ -69,10 +69,12 @@ struct PlanReport {
 };
 
 /// True when `spline`, sampled at most a quarter voxel apart, stays in voxels astar.traversableWith(.,
-/// min_distance) accepts (known free with known surroundings and clear of the box's faces, as the path
-/// search requires, and at least min_distance from mapped obstacles) from its first such sample on: a
-/// start that had to snap out of a blocked voxel may begin outside (a curve that never enters fails).
-bool staysFlyable(const UniformBspline& spline, const planning::Astar& astar, double min_distance);
+/// min_distance) accepts (known free, at least min_distance from mapped obstacles and from the box's
+/// faces) wherever it is farther than exempt_radius from its start, and ends in one. Near the start the
+/// camera has not seen everything around the vehicle (and the path search may snap its start that far:
+/// pass snap_radius).
+bool staysFlyable(const UniformBspline& spline, const planning::Astar& astar, double min_distance,
+                  double exempt_radius);
 
 /// Plans a trajectory for `request`. A target within half a voxel of the start is a turn in place: the
 /// position brakes to rest there (safeStop) and the yaw spline turns to target_yaw. Otherwise: A* (known
