@@ -66,27 +66,29 @@ std::size_t CoverageTracker::weight(std::size_t l) const {
   return it == extra_weight_.end() ? 1 : 1 + it->second;
 }
 
-double CoverageTracker::coverage(const map::OccupancyMap& map) const {
-  if (observable_total_ == 0) return 0.0;
-  std::size_t known = 0;
+template <typename Visit>
+void CoverageTracker::forEachKnownObservable(const map::OccupancyMap& map, Visit&& visit) const {
   for (std::size_t w = 0; w < observable_.size(); ++w)
     for (std::uint64_t bits = observable_[w]; bits; bits &= bits - 1) {
       const std::size_t l = (w << 6) + static_cast<std::size_t>(__builtin_ctzll(bits));
-      if (map.stateAt(l) != map::VoxelState::kUnknown) known += weight(l);
+      if (map.stateAt(l) != map::VoxelState::kUnknown) visit(l);
     }
+}
+
+double CoverageTracker::coverage(const map::OccupancyMap& map) const {
+  if (observable_total_ == 0) return 0.0;
+  std::size_t known = 0;
+  forEachKnownObservable(map, [&](std::size_t l) { known += weight(l); });
   return static_cast<double>(known) / static_cast<double>(observable_total_);
 }
 
 void CoverageTracker::reset(const map::OccupancyMap& map) {
   pending_ = observable_;
   known_ = 0;
-  for (std::size_t w = 0; w < pending_.size(); ++w)
-    for (std::uint64_t bits = pending_[w]; bits; bits &= bits - 1) {
-      const std::size_t l = (w << 6) + static_cast<std::size_t>(__builtin_ctzll(bits));
-      if (map.stateAt(l) == map::VoxelState::kUnknown) continue;
-      pending_[w] &= ~(std::uint64_t{1} << (l & 63));
-      known_ += weight(l);
-    }
+  forEachKnownObservable(map, [&](std::size_t l) {
+    pending_[l >> 6] &= ~(std::uint64_t{1} << (l & 63));
+    known_ += weight(l);
+  });
 }
 
 void CoverageTracker::update(const map::OccupancyMap& map, const std::vector<std::size_t>& changed) {

@@ -66,6 +66,9 @@ class CoverageTracker {
   bool bit(const std::vector<std::uint64_t>& bits, std::size_t l) const { return (bits[l >> 6] >> (l & 63)) & 1u; }
   /// Observable voxels in map voxel l (1 unless the scene's grid is finer than the map's).
   std::size_t weight(std::size_t l) const;
+  /// Calls visit(l) for every map voxel l that holds an observable voxel and is known in `map`.
+  template <typename Visit>
+  void forEachKnownObservable(const map::OccupancyMap& map, Visit&& visit) const;
 
   std::vector<std::uint64_t> observable_;  ///< one bit per map voxel: holds an observable voxel
   std::vector<std::uint64_t> pending_;     ///< observable map voxels not yet counted known (incremental)
