@@ -241,7 +241,7 @@ void ExplorationRun::planStep() {
   std::optional<planning::CurrentTarget> current;
   if (target_)
     current = planning::assessTarget({target_->position, target_->yaw, 0}, target_->committed_at, position, yaw(),
-                                     vehicle_.state().velocity.norm(), t_, finder_->frontiers(), map_->occupancy(),
+                                     vehicle_.state().velocity.norm(), finder_->frontiers(), map_->occupancy(),
                                      config_.viewpoints, config_.frontier.max_cluster_extent, config_.local);
   const planning::TargetDecision decision =
       planning::decideTarget(current ? &*current : nullptr, vp,

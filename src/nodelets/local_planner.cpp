@@ -169,7 +169,7 @@ class LocalPlanner : public nodelet::Nodelet {
     const frontier::Viewpoint& proposal = plan->path.front();
     std::optional<planning::CurrentTarget> current;
     if (target_)
-      current = planning::assessTarget(*target_, committed_at_, *position_, yaw_, speed_, now, all, m.occupancy(),
+      current = planning::assessTarget(*target_, committed_at_, *position_, yaw_, speed_, all, m.occupancy(),
                                        viewpoint_config_, frontier_extent_, local_config_);
     ros_conv::publishComputeTime(compute_pub_, "local", t_compute);
     map_lock.unlock();

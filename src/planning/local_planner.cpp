@@ -190,7 +190,7 @@ Result<LocalPlan> planLocal(const Vec3& position, double yaw, const std::vector<
 }
 
 CurrentTarget assessTarget(const frontier::Viewpoint& target, double committed_at, const common::Vec3& position,
-                           double yaw, double speed, double t, const std::vector<frontier::Frontier>& frontiers,
+                           double yaw, double speed, const std::vector<frontier::Frontier>& frontiers,
                            const map::OccupancyMap& map, const ViewpointConfig& viewpoint_config,
                            double cluster_extent, const LocalPlannerConfig& config) {
   CurrentTarget c;
@@ -199,7 +199,7 @@ CurrentTarget assessTarget(const frontier::Viewpoint& target, double committed_a
   c.reached = targetReached(position, yaw, speed, target, config);
   c.cost = edgeCost((position - target.position).norm(), yaw, target.yaw, config);
   c.remaining_visible = viewpoint_config.min_visible;
-  if (!c.reached && t - committed_at < config.commit_time)
+  if (!c.reached)
     c.remaining_visible = remainingVisible(target, frontiers, map, viewpoint_config, cluster_extent);
   return c;
 }

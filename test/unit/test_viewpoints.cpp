@@ -484,3 +484,43 @@ TEST(Viewpoints, CacheGivesTheSampledViewpointsAndDropsThoseTheMapHasFilled) {
   cache.get(f, w.map(), w.esdf(), z_min, z_max, cfg);
   EXPECT_EQ(cache.misses(), 3u);
 }
+
+// A target whose frontier was seen on the way is dropped however long it has been kept: assessTarget
+// counts the cells still visible from it after commit_time too, and decideTarget switches on that even
+// when the proposal is costlier than the rest of the way to the target.
+TEST(Viewpoints, TargetSeenOutIsDroppedAfterTheCommitment) {
+  const ViewpointConfig cfg = testConfig();
+  World w(Index3(40, 40, 20));
+  w.set(Index3(25, 15, 5), Index3(30, 25, 15), VoxelState::kUnknown);
+  const Frontier f = frontierOf(w);
+  ASSERT_GE(f.cells.size(), 50u);
+  const std::vector<Viewpoint> vps = sampleViewpoints(f, w.map(), w.esdf(), 0.5, 1.5, cfg);
+  ASSERT_FALSE(vps.empty());
+  const Viewpoint& target = vps.front();
+  go_feap::planning::LocalPlannerConfig local;
+  local.commit_time = 1.5;
+  const Vec3 vehicle = target.position + Vec3(0.6, 0.0, 0.0);  // on the way, moving
+  const double extent = 2.0;
+  // Long after the commitment, with the frontier still there: its cells are counted (up to min_visible).
+  auto current = go_feap::planning::assessTarget(target, 0.0, vehicle, target.yaw, 1.0, {f}, w.map(), cfg, extent,
+                                                 local);
+  EXPECT_FALSE(current.reached);
+  EXPECT_EQ(current.remaining_visible, cfg.min_visible);
+  Viewpoint other;
+  other.position = target.position + Vec3(0.0, 1.0, 0.0);
+  other.yaw = target.yaw + 1.0;
+  const double costlier = current.cost + 1.0;
+  using go_feap::planning::TargetDecision;
+  EXPECT_EQ(go_feap::planning::decideTarget(&current, other, costlier, 100.0, cfg.min_visible, local),
+            TargetDecision::kKeep);
+  // The frontier is gone (seen on the way): nothing is left to see there, so the target goes.
+  current = go_feap::planning::assessTarget(target, 0.0, vehicle, target.yaw, 1.0, {}, w.map(), cfg, extent, local);
+  EXPECT_EQ(current.remaining_visible, 0);
+  EXPECT_EQ(go_feap::planning::decideTarget(&current, other, costlier, 100.0, cfg.min_visible, local),
+            TargetDecision::kSwitch);
+  // Reached (close, facing it, slow): the count decides nothing and is not made.
+  current = go_feap::planning::assessTarget(target, 0.0, target.position, target.yaw, 0.0, {}, w.map(), cfg, extent,
+                                            local);
+  EXPECT_TRUE(current.reached);
+  EXPECT_EQ(current.remaining_visible, cfg.min_visible);
+}

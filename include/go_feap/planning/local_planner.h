@@ -130,12 +130,13 @@ struct CurrentTarget {
   double cost = 0.0;          ///< s, edgeCost() from the vehicle's pose to it now
 };
 
-/// The current target as decideTarget() needs it, assessed from the vehicle's pose and speed at time t:
+/// The current target as decideTarget() needs it, assessed from the vehicle's pose and speed:
 /// reached (targetReached()), cost (edgeCost() from the vehicle), and the frontier cells still visible
-/// from it (remainingVisible() over `frontiers`), counted only while the commitment holds (not reached,
-/// kept for less than commit_time; min_visible otherwise, as the count decides nothing then).
+/// from it (remainingVisible() over `frontiers`), counted while it is not reached (min_visible once it is,
+/// as the count decides nothing then). It is counted after commit_time too: a target whose frontier has
+/// been seen on the way is dropped at once, instead of being flown to and stopped at.
 CurrentTarget assessTarget(const frontier::Viewpoint& target, double committed_at, const common::Vec3& position,
-                           double yaw, double speed, double t, const std::vector<frontier::Frontier>& frontiers,
+                           double yaw, double speed, const std::vector<frontier::Frontier>& frontiers,
                            const map::OccupancyMap& map, const ViewpointConfig& viewpoint_config,
                            double cluster_extent, const LocalPlannerConfig& config);
 
