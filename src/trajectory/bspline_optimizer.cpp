@@ -47,6 +47,7 @@ Status OptimizerConfig::validate() const {
   if (!positive(v_max)) return err("v_max", "must be finite and > 0");
   if (!positive(a_max)) return err("a_max", "must be finite and > 0");
   if (!positive(yaw_rate_max)) return err("yaw_rate_max", "must be finite and > 0");
+  if (!positive(yaw_acc_max)) return err("yaw_acc_max", "must be finite and > 0");
   if (!(feasibility_margin > 0.0 && feasibility_margin <= 1.0))
     return err("feasibility_margin", "must be in (0, 1]");
   if (!non_negative(limit_tolerance)) return err("limit_tolerance", "must be finite and >= 0");
@@ -342,40 +343,23 @@ Result<UniformBspline> optimize(const UniformBspline& init, const map::Esdf& esd
   return result;
 }
 
-Result<UniformBspline> optimizeYaw(const std::vector<double>& waypoint_yaws, double duration,
-                                   double start_rate, const OptimizerConfig& config) {
+Result<UniformBspline> yawTurn(double yaw0, double yaw1, double min_duration, const OptimizerConfig& config) {
   if (Status s = config.validate(); !s) return s;
-  if (waypoint_yaws.size() < 2)
-    return Result<UniformBspline>::Error("optimizeYaw: needs at least 2 waypoints");
-  if (!positive(duration))
-    return Result<UniformBspline>::Error("optimizeYaw: duration must be finite and > 0");
-  const double accepted = config.yaw_rate_max * (1.0 + config.limit_tolerance);
-  if (!(std::abs(start_rate) <= accepted))
-    return Result<UniformBspline>::Error("optimizeYaw: start rate " + num(start_rate) +
-                                         " rad/s exceeds yaw_rate_max");
-  const int k = static_cast<int>(waypoint_yaws.size());
-  Eigen::MatrixXd yaws(1, k);
-  double largest_step = 0.0;
-  for (int i = 0; i < k; ++i) {
-    if (!std::isfinite(waypoint_yaws[i]))
-      return Result<UniformBspline>::Error("optimizeYaw: non-finite waypoint");
-    yaws(0, i) =
-        i == 0 ? waypoint_yaws[0] : yaws(0, i - 1) + wrapAngle(waypoint_yaws[i] - waypoint_yaws[i - 1]);
-    if (i > 0) largest_step = std::max(largest_step, std::abs(yaws(0, i) - yaws(0, i - 1)));
-  }
-  // No knot span shorter than the one that turns the largest step at the limit can work.
-  double dt = std::max(duration / (k - 1), largest_step / config.yaw_rate_max);
-  const Eigen::VectorXd v0 = Eigen::VectorXd::Constant(1, start_rate), v1 = Eigen::VectorXd::Zero(1);
-  constexpr int kMaxStretches = 40;
-  double rate = 0.0;
-  for (int attempt = 0; attempt < kMaxStretches; ++attempt) {
-    UniformBspline spline = UniformBspline::fitPath(yaws, dt, v0, v1, kDegree);
-    rate = spline.maxDerivativeNorm(1, 32);
-    if (rate <= config.yaw_rate_max || (attempt + 1 == kMaxStretches && rate <= accepted)) return spline;
-    dt *= std::max(1.05, rate / config.yaw_rate_max);
-  }
-  return Result<UniformBspline>::Error("optimizeYaw: yaw rate " + num(rate) +
-                                       " rad/s still above yaw_rate_max");
+  if (!std::isfinite(yaw0) || !std::isfinite(yaw1) || !std::isfinite(min_duration))
+    return Result<UniformBspline>::Error("yawTurn: yaws and min_duration must be finite");
+  const double turn = std::remainder(yaw1 - yaw0, 2.0 * M_PI);
+  // Control points: yaw0 three times (start at rest), m equal steps, yaw1 three times (end at rest).
+  // The rate's control values are then 0, 0, turn / (m dt) (m times), 0, 0; the acceleration's are
+  // steps of that over dt. The span that reaches yaw_rate_max at yaw_acc_max is yaw_rate_max / yaw_acc_max.
+  double dt = config.yaw_rate_max / config.yaw_acc_max;
+  const int m = std::max(1, static_cast<int>(std::ceil(std::abs(turn) / (config.yaw_rate_max * dt) - 1e-9)));
+  const int spans = m + 2;
+  dt = std::max(dt, min_duration / spans);
+  Eigen::MatrixXd q(1, m + 5);
+  q(0, 0) = q(0, 1) = yaw0;
+  for (int i = 0; i <= m; ++i) q(0, 2 + i) = yaw0 + turn * i / m;
+  q(0, m + 3) = q(0, m + 4) = yaw0 + turn;
+  return UniformBspline(q, kDegree, dt);
 }
 
 }  // namespace go_feap::trajectory

@@ -34,27 +34,15 @@ common::Status TrajectoryPlannerConfig::validate() const {
   if (!positive(cruise_fraction) || cruise_fraction > 1.0)
     return common::Status::Error("planner: cruise_fraction must be in (0, 1]");
   if (max_refits < 0) return common::Status::Error("planner: max_refits must be >= 0");
+  if (!std::isfinite(horizon) || horizon < 0.0) return common::Status::Error("planner: horizon must be finite and >= 0");
+  if (!std::isfinite(max_slowdown) || max_slowdown < 1.0)
+    return common::Status::Error("planner: max_slowdown must be finite and >= 1");
   if (!std::isfinite(snap_radius) || snap_radius < 0.0)
     return common::Status::Error("planner: snap_radius must be finite and >= 0");
   if (!std::isfinite(goal_tolerance) || goal_tolerance < 0.0)
     return common::Status::Error("planner: goal_tolerance must be finite and >= 0");
   return common::Status::Ok();
 }
-
-namespace {
-
-// Yaw spline over `duration` from yaw0 to yaw1; when the yaw-rate limit cannot be met, the heading is
-// kept (report->yaw_fallback).
-common::Result<UniformBspline> yawSpline(double yaw0, double yaw1, double duration, const OptimizerConfig& optimizer,
-                                         PlanReport* report) {
-  duration = std::max(0.1, duration);
-  auto yaw = optimizeYaw({yaw0, yaw1}, duration, 0.0, optimizer);
-  if (yaw) return yaw;
-  if (report) report->yaw_fallback = true;
-  return optimizeYaw({yaw0, yaw0}, duration, 0.0, optimizer);
-}
-
-}  // namespace
 
 bool staysFlyable(const UniformBspline& spline, const planning::Astar& astar, double min_distance,
                   double exempt_radius) {
@@ -83,8 +71,9 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
   auto turnInPlace = [&]() -> R {
     Trajectory out;
     out.position = safeStop(request.start, request.velocity, optimizer.a_max);
+    out.goal = request.target;
     rep.path_status = planning::PathStatus::kFound;
-    auto yaw = yawSpline(request.yaw, request.target_yaw, out.position.duration(), optimizer, &rep);
+    auto yaw = yawTurn(request.yaw, request.target_yaw, out.position.duration(), optimizer);
     if (!yaw) return R::Error("yaw spline failed: " + yaw.message());
     out.yaw = std::move(yaw).value();
     return out;
@@ -111,6 +100,24 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
     points = {request.start, request.target};
     length = (request.target - request.start).norm();
   }
+  bool partial = false;
+  if (config.horizon > 0.0 && length > config.horizon) {
+    // Keep the first `horizon` metres of the polyline.
+    std::vector<Vec3> kept{points.front()};
+    double along = 0.0;
+    for (std::size_t i = 1; i < points.size(); ++i) {
+      const double seg = (points[i] - points[i - 1]).norm();
+      if (along + seg >= config.horizon) {
+        kept.push_back(points[i - 1] + (points[i] - points[i - 1]) * ((config.horizon - along) / seg));
+        break;
+      }
+      kept.push_back(points[i]);
+      along += seg;
+    }
+    points = std::move(kept);
+    length = config.horizon;
+    partial = true;
+  }
   // At least 6 segments, however short the hop: the optimiser needs 7 control points.
   const double spacing = std::min(config.path_spacing, length / 6.0);
   const auto samples = UniformBspline::resamplePolyline(points, spacing);
@@ -120,6 +127,7 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
   const double total = std::max({length / (config.cruise_fraction * optimizer.v_max),
                                  2.5 * std::sqrt(length / optimizer.a_max), v0 / optimizer.a_max + 0.5});
   double dt = total / static_cast<double>(std::max<std::size_t>(1, samples.size() - 1));
+  const double first_dt = dt;
   common::Result<UniformBspline> spline = common::Result<UniformBspline>::Error("not planned");
   // The optimiser checks min_clearance along the curve; a voxel's centre may be half a diagonal farther.
   const double voxel_clearance = optimizer.min_clearance - 0.5 * std::sqrt(3.0) * astar.geometry().resolution();
@@ -144,12 +152,17 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
     }
     const double f = std::max({1.5, init.maxVelocity() / (0.9 * optimizer.v_max),
                                std::sqrt(init.maxAcceleration() / (0.9 * optimizer.a_max))});
-    dt *= std::min(f, 4.0);
+    // Slowing down mends broken limits, not clearance: a crawl (a 26 m path in 145 s was seen) is a
+    // failure, so that the frontier counts a failed attempt instead of holding the vehicle for minutes.
+    if (dt >= first_dt * config.max_slowdown) break;
+    dt = std::min(dt * std::min(f, 4.0), first_dt * config.max_slowdown);
   }
   if (!spline) return R::Error("optimisation failed: " + spline.message());
   Trajectory out;
   out.position = std::move(spline).value();
-  auto yaw = yawSpline(request.yaw, request.target_yaw, out.position.duration(), optimizer, &rep);
+  out.goal = request.target;
+  out.partial = partial;
+  auto yaw = yawTurn(request.yaw, request.target_yaw, out.position.duration(), optimizer);
   if (!yaw) return R::Error("yaw spline failed: " + yaw.message());
   out.yaw = std::move(yaw).value();
   return out;
@@ -158,8 +171,9 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
 Trajectory stopTrajectory(const Vec3& p, const Vec3& v, double yaw, const OptimizerConfig& optimizer) {
   Trajectory out;
   out.position = safeStop(p, v, optimizer.a_max);
-  auto y = optimizeYaw({yaw, yaw}, std::max(0.1, out.position.duration()), 0.0, optimizer);
-  // A constant yaw always meets the rate limit; keep a valid spline even if it did not.
+  out.goal = out.position.position(out.position.duration());
+  auto y = yawTurn(yaw, yaw, out.position.duration(), optimizer);
+  // yawTurn fails only on a non-finite yaw or an invalid config: keep a valid spline even then.
   out.yaw = y ? std::move(y).value() : UniformBspline(Eigen::MatrixXd::Constant(1, 4, yaw), 3, 0.1);
   return out;
 }
@@ -172,13 +186,13 @@ ReplanReason replanReason(const Trajectory* current, double t, const Vec3& targe
   if (current) {
     in.has_trajectory = true;
     in.time_left = current->duration() - t;
-    in.target_distance_to_end = (current->position.position(current->duration()) - target).norm();
+    in.target_distance_to_end = (current->goal - target).norm();
     in.collision_time =
         firstCollisionTime(current->position, std::max(0.0, t), esdf, optimizer.min_clearance, config.collision_horizon);
   }
   const ReplanReason reason = shouldReplan(in, replan);
   // A trajectory that ends at its target needs no replanning for running out: it arrives.
-  const bool ends_at_target = current && in.target_distance_to_end <= replan.target_tolerance;
+  const bool ends_at_target = current && !current->partial && in.target_distance_to_end <= replan.target_tolerance;
   if (ends_at_target && reason == ReplanReason::kShortTimeLeft) return ReplanReason::kNone;
   return reason;
 }

@@ -374,41 +374,48 @@ TEST(BsplineOptimizer, KeepsMovingBoundaryStates) {
 // ---------------------------------------------------------------------------------------------------------
 // Yaw.
 
-TEST(YawSpline, InterpolatesUnwrappedWaypointsWithinTheRateLimit) {
+TEST(YawSpline, TurnsTheShortWayInNearlyTheLeastTimeWithinTheLimits) {
   OptimizerConfig config = optimizerConfig();
   Rng rng(21);
-  for (int trial = 0; trial < 50; ++trial) {
+  for (int trial = 0; trial < 200; ++trial) {
     config.yaw_rate_max = rng(0.5, 2.0);
-    std::vector<double> yaws;
-    const int k = rng.integer(2, 6);
-    for (int i = 0; i < k; ++i) yaws.push_back(rng(-kPi, kPi));
-    const double duration = rng(0.2, 5.0);
-    const double start_rate = rng(-1.0, 1.0) * config.yaw_rate_max;
-    const auto r = traj::optimizeYaw(yaws, duration, start_rate, config);
+    config.yaw_acc_max = rng(2.0, 10.0);
+    const double yaw0 = rng(-kPi, kPi), yaw1 = rng(-kPi, kPi);
+    const double min_duration = trial % 2 ? rng(0.1, 6.0) : 0.0;
+    const auto r = traj::yawTurn(yaw0, yaw1, min_duration, config);
     ASSERT_TRUE(r.ok()) << r.message();
     const UniformBspline& s = *r;
-    EXPECT_EQ(s.dimension(), 1);
-    EXPECT_GE(s.duration(), duration - 1e-9);
-    const double dt = s.knotSpan();
-    for (int i = 0; i < k; ++i) {
-      EXPECT_NEAR(std::remainder(s.value(i * dt)[0] - yaws[i], 2 * kPi), 0.0, 1e-6);
-      if (i > 0) {
-        EXPECT_LE(std::abs(s.value(i * dt)[0] - s.value((i - 1) * dt)[0]), kPi + 1e-9);
-      }
+    ASSERT_EQ(s.dimension(), 1);
+    EXPECT_GE(s.duration(), min_duration - 1e-9);
+    // Starts and ends at the yaws, at rest, turning the short way (|turn| <= pi).
+    const double turn = std::remainder(yaw1 - yaw0, 2 * kPi);
+    EXPECT_NEAR(s.value(0.0)[0], yaw0, 1e-9);
+    EXPECT_NEAR(s.value(s.duration())[0], yaw0 + turn, 1e-9);
+    EXPECT_NEAR(s.evaluate(0.0, 1)[0], 0.0, 1e-9);
+    EXPECT_NEAR(s.evaluate(s.duration(), 1)[0], 0.0, 1e-9);
+    // Rate and acceleration by central differences, densely sampled, within the limits.
+    double rate = 0.0, acc = 0.0;
+    const double h = 1e-4;
+    for (int j = 0; j <= 4000; ++j) {
+      const double t = std::clamp(s.duration() * j / 4000, h, s.duration() - h);
+      const double a = s.value(t - h)[0], b = s.value(t)[0], c = s.value(t + h)[0];
+      rate = std::max(rate, std::abs(c - a) / (2 * h));
+      acc = std::max(acc, std::abs(c - 2 * b + a) / (h * h));
+      EXPECT_LE(std::abs(b - yaw0), std::abs(turn) + 1e-9);  // no overshoot
     }
-    EXPECT_NEAR(s.evaluate(0.0, 1)[0], start_rate, 1e-6);
-    EXPECT_NEAR(s.evaluate(s.duration(), 1)[0], 0.0, 1e-6);
-    double rate = 0.0;
-    const double h = 1e-5;
-    for (int j = 0; j <= 5000; ++j) {
-      const double t = std::clamp(s.duration() * j / 5000, h, s.duration() - h);
-      rate = std::max(rate, std::abs(s.value(t + h)[0] - s.value(t - h)[0]) / (2 * h));
+    EXPECT_LE(rate, config.yaw_rate_max * (1 + 1e-6)) << "trial " << trial;
+    EXPECT_LE(acc, config.yaw_acc_max * 1.01) << "trial " << trial;
+    // Without a minimum duration it is close to the bang-coast-bang optimum: at most one span of ramp
+    // at each end plus one span of rounding beyond |turn| / rate + rate / acc.
+    if (min_duration == 0.0) {
+      const double span = config.yaw_rate_max / config.yaw_acc_max;
+      EXPECT_LE(s.duration(), std::abs(turn) / config.yaw_rate_max + 3 * span + 1e-9) << "trial " << trial;
     }
-    EXPECT_LE(rate, config.yaw_rate_max * 1.05) << "trial " << trial;
   }
-  EXPECT_FALSE(traj::optimizeYaw({0.0}, 1.0, 0.0, config).ok());
-  EXPECT_FALSE(traj::optimizeYaw({0.0, 1.0}, 1.0, 3.0 * config.yaw_rate_max, config).ok());
-  EXPECT_FALSE(traj::optimizeYaw({0.0, 1.0}, 0.0, 0.0, config).ok());
+  EXPECT_FALSE(traj::yawTurn(std::nan(""), 1.0, 0.0, config).ok());
+  EXPECT_FALSE(traj::yawTurn(0.0, 1.0, std::numeric_limits<double>::infinity(), config).ok());
+  config.yaw_acc_max = 0.0;
+  EXPECT_FALSE(traj::yawTurn(0.0, 1.0, 0.0, config).ok());
 }
 
 // ---------------------------------------------------------------------------------------------------------
@@ -550,6 +557,56 @@ TEST(TrajectoryPlanner, HopsOfEveryLengthReachTheTargetWithinTheLimits) {
     }
   }
   EXPECT_EQ(plans, 60);
+}
+
+// A path longer than the horizon is flown only that far along it (partial, the goal kept), and such a
+// trajectory is replanned when little time is left on it, while one that ends at its goal is not; a goal
+// farther than target_tolerance from the target is a new target. Without a horizon the whole corridor is
+// flown, no slower than max_slowdown times the first timing.
+TEST(TrajectoryPlanner, LongPathsAreFlownToTheHorizonAndReplannedOnTheWay) {
+  World world(Vec3(20, 4, 3));
+  const Index3 dims = world.geo().dims();
+  world.addBox(Index3(0, 0, 0), Index3(dims.x() - 1, dims.y() - 1, 0));
+  world.addBox(Index3(0, 0, dims.z() - 1), Index3(dims.x() - 1, dims.y() - 1, dims.z() - 1));
+  world.sync();
+  AstarConfig astar_config;
+  astar_config.unknown_is_free = true;
+  const Astar astar(world.occupancy(), world.esdf(), astar_config);
+  const OptimizerConfig optimizer = optimizerConfig();
+  traj::TrajectoryPlannerConfig planner;
+  planner.horizon = 6.0;
+  const ReplanConfig replan;
+  traj::PlanRequest request;
+  request.start = Vec3(1.0, 2.0, 1.5);
+  request.target = Vec3(18.0, 2.0, 1.5);
+  request.yaw = 0.0;
+  request.target_yaw = 0.5;
+  const auto partial = traj::planTrajectory(request, astar, world.esdf(), optimizer, planner);
+  ASSERT_TRUE(partial) << partial.message();
+  EXPECT_TRUE(partial->partial);
+  EXPECT_LT((partial->goal - request.target).norm(), 1e-12);
+  const Vec3 end = partial->position.position(partial->duration());
+  EXPECT_NEAR((end - request.start).norm(), planner.horizon, 0.5 * std::sqrt(3.0) * kRes);
+  double v = 0.0, a = 0.0;
+  finiteDifferenceDynamics(partial->position, 2000, v, a);
+  EXPECT_LE(v, 1.05 * optimizer.v_max);
+  EXPECT_LE(a, 1.05 * optimizer.a_max);
+  const double late = partial->duration() - 0.5 * replan.min_time_left;
+  auto reason = [&](const traj::Trajectory& t, double at, const Vec3& target) {
+    return traj::replanReason(&t, at, target, false, world.esdf(), replan, optimizer, planner);
+  };
+  EXPECT_EQ(reason(*partial, 0.5, request.target), ReplanReason::kNone);
+  EXPECT_EQ(reason(*partial, late, request.target), ReplanReason::kShortTimeLeft);
+  EXPECT_EQ(reason(*partial, 0.5, request.target + Vec3(0, 0.5, 0)), ReplanReason::kNewTarget);
+
+  planner.horizon = 0.0;
+  const auto whole = traj::planTrajectory(request, astar, world.esdf(), optimizer, planner);
+  ASSERT_TRUE(whole) << whole.message();
+  EXPECT_FALSE(whole->partial);
+  EXPECT_LT((whole->position.position(whole->duration()) - request.target).norm(), 0.5 * std::sqrt(3.0) * kRes);
+  EXPECT_EQ(reason(*whole, whole->duration() - 0.5 * replan.min_time_left, request.target), ReplanReason::kNone);
+  const double length = (request.target - request.start).norm();
+  EXPECT_LE(whole->duration(), planner.max_slowdown * length / (planner.cruise_fraction * optimizer.v_max) + 1e-9);
 }
 
 // staysFlyable(): a spline through mapped free space passes; the same spline fails once a voxel it

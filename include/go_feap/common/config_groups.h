@@ -98,6 +98,7 @@ void readOptimizer(R& p, trajectory::OptimizerConfig& o) {
   p.get("optimizer/lambda_feasibility", o.lambda_feasibility).get("optimizer/lambda_time", o.lambda_time);
   p.get("optimizer/clearance", o.clearance).get("optimizer/min_clearance", o.min_clearance);
   p.get("optimizer/v_max", o.v_max).get("optimizer/a_max", o.a_max).get("optimizer/yaw_rate_max", o.yaw_rate_max);
+  p.get("optimizer/yaw_acc_max", o.yaw_acc_max);
   p.get("optimizer/feasibility_margin", o.feasibility_margin).get("optimizer/limit_tolerance", o.limit_tolerance);
   p.get("optimizer/max_iterations", o.max_iterations).get("optimizer/relative_tolerance", o.relative_tolerance);
   p.get("optimizer/min_knot_span", o.min_knot_span).get("optimizer/max_knot_span", o.max_knot_span);
@@ -114,6 +115,7 @@ void readTrajectoryPlanner(R& p, trajectory::TrajectoryPlannerConfig& c) {
   p.get("planner/path_spacing", c.path_spacing).get("planner/collision_horizon", c.collision_horizon);
   p.get("planner/min_time_between_plans", c.min_time_between_plans);
   p.get("planner/cruise_fraction", c.cruise_fraction).get("planner/max_refits", c.max_refits);
+  p.get("planner/max_slowdown", c.max_slowdown).get("planner/horizon", c.horizon);
   p.get("planner/snap_radius", c.snap_radius).get("planner/goal_tolerance", c.goal_tolerance);
 }
 

@@ -22,7 +22,8 @@ struct OptimizerConfig {
   double min_clearance = 0.2;  ///< m, hard limit: a result whose sampled curve comes closer fails
   double v_max = 2.0;          ///< m/s
   double a_max = 2.0;          ///< m/s^2
-  double yaw_rate_max = 1.0;   ///< rad/s (optimizeYaw)
+  double yaw_rate_max = 1.0;   ///< rad/s (yawTurn)
+  double yaw_acc_max = 5.0;    ///< rad/s^2, how fast the yaw rate may rise and fall (yawTurn)
   /// Share of v_max / a_max the penalties aim at, leaving room for the small excess a penalty allows.
   double feasibility_margin = 0.95;
   /// Accepted excess of the sampled speed, acceleration and yaw rate over their limits (0.05 = 5 %).
@@ -124,13 +125,12 @@ common::Status checkTrajectory(const UniformBspline& spline, const map::Esdf& es
 common::Result<UniformBspline> optimize(const UniformBspline& init, const map::Esdf& esdf,
                                         const OptimizerConfig& config, OptimizeStats* stats = nullptr);
 
-/// 1-D cubic yaw spline through `waypoint_yaws` (rad) placed at equal time steps over [0, duration],
-/// unwrapped so that consecutive waypoints differ by at most pi, starting with yaw rate start_rate and
-/// ending at rest. The knot span starts at duration / (waypoints - 1) and is stretched (the spline refitted)
-/// until the sampled yaw rate is within yaw_rate_max, so the result may last longer than `duration`. Fails
-/// on fewer than 2 waypoints, non-finite input, duration <= 0, |start_rate| above the accepted limit, or
-/// when no stretch meets the limit.
-common::Result<UniformBspline> optimizeYaw(const std::vector<double>& waypoint_yaws, double duration,
-                                           double start_rate, const OptimizerConfig& config);
+/// 1-D cubic yaw spline that turns from yaw0 to yaw1 the short way round (|turn| <= pi) in about the
+/// least time the limits allow: from rest, the rate rises to at most yaw_rate_max within one knot span
+/// (yaw acceleration at most yaw_acc_max), stays constant, and falls back to rest in the last span. The
+/// rate and acceleration bounds hold exactly (the derivatives lie in the hulls of their control values).
+/// It lasts at least min_duration (the turn is spread over it, slower). Fails on non-finite input or an
+/// invalid config.
+common::Result<UniformBspline> yawTurn(double yaw0, double yaw1, double min_duration, const OptimizerConfig& config);
 
 }  // namespace go_feap::trajectory

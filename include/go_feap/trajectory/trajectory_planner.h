@@ -19,6 +19,8 @@ namespace go_feap::trajectory {
 struct Trajectory {
   UniformBspline position;
   UniformBspline yaw;
+  Vec3 goal = Vec3::Zero();  ///< m, the target it was planned for (its end, unless partial)
+  bool partial = false;      ///< ends short of the goal, `horizon` along the path: replanned before its end
   double duration() const { return position.duration(); }
 };
 
@@ -42,6 +44,9 @@ struct TrajectoryPlannerConfig {
   double min_time_between_plans = 0.3;  ///< s
   double cruise_fraction = 0.6;         ///< share of v_max the initial timing assumes
   int max_refits = 4;                   ///< slower refits tried when the optimum breaks a limit
+  double max_slowdown = 3.0;            ///< no refit is slower than this many times the first timing
+  /// m: a longer path is flown only this far (a partial trajectory, replanned on the way; 0 = whole path)
+  double horizon = 8.0;
   double snap_radius = 1.0;             ///< m: a blocked start (or goal) moves to free space this close
   /// m: a path may end at most this far from the target (a goal that had to snap farther is blocked)
   double goal_tolerance = 0.3;
@@ -64,7 +69,6 @@ struct PlanReport {
   bool used_fit = false;       ///< the unoptimised (refitted) spline was kept: it passed the checks
   planning::PathStatus path_status = planning::PathStatus::kNoPath;
   double path_length = 0.0;    ///< m
-  bool yaw_fallback = false;   ///< the yaw spline could not reach the target yaw in time: heading kept
   int left_flyable = 0;        ///< optimised splines refused by staysFlyable()
 };
 
@@ -80,10 +84,13 @@ bool staysFlyable(const UniformBspline& spline, const planning::Astar& astar, do
 /// position brakes to rest there (safeStop) and the yaw spline turns to target_yaw. Otherwise: A* (known
 /// free space, the astar's clearance), spline fit through
 /// the resampled path starting exactly at request.start with request.velocity and ending at rest,
-/// optimize() (refitted slower up to max_refits times while the optimum or the fit breaks a limit or
-/// leaves flyable space, staysFlyable()),
-/// then optimizeYaw() from request.yaw to target_yaw over the position's duration. A target in the start's
-/// voxel (a one-voxel path) is flown to straight; a hop of any length gets at least 6 path segments. Errors name the
+/// optimize() (refitted slower up to max_refits times, and to at most max_slowdown times the first timing,
+/// while the optimum or the fit breaks a limit or leaves flyable space, staysFlyable()),
+/// then yawTurn() from request.yaw to target_yaw over at least the position's duration. A target in the start's
+/// voxel (a one-voxel path) is flown to straight; a hop of any length gets at least 6 path segments. A path
+/// longer than `horizon` is flown only that far along (Trajectory::partial; yaw still turns to target_yaw):
+/// long paths are replanned on the way, with what has been mapped since, and each optimisation stays small.
+/// Errors name the
 /// reason: no path (with the A* status), optimisation failure (with the last check's message).
 /// `astar` and `esdf` must describe the same map; the caller holds the map still while this runs.
 common::Result<Trajectory> planTrajectory(const PlanRequest& request, const planning::Astar& astar,
@@ -96,8 +103,9 @@ Trajectory stopTrajectory(const Vec3& p, const Vec3& v, double yaw, const Optimi
 
 /// The replanning decision for a trajectory being flown (DESIGN §3.7). `current` is null when none is
 /// flown; t is the time since its start; target_changed is the caller's own notion of a new target.
-/// A trajectory that ends at its target needs no replanning for running out of time: short time left is
-/// a reason only when its end is not the target.
+/// A new target is one farther than target_tolerance from the trajectory's goal. A trajectory that ends
+/// at its target needs no replanning for running out of time: short time left is a reason only for a
+/// partial one.
 ReplanReason replanReason(const Trajectory* current, double t, const Vec3& target, bool target_changed,
                           const map::Esdf& esdf, const ReplanConfig& replan, const OptimizerConfig& optimizer,
                           const TrajectoryPlannerConfig& config);
