@@ -73,7 +73,7 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
     out.position = safeStop(request.start, request.velocity, optimizer.a_max);
     out.goal = request.target;
     rep.path_status = planning::PathStatus::kFound;
-    auto yaw = yawTurn(request.yaw, request.target_yaw, out.position.duration(), optimizer);
+    auto yaw = yawTurn(request.yaw, request.target_yaw, 0.0, optimizer);
     if (!yaw) return R::Error("yaw spline failed: " + yaw.message());
     out.yaw = std::move(yaw).value();
     return out;
@@ -162,7 +162,9 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
   out.position = std::move(spline).value();
   out.goal = request.target;
   out.partial = partial;
-  auto yaw = yawTurn(request.yaw, request.target_yaw, out.position.duration(), optimizer);
+  // Turn at once: facing the viewpoint's way early, the camera may see its frontier (and the target be
+  // dropped) before the vehicle has to stop there.
+  auto yaw = yawTurn(request.yaw, request.target_yaw, 0.0, optimizer);
   if (!yaw) return R::Error("yaw spline failed: " + yaw.message());
   out.yaw = std::move(yaw).value();
   return out;

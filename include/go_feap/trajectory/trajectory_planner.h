@@ -86,7 +86,8 @@ bool staysFlyable(const UniformBspline& spline, const planning::Astar& astar, do
 /// the resampled path starting exactly at request.start with request.velocity and ending at rest,
 /// optimize() (refitted slower up to max_refits times, and to at most max_slowdown times the first timing,
 /// while the optimum or the fit breaks a limit or leaves flyable space, staysFlyable()),
-/// then yawTurn() from request.yaw to target_yaw over at least the position's duration. A target in the start's
+/// then yawTurn() from request.yaw to target_yaw, as fast as the limits allow (the camera faces the
+/// viewpoint's way early, so its frontier may be seen, and the target dropped, before the vehicle stops there). A target in the start's
 /// voxel (a one-voxel path) is flown to straight; a hop of any length gets at least 6 path segments. A path
 /// longer than `horizon` is flown only that far along (Trajectory::partial; yaw still turns to target_yaw):
 /// long paths are replanned on the way, with what has been mapped since, and each optimisation stays small.
