@@ -297,8 +297,15 @@ void ExplorationRun::trajectoryStep() {
   }
   log(std::string("plan to frontier ") + std::to_string(target_->frontier) + " failed (" + trajectory::toString(reason) +
       "): " + planned.message());
-  // A start the search cannot leave is the vehicle's predicament, not the frontier's fault.
-  if (report.path_status != planning::PathStatus::kStartBlocked) failed_.push_back(target_->frontier);
+  // A start the search cannot leave is the vehicle's predicament, not the frontier's fault: look
+  // around (towards the target first) and try the same target again when the turn is nearly done.
+  if (trajectory::startEnclosed(report, config_.planner, map_->geometry().resolution())) {
+    log("the start region cannot be left (" + std::to_string(report.path_expansions) +
+        " voxels reachable): looking around");
+    trajectory_ = trajectory::lookAroundTrajectory(request, config_.planner, config_.optimizer);
+    return;
+  }
+  failed_.push_back(target_->frontier);
   trajectory_ = trajectory::stopTrajectory(request.start, request.velocity, request.yaw, config_.optimizer);
   target_.reset();
 }

@@ -160,13 +160,19 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     ros_conv::publishComputeTime(compute_pub_, "trajectory", t_compute);
     if (!planned) {
       NODELET_WARN_STREAM(getName() << ": planning to frontier " << target_frontier_ << " failed ("
-                                    << trajectory::toString(reason) << "): " << planned.message() << "; stopping");
-      // A start the search cannot leave is the vehicle's predicament, not the frontier's fault.
-      if (report.path_status != planning::PathStatus::kStartBlocked) {
-        std_msgs::UInt32 failed;
-        failed.data = target_frontier_;
-        failed_pub_.publish(failed);
+                                    << trajectory::toString(reason) << "): " << planned.message());
+      // A start the search cannot leave is the vehicle's predicament, not the frontier's fault: look
+      // around (towards the target first) and try the same target again when the turn is nearly done.
+      if (trajectory::startEnclosed(report, planner_, astar_->geometry().resolution())) {
+        NODELET_WARN_STREAM(getName() << ": the start region cannot be left (" << report.path_expansions
+                                      << " voxels reachable): looking around");
+        publish(now, trajectory::lookAroundTrajectory(request, planner_, optimizer_));
+        return;
       }
+      NODELET_WARN_STREAM(getName() << ": stopping; frontier " << target_frontier_ << " counts a failed attempt");
+      std_msgs::UInt32 failed;
+      failed.data = target_frontier_;
+      failed_pub_.publish(failed);
       publish(now, trajectory::stopTrajectory(request.start, request.velocity, request.yaw, optimizer_));
       target_.reset();  // wait for a new target
       return;

@@ -168,6 +168,11 @@ bool Astar::traversable(const Index3& idx, std::size_t linear) const {
   return freeAndKnown(idx, linear, true) && esdf_.distance(idx) >= blocked_below_;
 }
 
+bool Astar::traversableNearStart(const Index3& idx, std::size_t linear) const {
+  if ((idx.array() < box_lo_.array()).any() || (idx.array() > box_hi_.array()).any()) return false;
+  return freeAndKnown(idx, linear, false) && esdf_.distance(idx) >= blocked_below_;
+}
+
 bool Astar::freeAndKnown(const Index3& idx, std::size_t linear, bool surroundings) const {
   const VoxelState state = occupancy_.stateAt(linear);
   if (state == VoxelState::kOccupied) return false;
@@ -183,11 +188,14 @@ bool Astar::freeAndKnown(const Index3& idx, std::size_t linear, bool surrounding
   return true;
 }
 
-bool Astar::snap(const Vec3& p, double radius, Index3& out) const {
+bool Astar::snap(const Vec3& p, double radius, Index3& out, bool near_start) const {
   if (!p.allFinite() || !(radius >= 0.0)) return false;
+  auto pass = [&](const Index3& idx) {
+    return near_start ? geo_.inside(idx) && traversableNearStart(idx, geo_.linear(idx)) : traversable(idx);
+  };
   if (geo_.bounds().contains(p)) {
     const Index3 own = geo_.coordToIndex(p);
-    if (traversable(own)) {
+    if (pass(own)) {
       out = own;
       return true;
     }
@@ -210,7 +218,7 @@ bool Astar::snap(const Vec3& p, double radius, Index3& out) const {
     for (idx.y() = lo.y(); idx.y() <= hi.y(); ++idx.y())
       for (idx.x() = lo.x(); idx.x() <= hi.x(); ++idx.x()) {
         const double d2 = (geo_.indexToCoord(idx) - p).squaredNorm();
-        if (d2 <= r2 && d2 < best && traversable(idx)) {
+        if (d2 <= r2 && d2 < best && pass(idx)) {
           best = d2;
           out = idx;
         }
@@ -386,7 +394,7 @@ std::size_t Astar::brick(std::uint32_t key) const {
 PathResult Astar::search(const Vec3& start, const Vec3& goal, double snap_radius) const {
   PathResult result;
   Index3 s, g;
-  if (!snap(start, snap_radius, s)) {
+  if (!snap(start, snap_radius, s, true)) {
     result.status = PathStatus::kStartBlocked;
     return result;
   }
@@ -395,6 +403,9 @@ PathResult Astar::search(const Vec3& start, const Vec3& goal, double snap_radius
     return result;
   }
   const Neighbourhood& nb = neighbourhood();
+  // Voxels (in squared voxel units) within snap_radius of the start: no known-surroundings rule there.
+  const double exempt_voxels = snap_radius / geo_.resolution();
+  const int exempt2 = static_cast<int>(std::floor(exempt_voxels * exempt_voxels));
   const double w_extra = config_.tie_breaker - 1.0;
 
   // f = cost + heuristic is computed from summed move counts so that equal costs give bit-identical f
@@ -451,7 +462,11 @@ PathResult Astar::search(const Vec3& start, const Vec3& goal, double snap_radius
       if (!geo_.inside(q)) continue;
       cell[k] = cellOf(q);
       std::int32_t& c = cells_[cell[k]];
-      if (c == kCellUnseen) c = traversable(q, geo_.linear(q)) ? kCellFree : kCellBlocked;
+      if (c == kCellUnseen) {
+        const std::size_t linear = geo_.linear(q);
+        const bool pass = (q - s).squaredNorm() <= exempt2 ? traversableNearStart(q, linear) : traversable(q, linear);
+        c = pass ? kCellFree : kCellBlocked;
+      }
       if (c != kCellBlocked) free |= std::uint32_t{1} << k;  // kCellClosed voxels are traversable too
     }
     for (int k = 0; k < 26; ++k) {

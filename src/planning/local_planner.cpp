@@ -41,6 +41,7 @@ Status LocalPlannerConfig::validate() const {
   if (!(same_target_distance >= 0.0 && std::isfinite(same_target_distance)))
     return err("same_target_distance", "must be finite and >= 0");
   if (!(same_target_yaw >= 0.0 && std::isfinite(same_target_yaw))) return err("same_target_yaw", "must be finite and >= 0");
+  if (!(reached_speed > 0.0 && std::isfinite(reached_speed))) return err("reached_speed", "must be finite and > 0");
   if (!(scan_step > 0.0 && scan_step < 3.14159)) return err("scan_step", "must be in (0, pi)");
   return Status::Ok();
 }
@@ -214,7 +215,7 @@ frontier::Viewpoint scanTarget(const common::Vec3& position, double yaw, const L
 bool targetReached(const common::Vec3& position, double yaw, double speed, const frontier::Viewpoint& target,
                    const LocalPlannerConfig& config) {
   return (position - target.position).norm() <= config.same_target_distance &&
-         std::abs(wrapAngle(yaw - target.yaw)) <= config.same_target_yaw && speed < 0.1;
+         std::abs(wrapAngle(yaw - target.yaw)) <= config.same_target_yaw && speed < config.reached_speed;
 }
 
 TargetDecision decideTarget(const CurrentTarget* current, const frontier::Viewpoint& proposal, double proposal_cost,

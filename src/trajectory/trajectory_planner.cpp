@@ -33,6 +33,8 @@ common::Status TrajectoryPlannerConfig::validate() const {
     return common::Status::Error("planner: min_time_between_plans must be finite and >= 0");
   if (!positive(cruise_fraction) || cruise_fraction > 1.0)
     return common::Status::Error("planner: cruise_fraction must be in (0, 1]");
+  if (!std::isfinite(enclosed_turn) || enclosed_turn <= 0.0 || enclosed_turn > M_PI)
+    return common::Status::Error("planner: enclosed_turn must be in (0, pi]");
   if (max_refits < 0) return common::Status::Error("planner: max_refits must be >= 0");
   if (!std::isfinite(horizon) || horizon < 0.0) return common::Status::Error("planner: horizon must be finite and >= 0");
   if (!std::isfinite(max_slowdown) || max_slowdown < 1.0)
@@ -81,6 +83,7 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
   if ((request.target - request.start).norm() < 0.5 * astar.geometry().resolution()) return turnInPlace();
   const planning::PathResult path = astar.search(request.start, request.target, config.snap_radius);
   rep.path_status = path.status;
+  rep.path_expansions = path.expansions;
   if (path.status != planning::PathStatus::kFound)
     return R::Error(std::string("no path: ") + planning::toString(path.status));
   rep.path_length = path.length;
@@ -177,6 +180,31 @@ Trajectory stopTrajectory(const Vec3& p, const Vec3& v, double yaw, const Optimi
   auto y = yawTurn(yaw, yaw, out.position.duration(), optimizer);
   // yawTurn fails only on a non-finite yaw or an invalid config: keep a valid spline even then.
   out.yaw = y ? std::move(y).value() : UniformBspline(Eigen::MatrixXd::Constant(1, 4, yaw), 3, 0.1);
+  return out;
+}
+
+bool startEnclosed(const PlanReport& report, const TrajectoryPlannerConfig& config, double resolution) {
+  if (report.path_status == planning::PathStatus::kStartBlocked) return true;
+  if (report.path_status != planning::PathStatus::kNoPath) return false;
+  const double r = config.snap_radius / resolution;
+  return report.path_expansions < 4.0 / 3.0 * M_PI * r * r * r;
+}
+
+Trajectory lookAroundTrajectory(const PlanRequest& request, const TrajectoryPlannerConfig& config,
+                                const OptimizerConfig& optimizer) {
+  Trajectory out;
+  out.position = safeStop(request.start, request.velocity, optimizer.a_max);
+  const Vec3 to = request.target - request.start;
+  double yaw = std::atan2(to.y(), to.x());
+  if (to.head<2>().norm() < 1e-6 || std::abs(std::remainder(yaw - request.yaw, 2.0 * M_PI)) <= 0.25 * config.enclosed_turn)
+    yaw = request.yaw + config.enclosed_turn;
+  auto turn = yawTurn(request.yaw, yaw, out.position.duration(), optimizer);
+  out.yaw = turn ? std::move(turn).value() : UniformBspline(Eigen::MatrixXd::Constant(1, 4, request.yaw), 3, 0.1);
+  // At rest: hold still for as long as the turn takes (the replanning rule goes by the position's
+  // duration). Moving: brake; the next plan comes from wherever the braking has got to.
+  if (request.velocity.norm() < 1e-9) out.position = UniformBspline(request.start.replicate(1, 4), 3, out.yaw.duration());
+  out.goal = request.target;
+  out.partial = true;
   return out;
 }
 

@@ -635,3 +635,35 @@ TEST(Astar, ShortenKeepsCornersAroundObstacles) {
   EXPECT_EQ(trapped.status, PathStatus::kNoPath) << toString(trapped.status);
   EXPECT_TRUE(tight.shorten({}).empty());
 }
+
+// Within snap_radius of the start the known-surroundings rule is waived (the camera has not seen beside a
+// hovering vehicle): from a narrow known strip (unknown all around) into a known room, a start within
+// snap_radius of the room gets out, and every voxel of its path farther than that from the start obeys the
+// full rule; a start farther up the strip cannot leave, after expanding fewer voxels than the ball holds.
+TEST(Astar, KnownSurroundingsRuleIsWaivedNearTheStart) {
+  World world(Index3(60, 20, 20));
+  world.fill(VoxelState::kUnknown);
+  world.set(Index3(10, 9, 9), Index3(30, 11, 11), VoxelState::kFree);
+  world.set(Index3(30, 2, 2), Index3(55, 17, 17), VoxelState::kFree);
+  AstarConfig config = astarConfig(0.2, false);
+  config.known_clearance = true;
+  const Astar astar(world.occupancy(), world.esdf(), config);
+  const double snap_radius = 1.0;
+  const Vec3 goal = world.geo().indexToCoord(Index3(45, 10, 10));
+  const Index3 near_start(22, 10, 10);
+  EXPECT_FALSE(astar.traversable(near_start));  // its own surroundings are unknown
+  const PathResult out = astar.search(world.geo().indexToCoord(near_start), goal, snap_radius);
+  ASSERT_EQ(out.status, PathStatus::kFound) << toString(out.status);
+  EXPECT_EQ(out.raw_path.front(), world.geo().indexToCoord(near_start));  // not snapped away
+  for (const Vec3& p : out.raw_path) {
+    EXPECT_EQ(world.occupancy().state(p), VoxelState::kFree);
+    if ((p - out.raw_path.front()).norm() > snap_radius + 1e-9) {
+      EXPECT_TRUE(astar.traversable(world.geo().coordToIndex(p))) << p.transpose();
+    }
+  }
+  const PathResult stuck = astar.search(world.geo().indexToCoord(Index3(12, 10, 10)), goal, snap_radius);
+  EXPECT_EQ(stuck.status, PathStatus::kNoPath) << toString(stuck.status);
+  const double r = snap_radius / kRes;
+  EXPECT_LT(stuck.expansions, 4.0 / 3.0 * M_PI * r * r * r);
+  EXPECT_GT(stuck.expansions, 0);
+}

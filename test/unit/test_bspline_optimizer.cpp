@@ -609,6 +609,62 @@ TEST(TrajectoryPlanner, LongPathsAreFlownToTheHorizonAndReplannedOnTheWay) {
   EXPECT_LE(whole->duration(), planner.max_slowdown * length / (planner.cruise_fraction * optimizer.v_max) + 1e-9);
 }
 
+// A failed search is the vehicle's predicament when the start was blocked or the search ran dry inside
+// the snap_radius ball; then the vehicle turns in place towards the target (or on by enclosed_turn when it
+// already faces it), holding still for the whole turn, and retries the target before the turn ends.
+TEST(TrajectoryPlanner, EnclosedStartsLookAroundInsteadOfFailingTheTarget) {
+  const OptimizerConfig optimizer = optimizerConfig();
+  const traj::TrajectoryPlannerConfig planner;
+  const double res = 0.1;
+  const double ball = 4.0 / 3.0 * kPi * std::pow(planner.snap_radius / res, 3);
+  traj::PlanReport report;
+  report.path_status = PathStatus::kStartBlocked;
+  EXPECT_TRUE(traj::startEnclosed(report, planner, res));
+  report.path_status = PathStatus::kNoPath;
+  report.path_expansions = static_cast<int>(ball) - 1;
+  EXPECT_TRUE(traj::startEnclosed(report, planner, res));
+  report.path_expansions = static_cast<int>(ball) + 1;
+  EXPECT_FALSE(traj::startEnclosed(report, planner, res));
+  report.path_expansions = 10;
+  report.path_status = PathStatus::kBudgetExceeded;
+  EXPECT_FALSE(traj::startEnclosed(report, planner, res));
+  report.path_status = PathStatus::kGoalBlocked;
+  EXPECT_FALSE(traj::startEnclosed(report, planner, res));
+
+  traj::PlanRequest request;
+  request.start = Vec3(1.0, 2.0, 1.0);
+  request.yaw = 0.0;
+  request.target = Vec3(1.0, 5.0, 1.5);  // straight to the left: turn to pi/2
+  const traj::Trajectory look = traj::lookAroundTrajectory(request, planner, optimizer);
+  EXPECT_TRUE(look.partial);
+  EXPECT_LT((look.goal - request.target).norm(), 1e-12);
+  EXPECT_GE(look.duration(), look.yaw.duration() - 1e-9);
+  for (int i = 0; i <= 100; ++i) {
+    const traj::TrajectorySample s = traj::sampleTrajectory(look, look.duration() * i / 100);
+    EXPECT_LT((s.position - request.start).norm(), 1e-9);
+    EXPECT_LE(std::abs(s.yaw_dot), optimizer.yaw_rate_max * (1 + 1e-6));
+  }
+  EXPECT_NEAR(traj::sampleTrajectory(look, look.duration()).yaw, kPi / 2, 1e-9);
+  // Already facing the target: turn on by enclosed_turn.
+  request.yaw = kPi / 2 + 0.1;
+  const traj::Trajectory on = traj::lookAroundTrajectory(request, planner, optimizer);
+  EXPECT_NEAR(std::remainder(traj::sampleTrajectory(on, on.duration() + on.yaw.duration()).yaw - (request.yaw + planner.enclosed_turn), 2 * kPi), 0.0, 1e-9);
+  // Moving: it brakes (and the target is retried from wherever that ends).
+  request.velocity = Vec3(1.0, 0.0, 0.0);
+  const traj::Trajectory braking = traj::lookAroundTrajectory(request, planner, optimizer);
+  EXPECT_LT(traj::sampleTrajectory(braking, braking.duration()).velocity.norm(), 1e-9);
+  // The replanning rule retries the target shortly before the turn ends, not at once.
+  World world(Vec3(4, 4, 3));
+  world.sync();
+  const ReplanConfig replan;
+  auto reason = [&](double at) {
+    return traj::replanReason(&look, at, request.target, false, world.esdf(), replan, optimizer, planner);
+  };
+  ASSERT_GT(look.duration(), replan.min_time_left + 0.2);
+  EXPECT_EQ(reason(0.1), ReplanReason::kNone);
+  EXPECT_EQ(reason(look.duration() - 0.5 * replan.min_time_left), ReplanReason::kShortTimeLeft);
+}
+
 // staysFlyable(): a spline through mapped free space passes; the same spline fails once a voxel it
 // crosses is unknown, or lies within min_distance of the box's faces or of a mapped obstacle, except
 // within exempt_radius of its start.

@@ -286,6 +286,7 @@ TEST(TargetHysteresis, KeepsSwitchesAndReportsTargetsReachedInVain) {
   EXPECT_EQ(go_feap::planning::decideTarget(&cur, b, 3.0, 1.0, 10, c), TargetDecision::kSwitch);
   // Reached means close, facing it and slow.
   EXPECT_TRUE(go_feap::planning::targetReached(Vec3(0.1, 0, 1), 0.1, 0.05, a, c));
+  EXPECT_TRUE(go_feap::planning::targetReached(Vec3(0.1, 0, 1), 0.1, 0.9 * c.reached_speed, a, c));  // braking the last centimetres
   EXPECT_FALSE(go_feap::planning::targetReached(Vec3(0.1, 0, 1), 0.1, 0.5, a, c));
   EXPECT_FALSE(go_feap::planning::targetReached(Vec3(0.1, 0, 1), 1.0, 0.05, a, c));
   EXPECT_FALSE(go_feap::planning::targetReached(Vec3(1.0, 0, 1), 0.0, 0.0, a, c));

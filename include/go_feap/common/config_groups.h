@@ -90,6 +90,7 @@ void readLocal(R& p, planning::LocalPlannerConfig& l) {
   p.get("local/min_dist", l.min_dist).get("local/commit_time", l.commit_time);
   p.get("local/min_view_fraction", l.min_view_fraction).get("local/scan_step", l.scan_step);
   p.get("local/same_target_distance", l.same_target_distance).get("local/same_target_yaw", l.same_target_yaw);
+  p.get("local/reached_speed", l.reached_speed);
 }
 
 template <class R>
@@ -116,6 +117,7 @@ void readTrajectoryPlanner(R& p, trajectory::TrajectoryPlannerConfig& c) {
   p.get("planner/min_time_between_plans", c.min_time_between_plans);
   p.get("planner/cruise_fraction", c.cruise_fraction).get("planner/max_refits", c.max_refits);
   p.get("planner/max_slowdown", c.max_slowdown).get("planner/horizon", c.horizon);
+  p.get("planner/enclosed_turn", c.enclosed_turn);
   p.get("planner/snap_radius", c.snap_radius).get("planner/goal_tolerance", c.goal_tolerance);
 }
 

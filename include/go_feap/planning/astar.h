@@ -76,7 +76,11 @@ class Astar {
   /// a blocked voxel: every voxel around the edge or corner it passes through must be traversable too,
   /// so every segment of the raw path passes segmentTraversable(). A start or goal that is blocked
   /// or outside the grid is first moved to the nearest traversable voxel whose centre lies within
-  /// `snap_radius` metres of it (status kStartBlocked / kGoalBlocked when there is none). The heuristic is
+  /// `snap_radius` metres of it (status kStartBlocked / kGoalBlocked when there is none). Within snap_radius
+/// of the start the known-surroundings rule (config.known_clearance) is waived, as staysFlyable() waives
+/// it for trajectories: the camera has not seen beside or below a vehicle hovering there, and a vehicle
+/// that has only looked ahead (at the start, or after turning) could otherwise not leave at all; the
+/// voxels themselves must still be known free with the ESDF clearance. The heuristic is
   /// the exact obstacle-free cost on this lattice (the 3D octile distance, >= the Euclidean distance and
   /// still admissible), so open space costs few expansions. Stops with kBudgetExceeded after
   /// config.max_expansions expansions.
@@ -129,11 +133,13 @@ class Astar {
   };
 
   bool traversable(const Index3& idx, std::size_t linear) const;
+  /// traversable() without the known-surroundings rule: what a voxel near the search's start needs.
+  bool traversableNearStart(const Index3& idx, std::size_t linear) const;
   /// Not occupied, unknown only when config.unknown_is_free, and (with `surroundings` and
   /// config.known_clearance) the voxels config.clearance away along each axis known.
   bool freeAndKnown(const Index3& idx, std::size_t linear, bool surroundings) const;
   /// Nearest traversable voxel to p whose centre is within `radius` of it; false when none.
-  bool snap(const Vec3& p, double radius, Index3& out) const;
+  bool snap(const Vec3& p, double radius, Index3& out, bool near_start = false) const;
   void resetScratch() const;
   void heapUp(std::size_t i, const OpenEntry& e) const;
   /// Adds node e.node to the open list, or moves its entry to the (lower) f of e.

@@ -40,6 +40,9 @@ struct LocalPlannerConfig {
   /// m and rad: a proposal this close to the current target (position and yaw) is the same target.
   double same_target_distance = 0.3;
   double same_target_yaw = 0.3;
+  /// m/s: a vehicle this slow within same_target_distance and same_target_yaw of its target has reached
+  /// it (it is braking the last centimetres: the view from there is the view from the target)
+  double reached_speed = 0.4;
   /// rad: when no viewpoint can be planned (at the start, facing a wall, nothing known around), the
   /// vehicle turns in place by this much to look around (scanTarget()).
   double scan_step = 2.0943951023931953;
@@ -144,7 +147,8 @@ CurrentTarget assessTarget(const frontier::Viewpoint& target, double committed_a
 frontier::Viewpoint scanTarget(const common::Vec3& position, double yaw, const LocalPlannerConfig& config);
 
 /// The vehicle is at the target: within same_target_distance and same_target_yaw of it, and slower than
-/// 0.1 m/s (so the frame taken there has been integrated).
+/// reached_speed (braking the last centimetres; waiting for a full stop there cost about a second per
+/// viewpoint).
 bool targetReached(const common::Vec3& position, double yaw, double speed, const frontier::Viewpoint& target,
                    const LocalPlannerConfig& config);
 

@@ -47,6 +47,9 @@ struct TrajectoryPlannerConfig {
   double max_slowdown = 3.0;            ///< no refit is slower than this many times the first timing
   /// m: a longer path is flown only this far (a partial trajectory, replanned on the way; 0 = whole path)
   double horizon = 8.0;
+  /// rad: a vehicle that cannot leave its start region (startEnclosed()) and already faces its target
+  /// turns this much to look around
+  double enclosed_turn = 2.0944;
   double snap_radius = 1.0;             ///< m: a blocked start (or goal) moves to free space this close
   /// m: a path may end at most this far from the target (a goal that had to snap farther is blocked)
   double goal_tolerance = 0.3;
@@ -70,6 +73,7 @@ struct PlanReport {
   planning::PathStatus path_status = planning::PathStatus::kNoPath;
   double path_length = 0.0;    ///< m
   int left_flyable = 0;        ///< optimised splines refused by staysFlyable()
+  int path_expansions = 0;     ///< voxels the path search expanded
 };
 
 /// True when `spline`, sampled at most a quarter voxel apart, stays in voxels astar.traversableWith(.,
@@ -101,6 +105,20 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
 /// A trajectory that brakes from (p, v) at a_max to a stop and holds yaw: what is flown when
 /// planning fails.
 Trajectory stopTrajectory(const Vec3& p, const Vec3& v, double yaw, const OptimizerConfig& optimizer);
+
+/// True when a failed plan is the vehicle's predicament, not its target's fault: the search could not
+/// start (start blocked), or found no path after expanding fewer voxels than the ball of snap_radius
+/// around the start holds, i.e. the vehicle has seen too little around itself to leave (at the start, or
+/// stopped in the middle of a turn, it has looked one way only). Such a failure is not counted against
+/// the frontier; the vehicle looks around instead (lookAroundTrajectory()).
+bool startEnclosed(const PlanReport& report, const TrajectoryPlannerConfig& config, double resolution);
+
+/// What to fly when the start is enclosed: brake to a stop where the reference is and turn towards the
+/// target (the space towards it is what the search lacked), or, when already facing it (within
+/// enclosed_turn / 4), by enclosed_turn further. `goal` is the target and the trajectory is partial, so
+/// the replanning rule tries the target again shortly before the turn ends.
+Trajectory lookAroundTrajectory(const PlanRequest& request, const TrajectoryPlannerConfig& config,
+                                const OptimizerConfig& optimizer);
 
 /// The replanning decision for a trajectory being flown (DESIGN §3.7). `current` is null when none is
 /// flown; t is the time since its start; target_changed is the caller's own notion of a new target.
