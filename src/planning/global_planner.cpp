@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <queue>
 #include <string>
 
 #include "go_feap/planning/tour_solver.h"
@@ -57,8 +58,27 @@ Result<GlobalTour> planTour(const std::vector<FrontierSummary>& frontiers, const
   if (Status s = config.validate(); !s) return s;
   constexpr double kUnreachable = std::numeric_limits<double>::infinity();
   std::vector<double> from_uav(frontiers.size(), kUnreachable);
-  for (std::size_t j = 0; j < frontiers.size(); ++j)
-    if (frontiers[j].active) from_uav[j] = distances.from_uav(j);
+  if (!distances.from_uav_lower_bound) {
+    for (std::size_t j = 0; j < frontiers.size(); ++j)
+      if (frontiers[j].active) from_uav[j] = distances.from_uav(j);
+  } else {
+    // In increasing lower bound; a frontier whose bound reaches the n_max_tsp-th smallest distance found
+    // so far cannot be among the n_max_tsp nearest, nor can any after it: it stays unreachable here.
+    std::vector<std::pair<double, std::size_t>> order;
+    for (std::size_t j = 0; j < frontiers.size(); ++j)
+      if (frontiers[j].active) order.emplace_back(distances.from_uav_lower_bound(j), j);
+    std::stable_sort(order.begin(), order.end(),
+                     [](const auto& a, const auto& b) { return a.first < b.first; });
+    const auto cap = static_cast<std::size_t>(std::max(config.n_max_tsp, 0));
+    std::priority_queue<double> nearest;  // the cap smallest distances found, largest on top
+    for (const auto& [bound, j] : order) {
+      if (cap == 0 || (nearest.size() == cap && bound >= nearest.top())) break;
+      from_uav[j] = distances.from_uav(j);
+      if (!(from_uav[j] >= 0.0 && std::isfinite(from_uav[j]))) continue;
+      nearest.push(from_uav[j]);
+      if (nearest.size() > cap) nearest.pop();
+    }
+  }
   const std::vector<std::size_t> candidates = selectCandidates(frontiers, from_uav, config);
 
   const int n = static_cast<int>(candidates.size());

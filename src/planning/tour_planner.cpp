@@ -30,6 +30,7 @@ common::Result<GlobalTour> TourPlanner::plan(const std::vector<FrontierSummary>&
     local_fallbacks += pd.euclidean_fallback;
     return pd.metres;
   };
+  d.from_uav_lower_bound = [&](std::size_t j) { return (frontiers[j].average - uav).norm(); };
   d.between = [&](std::size_t i, std::size_t j) {
     const auto key = std::make_pair(frontiers[i].id, frontiers[j].id);
     auto it = cache_.find(key);

@@ -275,6 +275,41 @@ TEST(PlanTour, UsesOnlyNearCandidatesAndTheHeuristicAboveMaxExact) {
   EXPECT_EQ(result->indices.size(), 6u);
 }
 
+// With a lower bound of the UAV distances (here the straight line, the fixture's UAV distances being
+// straight lines scaled up by a detour factor per frontier), the tour is the same as with every
+// distance asked for, and frontiers that cannot be among the n_max_tsp nearest are not asked about.
+TEST(PlanTour, LowerBoundSkipsFrontiersThatCannotBeCandidates) {
+  Fixture fx;
+  const double detour[] = {1.0, 1.6, 1.1, 1.0, 1.3, 2.0, 1.0};
+  for (int n_max = 1; n_max <= 6; ++n_max)
+    for (double s_near : {2.0, 4.0, 100.0}) {
+      GlobalPlannerConfig c;
+      c.s_near = s_near;
+      c.n_min_tsp = 1;
+      c.n_max_tsp = n_max;
+      c.lambda = 0.4;
+      c.omission = omissionConfig();
+      PathDistances full = fx.distances();
+      full.from_uav = [&](std::size_t j) { return detour[j] * (fx.frontiers[j].average - fx.uav).norm(); };
+      const auto want = planTour(fx.frontiers, full, c);
+      std::vector<std::size_t> asked;
+      PathDistances bounded = full;
+      bounded.from_uav = [&](std::size_t j) {
+        asked.push_back(j);
+        return full.from_uav(j);
+      };
+      bounded.from_uav_lower_bound = [&](std::size_t j) { return (fx.frontiers[j].average - fx.uav).norm(); };
+      const auto got = planTour(fx.frontiers, bounded, c);
+      ASSERT_TRUE(want.ok() && got.ok());
+      EXPECT_EQ(got->indices, want->indices) << "n_max " << n_max << " s_near " << s_near;
+      EXPECT_NEAR(got->cost, want->cost, 1e-12);
+      EXPECT_EQ(std::count(asked.begin(), asked.end(), 6u), 0);  // inactive
+      if (n_max <= 2) {
+        EXPECT_LT(asked.size(), 6u) << "n_max " << n_max;
+      }
+    }
+}
+
 TEST(PlanTour, EmptyAndBadInput) {
   Fixture fx;
   GlobalPlannerConfig c;

@@ -43,6 +43,10 @@ struct FrontierSummary {
 struct PathDistances {
   std::function<double(std::size_t j)> from_uav;                ///< UAV -> frontier j
   std::function<double(std::size_t i, std::size_t j)> between;  ///< frontier i -> frontier j
+  /// Optional: a lower bound of from_uav(j) (the straight-line distance). When given, frontiers are
+  /// asked about in increasing bound, and from_uav is not called for one whose bound is no smaller
+  /// than the n_max_tsp-th smallest distance found so far: it could not be a candidate.
+  std::function<double(std::size_t j)> from_uav_lower_bound;
 };
 
 /// NearCur_IDs: indices of the active frontiers whose distance from the UAV is below s_near,
@@ -68,7 +72,8 @@ struct GlobalTour {
 /// Orders the NearCur_IDs candidates among `frontiers` (only active ones are considered):
 /// cost matrix M[0][j] = from_uav(j) / v_max, M[i][j] = between(i, j) / v_max, column 0 = 0,
 /// xi from config.omission, solved exactly up to max_exact candidates, heuristically above.
-/// from_uav is called once per active frontier, between once per ordered pair of candidates.
+/// from_uav is called once per active frontier (fewer with from_uav_lower_bound; the candidates are the
+/// same, distance ties aside), between once per ordered pair of candidates.
 /// No active reachable frontier gives an empty tour. Errors: an invalid config, or a
 /// non-finite or negative distance between two candidates (named by frontier id).
 common::Result<GlobalTour> planTour(const std::vector<FrontierSummary>& frontiers,
