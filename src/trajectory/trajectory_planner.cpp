@@ -122,23 +122,24 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
     partial = true;
   }
   // At least 6 segments, however short the hop: the optimiser needs 7 control points.
-  const double spacing = std::min(config.path_spacing, length / 6.0);
-  const auto samples = UniformBspline::resamplePolyline(points, spacing);
+  double spacing = std::min(config.path_spacing, length / 6.0);
   // Initial timing within the limits: cruise at a share of v_max, but short hops from (or to) rest
   // need the time an a_max-limited accelerate/brake takes.
   const double v0 = request.velocity.norm();
   const double total = std::max({length / (config.cruise_fraction * optimizer.v_max),
                                  2.5 * std::sqrt(length / optimizer.a_max), v0 / optimizer.a_max + 0.5});
-  double dt = total / static_cast<double>(std::max<std::size_t>(1, samples.size() - 1));
-  const double first_dt = dt;
+  double duration = total;
   common::Result<UniformBspline> spline = common::Result<UniformBspline>::Error("not planned");
   // The optimiser checks min_clearance along the curve; a voxel's centre may be half a diagonal farther.
   const double voxel_clearance = optimizer.min_clearance - 0.5 * std::sqrt(3.0) * astar.geometry().resolution();
-  // Optimise; when the result breaks a limit, refit slower (the start velocity is kept, so the
-  // reference stays continuous) and try again; a refit that passes the same checks as an optimised
-  // spline is accepted as it is.
+  // Optimise; when the result breaks a limit or a clearance, refit slower and closer to the path (half
+  // the sample spacing, down to half a voxel: the fit then hugs the searched path, which keeps
+  // astar.clearance) and try again; the start velocity is kept, so the reference stays continuous. A
+  // refit that passes the same checks as an optimised spline is accepted as it is.
   for (int attempt = 0; attempt <= config.max_refits; ++attempt) {
     rep.refits = attempt;
+    const auto samples = UniformBspline::resamplePolyline(points, spacing);
+    const double dt = duration / static_cast<double>(std::max<std::size_t>(1, samples.size() - 1));
     const UniformBspline init = UniformBspline::fitPath(samples, dt, request.velocity, Vec3::Zero());
     spline = optimize(init, esdf, optimizer);
     // The optimum must also stay where the path search may go: the ESDF knows only mapped obstacles,
@@ -157,8 +158,9 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
                                std::sqrt(init.maxAcceleration() / (0.9 * optimizer.a_max))});
     // Slowing down mends broken limits, not clearance: a crawl (a 26 m path in 145 s was seen) is a
     // failure, so that the frontier counts a failed attempt instead of holding the vehicle for minutes.
-    if (dt >= first_dt * config.max_slowdown) break;
-    dt = std::min(dt * std::min(f, 4.0), first_dt * config.max_slowdown);
+    if (duration >= total * config.max_slowdown) break;
+    duration = std::min(duration * std::min(f, 4.0), total * config.max_slowdown);
+    spacing = std::max(0.5 * astar.geometry().resolution(), 0.5 * spacing);
   }
   if (!spline) return R::Error("optimisation failed: " + spline.message());
   Trajectory out;

@@ -665,6 +665,58 @@ TEST(TrajectoryPlanner, EnclosedStartsLookAroundInsteadOfFailingTheTarget) {
   EXPECT_EQ(reason(look.duration() - 0.5 * replan.min_time_left), ReplanReason::kShortTimeLeft);
 }
 
+// Through zig-zag corridors (mapped walls, known free space) 0.8-1.0 m wide, from a start already moving
+// along the first leg: every plan succeeds or fails with a reason, and every returned trajectory keeps
+// min_clearance from the walls beyond snap_radius (dense sampling of the ESDF) and the limits.
+TEST(TrajectoryPlanner, TightCornersAreFlownWithClearance) {
+  const OptimizerConfig optimizer = optimizerConfig();
+  const traj::TrajectoryPlannerConfig planner;
+  AstarConfig astar_config;
+  astar_config.unknown_is_free = false;
+  astar_config.known_clearance = true;
+  astar_config.clearance = 0.3;
+  Rng rng(5);
+  int ok = 0, total = 0;
+  for (int trial = 0; trial < 30; ++trial) {
+    World world(Vec3(8, 8, 2));
+    const Index3 dims = world.geo().dims();
+    world.setFree(Index3::Zero(), dims - Index3::Ones());
+    // Walls across the room with a gap alternating at either end: a zig-zag corridor 0.9-1.2 m wide.
+    const int width = 8 + trial % 3;
+    for (int k = 1; k * width < dims.x() - 5; ++k) {
+      const int x = k * width;
+      if (k % 2) world.addBox(Index3(x, 0, 0), Index3(x + 1, dims.y() - 9, dims.z() - 1));
+      else world.addBox(Index3(x, 8, 0), Index3(x + 1, dims.y() - 1, dims.z() - 1));
+    }
+    world.sync();
+    const Astar astar(world.occupancy(), world.esdf(), astar_config);
+    traj::PlanRequest request;
+    request.start = Vec3(0.5 * width * 0.1, 4.0 + rng(-2.0, 2.0), 1.0);
+    request.velocity = Vec3(0.0, rng(-1.2, 1.2), 0.0);  // along the first leg
+    request.target = Vec3(7.4, 4.0 + rng(-2.0, 2.0), 1.0);
+    request.yaw = 0.0;
+    request.target_yaw = 0.0;
+    ++total;
+    const auto planned = traj::planTrajectory(request, astar, world.esdf(), optimizer, planner);
+    if (!planned) {
+      EXPECT_FALSE(planned.message().empty());
+      continue;
+    }
+    ++ok;
+    const UniformBspline& p = planned->position;
+    for (int i = 0; i <= 4000; ++i) {
+      const Vec3 q = p.position(p.duration() * i / 4000);
+      if ((q - request.start).norm() <= planner.snap_radius) continue;
+      ASSERT_GE(world.esdf().distance(q), optimizer.min_clearance - 1e-9) << "trial " << trial << " at " << q.transpose();
+    }
+    double v = 0.0, a = 0.0;
+    finiteDifferenceDynamics(p, 4000, v, a);
+    EXPECT_LE(v, 1.05 * optimizer.v_max);
+    EXPECT_LE(a, 1.05 * optimizer.a_max);
+  }
+  EXPECT_GE(ok, total - 1) << ok << " of " << total << " plans succeeded";
+}
+
 // staysFlyable(): a spline through mapped free space passes; the same spline fails once a voxel it
 // crosses is unknown, or lies within min_distance of the box's faces or of a mapped obstacle, except
 // within exempt_radius of its start.
