@@ -132,7 +132,12 @@ LayerOutputs LayerManager::step(const LayerInputs& in, double t) {
     }
     if (empty_since_ >= 0.0 && t - empty_since_ >= config_.settle_time) {
       if (final_pass) {
-        finish(FinishReason::kComplete, "no frontier left in the box");
+        // Blacklisted frontiers are left unexplored: say how many, so a "complete" that is not is visible.
+        const std::size_t blacklisted = in.all_frontiers.size() - countUsable(in.all_frontiers);
+        finish(FinishReason::kComplete, blacklisted == 0 ? std::string("no frontier left in the box")
+                                                         : "no reachable frontier left in the box (" +
+                                                               std::to_string(blacklisted) +
+                                                               " blacklisted after failed attempts)");
       } else if (position_ + 1 < order_.size()) {
         ++position_;
         go(ExplorationState::kExplore, "band explored");

@@ -82,6 +82,7 @@ TEST(LayerManager, WalksEveryTransitionToComplete) {
   out = m.step(frontiers({}, {}, ++progress), t += 0.4);  // 1.0 s: settled
   ASSERT_EQ(out.state, ExplorationState::kFinished);
   EXPECT_EQ(out.reason, FinishReason::kComplete);
+  EXPECT_EQ(out.transitions.back().why, "no frontier left in the box");
   // Finished stays finished.
   out = m.step(frontiers({3}, {3}, ++progress), t += 1.0);
   EXPECT_EQ(out.state, ExplorationState::kFinished);
@@ -121,6 +122,8 @@ TEST(LayerManager, UnreachableFrontiersAreBlacklistedAfterBoundedRetries) {
   for (int i = 0; i < 20 && out.state != ExplorationState::kFinished; ++i) out = m.step(frontiers({9}, {9}, ++p), t += 0.6);
   EXPECT_EQ(out.state, ExplorationState::kFinished);
   EXPECT_EQ(out.reason, FinishReason::kComplete);
+  // The finish says that a frontier was left unexplored.
+  EXPECT_NE(out.transitions.back().why.find("1 blacklisted"), std::string::npos) << out.transitions.back().why;
 }
 
 TEST(LayerManager, TimeLimitAndStuckTerminate) {
