@@ -438,10 +438,16 @@ PathResult Astar::search(const Vec3& start, const Vec3& goal, double snap_radius
   nodes_.push_back(Node{s, -1, {0, 0, 0}, -1});
   cells_[cellOf(s)] = 0;
   open(0);
-  std::int32_t reached = -1;
+  std::int32_t reached = -1, nearest = 0;
+  double nearest_h = std::numeric_limits<double>::infinity();
   result.status = PathStatus::kNoPath;
   while (!open_.empty()) {
     const std::int32_t n = heapPop();
+    {
+      std::int32_t h[3];
+      octileMoves(nodes_[n].idx, g, h);
+      if (const double hc = movesCost(h); hc < nearest_h) nearest_h = hc, nearest = n;
+    }
     if (nodes_[n].idx == g) {
       ++result.expansions;
       reached = n;
@@ -487,7 +493,15 @@ PathResult Astar::search(const Vec3& start, const Vec3& goal, double snap_radius
       open(m);
     }
   }
-  if (reached < 0) return result;
+  if (reached < 0) {
+    if (nearest > 0) {
+      std::vector<Vec3> raw;
+      for (std::int32_t n = nearest; n >= 0; n = nodes_[n].parent) raw.push_back(geo_.indexToCoord(nodes_[n].idx));
+      std::reverse(raw.begin(), raw.end());
+      result.toward = shorten(raw);
+    }
+    return result;
+  }
 
   for (std::int32_t n = reached; n >= 0; n = nodes_[n].parent)
     result.raw_path.push_back(geo_.indexToCoord(nodes_[n].idx));

@@ -33,6 +33,8 @@ common::Status TrajectoryPlannerConfig::validate() const {
     return common::Status::Error("planner: min_time_between_plans must be finite and >= 0");
   if (!positive(cruise_fraction) || cruise_fraction > 1.0)
     return common::Status::Error("planner: cruise_fraction must be in (0, 1]");
+  if (!std::isfinite(min_progress) || min_progress < 0.0)
+    return common::Status::Error("planner: min_progress must be finite and >= 0");
   if (!std::isfinite(enclosed_turn) || enclosed_turn <= 0.0 || enclosed_turn > M_PI)
     return common::Status::Error("planner: enclosed_turn must be in (0, pi]");
   if (max_refits < 0) return common::Status::Error("planner: max_refits must be >= 0");
@@ -84,16 +86,25 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
   const planning::PathResult path = astar.search(request.start, request.target, config.snap_radius);
   rep.path_status = path.status;
   rep.path_expansions = path.expansions;
-  if (path.status != planning::PathStatus::kFound)
+  // No path through known space (yet): when the search got min_progress closer to the target, fly
+  // there (a partial trajectory, replanned on the way, as the space between comes into view);
+  // otherwise the plan fails.
+  const bool toward = path.status != planning::PathStatus::kFound && !path.toward.empty() &&
+                      config.min_progress > 0.0 &&
+                      (request.target - request.start).norm() - (request.target - path.toward.back()).norm() >=
+                          config.min_progress;
+  if (path.status != planning::PathStatus::kFound && !toward)
     return R::Error(std::string("no path: ") + planning::toString(path.status));
-  rep.path_length = path.length;
+  rep.toward = toward;
+  const std::vector<Vec3>& found = toward ? path.toward : path.path;
+  rep.path_length = toward ? 0.0 : path.length;
   // The start may snap out of a blocked voxel; the goal may not wander off the viewpoint.
-  if ((path.path.back() - request.target).norm() > config.goal_tolerance) {
+  if (!toward && (path.path.back() - request.target).norm() > config.goal_tolerance) {
     rep.path_status = planning::PathStatus::kGoalBlocked;
     return R::Error("no path: goal_blocked (the nearest flyable voxel is " +
                     std::to_string((path.path.back() - request.target).norm()) + " m from the target)");
   }
-  std::vector<Vec3> points = path.path;
+  std::vector<Vec3> points = found;
   points.front() = request.start;  // start exactly at the current reference
   double length = 0.0;
   for (std::size_t i = 1; i < points.size(); ++i) length += (points[i] - points[i - 1]).norm();
@@ -103,7 +114,7 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
     points = {request.start, request.target};
     length = (request.target - request.start).norm();
   }
-  bool partial = false;
+  bool partial = toward;
   if (config.horizon > 0.0 && length > config.horizon) {
     // Keep the first `horizon` metres of the polyline.
     std::vector<Vec3> kept{points.front()};

@@ -667,3 +667,34 @@ TEST(Astar, KnownSurroundingsRuleIsWaivedNearTheStart) {
   EXPECT_LT(stuck.expansions, 4.0 / 3.0 * M_PI * r * r * r);
   EXPECT_GT(stuck.expansions, 0);
 }
+
+// A search that finds no path returns, in `toward`, the shortened path to the expanded voxel nearest
+// the goal: through a wall without an opening, the voxel next to the wall in front of the goal; with the
+// budget exhausted, a path that ends nearer the goal than the start. A found path has none.
+TEST(Astar, FailedSearchesPointTowardTheGoal) {
+  World world(Index3(40, 20, 10));
+  world.fill(VoxelState::kFree);
+  world.set(Index3(25, 0, 0), Index3(25, 19, 9), VoxelState::kOccupied);
+  const Astar astar(world.occupancy(), world.esdf(), astarConfig(0.2, false));
+  const Vec3 start = world.geo().indexToCoord(Index3(5, 5, 5)), goal = world.geo().indexToCoord(Index3(35, 10, 5));
+  const PathResult walled = astar.search(start, goal);
+  ASSERT_EQ(walled.status, PathStatus::kNoPath);
+  ASSERT_GE(walled.toward.size(), 2u);
+  EXPECT_EQ(walled.toward.front(), start);
+  // Nearest by the lattice distance: on the goal's row and level, as close to the wall as the clearance lets.
+  EXPECT_EQ(world.geo().coordToIndex(walled.toward.back()), Index3(23, 10, 5));
+  for (std::size_t i = 1; i < walled.toward.size(); ++i)
+    EXPECT_TRUE(astar.segmentTraversable(walled.toward[i - 1], walled.toward[i]));
+
+  world.set(Index3(25, 0, 0), Index3(25, 19, 9), VoxelState::kFree);
+  AstarConfig small = astarConfig(0.2, false);
+  small.max_expansions = 10;
+  const Astar budget(world.occupancy(), world.esdf(), small);
+  const PathResult ran_out = budget.search(start, goal);
+  ASSERT_EQ(ran_out.status, PathStatus::kBudgetExceeded);
+  ASSERT_FALSE(ran_out.toward.empty());
+  EXPECT_LT((ran_out.toward.back() - goal).norm(), (start - goal).norm() - 0.5);
+  const PathResult found = astar.search(start, goal);
+  ASSERT_EQ(found.status, PathStatus::kFound);
+  EXPECT_TRUE(found.toward.empty());
+}

@@ -717,6 +717,44 @@ TEST(TrajectoryPlanner, TightCornersAreFlownWithClearance) {
   EXPECT_GE(ok, total - 1) << ok << " of " << total << " plans succeeded";
 }
 
+// Two known rooms with unseen space between: no path through known space, so the trajectory goes
+// towards the target, to the search's nearest point (partial, the goal kept, known flyable space
+// throughout); with min_progress above what that gains, the plan fails with the search's status.
+TEST(TrajectoryPlanner, WithoutAKnownPathItFliesTowardsTheTarget) {
+  World world(Vec3(8, 4, 2));
+  world.setFree(Index3(0, 0, 0), Index3(39, 39, 19));
+  world.setFree(Index3(50, 0, 0), Index3(79, 39, 19));
+  world.sync();
+  AstarConfig astar_config;
+  astar_config.unknown_is_free = false;
+  astar_config.known_clearance = true;
+  astar_config.clearance = 0.3;
+  const Astar astar(world.occupancy(), world.esdf(), astar_config);
+  const OptimizerConfig optimizer = optimizerConfig();
+  traj::TrajectoryPlannerConfig planner;
+  traj::PlanRequest request;
+  request.start = Vec3(1.0, 2.0, 1.0);
+  request.target = Vec3(7.0, 2.0, 1.0);
+  traj::PlanReport report;
+  const auto planned = traj::planTrajectory(request, astar, world.esdf(), optimizer, planner, &report);
+  ASSERT_TRUE(planned) << planned.message();
+  EXPECT_TRUE(report.toward);
+  EXPECT_EQ(report.path_status, PathStatus::kNoPath);
+  EXPECT_TRUE(planned->partial);
+  EXPECT_LT((planned->goal - request.target).norm(), 1e-12);
+  const Vec3 end = planned->position.position(planned->duration());
+  EXPECT_GT(end.x(), 3.0);  // at the first room's far side
+  EXPECT_LT(end.x(), 3.7);
+  const double res = world.geo().resolution();
+  EXPECT_TRUE(traj::staysFlyable(planned->position, astar, optimizer.min_clearance - 0.5 * std::sqrt(3.0) * res,
+                                 planner.snap_radius));
+  planner.min_progress = 3.0;  // more than the 2.6 m it gains
+  const auto refused = traj::planTrajectory(request, astar, world.esdf(), optimizer, planner, &report);
+  ASSERT_FALSE(refused);
+  EXPECT_NE(refused.message().find("no_path"), std::string::npos) << refused.message();
+  EXPECT_FALSE(report.toward);
+}
+
 // staysFlyable(): a spline through mapped free space passes; the same spline fails once a voxel it
 // crosses is unknown, or lies within min_distance of the box's faces or of a mapped obstacle, except
 // within exempt_radius of its start.

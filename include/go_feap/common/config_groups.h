@@ -117,7 +117,7 @@ void readTrajectoryPlanner(R& p, trajectory::TrajectoryPlannerConfig& c) {
   p.get("planner/min_time_between_plans", c.min_time_between_plans);
   p.get("planner/cruise_fraction", c.cruise_fraction).get("planner/max_refits", c.max_refits);
   p.get("planner/max_slowdown", c.max_slowdown).get("planner/horizon", c.horizon);
-  p.get("planner/enclosed_turn", c.enclosed_turn);
+  p.get("planner/enclosed_turn", c.enclosed_turn).get("planner/min_progress", c.min_progress);
   p.get("planner/snap_radius", c.snap_radius).get("planner/goal_tolerance", c.goal_tolerance);
 }
 

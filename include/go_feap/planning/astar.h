@@ -57,6 +57,10 @@ struct PathResult {
   /// m, sum of the segment lengths of `raw_path`: the shortest-path cost when tie_breaker is 1.
   double raw_length = 0.0;
   int expansions = 0;  ///< voxels expanded (closed) by the search
+  /// When the search ran out (no path, budget exceeded): the shortened path from the start voxel to the
+  /// expanded voxel nearest the goal (by the heuristic's lattice distance); empty when that is the start
+  /// voxel itself, or after any other outcome. Where to go to see what lies between.
+  std::vector<Vec3> toward;
 };
 
 /// A* on the grid of an occupancy map and its ESDF. Holds references to both (they must outlive it and

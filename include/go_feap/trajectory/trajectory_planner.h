@@ -50,6 +50,9 @@ struct TrajectoryPlannerConfig {
   /// rad: a vehicle that cannot leave its start region (startEnclosed()) and already faces its target
   /// turns this much to look around
   double enclosed_turn = 2.0944;
+  /// m: when no path through known space is found, the search's nearest point to the target is flown to
+  /// (partial) if it is at least this much closer to the target than the start (0 = never)
+  double min_progress = 1.5;
   double snap_radius = 1.0;             ///< m: a blocked start (or goal) moves to free space this close
   /// m: a path may end at most this far from the target (a goal that had to snap farther is blocked)
   double goal_tolerance = 0.3;
@@ -74,6 +77,7 @@ struct PlanReport {
   double path_length = 0.0;    ///< m
   int left_flyable = 0;        ///< optimised splines refused by staysFlyable()
   int path_expansions = 0;     ///< voxels the path search expanded
+  bool toward = false;         ///< no path was found: the trajectory goes towards the target (PathResult::toward)
 };
 
 /// True when `spline`, sampled at most a quarter voxel apart, stays in voxels astar.traversableWith(.,
@@ -95,6 +99,10 @@ bool staysFlyable(const UniformBspline& spline, const planning::Astar& astar, do
 /// voxel (a one-voxel path) is flown to straight; a hop of any length gets at least 6 path segments. A path
 /// longer than `horizon` is flown only that far along (Trajectory::partial; yaw still turns to target_yaw):
 /// long paths are replanned on the way, with what has been mapped since, and each optimisation stays small.
+/// When the search finds no path (no path, budget exceeded) but its nearest point to the target
+/// (PathResult::toward) is at least min_progress closer to it than the start, the trajectory goes there,
+/// partial (PlanReport::toward): the space between comes into view on the way, as FUEL flies on
+/// optimistically and replans.
 /// Errors name the
 /// reason: no path (with the A* status), optimisation failure (with the last check's message).
 /// `astar` and `esdf` must describe the same map; the caller holds the map still while this runs.
