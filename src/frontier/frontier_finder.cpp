@@ -11,6 +11,7 @@ common::Status FrontierConfig::validate() const {
   if (min_cluster_cells < 1) return common::Status::Error("frontier: min_cluster_cells must be >= 1");
   if (!(max_cluster_extent > 0.0)) return common::Status::Error("frontier: max_cluster_extent must be > 0");
   if (!(s_near > 0.0)) return common::Status::Error("frontier: s_near must be > 0");
+  if (max_regrow_cells < 0) return common::Status::Error("frontier: max_regrow_cells must be >= 0");
   return common::Status::Ok();
 }
 
@@ -124,9 +125,7 @@ FrontierDelta FrontierFinder::recomputeAll(const map::OccupancyMap& map, double 
 
 // Frontier status of a voxel depends on it and its face neighbours, so statuses can change
 // in the changed box grown by one voxel (R). A cluster is rebuilt when one of its cells lies
-// within one more voxel of R (26-adjacency), together with the whole connected region of
-// frontier cells it belongs to; everything farther away is untouched, which is what makes
-// the result equal to a full recomputation.
+// within one more voxel of R (26-adjacency); everything farther away is untouched.
 FrontierDelta FrontierFinder::rebuild(const map::OccupancyMap& map, const Index3& changed_min,
                                       const Index3& changed_max, double now) {
   const Index3 r_lo = (changed_min - Index3::Ones()).cwiseMax(box_lo_);
@@ -171,8 +170,8 @@ FrontierDelta FrontierFinder::rebuild(const map::OccupancyMap& map, const Index3
   return regrow(std::move(affected), std::move(seeds), now);
 }
 
-// Rebuilds the removed (affected) clusters' regions from the seeds: flood fill over frontier
-// cells, then drop / split / age exactly as a full recomputation does.
+// Rebuilds the removed (affected) clusters from the seeds: flood fill over frontier cells not held
+// by a kept cluster, then drop / split / age as a full recomputation does.
 FrontierDelta FrontierFinder::regrow(std::unordered_set<std::uint32_t> affected, std::vector<std::size_t> seeds,
                                      double now) {
   FrontierDelta delta;
@@ -192,37 +191,86 @@ FrontierDelta FrontierFinder::regrow(std::unordered_set<std::uint32_t> affected,
     visited.push_back(l);
     return true;
   };
-  std::vector<std::vector<Index3>> regions;
-  std::unordered_map<std::size_t, std::uint32_t> old_owner;  // cells of removed clusters
+  std::vector<std::vector<std::size_t>> regions;  // linear indices
   std::sort(seeds.begin(), seeds.end());
+  // A cell of a cluster not marked affected: while the fill is small, that cluster's region is being
+  // rebuilt, so it goes too; past max_regrow_cells the cluster is kept and the fill goes around it, so
+  // an update costs about the size of the clusters it touches, not of the whole connected region.
+  auto kept = [&](std::size_t l) {
+    const std::uint32_t own = owner_[l];
+    if (own == 0 || affected.count(own) > 0) return false;
+    if (visited.size() >= static_cast<std::size_t>(config_.max_regrow_cells)) return true;
+    affected.insert(own);
+    markRemoved(own);
+    return false;
+  };
   for (std::size_t s : seeds) {
-    if (!visit(s)) continue;
-    std::vector<Index3> region;
+    if (kept(s) || !visit(s)) continue;
+    std::vector<std::size_t> region;
     std::vector<std::size_t> stack{s};
     while (!stack.empty()) {
       const std::size_t l = stack.back();
       stack.pop_back();
       const Index3 c = geo_.unlinear(l);
-      region.push_back(c);
-      if (const std::uint32_t own = owner_[l]) {
-        // A cell of a cluster not yet marked affected: its region is being rebuilt, so it
-        // goes too (robustness; regions never cross R unaffected).
-        if (affected.insert(own).second) markRemoved(own);
-        old_owner[l] = own;
-      }
+      region.push_back(l);
       for (int dz = -1; dz <= 1; ++dz)
         for (int dy = -1; dy <= 1; ++dy)
           for (int dx = -1; dx <= 1; ++dx) {
             const Index3 nb = c + Index3(dx, dy, dz);
             if ((dx == 0 && dy == 0 && dz == 0) || !isFrontierCell(nb)) continue;
             const std::size_t ln = geo_.linear(nb);
-            if (visit(ln)) stack.push_back(ln);
+            if (!kept(ln) && visit(ln)) stack.push_back(ln);
           }
     }
     regions.push_back(std::move(region));
   }
   for (std::size_t l : visited) scratch_[l >> 6] &= ~(std::uint64_t{1} << (l & 63));
-  // Cells of removed clusters lose their owner.
+
+  // 5. Regions -> clusters: drop small ones, split wide ones, inherit the oldest age (of the removed
+  // clusters that held their cells: owner_ still names them here).
+  const double h = 0.5 * geo_.resolution();
+  std::vector<Frontier> added;
+  std::vector<Cell> cells, buffer;
+  std::vector<std::pair<std::size_t, std::size_t>> pieces;
+  for (auto& region : regions) {
+    if (static_cast<int>(region.size()) < config_.min_cluster_cells) continue;
+    // Sorted cells make the split independent of the order the flood fill found them in; the split
+    // keeps the order, so every piece is sorted too.
+    std::sort(region.begin(), region.end());
+    cells.clear();
+    cells.reserve(region.size());
+    for (std::size_t l : region) {
+      const Index3 c = geo_.unlinear(l);
+      cells.push_back({c, geo_.indexToCoord(c)});
+    }
+    pieces.clear();
+    splitRange(cells, 0, cells.size(), buffer, pieces);
+    for (const auto& [b, e] : pieces) {
+      Frontier f;
+      f.id = next_id_++;
+      f.first_seen = now;
+      f.box = {Vec3::Constant(1e18), Vec3::Constant(-1e18)};
+      f.cells.reserve(e - b);
+      for (std::size_t i = b; i < e; ++i) {
+        const Cell& c = cells[i];
+        const std::size_t l = geo_.linear(c.index);
+        f.average += c.centre;
+        f.box.min = f.box.min.cwiseMin(c.centre - Vec3::Constant(h));
+        f.box.max = f.box.max.cwiseMax(c.centre + Vec3::Constant(h));
+        if (const std::uint32_t own = owner_[l]; own && own < f.id) {
+          auto it = first_seen.find(own);
+          if (it != first_seen.end()) f.first_seen = std::min(f.first_seen, it->second);
+        }
+        owner_[l] = f.id;
+        f.cells.push_back(c.index);
+      }
+      f.average /= static_cast<double>(e - b);
+      f.active = f.average.z() >= band_min_ && f.average.z() <= band_max_;
+      delta.added.push_back(f.id);
+      added.push_back(std::move(f));
+    }
+  }
+  // Cells of removed clusters that no new cluster took lose their owner.
   for (std::uint32_t id : affected) {
     const Frontier* f = find(id);
     if (!f) continue;
@@ -236,73 +284,47 @@ FrontierDelta FrontierFinder::regrow(std::unordered_set<std::uint32_t> affected,
   frontiers_.erase(std::remove_if(frontiers_.begin(), frontiers_.end(),
                                   [&](const Frontier& f) { return affected.count(f.id) > 0; }),
                    frontiers_.end());
-
-  // 5. Regions -> clusters: drop small ones, split wide ones, inherit the oldest age.
-  const double h = 0.5 * geo_.resolution();
-  for (auto& region : regions) {
-    if (static_cast<int>(region.size()) < config_.min_cluster_cells) continue;
-    // Sorted cells make the split independent of the order the flood fill found them in; the split
-    // keeps the order, so every piece is sorted too.
-    std::sort(region.begin(), region.end(),
-              [&](const Index3& p, const Index3& q) { return geo_.linear(p) < geo_.linear(q); });
-    std::vector<Cell> with_centres;
-    with_centres.reserve(region.size());
-    for (const Index3& c : region) with_centres.push_back({c, geo_.indexToCoord(c)});
-    std::vector<std::vector<Cell>> pieces;
-    splitInto(std::move(with_centres), pieces);
-    for (const auto& piece : pieces) {
-      Frontier f;
-      f.id = next_id_++;
-      f.first_seen = now;
-      f.box = {Vec3::Constant(1e18), Vec3::Constant(-1e18)};
-      f.cells.reserve(piece.size());
-      for (const Cell& c : piece) {
-        const std::size_t l = geo_.linear(c.index);
-        f.average += c.centre;
-        f.box.min = f.box.min.cwiseMin(c.centre - Vec3::Constant(h));
-        f.box.max = f.box.max.cwiseMax(c.centre + Vec3::Constant(h));
-        if (!old_owner.empty()) {
-          auto it = old_owner.find(l);
-          if (it != old_owner.end()) f.first_seen = std::min(f.first_seen, first_seen[it->second]);
-        }
-        owner_[l] = f.id;
-        f.cells.push_back(c.index);
-      }
-      f.average /= static_cast<double>(piece.size());
-      f.active = f.average.z() >= band_min_ && f.average.z() <= band_max_;
-      delta.added.push_back(f.id);
-      frontiers_.push_back(std::move(f));
-    }
-  }
+  for (Frontier& f : added) frontiers_.push_back(std::move(f));
   refreshNeighbourCounts();
   return delta;
 }
 
-void FrontierFinder::splitInto(std::vector<Cell> cells, std::vector<std::vector<Cell>>& out) const {
+void FrontierFinder::splitRange(std::vector<Cell>& cells, std::size_t begin, std::size_t end,
+                                std::vector<Cell>& buffer, std::vector<std::pair<std::size_t, std::size_t>>& out) const {
+  const std::size_t n = end - begin;
   Vec3 mean = Vec3::Zero();
-  for (const Cell& c : cells) mean += c.centre;
-  mean /= static_cast<double>(cells.size());
+  for (std::size_t i = begin; i < end; ++i) mean += cells[i].centre;
+  mean /= static_cast<double>(n);
   double spread2 = 0.0;
-  for (const Cell& c : cells) spread2 = std::max(spread2, (c.centre - mean).squaredNorm());
-  if (std::sqrt(spread2) <= config_.max_cluster_extent || cells.size() < 2) {
-    out.push_back(std::move(cells));
+  for (std::size_t i = begin; i < end; ++i) spread2 = std::max(spread2, (cells[i].centre - mean).squaredNorm());
+  if (std::sqrt(spread2) <= config_.max_cluster_extent || n < 2) {
+    out.emplace_back(begin, end);
     return;
   }
   Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (const Cell& c : cells) {
-    const Vec3 d = c.centre - mean;
+  for (std::size_t i = begin; i < end; ++i) {
+    const Vec3 d = cells[i].centre - mean;
     cov += d * d.transpose();
   }
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
   const Vec3 axis = eig.eigenvectors().col(2);  // largest eigenvalue
-  std::vector<Cell> a, b;
-  for (const Cell& c : cells) ((c.centre - mean).dot(axis) >= 0.0 ? a : b).push_back(c);
-  if (a.empty() || b.empty()) {
-    out.push_back(std::move(cells));
+  // Stable partition: the half along the axis first, each half in its original order.
+  buffer.clear();
+  std::size_t mid = begin;
+  for (std::size_t i = begin; i < end; ++i) {
+    if ((cells[i].centre - mean).dot(axis) >= 0.0)
+      cells[mid++] = cells[i];
+    else
+      buffer.push_back(cells[i]);
+  }
+  if (mid == begin || mid == end) {
+    std::copy(buffer.begin(), buffer.end(), cells.begin() + static_cast<std::ptrdiff_t>(mid));
+    out.emplace_back(begin, end);
     return;
   }
-  splitInto(std::move(a), out);
-  splitInto(std::move(b), out);
+  std::copy(buffer.begin(), buffer.end(), cells.begin() + static_cast<std::ptrdiff_t>(mid));
+  splitRange(cells, begin, mid, buffer, out);
+  splitRange(cells, mid, end, buffer, out);
 }
 
 void FrontierFinder::refreshNeighbourCounts() {

@@ -1,6 +1,7 @@
 // Frontier detection against hand-built grids and a full recomputation.
 #include <gtest/gtest.h>
 
+#include <functional>
 #include <random>
 #include <set>
 
@@ -71,15 +72,90 @@ TEST(FrontierFinder, KnownFreeBlockInUnknownSpace) {
   EXPECT_LT((f.frontiers()[0].average - Vec3(1.5, 1.0, 0.5)).norm(), 1e-9);
 }
 
-TEST(FrontierFinder, IncrementalEqualsFullRecomputationOnRandomUpdates) {
+namespace {
+
+// The oracle's definition of a frontier cell, straight from the map.
+bool frontierCell(const map::OccupancyMap& m, const Index3& idx) {
+  const auto& g = m.geometry();
+  auto inBox = [&](const Index3& i) {
+    const Vec3 c = g.indexToCoord(i);
+    return g.inside(i) && (c.array() > kBox.min.array()).all() && (c.array() < kBox.max.array()).all();
+  };
+  if (!inBox(idx) || m.state(idx) != VoxelState::kFree) return false;
+  for (const Index3& o : {Index3(1, 0, 0), Index3(-1, 0, 0), Index3(0, 1, 0), Index3(0, -1, 0), Index3(0, 0, 1),
+                          Index3(0, 0, -1)})
+    if (inBox(idx + o) && m.state(Index3(idx + o)) == VoxelState::kUnknown) return true;
+  return false;
+}
+
+// Sizes of the 26-connected components of `cells`.
+std::vector<std::size_t> componentSizes(const std::set<std::size_t>& cells, const common::GridGeometry& g) {
+  std::set<std::size_t> left = cells;
+  std::vector<std::size_t> sizes;
+  while (!left.empty()) {
+    std::vector<std::size_t> stack{*left.begin()};
+    left.erase(left.begin());
+    std::size_t n = 0;
+    while (!stack.empty()) {
+      const Index3 c = g.unlinear(stack.back());
+      stack.pop_back();
+      ++n;
+      for (int dz = -1; dz <= 1; ++dz)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const Index3 nb = c + Index3(dx, dy, dz);
+            if (!g.inside(nb)) continue;
+            auto it = left.find(g.linear(nb));
+            if (it != left.end()) stack.push_back(*it), left.erase(it);
+          }
+    }
+    sizes.push_back(n);
+  }
+  return sizes;
+}
+
+// What a local update guarantees, checked against the map and a full recomputation: clusters are
+// disjoint sets of frontier cells no wider than max_cluster_extent (pieces of 26-connected regions: a
+// split may cut a bent region apart, or leave a piece below min_cluster_cells); they hold only cells
+// the full recomputation clusters too, and what they leave out of those falls into connected pieces
+// smaller than min_cluster_cells.
+void expectValidLocalClusters(const frontier::FrontierFinder& f, const frontier::FrontierFinder& full,
+                              const map::OccupancyMap& m, const frontier::FrontierConfig& cfg, const std::string& what) {
+  const auto& g = m.geometry();
+  std::set<std::size_t> held, all;
+  for (const auto& fr : f.frontiers()) {
+    Vec3 mean = Vec3::Zero();
+    for (const Index3& c : fr.cells) {
+      EXPECT_TRUE(frontierCell(m, c)) << what << ": cluster " << fr.id << " holds a cell that is not a frontier";
+      EXPECT_TRUE(held.insert(g.linear(c)).second) << what << ": a cell in two clusters";
+      mean += g.indexToCoord(c);
+    }
+    mean /= static_cast<double>(fr.cells.size());
+    EXPECT_LT((fr.average - mean).norm(), 1e-9) << what;
+    for (const Index3& c : fr.cells) EXPECT_LE((g.indexToCoord(c) - mean).norm(), cfg.max_cluster_extent + 1e-9) << what;
+  }
+  for (const auto& fr : full.frontiers())
+    for (const Index3& c : fr.cells) all.insert(g.linear(c));
+  std::set<std::size_t> left;
+  for (std::size_t l : all)
+    if (!held.count(l)) left.insert(l);
+  for (std::size_t l : held) EXPECT_TRUE(all.count(l)) << what << ": a held cell the full recomputation drops";
+  for (std::size_t n : componentSizes(left, g))
+    EXPECT_LT(static_cast<int>(n), cfg.min_cluster_cells) << what << ": a left-out piece of " << n << " cells";
+}
+
+// Runs 6 seeds x 40 random box updates (free, occupied or unknown) on a map, updating one finder by
+// box and one by voxel list, and hands both with a full recomputation to `check` after each; stops at
+// the first failure.
+void randomUpdates(const frontier::FrontierConfig& cfg,
+                   const std::function<void(const frontier::FrontierFinder& box, const frontier::FrontierFinder& list,
+                                            const frontier::FrontierFinder& full, const map::OccupancyMap& m,
+                                            const std::string& at)>& check) {
   for (int seed = 0; seed < 6; ++seed) {
     std::mt19937_64 rng(seed);
     std::uniform_real_distribution<double> ux(0.0, 3.0), uy(0.0, 2.0), uz(0.0, 1.0), size(0.1, 0.9);
     std::uniform_int_distribution<int> state(0, 9);
     map::OccupancyMap m(mapConfig(), kBox);
-    frontier::FrontierConfig cfg;
-    cfg.min_cluster_cells = 4;
-    cfg.max_cluster_extent = 0.6;
     frontier::FrontierFinder inc(cfg, m.geometry(), kBox), listed(cfg, m.geometry(), kBox);
     inc.recomputeAll(m, 0.0);
     listed.recomputeAll(m, 0.0);
@@ -101,11 +177,79 @@ TEST(FrontierFinder, IncrementalEqualsFullRecomputationOnRandomUpdates) {
       listed.update(m, changed, step + 1.0);
       frontier::FrontierFinder full(cfg, m.geometry(), kBox);
       full.recomputeAll(m, step + 1.0);
-      ASSERT_EQ(clusterSets(inc, m.geometry()), clusterSets(full, m.geometry())) << "seed " << seed << " step " << step;
-      ASSERT_EQ(clusterSets(listed, m.geometry()), clusterSets(full, m.geometry())) << "list, seed " << seed << " step " << step;
+      check(inc, listed, full, m, "seed " + std::to_string(seed) + " step " + std::to_string(step));
+      if (::testing::Test::HasFailure()) return;
     }
     EXPECT_GT(inc.frontiers().size(), 0u);
   }
+}
+
+frontier::FrontierConfig randomUpdateConfig() {
+  frontier::FrontierConfig cfg;
+  cfg.min_cluster_cells = 4;
+  cfg.max_cluster_extent = 0.6;
+  return cfg;
+}
+
+}  // namespace
+
+// Regions below max_regrow_cells (all of them here) are regrown whole: the result is the full one.
+TEST(FrontierFinder, IncrementalEqualsFullRecomputationOnRandomUpdates) {
+  randomUpdates(randomUpdateConfig(), [](const auto& box, const auto& list, const auto& full, const auto& m,
+                                         const std::string& at) {
+    ASSERT_EQ(clusterSets(box, m.geometry()), clusterSets(full, m.geometry())) << at;
+    ASSERT_EQ(clusterSets(list, m.geometry()), clusterSets(full, m.geometry())) << "list, " << at;
+  });
+}
+
+// With max_regrow_cells = 0 every update keeps the clusters it does not touch.
+TEST(FrontierFinder, LocalUpdatesKeepValidClustersOnRandomUpdates) {
+  frontier::FrontierConfig cfg = randomUpdateConfig();
+  cfg.max_regrow_cells = 0;
+  randomUpdates(cfg, [&](const auto& box, const auto& list, const auto& full, const auto& m, const std::string& at) {
+    expectValidLocalClusters(box, full, m, cfg, "box, " + at);
+    expectValidLocalClusters(list, full, m, cfg, "list, " + at);
+  });
+}
+
+// Past max_regrow_cells, a change at one end of a long frontier ring rebuilds the clusters there and
+// keeps the others (ids and all): the cost of an update is the size of what it touches, not of the
+// connected region.
+TEST(FrontierFinder, UpdateKeepsTheClustersItDoesNotTouch) {
+  map::OccupancyMap m(mapConfig(), kBox);
+  paint(m, Vec3(0.2, 0.5, 0.0), Vec3(2.5, 1.5, 1.0), VoxelState::kFree);
+  frontier::FrontierConfig cfg;
+  cfg.min_cluster_cells = 4;
+  cfg.max_cluster_extent = 0.4;
+  cfg.max_regrow_cells = 0;
+  frontier::FrontierFinder f(cfg, m.geometry(), kBox);
+  f.recomputeAll(m, 0.0);
+  const std::size_t before = f.frontiers().size();
+  ASSERT_GT(before, 8u);
+  // Grow the free block by 0.2 m at its x end.
+  std::vector<std::size_t> changed;
+  Index3 a, b;
+  m.geometry().centreRange({Vec3(2.5, 0.5, 0.0), Vec3(2.7, 1.5, 1.0)}, a, b);
+  for (int z = a.z(); z < b.z(); ++z)
+    for (int y = a.y(); y < b.y(); ++y)
+      for (int x = a.x(); x < b.x(); ++x)
+        if (m.state(Index3(x, y, z)) != VoxelState::kFree) changed.push_back(m.geometry().linear(Index3(x, y, z)));
+  paint(m, Vec3(2.5, 0.5, 0.0), Vec3(2.7, 1.5, 1.0), VoxelState::kFree);
+  ASSERT_FALSE(changed.empty());
+  const frontier::FrontierDelta delta = f.update(m, changed, 1.0);
+  EXPECT_FALSE(delta.removed.empty());
+  EXPECT_LT(delta.removed.size(), before / 2);
+  // Every removed cluster was near the change; the far end's clusters are untouched.
+  for (const auto& fr : f.frontiers())
+    if (fr.average.x() < 1.5) EXPECT_DOUBLE_EQ(fr.first_seen, 0.0);
+  for (std::uint32_t id : delta.added) {
+    const frontier::Frontier* fr = f.find(id);
+    ASSERT_NE(fr, nullptr);
+    EXPECT_GT(fr->box.max.x(), 1.5) << "a rebuilt cluster far from the change";
+  }
+  frontier::FrontierFinder full(cfg, m.geometry(), kBox);
+  full.recomputeAll(m, 1.0);
+  expectValidLocalClusters(f, full, m, cfg, "after growing the block");
 }
 
 TEST(FrontierFinder, WideClustersAreSplitSmallRegionsDropped) {

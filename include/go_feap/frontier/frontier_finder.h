@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <unordered_map>
 #include <unordered_set>
+#include <utility>
 #include <vector>
 
 #include "go_feap/common/grid.h"
@@ -20,6 +21,10 @@ struct FrontierConfig {
   int min_cluster_cells = 10;       ///< connected frontier regions with fewer cells are ignored
   double max_cluster_extent = 2.0;  ///< m: a cluster with a cell farther than this from its mean is split (PCA)
   double s_near = 5.0;              ///< m: radius for N_near (other frontiers' average positions)
+  /// cells: an update regrows the whole connected regions of the clusters it touches while it has
+  /// visited fewer cells than this (the result then equals recomputeAll()); beyond it, the clusters it
+  /// did not touch are kept and the fill goes around them (bounded cost in large scenes; 0 = always)
+  int max_regrow_cells = 20000;
 
   common::Status validate() const;
 };
@@ -56,16 +61,23 @@ struct FrontierDelta {
 /// free voxel of the exploration box with an unknown face neighbour inside the box. Cells
 /// are grouped into 26-connected regions; regions below min_cluster_cells are dropped and
 /// wide regions are split along their principal axis until every piece is narrow enough.
+/// Updates are local (DESIGN §3.4): the clusters the change touches are removed and their connected
+/// regions regrown. A region larger than max_regrow_cells (a sheet of frontier over a large hall can
+/// hold 10^5 cells) is regrown only that far: past it, the clusters the change did not touch are kept
+/// and the fill goes around them, as FUEL's does. Then clusters depend on the order the map was seen
+/// in, and a piece that the kept clusters cut off and that is smaller than min_cluster_cells is left
+/// out; every connected set of frontier cells that no cluster holds stays below that size.
 class FrontierFinder {
  public:
   FrontierFinder(const FrontierConfig& config, const common::GridGeometry& geometry, const Aabb& box);
 
   /// Updates after the map changed in the voxel index box [changed_min, changed_max]
-  /// (inclusive). Only clusters within reach of the change are rebuilt; the result equals
-  /// recomputeAll() up to frontier ids.
+  /// (inclusive). Only clusters within reach of the change (a cell within 2 voxels of the box) are
+  /// rebuilt; while no region exceeds max_regrow_cells the result equals recomputeAll() up to ids.
   FrontierDelta update(const map::OccupancyMap& map, const Index3& changed_min, const Index3& changed_max, double now);
   /// Updates after the voxels `changed` (linear indices) changed state; cheaper than the
-  /// box form when the changes are sparse in a large box. Same result.
+  /// box form when the changes are sparse in a large box. Only clusters with a cell in or
+  /// 26-adjacent to a changed voxel or its face neighbours are rebuilt; same result.
   FrontierDelta update(const map::OccupancyMap& map, const std::vector<std::size_t>& changed, double now);
   /// Rebuilds everything from the map (the oracle for update()).
   FrontierDelta recomputeAll(const map::OccupancyMap& map, double now);
@@ -86,7 +98,10 @@ class FrontierFinder {
     Index3 index;
     Vec3 centre;
   };
-  void splitInto(std::vector<Cell> cells, std::vector<std::vector<Cell>>& out) const;
+  /// Splits cells[begin, end) in place into pieces no wider than max_cluster_extent (PCA halves, each
+  /// kept in its order) and appends their ranges to `out`; `buffer` is scratch space.
+  void splitRange(std::vector<Cell>& cells, std::size_t begin, std::size_t end, std::vector<Cell>& buffer,
+                  std::vector<std::pair<std::size_t, std::size_t>>& out) const;
   void refreshNeighbourCounts();
   bool inBox(const Index3& idx) const {
     return (idx.array() >= box_lo_.array()).all() && (idx.array() < box_hi_.array()).all();
