@@ -243,10 +243,11 @@ void ExplorationRun::planStep() {
     current = planning::assessTarget({target_->position, target_->yaw, 0}, target_->committed_at, position, yaw(),
                                      vehicle_.state().velocity.norm(), finder_->frontiers(), map_->occupancy(),
                                      config_.viewpoints, config_.frontier.max_cluster_extent, config_.local);
-  const planning::TargetDecision decision =
-      planning::decideTarget(current ? &*current : nullptr, vp,
-                             planning::edgeCost((position - vp.position).norm(), yaw(), vp.yaw, config_.local), t_,
-                             config_.viewpoints.min_visible, config_.local);
+  const double heading = yaw();
+  const planning::TargetDecision decision = planning::decideTarget(
+      current ? &*current : nullptr, vp,
+      [&](const frontier::Viewpoint& v) { return planning::pathCost(*distance_astar_, position, heading, v, config_.local); },
+      t_, config_.viewpoints.min_visible, config_.local);
   if (decision == planning::TargetDecision::kKeep) return;
   if (decision == planning::TargetDecision::kReachedInVain) {
     log("frontier " + std::to_string(target_->frontier) + " not cleared from its reached viewpoint: failed attempt");

@@ -171,12 +171,13 @@ class LocalPlanner : public nodelet::Nodelet {
     if (target_)
       current = planning::assessTarget(*target_, committed_at_, *position_, yaw_, speed_, all, m.occupancy(),
                                        viewpoint_config_, frontier_extent_, local_config_);
-    ros_conv::publishComputeTime(compute_pub_, "local", t_compute);
-    map_lock.unlock();
+    // Targets are compared by path, not straight line (pathCost()): under the map lock.
     const planning::TargetDecision decision = planning::decideTarget(
         current ? &*current : nullptr, proposal,
-        planning::edgeCost((*position_ - proposal.position).norm(), yaw_, proposal.yaw, local_config_), now,
-        viewpoint_config_.min_visible, local_config_);
+        [&](const frontier::Viewpoint& v) { return planning::pathCost(*astar_, *position_, yaw_, v, local_config_); },
+        now, viewpoint_config_.min_visible, local_config_);
+    ros_conv::publishComputeTime(compute_pub_, "local", t_compute);
+    map_lock.unlock();
     if (decision == planning::TargetDecision::kKeep) {
       // Repeat the kept target: a subscriber that started late (or missed it) still gets it.
       if (last_out_) target_pub_.publish(*last_out_);

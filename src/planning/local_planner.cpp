@@ -198,7 +198,6 @@ CurrentTarget assessTarget(const frontier::Viewpoint& target, double committed_a
   c.viewpoint = target;
   c.committed_at = committed_at;
   c.reached = targetReached(position, yaw, speed, target, config);
-  c.cost = edgeCost((position - target.position).norm(), yaw, target.yaw, config);
   c.remaining_visible = viewpoint_config.min_visible;
   if (!c.reached)
     c.remaining_visible = remainingVisible(target, frontiers, map, viewpoint_config, cluster_extent);
@@ -218,14 +217,21 @@ bool targetReached(const common::Vec3& position, double yaw, double speed, const
          std::abs(wrapAngle(yaw - target.yaw)) <= config.same_target_yaw && speed < config.reached_speed;
 }
 
-TargetDecision decideTarget(const CurrentTarget* current, const frontier::Viewpoint& proposal, double proposal_cost,
-                            double t, int min_visible, const LocalPlannerConfig& config) {
+double pathCost(const Astar& astar, const common::Vec3& position, double yaw, const frontier::Viewpoint& target,
+                const LocalPlannerConfig& config) {
+  return edgeCost(pathDistance(astar, position, target.position).metres, yaw, target.yaw, config);
+}
+
+TargetDecision decideTarget(const CurrentTarget* current, const frontier::Viewpoint& proposal,
+                            const std::function<double(const frontier::Viewpoint&)>& cost, double t,
+                            int min_visible, const LocalPlannerConfig& config) {
   if (!current) return TargetDecision::kSwitch;
   const bool same = (proposal.position - current->viewpoint.position).norm() <= config.same_target_distance &&
                     std::abs(wrapAngle(proposal.yaw - current->viewpoint.yaw)) <= config.same_target_yaw;
   if (same) return current->reached ? TargetDecision::kReachedInVain : TargetDecision::kKeep;
   if (current->remaining_visible < min_visible || current->reached) return TargetDecision::kSwitch;
-  if (t - current->committed_at >= config.commit_time && proposal_cost < current->cost) return TargetDecision::kSwitch;
+  if (t - current->committed_at >= config.commit_time && cost(proposal) < cost(current->viewpoint))
+    return TargetDecision::kSwitch;
   return TargetDecision::kKeep;
 }
 

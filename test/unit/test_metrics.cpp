@@ -263,27 +263,38 @@ TEST(TargetHysteresis, KeepsSwitchesAndReportsTargetsReachedInVain) {
   b.position = Vec3(3, 0, 1);
   b.yaw = 1.0;
   using go_feap::planning::TargetDecision;
-  EXPECT_EQ(go_feap::planning::decideTarget(nullptr, b, 1.0, 0.0, 10, c), TargetDecision::kSwitch);
+  // Costs as the callers' pathCost() would give them; counts the calls (only the commitment rule asks).
+  double cost_a = 2.0, cost_b = 1.0;
+  int asked = 0;
+  auto cost = [&](const go_feap::frontier::Viewpoint& v) {
+    ++asked;
+    return (v.position - a.position).norm() < 0.5 ? cost_a : cost_b;
+  };
+  EXPECT_EQ(go_feap::planning::decideTarget(nullptr, b, cost, 0.0, 10, c), TargetDecision::kSwitch);
   go_feap::planning::CurrentTarget cur;
   cur.viewpoint = a;
   cur.committed_at = 0.0;
   cur.remaining_visible = 50;
-  cur.cost = 2.0;
   // Within the commitment: kept, unless nothing is left to see or it was reached.
-  EXPECT_EQ(go_feap::planning::decideTarget(&cur, b, 1.0, 1.0, 10, c), TargetDecision::kKeep);
+  EXPECT_EQ(go_feap::planning::decideTarget(&cur, b, cost, 1.0, 10, c), TargetDecision::kKeep);
   cur.remaining_visible = 5;
-  EXPECT_EQ(go_feap::planning::decideTarget(&cur, b, 1.0, 1.0, 10, c), TargetDecision::kSwitch);
+  EXPECT_EQ(go_feap::planning::decideTarget(&cur, b, cost, 1.0, 10, c), TargetDecision::kSwitch);
+  EXPECT_EQ(asked, 0);
   cur.remaining_visible = 50;
   // After it: only a quicker proposal replaces it (no taking turns between two targets).
-  EXPECT_EQ(go_feap::planning::decideTarget(&cur, b, 3.0, 2.0, 10, c), TargetDecision::kKeep);
-  EXPECT_EQ(go_feap::planning::decideTarget(&cur, b, 1.0, 2.0, 10, c), TargetDecision::kSwitch);
+  cost_b = 3.0;
+  EXPECT_EQ(go_feap::planning::decideTarget(&cur, b, cost, 2.0, 10, c), TargetDecision::kKeep);
+  EXPECT_EQ(asked, 2);
+  cost_b = 1.0;
+  EXPECT_EQ(go_feap::planning::decideTarget(&cur, b, cost, 2.0, 10, c), TargetDecision::kSwitch);
   // The same target proposed again: kept while flying, reported once reached.
   go_feap::frontier::Viewpoint same = a;
   same.position.x() += 0.1;
-  EXPECT_EQ(go_feap::planning::decideTarget(&cur, same, 0.0, 5.0, 10, c), TargetDecision::kKeep);
+  EXPECT_EQ(go_feap::planning::decideTarget(&cur, same, cost, 5.0, 10, c), TargetDecision::kKeep);
   cur.reached = true;
-  EXPECT_EQ(go_feap::planning::decideTarget(&cur, same, 0.0, 5.0, 10, c), TargetDecision::kReachedInVain);
-  EXPECT_EQ(go_feap::planning::decideTarget(&cur, b, 3.0, 1.0, 10, c), TargetDecision::kSwitch);
+  EXPECT_EQ(go_feap::planning::decideTarget(&cur, same, cost, 5.0, 10, c), TargetDecision::kReachedInVain);
+  cost_b = 3.0;
+  EXPECT_EQ(go_feap::planning::decideTarget(&cur, b, cost, 1.0, 10, c), TargetDecision::kSwitch);
   // Reached means close, facing it and slow.
   EXPECT_TRUE(go_feap::planning::targetReached(Vec3(0.1, 0, 1), 0.1, 0.05, a, c));
   EXPECT_TRUE(go_feap::planning::targetReached(Vec3(0.1, 0, 1), 0.1, 0.9 * c.reached_speed, a, c));  // braking the last centimetres

@@ -509,7 +509,8 @@ TEST(Viewpoints, TargetSeenOutIsDroppedAfterTheCommitment) {
   Viewpoint other;
   other.position = target.position + Vec3(0.0, 1.0, 0.0);
   other.yaw = target.yaw + 1.0;
-  const double costlier = current.cost + 1.0;
+  // The proposal is costlier to reach than the rest of the way to the target.
+  auto costlier = [&](const Viewpoint& v) { return (v.position - target.position).norm() < 1e-9 ? 1.0 : 2.0; };
   using go_feap::planning::TargetDecision;
   EXPECT_EQ(go_feap::planning::decideTarget(&current, other, costlier, 100.0, cfg.min_visible, local),
             TargetDecision::kKeep);
@@ -523,4 +524,41 @@ TEST(Viewpoints, TargetSeenOutIsDroppedAfterTheCommitment) {
                                             local);
   EXPECT_TRUE(current.reached);
   EXPECT_EQ(current.remaining_visible, cfg.min_visible);
+}
+
+// Targets are compared by the time to reach them along a path: behind a wall, a target as near as
+// another in a straight line costs the way round (pathCost() is edgeCost() over pathDistance()), so the
+// hysteresis keeps the target in front.
+TEST(Viewpoints, TargetsAreComparedByPathNotStraightLine) {
+  World w(Index3(40, 40, 20));
+  // A wall across x = 2.0 m from y = 0 to 3.0 m, full height: the way round goes past y = 3.0 m.
+  w.set(Index3(20, 0, 0), Index3(21, 29, 19), VoxelState::kOccupied);
+  go_feap::planning::AstarConfig ac;
+  ac.clearance = 0.2;
+  ac.unknown_is_free = true;
+  ac.max_expansions = 100000;
+  const go_feap::planning::Astar astar(w.map(), w.esdf(), ac);
+  go_feap::planning::LocalPlannerConfig local;
+  const Vec3 vehicle(1.5, 1.0, 1.0);
+  Viewpoint behind, ahead;
+  behind.position = Vec3(2.6, 1.0, 1.0);  // 1.1 m away through the wall
+  ahead.position = Vec3(1.5, 2.5, 1.0);   // 1.5 m away, in the open
+  behind.yaw = ahead.yaw = 0.0;
+  const double straight_behind = go_feap::planning::edgeCost(1.1, 0.0, 0.0, local);
+  const double cost_behind = go_feap::planning::pathCost(astar, vehicle, 0.0, behind, local);
+  const double cost_ahead = go_feap::planning::pathCost(astar, vehicle, 0.0, ahead, local);
+  const auto d = go_feap::planning::pathDistance(astar, vehicle, behind.position);
+  ASSERT_FALSE(d.euclidean_fallback);
+  EXPECT_DOUBLE_EQ(cost_behind, go_feap::planning::edgeCost(d.metres, 0.0, 0.0, local));
+  // Round the wall's end at y = 3.0 m (plus clearance) and back: more than 2 x 2 m.
+  EXPECT_GT(d.metres, 4.0);
+  EXPECT_GT(cost_behind, 3.0 * straight_behind);
+  EXPECT_NEAR(cost_ahead, 1.5 / local.v_max, 0.1);
+  // Kept past the commitment: the target in front is not dropped for the one behind the wall.
+  go_feap::planning::CurrentTarget current;
+  current.viewpoint = ahead;
+  current.remaining_visible = 50;
+  auto cost = [&](const Viewpoint& v) { return go_feap::planning::pathCost(astar, vehicle, 0.0, v, local); };
+  EXPECT_EQ(go_feap::planning::decideTarget(&current, behind, cost, 100.0, 10, local),
+            go_feap::planning::TargetDecision::kKeep);
 }

@@ -130,11 +130,10 @@ struct CurrentTarget {
   double committed_at = 0.0;  ///< s, when it was chosen
   int remaining_visible = 0;  ///< frontier cells still visible from it now (remainingVisible(): counted up to min_visible)
   bool reached = false;       ///< the vehicle got there (targetReached())
-  double cost = 0.0;          ///< s, edgeCost() from the vehicle's pose to it now
 };
 
 /// The current target as decideTarget() needs it, assessed from the vehicle's pose and speed:
-/// reached (targetReached()), cost (edgeCost() from the vehicle), and the frontier cells still visible
+/// reached (targetReached()) and the frontier cells still visible
 /// from it (remainingVisible() over `frontiers`), counted while it is not reached (min_visible once it is,
 /// as the count decides nothing then). It is counted after commit_time too: a target whose frontier has
 /// been seen on the way is dropped at once, instead of being flown to and stopped at.
@@ -156,14 +155,22 @@ bool targetReached(const common::Vec3& position, double yaw, double speed, const
 /// cleared from there; the caller reports that frontier as failed (blacklisted after bounded retries)
 /// and drops the target.
 enum class TargetDecision { kKeep, kSwitch, kReachedInVain };
+/// The time to reach a viewpoint from the vehicle's pose, for comparing targets: edgeCost() over the
+/// path distance (pathDistance() on `astar`), not the straight line, which through a wall makes a
+/// target far round it look as near as one in front.
+double pathCost(const Astar& astar, const common::Vec3& position, double yaw, const frontier::Viewpoint& target,
+                const LocalPlannerConfig& config);
+
 /// Whether `proposal` (the planner's newest first viewpoint) replaces `current` at time t: always when
 /// there is no current target; when the proposal is the same target (within same_target_distance and
 /// same_target_yaw), keep it unless it was reached (kReachedInVain); otherwise switch when nothing is left
 /// to see from the current one (remaining_visible < min_visible), when it was reached, or when it has
-/// been kept for commit_time and the proposal is quicker to reach (proposal_cost < current->cost, both
-/// edgeCost() from the vehicle's pose), which keeps two similar targets from taking turns.
-TargetDecision decideTarget(const CurrentTarget* current, const frontier::Viewpoint& proposal, double proposal_cost,
-                            double t, int min_visible, const LocalPlannerConfig& config);
+/// been kept for commit_time and the proposal is quicker to reach (cost(proposal) < cost(current
+/// viewpoint); `cost` is called only then: the callers pass pathCost()), which keeps two similar targets
+/// from taking turns.
+TargetDecision decideTarget(const CurrentTarget* current, const frontier::Viewpoint& proposal,
+                            const std::function<double(const frontier::Viewpoint&)>& cost, double t,
+                            int min_visible, const LocalPlannerConfig& config);
 
 /// Frontier cells of `frontiers` (those whose average lies within sensor_range + max_cluster_extent of the
 /// viewpoint) that the viewpoint sees: its remaining value, counted up to min_visible (the only
