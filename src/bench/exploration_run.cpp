@@ -243,6 +243,7 @@ void ExplorationRun::planStep() {
     current = planning::assessTarget({target_->position, target_->yaw, 0}, target_->committed_at, position, yaw(),
                                      vehicle_.state().velocity.norm(), finder_->frontiers(), map_->occupancy(),
                                      config_.viewpoints, config_.frontier.max_cluster_extent, config_.local);
+  if (current) current->quicker = target_->quicker;
   const double heading = yaw();
   const planning::TargetDecision decision = planning::decideTarget(
       current ? &*current : nullptr, vp,
@@ -264,7 +265,8 @@ void ExplorationRun::planStep() {
          << vp.yaw << " (tour of " << tour->frontier_ids.size() << ", " << summaries.size() << " frontiers)";
     log(what.str());
   }
-  target_ = Target{vp.position, vp.yaw, plan->frontier_ids.front(), t_};
+  target_ = Target{vp.position, vp.yaw, plan->frontier_ids.front(), t_,
+                   decision == planning::TargetDecision::kSwitchQuicker};
 }
 
 void ExplorationRun::trajectoryStep() {

@@ -144,6 +144,7 @@ class LocalPlanner : public nodelet::Nodelet {
                                                     << "): turning in place to look around");
         target_ = planning::scanTarget(*position_, yaw_, local_config_);
         target_frontier_ = 0;
+        target_quicker_ = false;
         // Each look around is a failed attempt for the tour's frontiers (none had a viewpoint): a
         // frontier that stays unchanged through max_retries of them is blacklisted, not scanned for ever.
         for (unsigned id : tour->frontier_ids) {
@@ -171,6 +172,7 @@ class LocalPlanner : public nodelet::Nodelet {
     if (target_)
       current = planning::assessTarget(*target_, committed_at_, *position_, yaw_, speed_, all, m.occupancy(),
                                        viewpoint_config_, frontier_extent_, local_config_);
+    if (current) current->quicker = target_quicker_;
     // Targets are compared by path, not straight line (pathCost()): under the map lock.
     const planning::TargetDecision decision = planning::decideTarget(
         current ? &*current : nullptr, proposal,
@@ -194,6 +196,7 @@ class LocalPlanner : public nodelet::Nodelet {
       return;
     }
     target_ = proposal;
+    target_quicker_ = decision == planning::TargetDecision::kSwitchQuicker;
     target_frontier_ = plan->frontier_ids.front();
     committed_at_ = now;
     ViewpointPath out;
@@ -245,6 +248,7 @@ class LocalPlanner : public nodelet::Nodelet {
   std::optional<ViewpointPath> last_out_;
   planning::ViewpointCache cache_;
   std::uint32_t target_frontier_ = 0;
+  bool target_quicker_ = false;  ///< the target won on cost (planning::CurrentTarget::quicker)
   double committed_at_ = 0.0, speed_ = 0.0, frontier_extent_ = 2.0;
   ros::Subscriber handle_sub_, odom_sub_, depth_sub_, layer_sub_, frontier_sub_, tour_sub_;
 };

@@ -230,8 +230,9 @@ TargetDecision decideTarget(const CurrentTarget* current, const frontier::Viewpo
                     std::abs(wrapAngle(proposal.yaw - current->viewpoint.yaw)) <= config.same_target_yaw;
   if (same) return current->reached ? TargetDecision::kReachedInVain : TargetDecision::kKeep;
   if (current->remaining_visible < min_visible || current->reached) return TargetDecision::kSwitch;
-  if (t - current->committed_at >= config.commit_time && cost(proposal) < cost(current->viewpoint))
-    return TargetDecision::kSwitch;
+  if (!current->quicker && t - current->committed_at >= config.commit_time &&
+      cost(proposal) < cost(current->viewpoint))
+    return TargetDecision::kSwitchQuicker;
   return TargetDecision::kKeep;
 }
 

@@ -286,7 +286,15 @@ TEST(TargetHysteresis, KeepsSwitchesAndReportsTargetsReachedInVain) {
   EXPECT_EQ(go_feap::planning::decideTarget(&cur, b, cost, 2.0, 10, c), TargetDecision::kKeep);
   EXPECT_EQ(asked, 2);
   cost_b = 1.0;
+  EXPECT_EQ(go_feap::planning::decideTarget(&cur, b, cost, 2.0, 10, c), TargetDecision::kSwitchQuicker);
+  // A target that won on cost is not replaced on cost in turn (costs estimated through unknown space
+  // can cross and cross back as the vehicle flies: the two would take turns for ever).
+  cur.quicker = true;
+  EXPECT_EQ(go_feap::planning::decideTarget(&cur, b, cost, 2.0, 10, c), TargetDecision::kKeep);
+  cur.remaining_visible = 5;
   EXPECT_EQ(go_feap::planning::decideTarget(&cur, b, cost, 2.0, 10, c), TargetDecision::kSwitch);
+  cur.remaining_visible = 50;
+  cur.quicker = false;
   // The same target proposed again: kept while flying, reported once reached.
   go_feap::frontier::Viewpoint same = a;
   same.position.x() += 0.1;

@@ -141,6 +141,7 @@ class ExplorationRun {
     double yaw;
     std::uint32_t frontier;
     double committed_at;
+    bool quicker = false;  ///< won on cost (planning::CurrentTarget::quicker)
   };
   std::optional<Target> target_;
   bool target_changed_ = false;

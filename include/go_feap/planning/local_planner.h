@@ -130,6 +130,9 @@ struct CurrentTarget {
   double committed_at = 0.0;  ///< s, when it was chosen
   int remaining_visible = 0;  ///< frontier cells still visible from it now (remainingVisible(): counted up to min_visible)
   bool reached = false;       ///< the vehicle got there (targetReached())
+  /// it replaced a target for being quicker to reach (kSwitchQuicker): it is not replaced that way in
+  /// turn, so that two targets whose estimated costs cross as the vehicle moves cannot take turns
+  bool quicker = false;
 };
 
 /// The current target as decideTarget() needs it, assessed from the vehicle's pose and speed:
@@ -154,7 +157,9 @@ bool targetReached(const common::Vec3& position, double yaw, double speed, const
 /// kReachedInVain: the current target was reached and is proposed again, so its frontier is not being
 /// cleared from there; the caller reports that frontier as failed (blacklisted after bounded retries)
 /// and drops the target.
-enum class TargetDecision { kKeep, kSwitch, kReachedInVain };
+/// kSwitchQuicker: switched for the commitment rule (the proposal is quicker to reach); the caller
+/// marks the new target CurrentTarget::quicker.
+enum class TargetDecision { kKeep, kSwitch, kSwitchQuicker, kReachedInVain };
 /// The time to reach a viewpoint from the vehicle's pose, for comparing targets: edgeCost() over the
 /// path distance (pathDistance() on `astar`), not the straight line, which through a wall makes a
 /// target far round it look as near as one in front.
@@ -164,10 +169,12 @@ double pathCost(const Astar& astar, const common::Vec3& position, double yaw, co
 /// Whether `proposal` (the planner's newest first viewpoint) replaces `current` at time t: always when
 /// there is no current target; when the proposal is the same target (within same_target_distance and
 /// same_target_yaw), keep it unless it was reached (kReachedInVain); otherwise switch when nothing is left
-/// to see from the current one (remaining_visible < min_visible), when it was reached, or when it has
-/// been kept for commit_time and the proposal is quicker to reach (cost(proposal) < cost(current
-/// viewpoint); `cost` is called only then: the callers pass pathCost()), which keeps two similar targets
-/// from taking turns.
+/// to see from the current one (remaining_visible < min_visible), when it was reached, or
+/// (kSwitchQuicker) when it has been kept for commit_time, did not itself win that way
+/// (CurrentTarget::quicker) and the proposal is quicker to reach (cost(proposal) < cost(current
+/// viewpoint); `cost` is called only then: the callers pass pathCost()). Path estimates through unknown
+/// space can make two targets' costs cross and cross back as the vehicle flies: a target won on cost is
+/// flown to until it is reached, seen or failed, so no two targets take turns for ever.
 TargetDecision decideTarget(const CurrentTarget* current, const frontier::Viewpoint& proposal,
                             const std::function<double(const frontier::Viewpoint&)>& cost, double t,
                             int min_visible, const LocalPlannerConfig& config);
