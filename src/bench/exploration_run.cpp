@@ -220,7 +220,7 @@ void ExplorationRun::planStep() {
   t0 = Clock::now();
   auto plan = planning::chooseLocalTarget(position, yaw(), std::move(ordered), layer_out_.band.z_min,
                                           layer_out_.band.z_max, map_->occupancy(), map_->esdf(), *distance_astar_,
-                                          window_, config_.viewpoints, config_.local, &viewpoint_cache_);
+                                          window_, config_.viewpoints, config_.local, &viewpoint_cache_, &visited_);
   recorder_.addTime("local", msSince(t0));
   if (!plan) {
     // Nothing to fly to: look around, unless already flying somewhere or turning.
@@ -250,6 +250,7 @@ void ExplorationRun::planStep() {
       [&](const frontier::Viewpoint& v) { return planning::pathCost(*distance_astar_, position, heading, v, config_.local); },
       t_, config_.viewpoints.min_visible, config_.local);
   if (decision == planning::TargetDecision::kKeep) return;
+  if (current && current->reached) visited_.add(current->viewpoint, config_.local);
   if (decision == planning::TargetDecision::kReachedInVain) {
     log("frontier " + std::to_string(target_->frontier) + " not cleared from its reached viewpoint: failed attempt");
     failed_.push_back(target_->frontier);

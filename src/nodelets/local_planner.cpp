@@ -134,7 +134,7 @@ class LocalPlanner : public nodelet::Nodelet {
     cache_.retain(ids);
     auto plan = planning::chooseLocalTarget(*position_, yaw_, std::move(tour_frontiers), band_.first, band_.second,
                                             m.occupancy(), m.esdf(), *astar_, *window_, viewpoint_config_,
-                                            local_config_, &cache_);
+                                            local_config_, &cache_, &visited_);
     if (!plan) {
       ros_conv::publishComputeTime(compute_pub_, "local", t_compute);
       map_lock.unlock();
@@ -185,6 +185,7 @@ class LocalPlanner : public nodelet::Nodelet {
       if (last_out_) target_pub_.publish(*last_out_);
       return;
     }
+    if (current && current->reached) visited_.add(current->viewpoint, local_config_);
     if (decision == planning::TargetDecision::kReachedInVain) {
       NODELET_INFO_STREAM(getName() << ": frontier " << target_frontier_
                                     << " not cleared from its reached viewpoint: failed attempt");
@@ -247,6 +248,7 @@ class LocalPlanner : public nodelet::Nodelet {
   std::optional<frontier::Viewpoint> target_;
   std::optional<ViewpointPath> last_out_;
   planning::ViewpointCache cache_;
+  planning::VisitedViewpoints visited_;
   std::uint32_t target_frontier_ = 0;
   bool target_quicker_ = false;  ///< the target won on cost (planning::CurrentTarget::quicker)
   double committed_at_ = 0.0, speed_ = 0.0, frontier_extent_ = 2.0;

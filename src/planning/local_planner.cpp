@@ -42,6 +42,7 @@ Status LocalPlannerConfig::validate() const {
     return err("same_target_distance", "must be finite and >= 0");
   if (!(same_target_yaw >= 0.0 && std::isfinite(same_target_yaw))) return err("same_target_yaw", "must be finite and >= 0");
   if (!(reached_speed > 0.0 && std::isfinite(reached_speed))) return err("reached_speed", "must be finite and > 0");
+  if (max_visits < 1) return err("max_visits", "must be >= 1");
   if (!(scan_step > 0.0 && scan_step < 3.14159)) return err("scan_step", "must be in (0, pi)");
   return Status::Ok();
 }
@@ -204,6 +205,30 @@ CurrentTarget assessTarget(const frontier::Viewpoint& target, double committed_a
   return c;
 }
 
+namespace {
+
+bool samePose(const common::Vec3& p, double yaw, const Viewpoint& vp, const LocalPlannerConfig& config) {
+  return (p - vp.position).norm() <= config.same_target_distance &&
+         std::abs(wrapAngle(yaw - vp.yaw)) <= config.same_target_yaw;
+}
+
+}  // namespace
+
+void VisitedViewpoints::add(const Viewpoint& reached, const LocalPlannerConfig& config) {
+  for (Visit& v : visits_)
+    if (samePose(v.position, v.yaw, reached, config)) {
+      ++v.count;
+      return;
+    }
+  visits_.push_back({reached.position, reached.yaw, 1});
+}
+
+bool VisitedViewpoints::exhausted(const Viewpoint& viewpoint, const LocalPlannerConfig& config) const {
+  for (const Visit& v : visits_)
+    if (v.count >= config.max_visits && samePose(v.position, v.yaw, viewpoint, config)) return true;
+  return false;
+}
+
 frontier::Viewpoint scanTarget(const common::Vec3& position, double yaw, const LocalPlannerConfig& config) {
   frontier::Viewpoint vp;
   vp.position = position;
@@ -281,13 +306,18 @@ common::Result<LocalPlan> chooseLocalTarget(const common::Vec3& position, double
                                             std::vector<frontier::Frontier> tour, double z_min, double z_max,
                                             const map::OccupancyMap& map, const map::Esdf& esdf, const Astar& astar,
                                             const ObstacleWindow& window, const ViewpointConfig& viewpoint_config,
-                                            const LocalPlannerConfig& config, ViewpointCache* cache) {
+                                            const LocalPlannerConfig& config, ViewpointCache* cache,
+                                            const VisitedViewpoints* visited) {
   std::vector<frontier::Frontier> ordered;
   std::vector<FrontierType> types;
   for (frontier::Frontier& f : tour) {
     if (static_cast<int>(ordered.size()) >= config.k_frontiers) break;
     f.viewpoints = cache ? cache->get(f, map, esdf, z_min, z_max, viewpoint_config)
                          : sampleViewpoints(f, map, esdf, z_min, z_max, viewpoint_config);
+    if (visited)
+      f.viewpoints.erase(std::remove_if(f.viewpoints.begin(), f.viewpoints.end(),
+                                        [&](const Viewpoint& vp) { return visited->exhausted(vp, config); }),
+                         f.viewpoints.end());
     if (f.viewpoints.empty()) continue;
     // A path is never shorter than the straight line: only a frontier within d_near of the UAV in a
     // straight line needs the search to be typed.

@@ -63,6 +63,7 @@ TEST(LocalPlannerConfig, ValidateNamesTheBadKey) {
   expectBad("clutter_threshold", [](LocalPlannerConfig& c) { c.clutter_threshold = 1.5; });
   expectBad("max_range", [](LocalPlannerConfig& c) { c.max_range = 0; });
   expectBad("min_dist", [](LocalPlannerConfig& c) { c.min_dist = 0; });
+  expectBad("max_visits", [](LocalPlannerConfig& c) { c.max_visits = 0; });
 }
 
 TEST(ObstacleRatio, SyntheticImages) {

@@ -562,3 +562,49 @@ TEST(Viewpoints, TargetsAreComparedByPathNotStraightLine) {
   EXPECT_EQ(go_feap::planning::decideTarget(&current, behind, cost, 100.0, 10, local),
             go_feap::planning::TargetDecision::kKeep);
 }
+
+// A pose reached max_visits times is exhausted and left out of the local plan: two viewpoints whose
+// frontiers are never cleared (and get new ids every frame) cannot take turns for ever.
+TEST(Viewpoints, PosesReachedMaxVisitsTimesAreNoLongerProposed) {
+  const ViewpointConfig cfg = testConfig();
+  World w(Index3(40, 40, 20));
+  w.set(Index3(25, 15, 5), Index3(30, 25, 15), VoxelState::kUnknown);
+  const Frontier f = frontierOf(w);
+  go_feap::planning::LocalPlannerConfig local;
+  local.max_visits = 2;
+  go_feap::planning::ObstacleWindow window(local.window_size, local.clutter_threshold);
+  go_feap::planning::AstarConfig ac;
+  ac.clearance = 0.2;
+  ac.unknown_is_free = true;
+  const go_feap::planning::Astar astar(w.map(), w.esdf(), ac);
+  const Vec3 vehicle(0.8, 2.0, 1.0);
+  auto plan = [&](const go_feap::planning::VisitedViewpoints* visited) {
+    return go_feap::planning::chooseLocalTarget(vehicle, 0.0, {f}, 0.5, 1.5, w.map(), w.esdf(), astar, window, cfg,
+                                                local, nullptr, visited);
+  };
+  const auto first = plan(nullptr);
+  ASSERT_TRUE(first) << first.message();
+  const Viewpoint chosen = first->path.front();
+  go_feap::planning::VisitedViewpoints visited;
+  // Once: not yet exhausted, the same viewpoint comes back.
+  visited.add(chosen, local);
+  EXPECT_FALSE(visited.exhausted(chosen, local));
+  auto again = plan(&visited);
+  ASSERT_TRUE(again) << again.message();
+  EXPECT_LT((again->path.front().position - chosen.position).norm(), 1e-9);
+  // A nearby pose (same target) counts for it; then the pose is exhausted and another is chosen.
+  Viewpoint nearby = chosen;
+  nearby.position.x() += 0.5 * local.same_target_distance;
+  visited.add(nearby, local);
+  EXPECT_EQ(visited.size(), 1u);
+  EXPECT_TRUE(visited.exhausted(chosen, local));
+  Viewpoint turned = chosen;
+  turned.yaw += 2.0 * local.same_target_yaw;
+  EXPECT_FALSE(visited.exhausted(turned, local));
+  const auto other = plan(&visited);
+  ASSERT_TRUE(other) << other.message();
+  EXPECT_FALSE(visited.exhausted(other->path.front(), local));
+  EXPECT_GT((other->path.front().position - chosen.position).norm() +
+                std::abs(go_feap::planning::wrapAngle(other->path.front().yaw - chosen.yaw)),
+            0.1);
+}

@@ -144,6 +144,7 @@ class ExplorationRun {
     bool quicker = false;  ///< won on cost (planning::CurrentTarget::quicker)
   };
   std::optional<Target> target_;
+  planning::VisitedViewpoints visited_;
   bool target_changed_ = false;
   std::optional<trajectory::Trajectory> trajectory_;
   double trajectory_start_ = 0.0, last_plan_ = -1e9;

@@ -91,7 +91,7 @@ void readLocal(R& p, planning::LocalPlannerConfig& l) {
   p.get("local/min_dist", l.min_dist).get("local/commit_time", l.commit_time);
   p.get("local/min_view_fraction", l.min_view_fraction).get("local/scan_step", l.scan_step);
   p.get("local/same_target_distance", l.same_target_distance).get("local/same_target_yaw", l.same_target_yaw);
-  p.get("local/reached_speed", l.reached_speed);
+  p.get("local/reached_speed", l.reached_speed).get("local/max_visits", l.max_visits);
 }
 
 template <class R>

@@ -43,6 +43,9 @@ struct LocalPlannerConfig {
   /// m/s: a vehicle this slow within same_target_distance and same_target_yaw of its target has reached
   /// it (it is braking the last centimetres: the view from there is the view from the target)
   double reached_speed = 0.4;
+  /// a viewpoint pose reached this many times (VisitedViewpoints) is no longer proposed: its frontier
+  /// is not being cleared from there
+  int max_visits = 3;
   /// rad: when no viewpoint can be planned (at the start, facing a wall, nothing known around), the
   /// vehicle turns in place by this much to look around (scanTarget()).
   double scan_step = 2.0943951023931953;
@@ -185,6 +188,27 @@ TargetDecision decideTarget(const CurrentTarget* current, const frontier::Viewpo
 int remainingVisible(const frontier::Viewpoint& viewpoint, const std::vector<frontier::Frontier>& frontiers,
                      const map::OccupancyMap& map, const ViewpointConfig& config, double cluster_extent);
 
+/// The viewpoint poses the vehicle has reached, and how often. Frontier ids do not identify a place for
+/// long (a cluster gets a new id whenever it is regrown, which a voxel flickering at a grazing angle
+/// does every frame), so the blacklist of failed frontiers cannot stop two viewpoints whose frontiers
+/// are never cleared from taking turns for ever (seen in the powerplant: 1700 s between two poses 4 m
+/// apart). A pose reached max_visits times (within same_target_distance and same_target_yaw) is
+/// exhausted: chooseLocalTarget() no longer proposes it.
+class VisitedViewpoints {
+ public:
+  void add(const frontier::Viewpoint& reached, const LocalPlannerConfig& config);
+  bool exhausted(const frontier::Viewpoint& viewpoint, const LocalPlannerConfig& config) const;
+  std::size_t size() const { return visits_.size(); }
+
+ private:
+  struct Visit {
+    common::Vec3 position;
+    double yaw;
+    int count;
+  };
+  std::vector<Visit> visits_;
+};
+
 /// Candidate viewpoints kept per frontier between planning steps (FUEL keeps them in the frontier
 /// the same way): a frontier keeps its id only while its cells are unchanged, so its viewpoints stay
 /// what sampleViewpoints() gave, except where the map has since filled in; get() re-checks each
@@ -217,11 +241,13 @@ class ViewpointCache {
 /// shorter than d_near: a path is never shorter) and the obstacle window, and runs
 /// planLocal(). `tour` holds the frontiers' cells and averages; their viewpoints are ignored and
 /// replaced. Errors as planLocal(), or "no viewpoint" when no tour frontier has one. With a `cache`,
-/// viewpoints come from it (ViewpointCache::get()) instead of being sampled every time.
+/// viewpoints come from it (ViewpointCache::get()) instead of being sampled every time. With `visited`,
+/// exhausted poses (VisitedViewpoints::exhausted()) are left out.
 common::Result<LocalPlan> chooseLocalTarget(const common::Vec3& position, double yaw,
                                             std::vector<frontier::Frontier> tour, double z_min, double z_max,
                                             const map::OccupancyMap& map, const map::Esdf& esdf, const Astar& astar,
                                             const ObstacleWindow& window, const ViewpointConfig& viewpoint_config,
-                                            const LocalPlannerConfig& config, ViewpointCache* cache = nullptr);
+                                            const LocalPlannerConfig& config, ViewpointCache* cache = nullptr,
+                                            const VisitedViewpoints* visited = nullptr);
 
 }  // namespace go_feap::planning
