@@ -185,11 +185,10 @@ FrontierDelta FrontierFinder::regrow(std::unordered_set<std::uint32_t> affected,
   // 4. Flood fill (26-connected) over frontier cells from the seeds: whole regions. Visited cells are
   // marked in scratch_ (all clear between updates) and cleared again afterwards.
   std::vector<std::size_t> visited;
+  auto marked = [&](std::size_t l) { return ((scratch_[l >> 6] >> (l & 63)) & 1u) != 0; };
   auto visit = [&](std::size_t l) {
-    if ((scratch_[l >> 6] >> (l & 63)) & 1u) return false;
     scratch_[l >> 6] |= std::uint64_t{1} << (l & 63);
     visited.push_back(l);
-    return true;
   };
   std::vector<std::vector<std::size_t>> regions;  // linear indices
   std::sort(seeds.begin(), seeds.end());
@@ -205,7 +204,8 @@ FrontierDelta FrontierFinder::regrow(std::unordered_set<std::uint32_t> affected,
     return false;
   };
   for (std::size_t s : seeds) {
-    if (kept(s) || !visit(s)) continue;
+    if (marked(s) || kept(s)) continue;
+    visit(s);
     std::vector<std::size_t> region;
     std::vector<std::size_t> stack{s};
     while (!stack.empty()) {
@@ -219,7 +219,9 @@ FrontierDelta FrontierFinder::regrow(std::unordered_set<std::uint32_t> affected,
             const Index3 nb = c + Index3(dx, dy, dz);
             if ((dx == 0 && dy == 0 && dz == 0) || !isFrontierCell(nb)) continue;
             const std::size_t ln = geo_.linear(nb);
-            if (!kept(ln) && visit(ln)) stack.push_back(ln);
+            if (marked(ln) || kept(ln)) continue;
+            visit(ln);
+            stack.push_back(ln);
           }
     }
     regions.push_back(std::move(region));
@@ -257,7 +259,7 @@ FrontierDelta FrontierFinder::regrow(std::unordered_set<std::uint32_t> affected,
         f.average += c.centre;
         f.box.min = f.box.min.cwiseMin(c.centre - Vec3::Constant(h));
         f.box.max = f.box.max.cwiseMax(c.centre + Vec3::Constant(h));
-        if (const std::uint32_t own = owner_[l]; own && own < f.id) {
+        if (const std::uint32_t own = owner_[l]) {
           auto it = first_seen.find(own);
           if (it != first_seen.end()) f.first_seen = std::min(f.first_seen, it->second);
         }

@@ -439,15 +439,12 @@ PathResult Astar::search(const Vec3& start, const Vec3& goal, double snap_radius
   cells_[cellOf(s)] = 0;
   open(0);
   std::int32_t reached = -1, nearest = 0;
-  double nearest_h = std::numeric_limits<double>::infinity();
+  float nearest_h = std::numeric_limits<float>::infinity();
   result.status = PathStatus::kNoPath;
   while (!open_.empty()) {
+    const float h = open_.front().h;  // the heuristic its entry was opened with
     const std::int32_t n = heapPop();
-    {
-      std::int32_t h[3];
-      octileMoves(nodes_[n].idx, g, h);
-      if (const double hc = movesCost(h); hc < nearest_h) nearest_h = hc, nearest = n;
-    }
+    if (h < nearest_h) nearest_h = h, nearest = n;
     if (nodes_[n].idx == g) {
       ++result.expansions;
       reached = n;

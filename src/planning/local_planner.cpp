@@ -20,6 +20,12 @@ namespace {
 
 bool positiveFinite(double v) { return v > 0.0 && std::isfinite(v); }
 
+// Within same_target_distance and same_target_yaw of the viewpoint: the same target, or at it.
+bool samePose(const Vec3& p, double yaw, const Viewpoint& vp, const LocalPlannerConfig& config) {
+  return (p - vp.position).norm() <= config.same_target_distance &&
+         std::abs(wrapAngle(yaw - vp.yaw)) <= config.same_target_yaw;
+}
+
 }  // namespace
 
 Status LocalPlannerConfig::validate() const {
@@ -205,15 +211,6 @@ CurrentTarget assessTarget(const frontier::Viewpoint& target, double committed_a
   return c;
 }
 
-namespace {
-
-bool samePose(const common::Vec3& p, double yaw, const Viewpoint& vp, const LocalPlannerConfig& config) {
-  return (p - vp.position).norm() <= config.same_target_distance &&
-         std::abs(wrapAngle(yaw - vp.yaw)) <= config.same_target_yaw;
-}
-
-}  // namespace
-
 void VisitedViewpoints::add(const Viewpoint& reached, const LocalPlannerConfig& config) {
   for (Visit& v : visits_)
     if (samePose(v.position, v.yaw, reached, config)) {
@@ -238,8 +235,7 @@ frontier::Viewpoint scanTarget(const common::Vec3& position, double yaw, const L
 
 bool targetReached(const common::Vec3& position, double yaw, double speed, const frontier::Viewpoint& target,
                    const LocalPlannerConfig& config) {
-  return (position - target.position).norm() <= config.same_target_distance &&
-         std::abs(wrapAngle(yaw - target.yaw)) <= config.same_target_yaw && speed < config.reached_speed;
+  return samePose(position, yaw, target, config) && speed < config.reached_speed;
 }
 
 double pathCost(const Astar& astar, const common::Vec3& position, double yaw, const frontier::Viewpoint& target,
@@ -251,8 +247,7 @@ TargetDecision decideTarget(const CurrentTarget* current, const frontier::Viewpo
                             const std::function<double(const frontier::Viewpoint&)>& cost, double t,
                             int min_visible, const LocalPlannerConfig& config) {
   if (!current) return TargetDecision::kSwitch;
-  const bool same = (proposal.position - current->viewpoint.position).norm() <= config.same_target_distance &&
-                    std::abs(wrapAngle(proposal.yaw - current->viewpoint.yaw)) <= config.same_target_yaw;
+  const bool same = samePose(proposal.position, proposal.yaw, current->viewpoint, config);
   if (same) return current->reached ? TargetDecision::kReachedInVain : TargetDecision::kKeep;
   if (current->remaining_visible < min_visible || current->reached) return TargetDecision::kSwitch;
   if (!current->quicker && t - current->committed_at >= config.commit_time &&
