@@ -101,6 +101,8 @@ Status AstarConfig::validate() const {
   // Each expansion adds at most 26 nodes, indexed by int32.
   if (max_expansions < 1 || max_expansions > kMaxExpansions)
     return err("max_expansions", ("must be in [1, " + std::to_string(kMaxExpansions) + "]").c_str());
+  if (probe_expansions < 0 || probe_expansions > kMaxExpansions)
+    return err("probe_expansions", ("must be in [0, " + std::to_string(kMaxExpansions) + "]").c_str());
   if (!(tie_breaker >= 1.0 && std::isfinite(tie_breaker)))
     return err("tie_breaker", "must be finite and >= 1");
   return Status::Ok();
@@ -160,7 +162,18 @@ bool Astar::traversableWith(const Index3& idx, double min_distance) const {
   if ((c.array() < box.min.array() + min_distance).any() || (c.array() > box.max.array() - min_distance).any())
     return false;
   const std::size_t linear = geo_.linear(idx);
-  return freeAndKnown(idx, linear, false) && esdf_.distance(idx) >= min_distance;
+  if (!freeAndKnown(idx, linear, false) || !(esdf_.distance(idx) >= min_distance)) return false;
+  if (!config_.known_clearance || config_.unknown_is_free) return true;
+  // Nothing unseen within min_distance either: an obstacle there would be that close to the vehicle.
+  const double r = min_distance / geo_.resolution();
+  const int n = static_cast<int>(std::floor(r));
+  for (int dz = -n; dz <= n; ++dz)
+    for (int dy = -n; dy <= n; ++dy)
+      for (int dx = -n; dx <= n; ++dx) {
+        if (dx * dx + dy * dy + dz * dz > r * r) continue;
+        if (occupancy_.state(Index3(idx + Index3(dx, dy, dz))) == VoxelState::kUnknown) return false;
+      }
+  return true;
 }
 
 bool Astar::traversable(const Index3& idx, std::size_t linear) const {
@@ -391,17 +404,8 @@ std::size_t Astar::brick(std::uint32_t key) const {
   return first;
 }
 
-PathResult Astar::search(const Vec3& start, const Vec3& goal, double snap_radius) const {
-  PathResult result;
-  Index3 s, g;
-  if (!snap(start, snap_radius, s, true)) {
-    result.status = PathStatus::kStartBlocked;
-    return result;
-  }
-  if (!snap(goal, snap_radius, g)) {
-    result.status = PathStatus::kGoalBlocked;
-    return result;
-  }
+std::int32_t Astar::run(const Index3& s, const Index3& g, const Index3& start, double snap_radius, int budget,
+                       PathResult& result, std::int32_t& nearest) const {
   const Neighbourhood& nb = neighbourhood();
   // Voxels (in squared voxel units) within snap_radius of the start: no known-surroundings rule there.
   const double exempt_voxels = snap_radius / geo_.resolution();
@@ -438,9 +442,11 @@ PathResult Astar::search(const Vec3& start, const Vec3& goal, double snap_radius
   nodes_.push_back(Node{s, -1, {0, 0, 0}, -1});
   cells_[cellOf(s)] = 0;
   open(0);
-  std::int32_t reached = -1, nearest = 0;
+  std::int32_t reached = -1;
+  nearest = 0;
   float nearest_h = std::numeric_limits<float>::infinity();
   result.status = PathStatus::kNoPath;
+  result.expansions = 0;
   while (!open_.empty()) {
     const float h = open_.front().h;  // the heuristic its entry was opened with
     const std::int32_t n = heapPop();
@@ -451,7 +457,7 @@ PathResult Astar::search(const Vec3& start, const Vec3& goal, double snap_radius
       result.status = PathStatus::kFound;
       break;
     }
-    if (result.expansions >= config_.max_expansions) {
+    if (result.expansions >= budget) {
       result.status = PathStatus::kBudgetExceeded;
       break;
     }
@@ -467,7 +473,8 @@ PathResult Astar::search(const Vec3& start, const Vec3& goal, double snap_radius
       std::int32_t& c = cells_[cell[k]];
       if (c == kCellUnseen) {
         const std::size_t linear = geo_.linear(q);
-        const bool pass = (q - s).squaredNorm() <= exempt2 ? traversableNearStart(q, linear) : traversable(q, linear);
+        const bool pass =
+            (q - start).squaredNorm() <= exempt2 ? traversableNearStart(q, linear) : traversable(q, linear);
         c = pass ? kCellFree : kCellBlocked;
       }
       if (c != kCellBlocked) free |= std::uint32_t{1} << k;  // kCellClosed voxels are traversable too
@@ -490,22 +497,82 @@ PathResult Astar::search(const Vec3& start, const Vec3& goal, double snap_radius
       open(m);
     }
   }
-  if (reached < 0) {
-    if (nearest > 0) {
-      std::vector<Vec3> raw;
-      for (std::int32_t n = nearest; n >= 0; n = nodes_[n].parent) raw.push_back(geo_.indexToCoord(nodes_[n].idx));
-      std::reverse(raw.begin(), raw.end());
-      result.toward = shorten(raw);
-    }
+  return reached;
+}
+
+std::vector<Vec3> Astar::chain(std::int32_t n) const {
+  std::vector<Vec3> out;
+  for (; n >= 0; n = nodes_[n].parent) out.push_back(geo_.indexToCoord(nodes_[n].idx));
+  return out;
+}
+
+PathResult Astar::search(const Vec3& start, const Vec3& goal, double snap_radius) const {
+  PathResult result;
+  Index3 s, g;
+  if (!snap(start, snap_radius, s, true)) {
+    result.status = PathStatus::kStartBlocked;
     return result;
   }
-
-  for (std::int32_t n = reached; n >= 0; n = nodes_[n].parent)
-    result.raw_path.push_back(geo_.indexToCoord(nodes_[n].idx));
-  std::reverse(result.raw_path.begin(), result.raw_path.end());
-  result.raw_length = pathLength(result.raw_path);
-  result.path = shorten(result.raw_path);
-  result.length = pathLength(result.path);
+  if (!snap(goal, snap_radius, g)) {
+    result.status = PathStatus::kGoalBlocked;
+    return result;
+  }
+  auto finish = [&](std::vector<Vec3> raw) {
+    result.raw_path = std::move(raw);
+    result.raw_length = pathLength(result.raw_path);
+    result.path = shorten(result.raw_path);
+    result.length = pathLength(result.path);
+  };
+  auto towardNearest = [&](std::int32_t nearest) {
+    if (nearest <= 0) return;
+    std::vector<Vec3> raw = chain(nearest);
+    std::reverse(raw.begin(), raw.end());
+    result.toward = shorten(raw);
+  };
+  std::int32_t nearest = 0;
+  int spent = 0;
+  const int probe = config_.probe_expansions;
+  if (probe > 0 && probe < config_.max_expansions) {
+    const std::int32_t reached = run(s, g, s, snap_radius, probe, result, nearest);
+    if (reached >= 0) {
+      std::vector<Vec3> raw = chain(reached);
+      std::reverse(raw.begin(), raw.end());
+      finish(std::move(raw));
+      return result;
+    }
+    if (result.status == PathStatus::kNoPath) {
+      towardNearest(nearest);
+      return result;
+    }
+    // Not settled from the start's side: try from the goal's (the scratch is reused, so keep `toward`).
+    towardNearest(nearest);
+    PathResult back;
+    std::int32_t unused = 0;
+    const std::int32_t met = run(g, s, s, snap_radius, probe, back, unused);
+    spent = result.expansions + back.expansions;
+    if (back.status == PathStatus::kNoPath) {  // the goal's side ran out: cut off
+      result.status = PathStatus::kNoPath;
+      result.expansions = spent;
+      return result;
+    }
+    if (met >= 0) {  // the chain from the start voxel back to the goal is the path, start first
+      result.status = PathStatus::kFound;
+      result.expansions = spent;
+      result.toward.clear();
+      finish(chain(met));
+      return result;
+    }
+    result.toward.clear();
+  }
+  const std::int32_t reached = run(s, g, s, snap_radius, config_.max_expansions, result, nearest);
+  result.expansions += spent;
+  if (reached < 0) {
+    towardNearest(nearest);
+    return result;
+  }
+  std::vector<Vec3> raw = chain(reached);
+  std::reverse(raw.begin(), raw.end());
+  finish(std::move(raw));
   return result;
 }
 

@@ -257,6 +257,9 @@ TEST(AstarConfig, ValidateNamesTheBadKey) {
   c.max_expansions = 0;
   EXPECT_NE(c.validate().message().find("max_expansions"), std::string::npos);
   c = AstarConfig();
+  c.probe_expansions = -1;
+  EXPECT_NE(c.validate().message().find("probe_expansions"), std::string::npos);
+  c = AstarConfig();
   c.tie_breaker = 0.99;
   EXPECT_NE(c.validate().message().find("tie_breaker"), std::string::npos);
   c = AstarConfig();
@@ -313,7 +316,7 @@ TEST(Astar, TraversableFollowsTheBlockingRule) {
 }
 
 TEST(Astar, CostEqualsExhaustiveShortestPathOnRandomGrids) {
-  int found = 0, no_path = 0;
+  int found = 0, no_path = 0, probed = 0;
   for (unsigned seed = 1; seed <= 6; ++seed) {
     World world(kRandomDims);
     Rng rng(seed);
@@ -327,6 +330,11 @@ TEST(Astar, CostEqualsExhaustiveShortestPathOnRandomGrids) {
     AstarConfig weighted = config;
     weighted.tie_breaker = 1.5;
     const Astar greedy(world.occupancy(), world.esdf(), weighted);
+    // Searches that look from the goal's side after a few expansions find paths as short, and the same
+    // unreachable goals.
+    AstarConfig probing_config = config;
+    probing_config.probe_expansions = 20 + 10 * static_cast<int>(seed);
+    const Astar probing(world.occupancy(), world.esdf(), probing_config);
     const GridGeometry& g = world.geo();
     std::vector<std::uint8_t> ok(g.size());
     for (std::size_t l = 0; l < g.size(); ++l) ok[l] = astar.traversable(g.unlinear(l));
@@ -343,13 +351,19 @@ TEST(Astar, CostEqualsExhaustiveShortestPathOnRandomGrids) {
         const double want = cost[g.linear(goal)];
         SCOPED_TRACE("seed " + std::to_string(seed) + " query " + std::to_string(query) + "/" +
                      std::to_string(k));
+        const PathResult p = probing.search(g.indexToCoord(start), g.indexToCoord(goal), 0.0);
         if (want == kInf) {
           EXPECT_EQ(r.status, PathStatus::kNoPath) << toString(r.status);
           EXPECT_TRUE(r.path.empty());
           EXPECT_TRUE(r.raw_path.empty());
+          EXPECT_EQ(p.status, PathStatus::kNoPath) << toString(p.status);
+          EXPECT_TRUE(p.raw_path.empty());
           ++no_path;
           continue;
         }
+        expectWellFormed(probing, p, start, goal);
+        EXPECT_NEAR(p.raw_length, want, 1e-9);
+        if (p.expansions > probing_config.probe_expansions) ++probed;
         ++found;
         expectWellFormed(astar, r, start, goal);
         EXPECT_NEAR(r.raw_length, want, 1e-9);
@@ -367,6 +381,7 @@ TEST(Astar, CostEqualsExhaustiveShortestPathOnRandomGrids) {
   }
   EXPECT_GT(found, 50);
   EXPECT_GT(no_path, 5);
+  EXPECT_GT(probed, 10);  // the searches from the goal's side were exercised
 }
 
 TEST(Astar, CostEqualsExhaustiveShortestPathInLargeMazes) {
@@ -661,6 +676,15 @@ TEST(Astar, KnownSurroundingsRuleIsWaivedNearTheStart) {
       EXPECT_TRUE(astar.traversable(world.geo().coordToIndex(p))) << p.transpose();
     }
   }
+  // Searched back from the goal (probe_expansions), the waiver is still around the vehicle's start.
+  AstarConfig probing_config = config;
+  probing_config.probe_expansions = 8;
+  const Astar probing(world.occupancy(), world.esdf(), probing_config);
+  const PathResult back = probing.search(world.geo().indexToCoord(near_start), goal, snap_radius);
+  ASSERT_EQ(back.status, PathStatus::kFound) << toString(back.status);
+  EXPECT_GT(back.expansions, 2 * probing_config.probe_expansions);  // found from the goal's side
+  EXPECT_EQ(back.raw_path.front(), world.geo().indexToCoord(near_start));
+  EXPECT_NEAR(back.raw_length, out.raw_length, 1e-9);
   const PathResult stuck = astar.search(world.geo().indexToCoord(Index3(12, 10, 10)), goal, snap_radius);
   EXPECT_EQ(stuck.status, PathStatus::kNoPath) << toString(stuck.status);
   const double r = snap_radius / kRes;
@@ -697,4 +721,39 @@ TEST(Astar, FailedSearchesPointTowardTheGoal) {
   const PathResult found = astar.search(start, goal);
   ASSERT_EQ(found.status, PathStatus::kFound);
   EXPECT_TRUE(found.toward.empty());
+}
+
+// A goal in a sealed pocket: a plain search floods the start's whole side before it gives up; with
+// probe_expansions the search from the goal runs out of pocket and fails at once, still pointing toward
+// the goal. A goal around a wall is found from its side with the same length.
+TEST(Astar, ProbeFromTheGoalFailsFastWhenTheGoalIsCutOff) {
+  World world(Index3(80, 60, 20));
+  world.fill(VoxelState::kFree);
+  world.set(Index3(60, 20, 4), Index3(68, 28, 12), VoxelState::kOccupied);
+  world.set(Index3(62, 22, 6), Index3(66, 26, 10), VoxelState::kFree);  // the pocket: 5^3 voxels inside a shell
+  const Vec3 start = world.geo().indexToCoord(Index3(5, 5, 8)), goal = world.geo().indexToCoord(Index3(64, 24, 8));
+  const Astar plain(world.occupancy(), world.esdf(), astarConfig(0.0, false));
+  const PathResult flood = plain.search(start, goal);
+  EXPECT_EQ(flood.status, PathStatus::kNoPath) << toString(flood.status);
+  EXPECT_GT(flood.expansions, 50000);
+
+  AstarConfig config = astarConfig(0.0, false);
+  config.probe_expansions = 500;
+  const Astar probing(world.occupancy(), world.esdf(), config);
+  const PathResult fast = probing.search(start, goal);
+  EXPECT_EQ(fast.status, PathStatus::kNoPath) << toString(fast.status);
+  EXPECT_LE(fast.expansions, 500 + 125 + 1);
+  ASSERT_GE(fast.toward.size(), 2u);
+  EXPECT_EQ(fast.toward.front(), start);
+  EXPECT_LT((fast.toward.back() - goal).norm(), (start - goal).norm() - 1.0);
+
+  // The pocket opened through a corridor on its far side: the long way round, as short as without probing.
+  world.set(Index3(67, 24, 8), Index3(79, 24, 8), VoxelState::kFree);
+  const Astar plain_open(world.occupancy(), world.esdf(), astarConfig(0.0, false));
+  const Astar probing_open(world.occupancy(), world.esdf(), config);
+  const PathResult want = plain_open.search(start, goal);
+  const PathResult got = probing_open.search(start, goal);
+  ASSERT_EQ(want.status, PathStatus::kFound) << toString(want.status);
+  expectWellFormed(probing_open, got, world.geo().coordToIndex(start), world.geo().coordToIndex(goal));
+  EXPECT_NEAR(got.raw_length, want.raw_length, 1e-9);
 }

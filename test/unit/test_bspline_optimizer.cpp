@@ -756,8 +756,8 @@ TEST(TrajectoryPlanner, WithoutAKnownPathItFliesTowardsTheTarget) {
 }
 
 // staysFlyable(): a spline through mapped free space passes; the same spline fails once a voxel it
-// crosses is unknown, or lies within min_distance of the box's faces or of a mapped obstacle, except
-// within exempt_radius of its start.
+// crosses is unknown or has an unknown voxel within min_distance, or lies within min_distance of the
+// box's faces or of a mapped obstacle, except within exempt_radius of its start.
 TEST(TrajectoryPlanner, StaysFlyableFollowsTheSearchRulesWithTheGivenClearance) {
   World world(Vec3(6, 4, 3));
   const Index3 dims = world.geo().dims();
@@ -772,11 +772,15 @@ TEST(TrajectoryPlanner, StaysFlyableFollowsTheSearchRulesWithTheGivenClearance) 
   for (int i = 0; i <= 10; ++i) line.push_back(Vec3(1.0 + 0.4 * i, 2.0, 1.5));
   const UniformBspline spline = UniformBspline::fitPath(line, 0.3, Vec3::Zero(), Vec3::Zero());
   EXPECT_TRUE(traj::staysFlyable(spline, astar, 0.2, 0.5));
+  // Free space but for the voxel of `unknown`.
+  auto freeBut = [&](World& w, const Vec3& unknown) {
+    w.setFree(Index3::Zero(), dims - Index3::Ones());
+    w.setUnknown(w.geo().coordToIndex(unknown));
+    w.sync();
+  };
   // An unknown voxel on the way.
   World holed(Vec3(6, 4, 3));
-  holed.setFree(Index3::Zero(), dims - Index3::Ones());
-  holed.setUnknown(holed.geo().coordToIndex(Vec3(3.0, 2.0, 1.5)));
-  holed.sync();
+  freeBut(holed, Vec3(3.0, 2.0, 1.5));
   const Astar holed_astar(holed.occupancy(), holed.esdf(), config);
   EXPECT_FALSE(traj::staysFlyable(spline, holed_astar, 0.2, 0.5));
   // Along the top face: 0.65 m below it passes with 0.6 m of clearance, not with 0.8 m.
@@ -800,6 +804,13 @@ TEST(TrajectoryPlanner, StaysFlyableFollowsTheSearchRulesWithTheGivenClearance) 
   EXPECT_FALSE(traj::staysFlyable(UniformBspline::fitPath(towards, 0.2, Vec3::Zero(), Vec3::Zero()), walled_astar, 0.25, 0.3));
   // Unknown space within the exempt radius is allowed too, not at the end.
   EXPECT_TRUE(traj::staysFlyable(spline, holed_astar, 0.2, 2.5));
+  // An unknown voxel beside the way, 0.1 m off the curve: within min_distance it fails (an obstacle
+  // there, unseen, would be that close), with a smaller min_distance it passes.
+  World beside(Vec3(6, 4, 3));
+  freeBut(beside, Vec3(3.05, 2.15, 1.55));
+  const Astar beside_astar(beside.occupancy(), beside.esdf(), config);
+  EXPECT_FALSE(traj::staysFlyable(spline, beside_astar, 0.2, 0.5));
+  EXPECT_TRUE(traj::staysFlyable(spline, beside_astar, 0.09, 0.5));
 }
 
 }  // namespace

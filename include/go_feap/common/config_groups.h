@@ -64,7 +64,8 @@ template <class R>
 void readAstar(R& p, planning::AstarConfig& c) {
   p.get("astar/clearance", c.clearance).get("astar/unknown_is_free", c.unknown_is_free);
   p.get("astar/known_clearance", c.known_clearance);
-  p.get("astar/max_expansions", c.max_expansions).get("astar/tie_breaker", c.tie_breaker);
+  p.get("astar/max_expansions", c.max_expansions).get("astar/probe_expansions", c.probe_expansions);
+  p.get("astar/tie_breaker", c.tie_breaker);
 }
 
 template <class R>

@@ -29,6 +29,12 @@ struct AstarConfig {
   bool known_clearance = false;
   /// Search budget: voxels expanded before giving up, at most 5e7.
   int max_expansions = 200000;
+  /// Expansions after which a search that has not finished looks from the goal's side: a search from the
+  /// goal back to the start, with the same budget, that runs out of voxels proves the goal is cut off
+  /// (kNoPath at once, instead of flooding the start's side up to max_expansions); one that reaches the
+  /// start gives the path. Only when neither settles it does the search go on to max_expansions
+  /// (starting over). 0 = off. Paths are as short either way.
+  int probe_expansions = 0;
   /// Weight on the heuristic. 1 gives shortest paths; w > 1 may return a path up to w times longer than
   /// the shortest in exchange for fewer expansions in cluttered maps. Not needed for speed in open space:
   /// ties between equal-cost candidates are already broken towards the goal.
@@ -87,7 +93,8 @@ class Astar {
 /// voxels themselves must still be known free with the ESDF clearance. The heuristic is
   /// the exact obstacle-free cost on this lattice (the 3D octile distance, >= the Euclidean distance and
   /// still admissible), so open space costs few expansions. Stops with kBudgetExceeded after
-  /// config.max_expansions expansions.
+  /// config.max_expansions expansions, and earlier with kNoPath when config.probe_expansions proves the
+  /// goal cut off (see there; `expansions` then counts both directions, and `toward` is from the probe).
   PathResult search(const Vec3& start, const Vec3& goal, double snap_radius = 0.5) const;
 
   /// Greedily removes intermediate points: from each kept point, the path continues to a following point
@@ -102,9 +109,11 @@ class Astar {
   /// and ESDF distance at least config.clearance.
   bool traversable(const Index3& idx) const;
   /// traversable() with `min_distance` (m) in place of config.clearance, from mapped obstacles (ESDF) and
-  /// from the box's faces, and without the known-surroundings rule (the voxel itself must still be free,
-  /// or unknown when config.unknown_is_free). The test for a trajectory that the optimiser bent away from
-  /// the path: it may graze the edge of the known region the path hugs, never cross unseen space.
+  /// from the box's faces, and with a nearer known-surroundings rule: the voxel itself must be free (or
+  /// unknown when config.unknown_is_free), and with config.known_clearance every voxel whose centre lies
+  /// within min_distance of its centre must be known, since an unseen obstacle there would be that close.
+  /// The test for a trajectory that the optimiser bent away from the path: it may graze the edge of the
+  /// known region the path hugs (config.clearance away), never cross or touch unseen space.
   bool traversableWith(const Index3& idx, double min_distance) const;
   /// True when every voxel the segment from a to b touches is traversable (see shorten()).
   bool segmentTraversable(const Vec3& a, const Vec3& b) const;
@@ -144,6 +153,14 @@ class Astar {
   bool freeAndKnown(const Index3& idx, std::size_t linear, bool surroundings) const;
   /// Nearest traversable voxel to p whose centre is within `radius` of it; false when none.
   bool snap(const Vec3& p, double radius, Index3& out, bool near_start = false) const;
+  /// One A* run from voxel `from` to voxel `to` with at most `budget` expansions; the known-surroundings
+  /// rule is waived within snap_radius of voxel `start` (the vehicle's, whichever way the run goes).
+  /// Sets result.status and result.expansions; returns the node that reached `to` (-1 when none) and
+  /// the expanded node nearest to it in `nearest`.
+  std::int32_t run(const Index3& from, const Index3& to, const Index3& start, double snap_radius, int budget,
+                   PathResult& result, std::int32_t& nearest) const;
+  /// Voxel centres from node n back to the run's first node.
+  std::vector<Vec3> chain(std::int32_t n) const;
   void resetScratch() const;
   void heapUp(std::size_t i, const OpenEntry& e) const;
   /// Adds node e.node to the open list, or moves its entry to the (lower) f of e.
