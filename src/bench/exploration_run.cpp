@@ -289,10 +289,11 @@ void ExplorationRun::trajectoryStep() {
   }
   request.target = target_->position;
   request.target_yaw = target_->yaw;
+  request.time = t_;
   const auto t0 = Clock::now();
   trajectory::PlanReport report;
-  auto planned =
-      trajectory::planTrajectory(request, *flight_astar_, map_->esdf(), config_.optimizer, config_.planner, &report);
+  auto planned = trajectory::planTrajectory(request, *flight_astar_, map_->esdf(), config_.optimizer, config_.planner,
+                                            &report, &search_memory_);
   recorder_.addTime("trajectory", msSince(t0));
   trajectory_start_ = t_;
   if (planned) {

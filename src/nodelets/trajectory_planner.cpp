@@ -150,12 +150,14 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     startState(now, request.start, request.velocity, request.yaw);
     request.target = *target_;
     request.target_yaw = target_yaw_;
+    request.time = now.toSec();
     const auto t_compute = ros_conv::WallClock::now();
     common::Result<trajectory::Trajectory> planned = common::Result<trajectory::Trajectory>::Error("");
     trajectory::PlanReport report;
     {
       std::shared_lock<std::shared_mutex> map_lock(shared_->mutex);
-      planned = trajectory::planTrajectory(request, *astar_, shared_->map->esdf(), optimizer_, planner_, &report);
+      planned = trajectory::planTrajectory(request, *astar_, shared_->map->esdf(), optimizer_, planner_, &report,
+                                           &search_memory_);
     }
     ros_conv::publishComputeTime(compute_pub_, "trajectory", t_compute);
     if (!planned) {
@@ -219,6 +221,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
   bool target_changed_ = false;
   PositionCommand::ConstPtr command_;
   std::optional<ros_traj::Trajectory> current_;
+  trajectory::SearchMemory search_memory_;  // flight searches that found no path lately
   std::int64_t trajectory_id_ = 0;
   ros::Time last_plan_;
   ros::Publisher compute_pub_;

@@ -45,6 +45,8 @@ common::Status TrajectoryPlannerConfig::validate() const {
     return common::Status::Error("planner: snap_radius must be finite and >= 0");
   if (!std::isfinite(goal_tolerance) || goal_tolerance < 0.0)
     return common::Status::Error("planner: goal_tolerance must be finite and >= 0");
+  if (!std::isfinite(failed_search_memory) || failed_search_memory < 0.0)
+    return common::Status::Error("planner: failed_search_memory must be finite and >= 0");
   return common::Status::Ok();
 }
 
@@ -61,9 +63,28 @@ bool staysFlyable(const UniformBspline& spline, const planning::Astar& astar, do
   }
 }
 
+void SearchMemory::remember(const Vec3& start, const Vec3& goal, planning::PathStatus status, int expansions,
+                            double t) {
+  entries_.push_back({start, goal, {status, expansions, t}});
+}
+
+std::optional<SearchMemory::Failure> SearchMemory::recall(const Vec3& start, const Vec3& goal, double t,
+                                                          const TrajectoryPlannerConfig& config) {
+  entries_.erase(std::remove_if(entries_.begin(), entries_.end(),
+                                [&](const Entry& e) {
+                                  return !(t - e.failure.t < config.failed_search_memory) || t < e.failure.t;
+                                }),
+                 entries_.end());
+  for (const Entry& e : entries_)
+    if ((e.start - start).norm() <= config.snap_radius && (e.goal - goal).norm() <= config.goal_tolerance)
+      return e.failure;
+  return std::nullopt;
+}
+
 common::Result<Trajectory> planTrajectory(const PlanRequest& request, const planning::Astar& astar,
                                           const map::Esdf& esdf, const OptimizerConfig& optimizer,
-                                          const TrajectoryPlannerConfig& config, PlanReport* report) {
+                                          const TrajectoryPlannerConfig& config, PlanReport* report,
+                                          SearchMemory* memory) {
   using R = common::Result<Trajectory>;
   PlanReport local;
   PlanReport& rep = report ? *report : local;
@@ -83,6 +104,15 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
     return out;
   };
   if ((request.target - request.start).norm() < 0.5 * astar.geometry().resolution()) return turnInPlace();
+  if (memory) {
+    if (const auto failure = memory->recall(request.start, request.target, request.time, config)) {
+      rep.path_status = failure->status;
+      rep.path_expansions = failure->expansions;
+      rep.remembered = true;
+      return R::Error(std::string("no path: ") + planning::toString(failure->status) + " (the same search failed " +
+                      std::to_string(request.time - failure->t) + " s ago)");
+    }
+  }
   const planning::PathResult path = astar.search(request.start, request.target, config.snap_radius);
   rep.path_status = path.status;
   rep.path_expansions = path.expansions;
@@ -93,8 +123,11 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
                       config.min_progress > 0.0 &&
                       (request.target - request.start).norm() - (request.target - path.toward.back()).norm() >=
                           config.min_progress;
-  if (path.status != planning::PathStatus::kFound && !toward)
+  if (path.status != planning::PathStatus::kFound && !toward) {
+    if (memory && (path.status == planning::PathStatus::kNoPath || path.status == planning::PathStatus::kBudgetExceeded))
+      memory->remember(request.start, request.target, path.status, path.expansions, request.time);
     return R::Error(std::string("no path: ") + planning::toString(path.status));
+  }
   rep.toward = toward;
   const std::vector<Vec3>& found = toward ? path.toward : path.path;
   rep.path_length = toward ? 0.0 : path.length;

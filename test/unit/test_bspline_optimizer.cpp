@@ -720,16 +720,26 @@ TEST(TrajectoryPlanner, TightCornersAreFlownWithClearance) {
 // Two known rooms with unseen space between: no path through known space, so the trajectory goes
 // towards the target, to the search's nearest point (partial, the goal kept, known flyable space
 // throughout); with min_progress above what that gains, the plan fails with the search's status.
-TEST(TrajectoryPlanner, WithoutAKnownPathItFliesTowardsTheTarget) {
-  World world(Vec3(8, 4, 2));
+// Two known-free rooms, x in [0, 4] m and [5, 8] m, with unknown space between them.
+void twoRooms(World& world) {
   world.setFree(Index3(0, 0, 0), Index3(39, 39, 19));
   world.setFree(Index3(50, 0, 0), Index3(79, 39, 19));
   world.sync();
-  AstarConfig astar_config;
-  astar_config.unknown_is_free = false;
-  astar_config.known_clearance = true;
-  astar_config.clearance = 0.3;
-  const Astar astar(world.occupancy(), world.esdf(), astar_config);
+}
+
+// The flight search's settings: known space only, its surroundings known 0.3 m out.
+AstarConfig flightAstarConfig() {
+  AstarConfig c;
+  c.unknown_is_free = false;
+  c.known_clearance = true;
+  c.clearance = 0.3;
+  return c;
+}
+
+TEST(TrajectoryPlanner, WithoutAKnownPathItFliesTowardsTheTarget) {
+  World world(Vec3(8, 4, 2));
+  twoRooms(world);
+  const Astar astar(world.occupancy(), world.esdf(), flightAstarConfig());
   const OptimizerConfig optimizer = optimizerConfig();
   traj::TrajectoryPlannerConfig planner;
   traj::PlanRequest request;
@@ -753,6 +763,72 @@ TEST(TrajectoryPlanner, WithoutAKnownPathItFliesTowardsTheTarget) {
   ASSERT_FALSE(refused);
   EXPECT_NE(refused.message().find("no_path"), std::string::npos) << refused.message();
   EXPECT_FALSE(report.toward);
+}
+
+// A search that found no path is remembered: the same request (start within snap_radius, goal within
+// goal_tolerance) within failed_search_memory fails at once with the same status and expansions (so
+// startEnclosed() judges it the same); another goal, a later time or no memory searches again, and a
+// toward trajectory is not a failure to remember.
+TEST(TrajectoryPlanner, FailedSearchesAreRememberedForAWhile) {
+  World world(Vec3(8, 4, 2));
+  twoRooms(world);
+  const Astar astar(world.occupancy(), world.esdf(), flightAstarConfig());
+  const OptimizerConfig optimizer = optimizerConfig();
+  traj::TrajectoryPlannerConfig planner;
+  planner.min_progress = 0.0;  // no flying towards: the room's far side is a plain failure
+  planner.failed_search_memory = 3.0;
+  traj::SearchMemory memory;
+  traj::PlanRequest request;
+  request.start = Vec3(1.0, 2.0, 1.0);
+  request.target = Vec3(7.0, 2.0, 1.0);
+  request.time = 10.0;
+  auto plan = [&](const traj::PlanRequest& r, traj::SearchMemory* m, traj::PlanReport& report) {
+    return traj::planTrajectory(r, astar, world.esdf(), optimizer, planner, &report, m);
+  };
+  traj::PlanReport first;
+  ASSERT_FALSE(plan(request, &memory, first));
+  EXPECT_FALSE(first.remembered);
+  EXPECT_EQ(first.path_status, PathStatus::kNoPath);
+  EXPECT_GT(first.path_expansions, 1000);
+  EXPECT_EQ(memory.size(), 1u);
+
+  traj::PlanRequest again = request;
+  again.start += Vec3(0.5, 0.3, 0.0);
+  again.target += Vec3(0.0, 0.2, 0.0);
+  again.time = 12.0;
+  traj::PlanReport second;
+  const auto recalled = plan(again, &memory, second);
+  ASSERT_FALSE(recalled);
+  EXPECT_TRUE(second.remembered);
+  EXPECT_EQ(second.path_status, first.path_status);
+  EXPECT_EQ(second.path_expansions, first.path_expansions);
+  EXPECT_EQ(traj::startEnclosed(second, planner, world.geo().resolution()),
+            traj::startEnclosed(first, planner, world.geo().resolution()));
+  EXPECT_NE(recalled.message().find("no_path"), std::string::npos) << recalled.message();
+
+  traj::PlanReport other;
+  traj::PlanRequest elsewhere = again;
+  elsewhere.target = Vec3(7.0, 1.0, 1.0);  // 1 m from the remembered goal
+  EXPECT_FALSE(plan(elsewhere, &memory, other));
+  EXPECT_FALSE(other.remembered);
+  traj::PlanReport unmemorised;
+  EXPECT_FALSE(plan(again, nullptr, unmemorised));
+  EXPECT_FALSE(unmemorised.remembered);
+  traj::PlanReport later;
+  again.time = 13.5;  // 3.5 s after the first failure
+  EXPECT_FALSE(plan(again, &memory, later));
+  EXPECT_FALSE(later.remembered);
+  EXPECT_GT(later.path_expansions, 1000);
+
+  // Flying towards the target is not a failure: nothing is remembered.
+  planner.min_progress = 1.5;
+  traj::SearchMemory fresh;
+  traj::PlanReport toward;
+  ASSERT_TRUE(plan(request, &fresh, toward));
+  EXPECT_TRUE(toward.toward);
+  EXPECT_EQ(fresh.size(), 0u);
+  planner.failed_search_memory = -1.0;
+  EXPECT_NE(planner.validate().message().find("failed_search_memory"), std::string::npos);
 }
 
 // staysFlyable(): a spline through mapped free space passes; the same spline fails once a voxel it

@@ -147,6 +147,7 @@ class ExplorationRun {
   planning::VisitedViewpoints visited_;
   bool target_changed_ = false;
   std::optional<trajectory::Trajectory> trajectory_;
+  trajectory::SearchMemory search_memory_;  ///< flight searches that found no path lately
   double trajectory_start_ = 0.0, last_plan_ = -1e9;
   common::Vec3 hold_position_;
   double hold_yaw_ = 0.0;

@@ -6,6 +6,7 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "go_feap/common/grid.h"
 #include "go_feap/common/result.h"
@@ -56,6 +57,8 @@ struct TrajectoryPlannerConfig {
   double snap_radius = 1.0;             ///< m: a blocked start (or goal) moves to free space this close
   /// m: a path may end at most this far from the target (a goal that had to snap farther is blocked)
   double goal_tolerance = 0.3;
+  /// s a flight search that found no path is remembered (SearchMemory); 0 = never
+  double failed_search_memory = 3.0;
   /// Checks every key; the message names the bad one, e.g. "planner: path_spacing must be > 0".
   common::Status validate() const;
 };
@@ -67,6 +70,7 @@ struct PlanRequest {
   double yaw = 0.0;              ///< rad, the reference's heading
   Vec3 target = Vec3::Zero();    ///< m, viewpoint position
   double target_yaw = 0.0;       ///< rad, viewpoint heading
+  double time = 0.0;             ///< s, when it is planned (for a SearchMemory)
 };
 
 /// What plan() did, for logs and benchmarks.
@@ -78,6 +82,33 @@ struct PlanReport {
   int left_flyable = 0;        ///< optimised splines refused by staysFlyable()
   int path_expansions = 0;     ///< voxels the path search expanded
   bool toward = false;         ///< no path was found: the trajectory goes towards the target (PathResult::toward)
+  bool remembered = false;     ///< failed without searching: the same search failed lately (SearchMemory)
+};
+
+/// Flight searches that found no path (no path or budget exceeded, and nothing to fly towards either),
+/// remembered for config.failed_search_memory seconds. A search that used the whole of
+/// astar/max_expansions costs about 0.2 s in a large scene, and the local planner proposes the same
+/// viewpoint again right after a failure (its frontier is blacklisted only after layers/max_retries
+/// failed attempts), so planTrajectory() given a memory answers a request from within snap_radius of a
+/// remembered start to within goal_tolerance of its goal with the same failure, at once.
+class SearchMemory {
+ public:
+  void remember(const Vec3& start, const Vec3& goal, planning::PathStatus status, int expansions, double t);
+  /// The remembered failure matching (start, goal) at time t, if any (older ones are forgotten here).
+  struct Failure {
+    planning::PathStatus status;
+    int expansions;
+    double t;
+  };
+  std::optional<Failure> recall(const Vec3& start, const Vec3& goal, double t, const TrajectoryPlannerConfig& config);
+  std::size_t size() const { return entries_.size(); }
+
+ private:
+  struct Entry {
+    Vec3 start, goal;
+    Failure failure;
+  };
+  std::vector<Entry> entries_;
 };
 
 /// True when `spline`, sampled at most a quarter voxel apart, stays in voxels astar.traversableWith(.,
@@ -106,9 +137,13 @@ bool staysFlyable(const UniformBspline& spline, const planning::Astar& astar, do
 /// Errors name the
 /// reason: no path (with the A* status), optimisation failure (with the last check's message).
 /// `astar` and `esdf` must describe the same map; the caller holds the map still while this runs.
+/// With `memory`: a search failure remembered for this request (SearchMemory::recall at request.time)
+/// fails at once (PlanReport::remembered, with the remembered status and expansions), and a new one is
+/// remembered.
 common::Result<Trajectory> planTrajectory(const PlanRequest& request, const planning::Astar& astar,
                                           const map::Esdf& esdf, const OptimizerConfig& optimizer,
-                                          const TrajectoryPlannerConfig& config, PlanReport* report = nullptr);
+                                          const TrajectoryPlannerConfig& config, PlanReport* report = nullptr,
+                                          SearchMemory* memory = nullptr);
 
 /// A trajectory that brakes from (p, v) at a_max to a stop and holds yaw: what is flown when
 /// planning fails.
