@@ -1,7 +1,8 @@
 // LocalPlanner: picks the next viewpoint. Samples candidate viewpoints around the first
 // frontiers of the global tour, filters them by frontier type (near or cluttered: steering
 // rate; open: N_view) and runs the viewpoint DAG. In: global_tour, frontiers, odom, depth
-// (obstacle-ratio window), layer, map_handle. Out: local_target (go_feap/ViewpointPath),
+// (obstacle-ratio window), layer, map_handle, frontier_failed (drops a failed target). Out:
+// local_target (go_feap/ViewpointPath), frontier_failed,
 // viewpoint_markers.
 #include <cv_bridge/cv_bridge.h>
 #include <nav_msgs/Odometry.h>
@@ -57,6 +58,7 @@ class LocalPlanner : public nodelet::Nodelet {
     frontier_sub_ = nh.subscribe("frontiers", 2, &LocalPlanner::onFrontiers, this);
     tour_sub_ = nh.subscribe("global_tour", 2, &LocalPlanner::onTour, this);
     failed_pub_ = nh.advertise<std_msgs::UInt32>("frontier_failed", 100);
+    failed_sub_ = nh.subscribe("frontier_failed", 100, &LocalPlanner::onFailed, this);
   }
 
   void onHandle(const boost::shared_ptr<const ros_map::MapHandle>& msg) {
@@ -104,6 +106,16 @@ class LocalPlanner : public nodelet::Nodelet {
   void onLayer(const LayerBounds::ConstPtr& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
     band_ = {msg->z_min, msg->z_max};
+  }
+  // A failed attempt on the current target's frontier (the trajectory planner found no way there): drop
+  // the target, as go_feap_bench does, so that the next tour chooses again. Kept, it was repeated for
+  // ever, and each repeat failed again (the frontier, blacklisted, was no longer in any tour).
+  void onFailed(const std_msgs::UInt32::ConstPtr& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!target_ || target_frontier_ == 0 || msg->data != target_frontier_) return;
+    target_.reset();
+    last_out_.reset();
+    target_quicker_ = false;
   }
   void onFrontiers(const FrontierArray::ConstPtr& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -252,7 +264,7 @@ class LocalPlanner : public nodelet::Nodelet {
   std::uint32_t target_frontier_ = 0;
   bool target_quicker_ = false;  ///< the target won on cost (planning::CurrentTarget::quicker)
   double committed_at_ = 0.0, speed_ = 0.0, frontier_extent_ = 2.0;
-  ros::Subscriber handle_sub_, odom_sub_, depth_sub_, layer_sub_, frontier_sub_, tour_sub_;
+  ros::Subscriber handle_sub_, odom_sub_, depth_sub_, layer_sub_, frontier_sub_, tour_sub_, failed_sub_;
 };
 
 }  // namespace go_feap

@@ -7,6 +7,7 @@
 
 #include <cmath>
 
+#include <std_msgs/UInt32.h>
 #include <std_srvs/Trigger.h>
 
 #include "go_feap/ExplorationStatus.h"
@@ -147,6 +148,39 @@ TEST_F(FrontierPlannerTest, TriggerStartsTheStartBandOnceAndFrontiersFollowIt) {
   ASSERT_TRUE(spinUntil([&] { return frontiers_->header.stamp > after && !frontiers_->frontiers.empty(); }, 60.0));
   for (const auto& f : frontiers_->frontiers)
     EXPECT_EQ(f.active, f.average.z >= 1.0 && f.average.z <= 2.0) << "frontier " << f.id << " z " << f.average.z;
+}
+
+// A failed attempt reported on frontier_failed for the local target's frontier (the trajectory planner
+// found no way there) drops that target: the local planner chooses again on the next tour instead of
+// repeating the kept target (same tour stamp) for ever. Runs after the trigger test (EXPLORE).
+TEST_F(FrontierPlannerTest, AFailedTargetIsDroppedAndChosenAgain) {
+  ASSERT_TRUE(spinUntil([&] { return status_ != nullptr; }, 60.0)) << "no status";
+  if (status_->state == go_feap::ExplorationStatus::WAIT_TRIGGER) {
+    std_srvs::Trigger trigger;
+    ASSERT_TRUE(ros::service::waitForService("trigger", ros::Duration(10.0)));
+    ASSERT_TRUE(ros::service::call("trigger", trigger));
+  }
+  // A kept target: the same message (tour stamp) repeated.
+  go_feap::ViewpointPath::ConstPtr kept;
+  ASSERT_TRUE(spinUntil(
+      [&] {
+        if (!target_ || target_->frontier_ids.empty() || target_->frontier_ids.front() == 0) return false;
+        if (kept && kept != target_ && kept->header.stamp == target_->header.stamp &&
+            kept->frontier_ids.front() == target_->frontier_ids.front())
+          return true;
+        kept = target_;
+        return false;
+      },
+      90.0))
+      << "no kept local_target";
+  ros::Publisher failed_pub = nh_.advertise<std_msgs::UInt32>("frontier_failed", 10);
+  // The layer manager and the local planner share one manager: one connection.
+  ASSERT_TRUE(spinUntil([&] { return failed_pub.getNumSubscribers() >= 1; }, 10.0));
+  std_msgs::UInt32 failed;
+  failed.data = kept->frontier_ids.front();
+  failed_pub.publish(failed);
+  EXPECT_TRUE(spinUntil([&] { return target_->header.stamp > kept->header.stamp; }, 5.0))
+      << "the local planner kept its target for frontier " << failed.data << " after it failed";
 }
 
 }  // namespace
