@@ -517,62 +517,46 @@ PathResult Astar::search(const Vec3& start, const Vec3& goal, double snap_radius
     result.status = PathStatus::kGoalBlocked;
     return result;
   }
-  auto finish = [&](std::vector<Vec3> raw) {
+  // Voxel centres from the run's first node to node n.
+  auto fromStart = [&](std::int32_t n) {
+    std::vector<Vec3> raw = chain(n);
+    std::reverse(raw.begin(), raw.end());
+    return raw;
+  };
+  auto found = [&](std::vector<Vec3> raw) {
+    result.status = PathStatus::kFound;
     result.raw_path = std::move(raw);
     result.raw_length = pathLength(result.raw_path);
     result.path = shorten(result.raw_path);
     result.length = pathLength(result.path);
-  };
-  auto towardNearest = [&](std::int32_t nearest) {
-    if (nearest <= 0) return;
-    std::vector<Vec3> raw = chain(nearest);
-    std::reverse(raw.begin(), raw.end());
-    result.toward = shorten(raw);
+    return result;
   };
   std::int32_t nearest = 0;
   int spent = 0;
   const int probe = config_.probe_expansions;
   if (probe > 0 && probe < config_.max_expansions) {
     const std::int32_t reached = run(s, g, s, snap_radius, probe, result, nearest);
-    if (reached >= 0) {
-      std::vector<Vec3> raw = chain(reached);
-      std::reverse(raw.begin(), raw.end());
-      finish(std::move(raw));
-      return result;
+    if (reached >= 0) return found(fromStart(reached));
+    // Taken before the search from the goal's side reuses the scratch; shortened only if it is returned.
+    const std::vector<Vec3> toward = nearest > 0 ? fromStart(nearest) : std::vector<Vec3>();
+    if (result.status == PathStatus::kBudgetExceeded) {
+      PathResult back;
+      std::int32_t unused = 0;
+      const std::int32_t met = run(g, s, s, snap_radius, probe, back, unused);
+      result.expansions += back.expansions;
+      if (met >= 0) return found(chain(met));  // from the start voxel back to the goal: start first
+      if (back.status == PathStatus::kNoPath) result.status = PathStatus::kNoPath;  // the goal's side ran out
     }
     if (result.status == PathStatus::kNoPath) {
-      towardNearest(nearest);
+      if (!toward.empty()) result.toward = shorten(toward);
       return result;
     }
-    // Not settled from the start's side: try from the goal's (the scratch is reused, so keep `toward`).
-    towardNearest(nearest);
-    PathResult back;
-    std::int32_t unused = 0;
-    const std::int32_t met = run(g, s, s, snap_radius, probe, back, unused);
-    spent = result.expansions + back.expansions;
-    if (back.status == PathStatus::kNoPath) {  // the goal's side ran out: cut off
-      result.status = PathStatus::kNoPath;
-      result.expansions = spent;
-      return result;
-    }
-    if (met >= 0) {  // the chain from the start voxel back to the goal is the path, start first
-      result.status = PathStatus::kFound;
-      result.expansions = spent;
-      result.toward.clear();
-      finish(chain(met));
-      return result;
-    }
-    result.toward.clear();
+    spent = result.expansions;
   }
   const std::int32_t reached = run(s, g, s, snap_radius, config_.max_expansions, result, nearest);
   result.expansions += spent;
-  if (reached < 0) {
-    towardNearest(nearest);
-    return result;
-  }
-  std::vector<Vec3> raw = chain(reached);
-  std::reverse(raw.begin(), raw.end());
-  finish(std::move(raw));
+  if (reached >= 0) return found(fromStart(reached));
+  if (nearest > 0) result.toward = shorten(fromStart(nearest));
   return result;
 }
 

@@ -56,10 +56,16 @@ bool staysFlyable(const UniformBspline& spline, const planning::Astar& astar, do
   // Samples at most a quarter voxel apart along the curve.
   const double step = std::max(1e-3, 0.25 * geo.resolution() / std::max(spline.maxVelocity(), 1e-3));
   const Vec3 start = spline.position(0.0);
+  // Consecutive samples mostly share a voxel: each voxel is checked once in a row.
+  std::optional<common::Index3> checked;
   for (double t = 0.0;; t = std::min(t + step, spline.duration())) {
     const Vec3 p = spline.position(t);
-    if ((p - start).norm() > exempt_radius && !astar.traversableWith(geo.coordToIndex(p), min_distance)) return false;
-    if (t >= spline.duration()) return astar.traversableWith(geo.coordToIndex(p), min_distance);
+    const common::Index3 idx = geo.coordToIndex(p);
+    if (t >= spline.duration()) return idx == checked || astar.traversableWith(idx, min_distance);
+    if ((p - start).norm() > exempt_radius && idx != checked) {
+      if (!astar.traversableWith(idx, min_distance)) return false;
+      checked = idx;
+    }
   }
 }
 
