@@ -257,15 +257,13 @@ void ExplorationRun::planStep() {
     target_.reset();
     return;
   }
-  const bool changed =
-      !target_ || trajectory::targetMoved(target_->position, target_->yaw, vp.position, vp.yaw, config_.replan);
-  target_changed_ = target_changed_ || changed;
-  if (changed) {
-    std::ostringstream what;
-    what << "target frontier " << plan->frontier_ids.front() << " viewpoint " << vp.position.transpose() << " yaw "
-         << vp.yaw << " (tour of " << tour->frontier_ids.size() << ", " << summaries.size() << " frontiers)";
-    log(what.str());
-  }
+  // A new target, however near the last one, is flown to exactly (the nodelets number their targets
+  // alike): the local planner judges it reached by its own pose.
+  target_changed_ = true;
+  std::ostringstream what;
+  what << "target frontier " << plan->frontier_ids.front() << " viewpoint " << vp.position.transpose() << " yaw "
+       << vp.yaw << " (tour of " << tour->frontier_ids.size() << ", " << summaries.size() << " frontiers)";
+  log(what.str());
   target_ = Target{vp.position, vp.yaw, plan->frontier_ids.front(), t_,
                    decision == planning::TargetDecision::kSwitchQuicker};
 }

@@ -2,8 +2,8 @@
 // frontiers of the global tour, filters them by frontier type (near or cluttered: steering
 // rate; open: N_view) and runs the viewpoint DAG. In: global_tour, frontiers, odom, depth
 // (obstacle-ratio window), layer, map_handle, frontier_failed (drops a failed target). Out:
-// local_target (go_feap/ViewpointPath), frontier_failed,
-// viewpoint_markers.
+// local_target (go_feap/ViewpointPath, numbered: a kept target is repeated with its number),
+// frontier_failed, viewpoint_markers.
 #include <cv_bridge/cv_bridge.h>
 #include <nav_msgs/Odometry.h>
 #include <nodelet/nodelet.h>
@@ -168,6 +168,7 @@ class LocalPlanner : public nodelet::Nodelet {
         ViewpointPath out;
         out.header.stamp = tour->header.stamp;
         out.header.frame_id = world_frame_;
+        out.target_seq = ++target_seq_;
         out.positions.push_back(ros_conv::toPoint(target_->position));
         out.yaws.push_back(target_->yaw);
         out.frontier_ids.push_back(0);
@@ -215,6 +216,7 @@ class LocalPlanner : public nodelet::Nodelet {
     ViewpointPath out;
     out.header.stamp = tour->header.stamp;
     out.header.frame_id = world_frame_;
+    out.target_seq = ++target_seq_;  // a new target, even one near the last: the trajectory goes exactly there
     out.cost = plan->cost;
     visualization_msgs::MarkerArray markers;
     visualization_msgs::Marker candidates, chosen;
@@ -262,6 +264,7 @@ class LocalPlanner : public nodelet::Nodelet {
   planning::ViewpointCache cache_;
   planning::VisitedViewpoints visited_;
   std::uint32_t target_frontier_ = 0;
+  std::uint32_t target_seq_ = 0;  ///< ViewpointPath::target_seq of the last new target
   bool target_quicker_ = false;  ///< the target won on cost (planning::CurrentTarget::quicker)
   double committed_at_ = 0.0, speed_ = 0.0, frontier_extent_ = 2.0;
   ros::Subscriber handle_sub_, odom_sub_, depth_sub_, layer_sub_, frontier_sub_, tour_sub_, failed_sub_;

@@ -89,8 +89,13 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     const auto& p = msg->positions.front();
     const common::Vec3 target(p.x, p.y, p.z);
     if (!target.allFinite() || !std::isfinite(msg->yaws.front())) return;
-    target_changed_ = target_changed_ || !target_ ||
+    // A newly numbered target is flown to exactly, however near the last one: the local planner judges
+    // it reached by its own pose, and after dropping a target it may choose a viewpoint next to it (kept
+    // within the tolerances, the vehicle hovered short of it for good). A repeat keeps its number.
+    const bool renumbered = msg->target_seq != 0 && msg->target_seq != target_seq_;
+    target_changed_ = target_changed_ || !target_ || renumbered ||
                       trajectory::targetMoved(*target_, target_yaw_, target, msg->yaws.front(), replan_);
+    target_seq_ = msg->target_seq;
     target_ = target;
     target_yaw_ = msg->yaws.front();
     target_frontier_ = msg->frontier_ids.empty() ? 0 : msg->frontier_ids.front();
@@ -218,6 +223,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
   std::optional<common::Vec3> odom_position_, target_;
   double odom_yaw_ = 0.0, target_yaw_ = 0.0;
   unsigned target_frontier_ = 0;
+  std::uint32_t target_seq_ = 0;  ///< ViewpointPath::target_seq of the target
   bool target_changed_ = false;
   PositionCommand::ConstPtr command_;
   std::optional<ros_traj::Trajectory> current_;

@@ -9,6 +9,7 @@
 
 #include "go_feap/PositionCommand.h"
 #include "go_feap/world/scene.h"
+#include "go_feap/world/scene_files.h"
 
 namespace go_feap::test {
 
@@ -22,6 +23,16 @@ bool spinUntil(Pred pred, double wall_timeout) {
     ros::WallDuration(0.005).sleep();
   }
   return pred();
+}
+
+/// The scene named by the test node's private parameters `scene` and `seed`.
+inline common::Result<world::Scene> sceneFromParams() {
+  ros::NodeHandle pnh("~");
+  std::string name;
+  int seed = 0;
+  if (!pnh.getParam("scene", name) || !pnh.getParam("seed", seed))
+    return common::Result<world::Scene>::Error("the test node needs the private parameters scene and seed");
+  return world::makeScene(name, static_cast<std::uint64_t>(seed));
 }
 
 /// Smallest distance (m) from p to an occupied ground-truth voxel, sampled on a 2.5 cm lattice up to

@@ -17,11 +17,8 @@ using go_feap::test::latticeClearance;
 using go_feap::test::spinUntil;
 
 TEST(Chain, FliesToAViewpointWithoutCollision) {
-  ros::NodeHandle nh, pnh("~");
-  std::string name;
-  int seed = 0;
-  ASSERT_TRUE(pnh.getParam("scene", name) && pnh.getParam("seed", seed));
-  auto scene = go_feap::world::makeScene(name, seed);
+  ros::NodeHandle nh;
+  auto scene = go_feap::test::sceneFromParams();
   ASSERT_TRUE(scene) << scene.message();
 
   std::vector<Vec3> targets, path;

@@ -28,10 +28,9 @@ using go_feap::test::spinUntil;
 
 TEST(Exploration, SmallMazeFinishesCompleteWithFullCoverageAndNoCollision) {
   ros::NodeHandle nh, pnh("~");
-  std::string name, output_dir;
-  int seed = 0;
-  ASSERT_TRUE(pnh.getParam("scene", name) && pnh.getParam("seed", seed) && pnh.getParam("output_dir", output_dir));
-  auto scene = go_feap::world::makeScene(name, seed);
+  std::string output_dir;
+  ASSERT_TRUE(pnh.getParam("output_dir", output_dir));
+  auto scene = go_feap::test::sceneFromParams();
   ASSERT_TRUE(scene) << scene.message();
 
   std::vector<Vec3> path;

@@ -65,11 +65,7 @@ class FrontierPlannerTest : public ::testing::Test {
 };
 
 TEST_F(FrontierPlannerTest, TourStartsAtAReachableFrontier) {
-  ros::NodeHandle pnh("~");
-  std::string name;
-  int seed = 0;
-  ASSERT_TRUE(pnh.getParam("scene", name) && pnh.getParam("seed", seed));
-  auto scene = go_feap::world::makeScene(name, seed);
+  auto scene = go_feap::test::sceneFromParams();
   ASSERT_TRUE(scene) << scene.message();
   const auto observable = go_feap::world::computeObservableSet(*scene);
   ASSERT_TRUE(spinUntil([&] { return odom_ != nullptr; }, 60.0));
@@ -105,11 +101,7 @@ TEST_F(FrontierPlannerTest, TourStartsAtAReachableFrontier) {
 }
 
 TEST_F(FrontierPlannerTest, LocalTargetIsAFreeViewpointOfATourFrontier) {
-  ros::NodeHandle pnh("~");
-  std::string name;
-  int seed = 0;
-  ASSERT_TRUE(pnh.getParam("scene", name) && pnh.getParam("seed", seed));
-  auto scene = go_feap::world::makeScene(name, seed);
+  auto scene = go_feap::test::sceneFromParams();
   ASSERT_TRUE(scene) << scene.message();
   ASSERT_TRUE(spinUntil([&] { return target_ && target_tour_ && !target_->positions.empty(); }, 90.0))
       << "no local_target";

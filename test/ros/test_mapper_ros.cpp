@@ -81,11 +81,7 @@ class MapperTest : public ::testing::Test {
 };
 
 TEST_F(MapperTest, TurningInPlaceMapsTheWallsBadFramesAreSkippedSaveMapWorks) {
-  ros::NodeHandle pnh("~");
-  std::string scene_name;
-  int seed = 0;
-  ASSERT_TRUE(pnh.getParam("scene", scene_name) && pnh.getParam("seed", seed));
-  auto scene = go_feap::world::makeScene(scene_name, seed);
+  auto scene = go_feap::test::sceneFromParams();
   ASSERT_TRUE(scene) << scene.message();
   ASSERT_TRUE(spinUntil([&] { return odom_ && last_update_; }, 60.0)) << "no odom or map_update";
 

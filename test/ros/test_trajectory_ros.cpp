@@ -1,0 +1,125 @@
+// rostest: the TrajectoryPlanner nodelet's rule for a new target. The local planner numbers the
+// targets it commits to (ViewpointPath::target_seq) and judges one reached by its own pose, so a
+// newly numbered target is flown to exactly, even 0.2 m from the last one (inside the distance
+// tolerance). A repeat of the same number, or an unnumbered target inside the tolerances, is not
+// a new target: no new trajectory.
+#include <gtest/gtest.h>
+#include <nav_msgs/Odometry.h>
+#include <ros/ros.h>
+
+#include <cmath>
+
+#include "go_feap/Bspline.h"
+#include "go_feap/ViewpointPath.h"
+#include "go_feap/ros/bspline_conversion.h"
+#include "go_feap/world/scene_files.h"
+#include "ros_test_util.h"
+
+namespace {
+
+using go_feap::common::Vec3;
+using go_feap::test::latticeClearance;
+using go_feap::test::spinUntil;
+
+class TrajectoryTargetTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    auto scene = go_feap::test::sceneFromParams();
+    ASSERT_TRUE(scene) << scene.message();
+    start_ = scene->start.position;
+    yaw_ = scene->start.yaw;
+    forward_ = Vec3(std::cos(yaw_), std::sin(yaw_), 0.0);
+    // The fixture's precondition: open space ahead of the start, in the camera's first view.
+    for (double s = 0.0; s <= 2.0; s += 0.1)
+      ASSERT_GT(latticeClearance(*scene, start_ + s * forward_, 0.5), 0.45) << "no open space ahead at " << s << " m";
+    target_pub_ = nh_.advertise<go_feap::ViewpointPath>("local_target", 5);
+    odom_sub_ = nh_.subscribe("odom", 20, &TrajectoryTargetTest::onOdom, this);
+    bspline_sub_ = nh_.subscribe("bspline", 20, &TrajectoryTargetTest::onBspline, this);
+  }
+  void onOdom(const nav_msgs::Odometry::ConstPtr& m) {
+    const auto& p = m->pose.pose.position;
+    const auto& v = m->twist.twist.linear;
+    position_ = Vec3(p.x, p.y, p.z);
+    speed_ = Vec3(v.x, v.y, v.z).norm();
+  }
+  void onBspline(const go_feap::Bspline::ConstPtr& m) {
+    auto t = go_feap::ros_traj::fromMsg(*m);
+    ASSERT_TRUE(t) << t.message();
+    ++trajectories_;
+    end_ = t->position.position(t->position.duration());
+  }
+  go_feap::ViewpointPath target(const Vec3& p, std::uint32_t seq) const {
+    go_feap::ViewpointPath m;
+    m.header.stamp = ros::Time::now();
+    m.header.frame_id = "world";
+    geometry_msgs::Point q;
+    q.x = p.x(), q.y = p.y(), q.z = p.z();
+    m.positions.push_back(q);
+    m.yaws.push_back(yaw_);
+    m.frontier_ids.push_back(7);
+    m.target_seq = seq;
+    return m;
+  }
+  // Publishes the target at 5 Hz (the local planner repeats a kept one) while spinning for
+  // `sim_seconds` of simulated time, or until `until()` holds; returns until().
+  template <typename Until>
+  bool publishWhile(const go_feap::ViewpointPath& m, double sim_seconds, Until until) {
+    const ros::Time end = ros::Time::now() + ros::Duration(sim_seconds);
+    ros::Time next;
+    return spinUntil(
+        [&] {
+          if (ros::Time::now() >= next) {
+            target_pub_.publish(m);
+            next = ros::Time::now() + ros::Duration(0.2);
+          }
+          return until() || ros::Time::now() >= end;
+        },
+        60.0) &&
+           until();
+  }
+  bool atRestNear(const Vec3& p) const { return (position_ - p).norm() < 0.08 && speed_ < 0.1; }
+
+  ros::NodeHandle nh_;
+  ros::Publisher target_pub_;
+  ros::Subscriber odom_sub_, bspline_sub_;
+  Vec3 start_, forward_, position_ = Vec3::Constant(1e9), end_ = Vec3::Constant(1e9);
+  double yaw_ = 0.0, speed_ = 0.0;
+  int trajectories_ = 0;
+};
+
+TEST_F(TrajectoryTargetTest, ANewlyNumberedTargetIsFlownToExactlyEvenNearTheLastOne) {
+  ASSERT_TRUE(spinUntil([&] { return position_.x() < 1e8 && ros::Time::now().toSec() > 3.0; }, 60.0)) << "no odometry";
+  // Targets at voxel centres (the planner's goal is its voxel's centre), 0.2 m apart.
+  double resolution = 0.0;
+  ASSERT_TRUE(ros::param::get("/esdf_mapper/occupancy/resolution", resolution) && resolution > 0.0);
+  const auto centre = [&](const Vec3& p) { return Vec3(((p / resolution).array().floor() + 0.5) * resolution); };
+  const Vec3 t1 = centre(start_ + 1.0 * forward_), t2 = centre(t1 + 0.2 * forward_), t3 = centre(t2 + 0.2 * forward_);
+
+  // Target 1, repeated as a kept target is: one trajectory there, and the vehicle arrives.
+  ASSERT_TRUE(publishWhile(target(t1, 1), 20.0, [&] { return atRestNear(t1); }))
+      << "not at target 1; vehicle at " << position_.transpose() << ", " << trajectories_ << " trajectories";
+  EXPECT_LT((end_ - t1).norm(), 0.01);
+  const int after_t1 = trajectories_;
+
+  // Target 2, numbered anew, 0.2 m on: inside the 0.3 m tolerance, yet a new trajectory ends there.
+  ASSERT_TRUE(publishWhile(target(t2, 2), 20.0, [&] { return atRestNear(t2); }))
+      << "not at target 2; vehicle at " << position_.transpose() << ", trajectory ends at " << end_.transpose();
+  EXPECT_GT(trajectories_, after_t1);
+  EXPECT_LT((end_ - t2).norm(), 0.01);
+
+  // A repeat of number 2, then an unnumbered target 0.2 m on: neither is a new target.
+  const int after_t2 = trajectories_;
+  publishWhile(target(t2, 2), 2.0, [] { return false; });
+  publishWhile(target(t3, 0), 2.0, [] { return false; });
+  EXPECT_EQ(trajectories_, after_t2);
+  EXPECT_LT((end_ - t2).norm(), 0.01);
+
+  // Numbered, the same point is a new target.
+  ASSERT_TRUE(publishWhile(target(t3, 3), 20.0, [&] { return atRestNear(t3); }))
+      << "not at target 3; vehicle at " << position_.transpose();
+  EXPECT_LT((end_ - t3).norm(), 0.01);
+}
+
+}  // namespace
+
+GO_FEAP_ROSTEST_MAIN("test_trajectory_ros")
