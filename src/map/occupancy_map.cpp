@@ -16,6 +16,15 @@ bool testBit(const std::vector<std::uint64_t>& bits, std::size_t l) { return (bi
 void setBit(std::vector<std::uint64_t>& bits, std::size_t l) { bits[l >> 6] |= std::uint64_t{1} << (l & 63); }
 void clearBit(std::vector<std::uint64_t>& bits, std::size_t l) { bits[l >> 6] &= ~(std::uint64_t{1} << (l & 63)); }
 
+// Two mark bits per voxel in one word array: voxel l's marks are bits 2(l mod 32) and
+// 2(l mod 32) + 1 of word l / 32.
+constexpr std::uint64_t kHitMark = 1, kFreeMark = 2;
+std::uint64_t& markWord(std::vector<std::uint64_t>& marks, std::size_t l) { return marks[l >> 5]; }
+unsigned markShift(std::size_t l) { return 2 * static_cast<unsigned>(l & 31); }
+std::uint64_t marksOf(const std::vector<std::uint64_t>& marks, std::size_t l) {
+  return (marks[l >> 5] >> markShift(l)) & 3u;
+}
+
 // Clips the segment [a, b] to the box (slab method). False when it misses the box.
 bool clipSegment(const Aabb& box, Vec3& a, Vec3& b) {
   double t0 = 0.0, t1 = 1.0;
@@ -69,8 +78,7 @@ OccupancyMap::OccupancyMap(const OccupancyConfig& config, const Aabb& box)
       min_(static_cast<std::int8_t>(std::lround(logit(config.p_min) * kScale))),
       max_(static_cast<std::int8_t>(std::lround(logit(config.p_max) * kScale))),
       occupied_(static_cast<std::int8_t>(std::floor(logit(config.p_occupied) * kScale))),
-      hit_bits_((geo_.size() + 63) / 64, 0),
-      free_bits_((geo_.size() + 63) / 64, 0),
+      marks_((geo_.size() + 31) / 32, 0),
       end_bits_((geo_.size() + 63) / 64, 0) {}
 
 double OccupancyMap::probability(const Index3& idx) const {
@@ -107,18 +115,28 @@ common::Result<FrameChange> OccupancyMap::integrate(const cv::Mat& depth, const 
   // the measured point (not the voxel centre) keeps grazing rays out of the wall in front.
   std::vector<std::pair<std::size_t, Vec3>> ends;
   touched_.clear();
-  auto touch = [&](std::size_t l) {
-    if (!testBit(hit_bits_, l) && !testBit(free_bits_, l)) touched_.push_back(l);
+  // Marks voxel l; the first mark of a frame records it for step 3.
+  auto mark = [&](std::size_t l, std::uint64_t bit) {
+    std::uint64_t& word = markWord(marks_, l);
+    const unsigned shift = markShift(l);
+    if (((word >> shift) & 3u) == 0) touched_.push_back(l);
+    word |= bit << shift;
   };
 
-  // 1. Sampled pixels -> ray end voxels; returns mark their voxel as hit.
+  // 1. Sampled pixels -> ray end voxels; returns mark their voxel as hit. The per-pixel
+  // arithmetic is written out on scalars (the hot loop of a mapping update).
   const Vec3 du = R.col(0) / K.fx;
+  const Vec3 lo = bounds.min, hi = bounds.max, g0 = geo_.origin();
+  const double inv_res = 1.0 / geo_.resolution();
+  const Index3 dims = geo_.dims();
   std::size_t last_end = std::numeric_limits<std::size_t>::max();
   bool last_hit = false;
   for (int v = 0; v < depth.rows; v += config_.skip_pixel) {
     const Vec3 row = R.col(1) * ((v - K.cy) / K.fy) + R.col(2);
+    const float* row_m = metric ? depth.ptr<float>(v) : nullptr;
+    const std::uint16_t* row_mm = metric ? nullptr : depth.ptr<std::uint16_t>(v);
     for (int u = 0; u < depth.cols; u += config_.skip_pixel) {
-      double d = metric ? static_cast<double>(depth.at<float>(v, u)) : 0.001 * depth.at<std::uint16_t>(v, u);
+      double d = metric ? static_cast<double>(row_m[u]) : 0.001 * row_mm[u];
       bool hit = true;
       if (!std::isfinite(d) || d <= 0.0 || d < config_.min_range) {
         ++change.pixels_invalid;
@@ -130,28 +148,29 @@ common::Result<FrameChange> OccupancyMap::integrate(const cv::Mat& depth, const 
         hit = false;
       }
       ++change.pixels_used;
-      // A return marks the voxel just behind the measured surface point: a point exactly
-      // on a voxel face (as a voxel world renders it) belongs to the surface's voxel.
-      const double nudge = hit ? 0.02 * config_.resolution : 0.0;
       const Vec3 ray = row + du * (u - K.cx);  // direction with unit optical-axis component
       Vec3 b = origin + ray * d;
-      if (hit) b += ray.normalized() * nudge;
-      if (!origin_inside || !bounds.contains(b)) {
+      // A return marks the voxel just behind the measured surface point: a point exactly
+      // on a voxel face (as a voxel world renders it) belongs to the surface's voxel.
+      if (hit) b += ray * (0.02 * config_.resolution / ray.norm());
+      Index3 e;
+      if (origin_inside && b.x() >= lo.x() && b.y() >= lo.y() && b.z() >= lo.z() && b.x() <= hi.x() &&
+          b.y() <= hi.y() && b.z() <= hi.z()) {
+        // Inside the map the voxel coordinates are >= 0: truncation is the floor.
+        for (int i = 0; i < 3; ++i) e[i] = std::min(static_cast<int>((b[i] - g0[i]) * inv_res), dims[i] - 1);
+      } else {
         Vec3 a = origin;
         const Vec3 b_full = b;
         if (!clipSegment(bounds, a, b)) continue;
         if ((b - b_full).squaredNorm() > 1e-12) hit = false;  // the return lies outside the map
+        e = geo_.coordToIndex(b).cwiseMax(Index3::Zero()).cwiseMin(dims - Index3::Ones());
       }
-      const Index3 e = geo_.coordToIndex(b).cwiseMax(Index3::Zero()).cwiseMin(geo_.dims() - Index3::Ones());
       const std::size_t l = geo_.linear(e);
       // Neighbouring pixels mostly end in the same voxel: nothing new to record then.
       if (l == last_end && hit == last_hit) continue;
       last_end = l;
       last_hit = hit;
-      if (hit) {
-        touch(l);
-        setBit(hit_bits_, l);
-      }
+      if (hit) mark(l, kHitMark);
       if (!testBit(end_bits_, l)) {
         setBit(end_bits_, l);
         ends.emplace_back(l, b);
@@ -164,16 +183,14 @@ common::Result<FrameChange> OccupancyMap::integrate(const cv::Mat& depth, const 
   for (const auto& [e, point] : ends) {
     clearBit(end_bits_, e);
     const Index3 end = geo_.unlinear(e);
-    const bool end_is_hit = testBit(hit_bits_, e);
+    const bool end_is_hit = marksOf(marks_, e) & kHitMark;
     Vec3 a = origin, b = point;
     if (!bounds.contains(a) && !clipSegment(bounds, a, b)) continue;  // camera outside the map
     ++change.rays;
     common::traverse(geo_, a, b, [&](const Index3& c) {
       if (c == end && end_is_hit) return false;
       if (!geo_.inside(c)) return true;
-      const std::size_t l = geo_.linear(c);
-      touch(l);
-      setBit(free_bits_, l);
+      mark(geo_.linear(c), kFreeMark);
       return c != end;
     });
   }
@@ -183,10 +200,9 @@ common::Result<FrameChange> OccupancyMap::integrate(const cv::Mat& depth, const 
     const std::int8_t old = logodds_[l];
     const VoxelState before = stateOf(old);
     int v = old == kUnknown ? occupied_ : old;
-    v = testBit(hit_bits_, l) ? std::min<int>(max_, v + hit_) : std::max<int>(min_, v + miss_);
+    v = marksOf(marks_, l) & kHitMark ? std::min<int>(max_, v + hit_) : std::max<int>(min_, v + miss_);
     logodds_[l] = static_cast<std::int8_t>(v);
-    clearBit(hit_bits_, l);
-    clearBit(free_bits_, l);
+    markWord(marks_, l) &= ~(std::uint64_t{3} << markShift(l));
     const VoxelState after = stateOf(logodds_[l]);
     if (after == before) continue;
     known_ += before == VoxelState::kUnknown;
@@ -223,7 +239,7 @@ bool OccupancyMap::isLineFree(const Vec3& a, const Vec3& b, bool unknown_blocks)
 }
 
 std::size_t OccupancyMap::memoryBytes() const {
-  return logodds_.capacity() + 8 * (hit_bits_.capacity() + free_bits_.capacity() + end_bits_.capacity()) +
+  return logodds_.capacity() + 8 * (marks_.capacity() + end_bits_.capacity()) +
          sizeof(std::size_t) * touched_.capacity();
 }
 

@@ -1,6 +1,12 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <random>
+#include <utility>
+#include <vector>
+
 #include "go_feap/common/grid.h"
+#include "go_feap/common/raycast.h"
 
 using go_feap::common::Aabb;
 using go_feap::common::GridGeometry;
@@ -39,4 +45,91 @@ TEST(GridGeometry, CentreRangeHoldsExactlyTheCentresInsideTheBox) {
       EXPECT_EQ(in, i >= lo[a] && i < hi[a]) << "axis " << a << " index " << i;
     }
   }
+}
+
+namespace {
+
+/// True when the segment [a, b] meets voxel idx of g (slab test on the voxel's box, widened by eps).
+bool segmentMeetsVoxel(const GridGeometry& g, const Index3& idx, const Vec3& a, const Vec3& b, double eps) {
+  const Vec3 lo = g.origin() + idx.cast<double>() * g.resolution() - Vec3::Constant(eps);
+  const Vec3 hi = lo + Vec3::Constant(g.resolution() + 2 * eps);
+  double t0 = 0.0, t1 = 1.0;
+  const Vec3 d = b - a;
+  for (int i = 0; i < 3; ++i) {
+    if (d[i] == 0.0) {
+      if (a[i] < lo[i] || a[i] > hi[i]) return false;
+      continue;
+    }
+    double ta = (lo[i] - a[i]) / d[i], tb = (hi[i] - a[i]) / d[i];
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+  }
+  return t0 <= t1;
+}
+
+std::vector<Index3> walk(const GridGeometry& g, const Vec3& a, const Vec3& b) {
+  std::vector<Index3> cells;
+  go_feap::common::traverse(g, a, b, [&](const Index3& c) {
+    cells.push_back(c);
+    return true;
+  });
+  return cells;
+}
+
+}  // namespace
+
+TEST(Traverse, VisitsExactlyTheVoxelsTheSegmentCrossesInOrder) {
+  const GridGeometry g(Vec3(-1.0, -2.0, 0.5), 0.1, Index3(40, 40, 30));
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> ux(-1.0, 3.0), uy(-2.0, 2.0), uz(0.5, 3.5);
+  for (int trial = 0; trial < 500; ++trial) {
+    const Vec3 a(ux(rng), uy(rng), uz(rng)), b(ux(rng), uy(rng), uz(rng));
+    const std::vector<Index3> cells = walk(g, a, b);
+    ASSERT_FALSE(cells.empty());
+    EXPECT_EQ(cells.front(), g.coordToIndex(a)) << trial;
+    EXPECT_EQ(cells.back(), g.coordToIndex(b)) << trial;
+    EXPECT_EQ(static_cast<int>(cells.size()), (g.coordToIndex(b) - g.coordToIndex(a)).cwiseAbs().sum() + 1);
+    for (std::size_t k = 0; k < cells.size(); ++k) {
+      // Every visited voxel is one the segment meets ...
+      EXPECT_TRUE(segmentMeetsVoxel(g, cells[k], a, b, 1e-9)) << trial << " voxel " << k;
+      // ... reached from the last through one face.
+      if (k > 0) {
+        EXPECT_EQ((cells[k] - cells[k - 1]).cwiseAbs().sum(), 1) << trial << " voxel " << k;
+      }
+    }
+    // ... and every voxel the segment passes through is visited.
+    for (int s = 0; s <= 1000; ++s) {
+      const Vec3 p = a + (b - a) * (s / 1000.0);
+      const Vec3 q = (p - g.origin()) / g.resolution();
+      if (((q.array() - q.array().round()).abs() < 1e-6).any()) continue;  // on a face: either side
+      EXPECT_NE(std::find(cells.begin(), cells.end(), g.coordToIndex(p)), cells.end()) << trial << " at " << s;
+    }
+  }
+}
+
+TEST(Traverse, ExactTiesAndAxisAlignedSegmentsEndInTheEndVoxel) {
+  const GridGeometry g(Vec3(0, 0, 0), 0.1, Index3(20, 20, 20));
+  // Through voxel corners (all three boundaries at once) and along one axis.
+  for (const auto& [a, b] : std::vector<std::pair<Vec3, Vec3>>{{Vec3(0.05, 0.05, 0.05), Vec3(1.05, 1.05, 1.05)},
+                                                               {Vec3(0.0, 0.0, 0.0), Vec3(1.0, 1.0, 1.0)},
+                                                               {Vec3(1.0, 0.2, 0.0), Vec3(0.0, 0.4, 0.0)},
+                                                               {Vec3(0.35, 0.35, 0.35), Vec3(1.55, 0.35, 0.35)},
+                                                               {Vec3(0.35, 0.35, 0.35), Vec3(0.35, 0.35, 0.35)}}) {
+    const std::vector<Index3> cells = walk(g, a, b);
+    EXPECT_EQ(cells.front(), g.coordToIndex(a));
+    EXPECT_EQ(cells.back(), g.coordToIndex(b));
+    for (std::size_t k = 1; k < cells.size(); ++k) EXPECT_EQ((cells[k] - cells[k - 1]).cwiseAbs().sum(), 1);
+  }
+  EXPECT_EQ(walk(g, Vec3(0.35, 0.35, 0.35), Vec3(1.55, 0.35, 0.35)).size(), 13u);
+}
+
+TEST(Traverse, StopsWhenTheVisitorSaysSo) {
+  const GridGeometry g(Vec3(0, 0, 0), 0.1, Index3(20, 20, 20));
+  int seen = 0;
+  const bool done = go_feap::common::traverse(g, Vec3(0.05, 0.05, 0.05), Vec3(1.55, 0.85, 0.35), [&](const Index3&) {
+    return ++seen < 4;
+  });
+  EXPECT_FALSE(done);
+  EXPECT_EQ(seen, 4);
 }

@@ -1,6 +1,7 @@
 // Voxel traversal along a segment (Amanatides & Woo 1987).
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -37,22 +38,29 @@ bool traverse(const GridGeometry& geo, const Vec3& a, const Vec3& b, Visit&& vis
   }
   // The number of steps is fixed by the end voxel, which guards against rounding.
   int steps = (last - cur).cwiseAbs().sum();
-  if (!visit(static_cast<const Index3&>(cur))) return false;
+  // The walk runs on scalars and picks the axis without branching: which boundary comes
+  // next is unpredictable, and a mispredicted branch per voxel costs more than the step.
+  int x = cur[0], y = cur[1], z = cur[2];
+  double tx = t_max[0], ty = t_max[1], tz = t_max[2];
+  if (!visit(Index3(x, y, z))) return false;
   while (steps-- > 0) {
-    int axis = 0;
-    if (t_max[1] < t_max[axis]) axis = 1;
-    if (t_max[2] < t_max[axis]) axis = 2;
+    const bool y_before_x = ty < tx;
+    bool step_z = tz < std::min(tx, ty);
+    bool step_y = !step_z && y_before_x;
+    bool step_x = !step_z && !y_before_x;
     // Never step past the end voxel along an axis (can happen at exact ties).
-    if (cur[axis] == last[axis]) {
-      for (int i = 0; i < 3; ++i)
-        if (cur[i] != last[i]) {
-          axis = i;
-          break;
-        }
+    if ((step_x && x == last[0]) || (step_y && y == last[1]) || (step_z && z == last[2])) {
+      step_x = x != last[0];
+      step_y = !step_x && y != last[1];
+      step_z = !step_x && !step_y;
     }
-    cur[axis] += step[axis];
-    t_max[axis] += t_delta[axis];
-    if (!visit(static_cast<const Index3&>(cur))) return false;
+    x += step_x ? step[0] : 0;
+    y += step_y ? step[1] : 0;
+    z += step_z ? step[2] : 0;
+    tx += step_x ? t_delta[0] : 0.0;
+    ty += step_y ? t_delta[1] : 0.0;
+    tz += step_z ? t_delta[2] : 0.0;
+    if (!visit(Index3(x, y, z))) return false;
   }
   return true;
 }

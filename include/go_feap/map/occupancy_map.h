@@ -110,8 +110,10 @@ class OccupancyMap {
   std::vector<std::int8_t> logodds_;
   std::size_t known_ = 0;  ///< voxels whose logodds_ is not kUnknown
   std::int8_t hit_, miss_, min_, max_, occupied_;
-  // Per-frame scratch: one bit per voxel, cleared where set.
-  std::vector<std::uint64_t> hit_bits_, free_bits_, end_bits_;
+  // Per-frame scratch, cleared where set. marks_ holds two bits per voxel, the return
+  // (kHitMark) and the free-space (kFreeMark) mark side by side, so that one load tells
+  // whether a voxel was touched this frame; end_bits_ holds one bit per voxel.
+  std::vector<std::uint64_t> marks_, end_bits_;
   std::vector<std::size_t> touched_;
 };
 
