@@ -1,6 +1,7 @@
 #include "go_feap/planning/tour_planner.h"
 
 #include <set>
+#include <utility>
 
 namespace go_feap::planning {
 
@@ -31,7 +32,10 @@ common::Result<GlobalTour> TourPlanner::plan(const std::vector<FrontierSummary>&
     return pd.metres;
   };
   d.from_uav_lower_bound = [&](std::size_t j) { return (frontiers[j].average - uav).norm(); };
+  // A path is as long one way as the other: one search per unordered pair, from the frontier with
+  // the lower id (so that the same pair always gets the same search).
   d.between = [&](std::size_t i, std::size_t j) {
+    if (frontiers[j].id < frontiers[i].id) std::swap(i, j);
     const auto key = std::make_pair(frontiers[i].id, frontiers[j].id);
     auto it = cache_.find(key);
     if (it == cache_.end()) it = cache_.emplace(key, pathDistance(astar_, frontiers[i].average, frontiers[j].average)).first;

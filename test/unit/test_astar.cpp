@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "go_feap/planning/astar.h"
+#include "go_feap/planning/tour_planner.h"
 
 using go_feap::common::Aabb;
 using go_feap::common::GridGeometry;
@@ -756,4 +757,54 @@ TEST(Astar, ProbeFromTheGoalFailsFastWhenTheGoalIsCutOff) {
   ASSERT_EQ(want.status, PathStatus::kFound) << toString(want.status);
   expectWellFormed(probing_open, got, world.geo().coordToIndex(start), world.geo().coordToIndex(goal));
   EXPECT_NEAR(got.raw_length, want.raw_length, 1e-9);
+}
+
+TEST(TourPlanner, SearchesEachPairOnceAndFindsTheShortestOpenTour) {
+  // Free space split by a wall with one gap: the frontiers on either side are far apart by path.
+  World world(Index3(60, 40, 10));
+  world.fill(VoxelState::kFree);
+  world.set(Index3(30, 0, 0), Index3(31, 29, 9), VoxelState::kOccupied);
+  const Astar astar(world.occupancy(), world.esdf(), astarConfig(0.2, true));
+  go_feap::planning::GlobalPlannerConfig config;
+  config.lambda = 0.0;  // travel time only: the brute force below is the whole objective
+  config.s_near = 100.0;
+  go_feap::planning::TourPlanner planner(config, astar);
+  std::vector<go_feap::planning::FrontierSummary> frontiers;
+  const std::vector<Vec3> at{Vec3(1.0, 1.0, 0.5), Vec3(5.0, 0.8, 0.5), Vec3(2.5, 3.5, 0.5), Vec3(4.0, 2.5, 0.5),
+                             Vec3(0.6, 3.0, 0.5)};
+  for (std::size_t k = 0; k < at.size(); ++k) {
+    go_feap::planning::FrontierSummary f;
+    f.id = static_cast<unsigned>(10 * (k + 1) % 7 + 1);  // ids not in list order
+    f.average = at[k];
+    f.cell_count = 100;
+    frontiers.push_back(f);
+  }
+  const Vec3 uav(2.0, 0.5, 0.5);
+  const auto tour = planner.plan(frontiers, uav);
+  ASSERT_TRUE(tour) << tour.message();
+  const std::size_t n = frontiers.size();
+  ASSERT_EQ(tour->indices.size(), n);
+  EXPECT_EQ(planner.cacheSize(), n * (n - 1) / 2);  // one search per unordered pair
+
+  // Brute force over every order, with the same path lengths (one per pair, the lower id first).
+  auto between = [&](std::size_t i, std::size_t j) {
+    if (frontiers[j].id < frontiers[i].id) std::swap(i, j);
+    return pathDistance(astar, frontiers[i].average, frontiers[j].average).metres;
+  };
+  std::vector<std::size_t> order(n);
+  for (std::size_t k = 0; k < n; ++k) order[k] = k;
+  double best = kInf;
+  do {
+    double s = pathDistance(astar, uav, frontiers[order[0]].average).metres;
+    for (std::size_t k = 1; k < n; ++k) s += between(order[k - 1], order[k]);
+    best = std::min(best, s / config.v_max);
+  } while (std::next_permutation(order.begin(), order.end()));
+  EXPECT_NEAR(tour->cost, best, 1e-9);
+
+  // Planning again searches nothing new; a frontier that is gone takes its pairs with it.
+  ASSERT_TRUE(planner.plan(frontiers, uav));
+  EXPECT_EQ(planner.cacheSize(), n * (n - 1) / 2);
+  frontiers.pop_back();
+  ASSERT_TRUE(planner.plan(frontiers, uav));
+  EXPECT_EQ(planner.cacheSize(), (n - 1) * (n - 2) / 2);
 }

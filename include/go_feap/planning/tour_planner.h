@@ -24,7 +24,8 @@ class TourPlanner {
 
   /// planTour() over `frontiers` from `uav`. Beyond s_near (Euclidean, a lower bound of the path) a
   /// frontier cannot be near: its Euclidean distance only orders the top-up, so no search is spent on
-  /// it. Cached lengths of frontiers no longer listed are dropped first. `fallbacks` (when not null)
+  /// it. Lengths between frontiers are searched once per unordered pair (from the lower id) and cached
+  /// by id pair; cached lengths of frontiers no longer listed are dropped first. `fallbacks` (when not null)
   /// counts the distances that fell back to Euclidean.
   common::Result<GlobalTour> plan(const std::vector<FrontierSummary>& frontiers, const Vec3& uav,
                                   std::size_t* fallbacks = nullptr);
