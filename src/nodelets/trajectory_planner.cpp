@@ -36,9 +36,11 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     config::readTrajectoryPlanner(p, planner_);
     p.get("planner/rate", rate_).get("planner/odom_timeout", odom_timeout_);
     config::readAstar(p, astar_config_);
+    config::readAstar(p, scout_config_, "scout_astar");
     p.get("world_frame", world_frame_);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
-    for (const common::Status& st : {o.validate(), replan_.validate(), astar_config_.validate(), planner_.validate()})
+    for (const common::Status& st :
+         {o.validate(), replan_.validate(), astar_config_.validate(), scout_config_.validate(), planner_.validate()})
       ros_params::requireOrThrow(st.ok(), getName(), st.message());
     ros_params::requireOrThrow(std::isfinite(rate_) && rate_ > 0.0, getName(),
                                "parameter '" + p.fullName("planner/rate") + "' must be > 0");
@@ -60,7 +62,9 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     if (shared_) return;
     auto map = ros_map::acceptHandle(*msg, [&](const map::EsdfConfig& esdf) {
       const common::Status st = optimizer_.validate(esdf);
-      return st.ok() ? astar_config_.validate(esdf) : st;
+      if (!st.ok()) return st;
+      const common::Status flight = astar_config_.validate(esdf);
+      return flight.ok() ? scout_config_.validate(esdf) : flight;
     });
     if (!map) {
       NODELET_ERROR_STREAM_THROTTLE(10.0, getName() << ": " << map.message());
@@ -68,6 +72,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     }
     shared_ = *map;
     astar_ = std::make_unique<planning::Astar>(shared_->map->occupancy(), shared_->map->esdf(), astar_config_);
+    scout_ = std::make_unique<planning::Astar>(shared_->map->occupancy(), shared_->map->esdf(), scout_config_);
   }
   void onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
     const auto& p = msg->pose.pose.position;
@@ -162,8 +167,11 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     {
       std::shared_lock<std::shared_mutex> map_lock(shared_->mutex);
       planned = trajectory::planTrajectory(request, *astar_, shared_->map->esdf(), optimizer_, planner_, &report,
-                                           &search_memory_);
+                                           &search_memory_, scout_.get());
     }
+    if (planned && report.scouted)
+      NODELET_INFO_STREAM(getName() << ": no known path to frontier " << target_frontier_
+                                    << ": scouting along a way through unseen space");
     ros_conv::publishComputeTime(compute_pub_, "trajectory", t_compute);
     if (!planned) {
       NODELET_WARN_STREAM(getName() << ": planning to frontier " << target_frontier_ << " failed ("
@@ -211,7 +219,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
 
   trajectory::OptimizerConfig optimizer_;
   trajectory::ReplanConfig replan_;
-  planning::AstarConfig astar_config_;
+  planning::AstarConfig astar_config_, scout_config_;
   trajectory::TrajectoryPlannerConfig planner_;
   double rate_ = 10.0, odom_timeout_ = 0.5;
   ros::Time odom_time_;
@@ -219,7 +227,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
   std::string world_frame_;
   std::mutex mutex_;
   std::shared_ptr<ros_map::SharedMap> shared_;
-  std::unique_ptr<planning::Astar> astar_;
+  std::unique_ptr<planning::Astar> astar_, scout_;
   std::optional<common::Vec3> odom_position_, target_;
   double odom_yaw_ = 0.0, target_yaw_ = 0.0;
   unsigned target_frontier_ = 0;

@@ -47,6 +47,8 @@ common::Status TrajectoryPlannerConfig::validate() const {
     return common::Status::Error("planner: goal_tolerance must be finite and >= 0");
   if (!std::isfinite(failed_search_memory) || failed_search_memory < 0.0)
     return common::Status::Error("planner: failed_search_memory must be finite and >= 0");
+  if (!std::isfinite(scout_min_length) || scout_min_length < 0.0)
+    return common::Status::Error("planner: scout_min_length must be finite and >= 0");
   return common::Status::Ok();
 }
 
@@ -90,7 +92,7 @@ std::optional<SearchMemory::Failure> SearchMemory::recall(const Vec3& start, con
 common::Result<Trajectory> planTrajectory(const PlanRequest& request, const planning::Astar& astar,
                                           const map::Esdf& esdf, const OptimizerConfig& optimizer,
                                           const TrajectoryPlannerConfig& config, PlanReport* report,
-                                          SearchMemory* memory) {
+                                          SearchMemory* memory, const planning::Astar* scout) {
   using R = common::Result<Trajectory>;
   PlanReport local;
   PlanReport& rep = report ? *report : local;
@@ -129,16 +131,29 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
                       config.min_progress > 0.0 &&
                       (request.target - request.start).norm() - (request.target - path.toward.back()).norm() >=
                           config.min_progress;
-  if (path.status != planning::PathStatus::kFound && !toward) {
-    if (memory && (path.status == planning::PathStatus::kNoPath || path.status == planning::PathStatus::kBudgetExceeded))
-      memory->remember(request.start, request.target, path.status, path.expansions, request.time);
+  const bool no_path =
+      path.status == planning::PathStatus::kNoPath || path.status == planning::PathStatus::kBudgetExceeded;
+  // Known space does not lead there (yet), but space nobody has seen may: fly the known start of that way.
+  std::vector<Vec3> scouted;
+  if (no_path && !toward && scout && config.scout_min_length > 0.0) {
+    const planning::PathResult way = scout->search(request.start, request.target, config.snap_radius);
+    if (way.status == planning::PathStatus::kFound) {
+      std::vector<Vec3> prefix = flyablePrefix(way.path, astar);
+      double along = 0.0;
+      for (std::size_t i = 1; i < prefix.size(); ++i) along += (prefix[i] - prefix[i - 1]).norm();
+      if (along >= config.scout_min_length) scouted = std::move(prefix);
+    }
+  }
+  if (path.status != planning::PathStatus::kFound && !toward && scouted.empty()) {
+    if (memory && no_path) memory->remember(request.start, request.target, path.status, path.expansions, request.time);
     return R::Error(std::string("no path: ") + planning::toString(path.status));
   }
-  rep.toward = toward;
-  const std::vector<Vec3>& found = toward ? path.toward : path.path;
-  rep.path_length = toward ? 0.0 : path.length;
+  rep.scouted = !scouted.empty();
+  rep.toward = toward || rep.scouted;
+  const std::vector<Vec3>& found = rep.scouted ? scouted : toward ? path.toward : path.path;
+  rep.path_length = rep.toward ? 0.0 : path.length;
   // The start may snap out of a blocked voxel; the goal may not wander off the viewpoint.
-  if (!toward && (path.path.back() - request.target).norm() > config.goal_tolerance) {
+  if (!rep.toward && (path.path.back() - request.target).norm() > config.goal_tolerance) {
     rep.path_status = planning::PathStatus::kGoalBlocked;
     return R::Error("no path: goal_blocked (the nearest flyable voxel is " +
                     std::to_string((path.path.back() - request.target).norm()) + " m from the target)");
@@ -153,7 +168,7 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
     points = {request.start, request.target};
     length = (request.target - request.start).norm();
   }
-  bool partial = toward;
+  bool partial = toward || rep.scouted;
   if (config.horizon > 0.0 && length > config.horizon) {
     // Keep the first `horizon` metres of the polyline.
     std::vector<Vec3> kept{points.front()};
@@ -219,9 +234,37 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
   out.partial = partial;
   // Turn at once: facing the viewpoint's way early, the camera may see its frontier (and the target be
   // dropped) before the vehicle has to stop there.
-  auto yaw = yawTurn(request.yaw, request.target_yaw, 0.0, optimizer);
+  // A scouting flight looks where it goes: along the way's last known piece.
+  double target_yaw = request.target_yaw;
+  if (rep.scouted && points.size() >= 2) {
+    const Vec3 last = points.back() - points[points.size() - 2];
+    if (last.head<2>().norm() > 1e-6) target_yaw = std::atan2(last.y(), last.x());
+  }
+  auto yaw = yawTurn(request.yaw, target_yaw, 0.0, optimizer);
   if (!yaw) return R::Error("yaw spline failed: " + yaw.message());
   out.yaw = std::move(yaw).value();
+  return out;
+}
+
+std::vector<Vec3> flyablePrefix(const std::vector<Vec3>& path, const planning::Astar& astar) {
+  std::vector<Vec3> out;
+  if (path.empty()) return out;
+  out.push_back(path.front());
+  const double step = 0.5 * astar.geometry().resolution();
+  for (std::size_t i = 1; i < path.size(); ++i) {
+    const Vec3 a = path[i - 1], d = path[i] - a;
+    const int n = std::max(1, static_cast<int>(std::ceil(d.norm() / step)));
+    Vec3 last_ok = a;
+    for (int k = 1; k <= n; ++k) {
+      const Vec3 p = a + d * (static_cast<double>(k) / n);
+      if (!astar.segmentTraversable(last_ok, p)) {
+        if (last_ok != out.back()) out.push_back(last_ok);
+        return out;
+      }
+      last_ok = p;
+    }
+    out.push_back(path[i]);
+  }
   return out;
 }
 

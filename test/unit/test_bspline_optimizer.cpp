@@ -765,6 +765,74 @@ TEST(TrajectoryPlanner, WithoutAKnownPathItFliesTowardsTheTarget) {
   EXPECT_FALSE(report.toward);
 }
 
+// Two known rooms whose only connection, a 1.5 m gap in the wall between them, nobody has seen: the flight
+// search finds no path, and the target is too far past the wall for min_progress. The scout search (unknown
+// space free) finds the way through the gap; its start in known flyable space is flown, facing along it.
+TEST(TrajectoryPlanner, WithoutAKnownWayItScoutsAlongAWayThroughUnseenSpace) {
+  auto rooms = [](World& world, bool gap_open) {
+    world.setFree(Index3(0, 0, 0), Index3(29, 39, 19));   // room A: x 0-3 m
+    world.setFree(Index3(40, 0, 0), Index3(79, 39, 19));  // room B: x 4-8 m
+    world.addBox(Index3(30, 0, 0), Index3(39, gap_open ? 24 : 39, 19));  // the wall; y 2.5-4 m unseen if open
+    world.sync();
+  };
+  World world(Vec3(8, 4, 2));
+  rooms(world, true);
+  const Astar astar(world.occupancy(), world.esdf(), flightAstarConfig());
+  AstarConfig scout_config;
+  scout_config.unknown_is_free = true;
+  scout_config.known_clearance = false;
+  scout_config.clearance = 0.3;
+  const Astar scout(world.occupancy(), world.esdf(), scout_config);
+  const OptimizerConfig optimizer = optimizerConfig();
+  traj::TrajectoryPlannerConfig planner;
+  planner.min_progress = 0.0;  // no flying towards the target through the wall's side
+  traj::PlanRequest request;
+  request.start = Vec3(1.0, 1.0, 1.0);
+  request.target = Vec3(6.0, 1.0, 1.0);
+  traj::PlanReport report;
+  const auto blind = traj::planTrajectory(request, astar, world.esdf(), optimizer, planner, &report);
+  ASSERT_FALSE(blind);
+  EXPECT_NE(blind.message().find("no_path"), std::string::npos) << blind.message();
+
+  const auto planned = traj::planTrajectory(request, astar, world.esdf(), optimizer, planner, &report, nullptr, &scout);
+  ASSERT_TRUE(planned) << planned.message();
+  EXPECT_TRUE(report.scouted);
+  EXPECT_TRUE(planned->partial);
+  EXPECT_LT((planned->goal - request.target).norm(), 1e-12);
+  const Vec3 end = planned->position.position(planned->duration());
+  EXPECT_LT(end.x(), 3.0);  // still in room A, in known space ...
+  EXPECT_GT(end.y(), 2.0);  // ... but at the gap, not at the wall straight ahead
+  EXPECT_GT((end - request.start).norm(), planner.scout_min_length);
+  const double res = world.geo().resolution();
+  EXPECT_TRUE(traj::staysFlyable(planned->position, astar, optimizer.min_clearance - 0.5 * std::sqrt(3.0) * res,
+                                 planner.snap_radius));
+  // Facing the way on: the gap's middle is ahead.
+  const double yaw = traj::sampleTrajectory(*planned, planned->duration() + planned->yaw.duration()).yaw;
+  const Vec3 to_gap = Vec3(3.5, 3.25, 1.0) - end;
+  EXPECT_GT(std::cos(yaw - std::atan2(to_gap.y(), to_gap.x())), 0.5) << "yaw " << yaw;
+  // The known start of the way is every flyable piece of it, and no more.
+  const PathResult way = scout.search(request.start, request.target, planner.snap_radius);
+  ASSERT_EQ(way.status, PathStatus::kFound);
+  const std::vector<Vec3> prefix = traj::flyablePrefix(way.path, astar);
+  ASSERT_GE(prefix.size(), 2u);
+  for (std::size_t i = 1; i < prefix.size(); ++i) EXPECT_TRUE(astar.segmentTraversable(prefix[i - 1], prefix[i]));
+  EXPECT_FALSE(astar.segmentTraversable(prefix.back(), prefix.back() + (way.path.back() - prefix.back()).normalized() * res));
+
+  planner.scout_min_length = 0.0;  // off
+  EXPECT_FALSE(traj::planTrajectory(request, astar, world.esdf(), optimizer, planner, &report, nullptr, &scout));
+  planner.scout_min_length = 0.5;
+  World closed(Vec3(8, 4, 2));  // no way at all: the plan fails as before
+  rooms(closed, false);
+  const Astar closed_astar(closed.occupancy(), closed.esdf(), flightAstarConfig());
+  const Astar closed_scout(closed.occupancy(), closed.esdf(), scout_config);
+  const auto none =
+      traj::planTrajectory(request, closed_astar, closed.esdf(), optimizer, planner, &report, nullptr, &closed_scout);
+  ASSERT_FALSE(none);
+  EXPECT_FALSE(report.scouted);
+  planner.scout_min_length = -1.0;
+  EXPECT_NE(planner.validate().message().find("scout_min_length"), std::string::npos);
+}
+
 // A search that found no path is remembered: the same request (start within snap_radius, goal within
 // goal_tolerance) within failed_search_memory fails at once with the same status and expansions (so
 // startEnclosed() judges it the same); another goal, a later time or no memory searches again, and a

@@ -57,6 +57,7 @@ struct ExplorationConfig {
   trajectory::TrajectoryPlannerConfig planner;
   double planner_rate = 10.0;          ///< Hz: replanning checks
   planning::AstarConfig flight_astar;  ///< trajectory.yaml astar: paths to fly
+  planning::AstarConfig scout_astar;   ///< trajectory.yaml scout_astar: the way on through unseen space
   LoopConfig loop;
   /// Every group's validate(), plus the rates and the extrinsic; names the bad key.
   common::Status validate() const;
@@ -119,7 +120,7 @@ class ExplorationRun {
   map::DepthIntrinsics intrinsics_;
   std::unique_ptr<map::VoxelMap> map_;
   std::unique_ptr<frontier::FrontierFinder> finder_;
-  std::unique_ptr<planning::Astar> distance_astar_, flight_astar_;
+  std::unique_ptr<planning::Astar> distance_astar_, flight_astar_, scout_astar_;
   std::unique_ptr<planning::TourPlanner> tour_planner_;
   planning::ObstacleWindow window_;
   planning::ViewpointCache viewpoint_cache_;

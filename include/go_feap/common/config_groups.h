@@ -5,6 +5,8 @@
 // YAML files), so both run with the same values and the same names in their messages.
 #pragma once
 
+#include <string>
+
 #include "go_feap/frontier/frontier_finder.h"
 #include "go_feap/map/voxel_map.h"
 #include "go_feap/planning/astar.h"
@@ -61,11 +63,11 @@ void readGlobalPlanner(R& p, planning::GlobalPlannerConfig& c) {
 }
 
 template <class R>
-void readAstar(R& p, planning::AstarConfig& c) {
-  p.get("astar/clearance", c.clearance).get("astar/unknown_is_free", c.unknown_is_free);
-  p.get("astar/known_clearance", c.known_clearance);
-  p.get("astar/max_expansions", c.max_expansions).get("astar/probe_expansions", c.probe_expansions);
-  p.get("astar/tie_breaker", c.tie_breaker);
+void readAstar(R& p, planning::AstarConfig& c, const std::string& ns = "astar") {
+  p.get(ns + "/clearance", c.clearance).get(ns + "/unknown_is_free", c.unknown_is_free);
+  p.get(ns + "/known_clearance", c.known_clearance);
+  p.get(ns + "/max_expansions", c.max_expansions).get(ns + "/probe_expansions", c.probe_expansions);
+  p.get(ns + "/tie_breaker", c.tie_breaker);
 }
 
 template <class R>
@@ -121,7 +123,7 @@ void readTrajectoryPlanner(R& p, trajectory::TrajectoryPlannerConfig& c) {
   p.get("planner/max_slowdown", c.max_slowdown).get("planner/horizon", c.horizon);
   p.get("planner/enclosed_turn", c.enclosed_turn).get("planner/min_progress", c.min_progress);
   p.get("planner/snap_radius", c.snap_radius).get("planner/goal_tolerance", c.goal_tolerance);
-  p.get("planner/failed_search_memory", c.failed_search_memory);
+  p.get("planner/failed_search_memory", c.failed_search_memory).get("planner/scout_min_length", c.scout_min_length);
 }
 
 template <class R>

@@ -59,6 +59,10 @@ struct TrajectoryPlannerConfig {
   double goal_tolerance = 0.3;
   /// s a flight search that found no path is remembered (SearchMemory); 0 = never
   double failed_search_memory = 3.0;
+  /// m: with no path through known space (and no min_progress towards the target), the part in known
+  /// flyable space of a scout search's path (unknown space free) is flown when it is at least this
+  /// long, facing along it: the way on comes into view (0 = never; needs a scout search)
+  double scout_min_length = 0.5;
   /// Checks every key; the message names the bad one, e.g. "planner: path_spacing must be > 0".
   common::Status validate() const;
 };
@@ -83,6 +87,7 @@ struct PlanReport {
   int path_expansions = 0;     ///< voxels the path search expanded
   bool toward = false;         ///< no path was found: the trajectory goes towards the target (PathResult::toward)
   bool remembered = false;     ///< failed without searching: the same search failed lately (SearchMemory)
+  bool scouted = false;        ///< no known path: the known start of the scout search's path is flown
 };
 
 /// Flight searches that found no path (no path or budget exceeded, and nothing to fly towards either),
@@ -140,10 +145,20 @@ bool staysFlyable(const UniformBspline& spline, const planning::Astar& astar, do
 /// With `memory`: a search failure remembered for this request (SearchMemory::recall at request.time)
 /// fails at once (PlanReport::remembered, with the remembered status and expansions), and a new one is
 /// remembered.
+///
+/// With a `scout` search (unknown space free) and config.scout_min_length > 0, a request that finds no
+/// path through known space, and cannot fly min_progress towards the target either, searches again
+/// with `scout`; the longest start of that path that `astar` could fly (segmentTraversable) is flown
+/// when it is scout_min_length long or more: a partial trajectory facing along the path
+/// (PlanReport::scouted), replanned on the way as the space beyond comes into view.
 common::Result<Trajectory> planTrajectory(const PlanRequest& request, const planning::Astar& astar,
                                           const map::Esdf& esdf, const OptimizerConfig& optimizer,
                                           const TrajectoryPlannerConfig& config, PlanReport* report = nullptr,
-                                          SearchMemory* memory = nullptr);
+                                          SearchMemory* memory = nullptr, const planning::Astar* scout = nullptr);
+
+/// The longest start of `path` (from path.front()) whose every piece passes astar.segmentTraversable(),
+/// checked in steps of half a voxel: the path's vertices up to the last such point, and that point.
+std::vector<Vec3> flyablePrefix(const std::vector<Vec3>& path, const planning::Astar& astar);
 
 /// A trajectory that brakes from (p, v) at a_max to a stop and holds yaw: what is flown when
 /// planning fails.
