@@ -148,12 +148,13 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
     if (memory && no_path) memory->remember(request.start, request.target, path.status, path.expansions, request.time);
     return R::Error(std::string("no path: ") + planning::toString(path.status));
   }
+  rep.toward = toward;
   rep.scouted = !scouted.empty();
-  rep.toward = toward || rep.scouted;
+  const bool partial_way = toward || rep.scouted;  // no path to the target: a part of the way there
   const std::vector<Vec3>& found = rep.scouted ? scouted : toward ? path.toward : path.path;
-  rep.path_length = rep.toward ? 0.0 : path.length;
+  rep.path_length = partial_way ? 0.0 : path.length;
   // The start may snap out of a blocked voxel; the goal may not wander off the viewpoint.
-  if (!rep.toward && (path.path.back() - request.target).norm() > config.goal_tolerance) {
+  if (!partial_way && (path.path.back() - request.target).norm() > config.goal_tolerance) {
     rep.path_status = planning::PathStatus::kGoalBlocked;
     return R::Error("no path: goal_blocked (the nearest flyable voxel is " +
                     std::to_string((path.path.back() - request.target).norm()) + " m from the target)");
@@ -168,7 +169,7 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
     points = {request.start, request.target};
     length = (request.target - request.start).norm();
   }
-  bool partial = toward || rep.scouted;
+  bool partial = partial_way;
   if (config.horizon > 0.0 && length > config.horizon) {
     // Keep the first `horizon` metres of the polyline.
     std::vector<Vec3> kept{points.front()};

@@ -797,6 +797,7 @@ TEST(TrajectoryPlanner, WithoutAKnownWayItScoutsAlongAWayThroughUnseenSpace) {
   const auto planned = traj::planTrajectory(request, astar, world.esdf(), optimizer, planner, &report, nullptr, &scout);
   ASSERT_TRUE(planned) << planned.message();
   EXPECT_TRUE(report.scouted);
+  EXPECT_FALSE(report.toward);  // not the search's nearest point: the scout's way
   EXPECT_TRUE(planned->partial);
   EXPECT_LT((planned->goal - request.target).norm(), 1e-12);
   const Vec3 end = planned->position.position(planned->duration());

@@ -87,7 +87,7 @@ struct PlanReport {
   int path_expansions = 0;     ///< voxels the path search expanded
   bool toward = false;         ///< no path was found: the trajectory goes towards the target (PathResult::toward)
   bool remembered = false;     ///< failed without searching: the same search failed lately (SearchMemory)
-  bool scouted = false;        ///< no known path: the known start of the scout search's path is flown
+  bool scouted = false;        ///< no known path, nor toward: the known start of the scout search's path is flown
 };
 
 /// Flight searches that found no path (no path or budget exceeded, and nothing to fly towards either),
