@@ -314,6 +314,19 @@ void ExplorationRun::trajectoryStep() {
     trajectory_ = trajectory::lookAroundTrajectory(request, config_.planner, config_.optimizer);
     return;
   }
+  // A way refused only for unseen space beside it, where the camera has not looked (it stopped
+  // mid-turn, say): look there once before the frontier counts a failed attempt.
+  if (!target_->looked_at_unseen) {
+    if (auto look = trajectory::lookAtUnseen(request, report, config_.planner, config_.optimizer)) {
+      std::ostringstream what;
+      what << "the way to frontier " << target_->frontier << " touches unseen space at ("
+           << report.unseen_at->transpose() << "): looking there";
+      log(what.str());
+      target_->looked_at_unseen = true;
+      trajectory_ = std::move(*look);
+      return;
+    }
+  }
   failed_.push_back(target_->frontier);
   trajectory_ = trajectory::stopTrajectory(request.start, request.velocity, request.yaw, config_.optimizer);
   target_.reset();

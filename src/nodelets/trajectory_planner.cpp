@@ -98,8 +98,10 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     // it reached by its own pose, and after dropping a target it may choose a viewpoint next to it (kept
     // within the tolerances, the vehicle hovered short of it for good). A repeat keeps its number.
     const bool renumbered = msg->target_seq != 0 && msg->target_seq != target_seq_;
-    target_changed_ = target_changed_ || !target_ || renumbered ||
-                      trajectory::targetMoved(*target_, target_yaw_, target, msg->yaws.front(), replan_);
+    const bool new_target =
+        !target_ || renumbered || trajectory::targetMoved(*target_, target_yaw_, target, msg->yaws.front(), replan_);
+    if (new_target) looked_at_unseen_ = false;
+    target_changed_ = target_changed_ || new_target;
     target_seq_ = msg->target_seq;
     target_ = target;
     target_yaw_ = msg->yaws.front();
@@ -184,6 +186,17 @@ class TrajectoryPlanner : public nodelet::Nodelet {
         publish(now, trajectory::lookAroundTrajectory(request, planner_, optimizer_));
         return;
       }
+      // A way refused only for unseen space beside it, where the camera has not looked (it stopped
+      // mid-turn, say): look there once before the frontier counts a failed attempt.
+      if (!looked_at_unseen_) {
+        if (auto look = trajectory::lookAtUnseen(request, report, planner_, optimizer_)) {
+          NODELET_WARN_STREAM(getName() << ": the way to frontier " << target_frontier_ << " touches unseen space at ("
+                                        << report.unseen_at->transpose() << "): looking there");
+          looked_at_unseen_ = true;
+          publish(now, std::move(*look));
+          return;
+        }
+      }
       NODELET_WARN_STREAM(getName() << ": stopping; frontier " << target_frontier_ << " counts a failed attempt");
       std_msgs::UInt32 failed;
       failed.data = target_frontier_;
@@ -233,6 +246,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
   unsigned target_frontier_ = 0;
   std::uint32_t target_seq_ = 0;  ///< ViewpointPath::target_seq of the target
   bool target_changed_ = false;
+  bool looked_at_unseen_ = false;  ///< lookAtUnseen() was flown for this target
   PositionCommand::ConstPtr command_;
   std::optional<ros_traj::Trajectory> current_;
   trajectory::SearchMemory search_memory_;  // flight searches that found no path lately

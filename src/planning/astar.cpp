@@ -155,25 +155,29 @@ bool Astar::traversable(const Index3& idx) const {
   return geo_.inside(idx) && traversable(idx, geo_.linear(idx));
 }
 
-bool Astar::traversableWith(const Index3& idx, double min_distance) const {
+bool Astar::traversableWith(const Index3& idx, double min_distance, bool* unseen) const {
+  if (unseen) *unseen = false;
   if (!geo_.inside(idx)) return false;
   const Vec3 c = geo_.indexToCoord(idx);
   const common::Aabb& box = occupancy_.box();
   if ((c.array() < box.min.array() + min_distance).any() || (c.array() > box.max.array() - min_distance).any())
     return false;
-  const std::size_t linear = geo_.linear(idx);
-  if (!freeAndKnown(idx, linear, false) || !(esdf_.distance(idx) >= min_distance)) return false;
-  if (!config_.known_clearance || config_.unknown_is_free) return true;
-  // Nothing unseen within min_distance either: an obstacle there would be that close to the vehicle.
-  const double r = min_distance / geo_.resolution();
-  const int n = static_cast<int>(std::floor(r));
-  for (int dz = -n; dz <= n; ++dz)
-    for (int dy = -n; dy <= n; ++dy)
-      for (int dx = -n; dx <= n; ++dx) {
-        if (dx * dx + dy * dy + dz * dz > r * r) continue;
-        if (occupancy_.state(Index3(idx + Index3(dx, dy, dz))) == VoxelState::kUnknown) return false;
-      }
-  return true;
+  const VoxelState state = occupancy_.stateAt(geo_.linear(idx));
+  if (state == VoxelState::kOccupied || !(esdf_.distance(idx) >= min_distance)) return false;
+  // Clear of every mapped obstacle: what remains is whether the space is seen.
+  bool seen = state != VoxelState::kUnknown || config_.unknown_is_free;
+  if (seen && config_.known_clearance && !config_.unknown_is_free) {
+    // Nothing unseen within min_distance either: an obstacle there would be that close to the vehicle.
+    const double r = min_distance / geo_.resolution();
+    const int n = static_cast<int>(std::floor(r));
+    for (int dz = -n; dz <= n && seen; ++dz)
+      for (int dy = -n; dy <= n && seen; ++dy)
+        for (int dx = -n; dx <= n && seen; ++dx)
+          seen = dx * dx + dy * dy + dz * dz > r * r ||
+                 occupancy_.state(Index3(idx + Index3(dx, dy, dz))) != VoxelState::kUnknown;
+  }
+  if (unseen) *unseen = !seen;
+  return seen;
 }
 
 bool Astar::traversable(const Index3& idx, std::size_t linear) const {

@@ -49,23 +49,32 @@ common::Status TrajectoryPlannerConfig::validate() const {
     return common::Status::Error("planner: failed_search_memory must be finite and >= 0");
   if (!std::isfinite(scout_min_length) || scout_min_length < 0.0)
     return common::Status::Error("planner: scout_min_length must be finite and >= 0");
+  if (!std::isfinite(look_tolerance) || look_tolerance < 0.0 || look_tolerance > M_PI)
+    return common::Status::Error("planner: look_tolerance must be in [0, pi]");
   return common::Status::Ok();
 }
 
 bool staysFlyable(const UniformBspline& spline, const planning::Astar& astar, double min_distance,
-                  double exempt_radius) {
+                  double exempt_radius, std::optional<Vec3>* unseen_at) {
+  if (unseen_at) unseen_at->reset();
   const common::GridGeometry& geo = astar.geometry();
   // Samples at most a quarter voxel apart along the curve.
   const double step = std::max(1e-3, 0.25 * geo.resolution() / std::max(spline.maxVelocity(), 1e-3));
   const Vec3 start = spline.position(0.0);
+  auto refused = [&](const Vec3& p, const common::Index3& idx) {
+    bool unseen = false;
+    if (astar.traversableWith(idx, min_distance, &unseen)) return false;
+    if (unseen && unseen_at) *unseen_at = p;
+    return true;
+  };
   // Consecutive samples mostly share a voxel: each voxel is checked once in a row.
   std::optional<common::Index3> checked;
   for (double t = 0.0;; t = std::min(t + step, spline.duration())) {
     const Vec3 p = spline.position(t);
     const common::Index3 idx = geo.coordToIndex(p);
-    if (t >= spline.duration()) return idx == checked || astar.traversableWith(idx, min_distance);
+    if (t >= spline.duration()) return idx == checked || !refused(p, idx);
     if ((p - start).norm() > exempt_radius && idx != checked) {
-      if (!astar.traversableWith(idx, min_distance)) return false;
+      if (refused(p, idx)) return false;
       checked = idx;
     }
   }
@@ -210,16 +219,19 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
     spline = optimize(init, esdf, optimizer);
     // The optimum must also stay where the path search may go: the ESDF knows only mapped obstacles,
     // and a smoothed corner can cut through space nobody has seen (or over the box's clearance).
-    if (spline && !staysFlyable(*spline, astar, voxel_clearance, config.snap_radius)) {
+    if (spline && !staysFlyable(*spline, astar, voxel_clearance, config.snap_radius, &rep.unseen_at)) {
       spline = common::Result<UniformBspline>::Error("the optimised trajectory leaves known flyable space");
       ++rep.left_flyable;
     }
     if (spline) break;
-    if (checkTrajectory(init, esdf, optimizer).ok() && staysFlyable(init, astar, voxel_clearance, config.snap_radius)) {
+    std::optional<Vec3> fit_unseen;
+    const bool fit_ok = checkTrajectory(init, esdf, optimizer).ok();
+    if (fit_ok && staysFlyable(init, astar, voxel_clearance, config.snap_radius, &fit_unseen)) {
       spline = init;
       rep.used_fit = true;
       break;
     }
+    if (fit_unseen) rep.unseen_at = fit_unseen;
     const double f = std::max({1.5, init.maxVelocity() / (0.9 * optimizer.v_max),
                                std::sqrt(init.maxAcceleration() / (0.9 * optimizer.a_max))});
     // Slowing down mends broken limits, not clearance: a crawl (a 26 m path in 145 s was seen) is a
@@ -229,6 +241,7 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
     spacing = std::max(0.5 * astar.geometry().resolution(), 0.5 * spacing);
   }
   if (!spline) return R::Error("optimisation failed: " + spline.message());
+  rep.unseen_at.reset();
   Trajectory out;
   out.position = std::move(spline).value();
   out.goal = request.target;
@@ -286,22 +299,42 @@ bool startEnclosed(const PlanReport& report, const TrajectoryPlannerConfig& conf
   return report.path_expansions < 4.0 / 3.0 * M_PI * r * r * r;
 }
 
-Trajectory lookAroundTrajectory(const PlanRequest& request, const TrajectoryPlannerConfig& config,
-                                const OptimizerConfig& optimizer) {
+namespace {
+
+/// Brake to a stop where the reference is while turning to `yaw`; at rest, hold still for as long as
+/// the turn takes (the replanning rule goes by the position's duration). Moving: the next plan comes
+/// from wherever the braking has got to. Partial, with the target as goal.
+Trajectory turnTowards(const PlanRequest& request, double yaw, const OptimizerConfig& optimizer) {
   Trajectory out;
   out.position = safeStop(request.start, request.velocity, optimizer.a_max);
-  const Vec3 to = request.target - request.start;
-  double yaw = std::atan2(to.y(), to.x());
-  if (to.head<2>().norm() < 1e-6 || std::abs(std::remainder(yaw - request.yaw, 2.0 * M_PI)) <= 0.25 * config.enclosed_turn)
-    yaw = request.yaw + config.enclosed_turn;
   auto turn = yawTurn(request.yaw, yaw, out.position.duration(), optimizer);
   out.yaw = turn ? std::move(turn).value() : UniformBspline(Eigen::MatrixXd::Constant(1, 4, request.yaw), 3, 0.1);
-  // At rest: hold still for as long as the turn takes (the replanning rule goes by the position's
-  // duration). Moving: brake; the next plan comes from wherever the braking has got to.
   if (request.velocity.norm() < 1e-9) out.position = UniformBspline(request.start.replicate(1, 4), 3, out.yaw.duration());
   out.goal = request.target;
   out.partial = true;
   return out;
+}
+
+}  // namespace
+
+Trajectory lookAroundTrajectory(const PlanRequest& request, const TrajectoryPlannerConfig& config,
+                                const OptimizerConfig& optimizer) {
+  const Vec3 to = request.target - request.start;
+  double yaw = std::atan2(to.y(), to.x());
+  if (to.head<2>().norm() < 1e-6 || std::abs(std::remainder(yaw - request.yaw, 2.0 * M_PI)) <= 0.25 * config.enclosed_turn)
+    yaw = request.yaw + config.enclosed_turn;
+  return turnTowards(request, yaw, optimizer);
+}
+
+std::optional<Trajectory> lookAtUnseen(const PlanRequest& request, const PlanReport& report,
+                                       const TrajectoryPlannerConfig& config, const OptimizerConfig& optimizer) {
+  if (!report.unseen_at || config.look_tolerance <= 0.0) return std::nullopt;
+  const Vec3 to = *report.unseen_at - request.start;
+  // Turning does not bring a point above or below the vehicle into view.
+  if (to.head<2>().norm() < std::abs(to.z())) return std::nullopt;
+  const double yaw = std::atan2(to.y(), to.x());
+  if (std::abs(std::remainder(yaw - request.yaw, 2.0 * M_PI)) <= config.look_tolerance) return std::nullopt;
+  return turnTowards(request, yaw, optimizer);
 }
 
 ReplanReason replanReason(const Trajectory* current, double t, const Vec3& target, bool target_changed,

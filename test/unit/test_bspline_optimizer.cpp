@@ -956,6 +956,95 @@ TEST(TrajectoryPlanner, StaysFlyableFollowsTheSearchRulesWithTheGivenClearance) 
   const Astar beside_astar(beside.occupancy(), beside.esdf(), config);
   EXPECT_FALSE(traj::staysFlyable(spline, beside_astar, 0.2, 0.5));
   EXPECT_TRUE(traj::staysFlyable(spline, beside_astar, 0.09, 0.5));
+  // Where it failed for unseen space alone, it says where: a sample within min_distance (plus the
+  // sample's offset in its voxel) of the unseen voxel; an obstacle or the box's face is not unseen space.
+  std::optional<Vec3> unseen_at;
+  EXPECT_FALSE(traj::staysFlyable(spline, beside_astar, 0.2, 0.5, &unseen_at));
+  ASSERT_TRUE(unseen_at.has_value());
+  EXPECT_LT((*unseen_at - beside.geo().indexToCoord(beside.geo().coordToIndex(Vec3(3.05, 2.15, 1.55)))).norm(),
+            0.2 + 0.5 * std::sqrt(3.0) * 0.1);
+  EXPECT_FALSE(traj::staysFlyable(spline, holed_astar, 0.2, 0.5, &unseen_at));
+  ASSERT_TRUE(unseen_at.has_value());
+  EXPECT_LT((*unseen_at - holed.geo().indexToCoord(holed.geo().coordToIndex(Vec3(3.0, 2.0, 1.5)))).norm(),
+            0.2 + 0.5 * std::sqrt(3.0) * 0.1);
+  EXPECT_LT(unseen_at->x(), 3.0);  // the first refused sample, before the hole
+  EXPECT_TRUE(traj::staysFlyable(spline, beside_astar, 0.09, 0.5, &unseen_at));
+  EXPECT_FALSE(unseen_at.has_value());
+  EXPECT_FALSE(traj::staysFlyable(high_spline, astar, 0.8, 0.5, &unseen_at));
+  EXPECT_FALSE(unseen_at.has_value());
+  EXPECT_FALSE(traj::staysFlyable(away_spline, walled_astar, 0.25, 0.0, &unseen_at));
+  EXPECT_FALSE(unseen_at.has_value());
+}
+
+// The flight search checks the known surroundings of a voxel 0.3 m out along each axis, the flight check
+// every voxel within min_clearance: one unseen voxel right beside a straight way (the vehicle stopped
+// mid-turn and never looked there) lets the search through and refuses every spline along it. The plan
+// fails and says where; the vehicle turns to look there (once the heading is more than look_tolerance
+// off it) instead of failing the frontier, and with that voxel seen the same plan succeeds.
+TEST(TrajectoryPlanner, AWayRefusedForUnseenSpaceBesideItLooksThere) {
+  const Vec3 unseen(3.05, 2.15, 1.05);  // beside the way's voxels at y 2.05
+  auto corridor = [&](World& world, bool seen) {
+    world.setFree(Index3::Zero(), world.geo().dims() - Index3::Ones());
+    if (!seen) world.setUnknown(world.geo().coordToIndex(unseen));
+    world.sync();
+  };
+  World world(Vec3(6, 4, 2));
+  corridor(world, false);
+  const Astar astar(world.occupancy(), world.esdf(), flightAstarConfig());
+  const OptimizerConfig optimizer = optimizerConfig();
+  traj::TrajectoryPlannerConfig planner;
+  traj::PlanRequest request;
+  request.start = Vec3(1.05, 2.05, 1.05);
+  request.target = Vec3(5.05, 2.05, 1.05);
+  request.yaw = kPi / 2;  // facing +y: the way (+x) is off to the right
+  const PathResult path = astar.search(request.start, request.target, planner.snap_radius);
+  ASSERT_EQ(path.status, PathStatus::kFound);  // the search lets it through
+  traj::PlanReport report;
+  const auto refused = traj::planTrajectory(request, astar, world.esdf(), optimizer, planner, &report);
+  ASSERT_FALSE(refused);
+  EXPECT_NE(refused.message().find("leaves known flyable space"), std::string::npos) << refused.message();
+  ASSERT_TRUE(report.unseen_at.has_value());
+  EXPECT_LT((*report.unseen_at - unseen).norm(), 0.3);
+
+  // Look there: brake, hold still and turn to face it; the target is retried when the turn is nearly done.
+  const auto look = traj::lookAtUnseen(request, report, planner, optimizer);
+  ASSERT_TRUE(look.has_value());
+  EXPECT_TRUE(look->partial);
+  EXPECT_LT((look->goal - request.target).norm(), 1e-12);
+  EXPECT_GE(look->duration(), look->yaw.duration() - 1e-9);
+  for (int i = 0; i <= 50; ++i)
+    EXPECT_LT((traj::sampleTrajectory(*look, look->duration() * i / 50).position - request.start).norm(), 1e-9);
+  const Vec3 to = *report.unseen_at - request.start;
+  EXPECT_NEAR(std::remainder(traj::sampleTrajectory(*look, look->duration()).yaw - std::atan2(to.y(), to.x()), 2 * kPi),
+              0.0, 1e-9);
+  // Already facing it: a look cannot mend the way, and the failure counts.
+  traj::PlanRequest facing = request;
+  facing.yaw = std::atan2(to.y(), to.x()) + 0.9 * planner.look_tolerance;
+  EXPECT_FALSE(traj::lookAtUnseen(facing, report, planner, optimizer).has_value());
+  facing.yaw = std::atan2(to.y(), to.x()) - 1.1 * planner.look_tolerance;
+  EXPECT_TRUE(traj::lookAtUnseen(facing, report, planner, optimizer).has_value());
+  // Steeply above or below: turning does not bring it into view.
+  traj::PlanReport steep = report;
+  steep.unseen_at = request.start + Vec3(0.0, -0.3, 0.5);
+  EXPECT_FALSE(traj::lookAtUnseen(request, steep, planner, optimizer).has_value());
+  // No unseen point (another failure), or looking switched off.
+  traj::PlanReport other;
+  EXPECT_FALSE(traj::lookAtUnseen(request, other, planner, optimizer).has_value());
+  traj::TrajectoryPlannerConfig off = planner;
+  off.look_tolerance = 0.0;
+  EXPECT_FALSE(traj::lookAtUnseen(request, report, off, optimizer).has_value());
+  off.look_tolerance = 4.0;
+  EXPECT_NE(off.validate().message().find("look_tolerance"), std::string::npos);
+  off.look_tolerance = -0.1;
+  EXPECT_NE(off.validate().message().find("look_tolerance"), std::string::npos);
+
+  // With the voxel seen (what the look brings), the same plan succeeds.
+  World seen(Vec3(6, 4, 2));
+  corridor(seen, true);
+  const Astar seen_astar(seen.occupancy(), seen.esdf(), flightAstarConfig());
+  const auto planned = traj::planTrajectory(request, seen_astar, seen.esdf(), optimizer, planner, &report);
+  ASSERT_TRUE(planned) << planned.message();
+  EXPECT_FALSE(report.unseen_at.has_value());
 }
 
 }  // namespace

@@ -143,6 +143,7 @@ class ExplorationRun {
     std::uint32_t frontier;
     double committed_at;
     bool quicker = false;  ///< won on cost (planning::CurrentTarget::quicker)
+    bool looked_at_unseen = false;  ///< trajectory::lookAtUnseen() was flown for it
   };
   std::optional<Target> target_;
   planning::VisitedViewpoints visited_;

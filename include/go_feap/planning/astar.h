@@ -114,7 +114,9 @@ class Astar {
   /// within min_distance of its centre must be known, since an unseen obstacle there would be that close.
   /// The test for a trajectory that the optimiser bent away from the path: it may graze the edge of the
   /// known region the path hugs (config.clearance away), never cross or touch unseen space.
-  bool traversableWith(const Index3& idx, double min_distance) const;
+  /// `unseen`, when given, is set when the voxel fails for unseen space alone (it is inside the box,
+  /// min_distance from mapped obstacles and the box's faces): a look there may clear it.
+  bool traversableWith(const Index3& idx, double min_distance, bool* unseen = nullptr) const;
   /// True when every voxel the segment from a to b touches is traversable (see shorten()).
   bool segmentTraversable(const Vec3& a, const Vec3& b) const;
 

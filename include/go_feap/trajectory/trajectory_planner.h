@@ -63,6 +63,9 @@ struct TrajectoryPlannerConfig {
   /// flyable space of a scout search's path (unknown space free) is flown when it is at least this
   /// long, facing along it: the way on comes into view (0 = never; needs a scout search)
   double scout_min_length = 0.5;
+  /// rad: a plan refused where its spline touches unseen space (PlanReport::unseen_at) turns the camera
+  /// there first, unless the heading is already this close to it (lookAtUnseen(); 0 = never)
+  double look_tolerance = 0.5236;
   /// Checks every key; the message names the bad one, e.g. "planner: path_spacing must be > 0".
   common::Status validate() const;
 };
@@ -88,6 +91,9 @@ struct PlanReport {
   bool toward = false;         ///< no path was found: the trajectory goes towards the target (PathResult::toward)
   bool remembered = false;     ///< failed without searching: the same search failed lately (SearchMemory)
   bool scouted = false;        ///< no known path, nor toward: the known start of the scout search's path is flown
+  /// A failed plan whose path was found but whose spline was refused where it touched unseen space
+  /// (staysFlyable(), the last such refusal): a look there may mend it (lookAtUnseen()).
+  std::optional<Vec3> unseen_at;
 };
 
 /// Flight searches that found no path (no path or budget exceeded, and nothing to fly towards either),
@@ -121,8 +127,10 @@ class SearchMemory {
 /// faces) wherever it is farther than exempt_radius from its start, and ends in one. Near the start the
 /// camera has not seen everything around the vehicle (and the path search may snap its start that far:
 /// pass snap_radius).
+/// With `unseen_at`: set to the refused sample when the spline fails for unseen space alone
+/// (Astar::traversableWith's `unseen`), reset otherwise.
 bool staysFlyable(const UniformBspline& spline, const planning::Astar& astar, double min_distance,
-                  double exempt_radius);
+                  double exempt_radius, std::optional<Vec3>* unseen_at = nullptr);
 
 /// Plans a trajectory for `request`. A target within half a voxel of the start is a turn in place: the
 /// position brakes to rest there (safeStop) and the yaw spline turns to target_yaw. Otherwise: A* (known
@@ -177,6 +185,15 @@ bool startEnclosed(const PlanReport& report, const TrajectoryPlannerConfig& conf
 /// the replanning rule tries the target again shortly before the turn ends.
 Trajectory lookAroundTrajectory(const PlanRequest& request, const TrajectoryPlannerConfig& config,
                                 const OptimizerConfig& optimizer);
+
+/// What to fly when a plan failed only for unseen space beside its way (PlanReport::unseen_at set): the
+/// vehicle stopped mid-turn, say, has not looked where the way goes. Brakes to a stop where the reference
+/// is and turns to face that point, as lookAroundTrajectory() does (goal = target, partial: the target is
+/// tried again when the turn is nearly done). nullopt when there is no such point, when config.look_tolerance
+/// is 0, when the point is more than 45 deg above or below the vehicle, or when the heading is already within
+/// look_tolerance of it: a look cannot mend that, and the failure counts. Callers look once per target.
+std::optional<Trajectory> lookAtUnseen(const PlanRequest& request, const PlanReport& report,
+                                       const TrajectoryPlannerConfig& config, const OptimizerConfig& optimizer);
 
 /// The replanning decision for a trajectory being flown (DESIGN §3.7). `current` is null when none is
 /// flown; t is the time since its start; target_changed is the caller's own notion of a new target.
