@@ -219,9 +219,11 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
     spline = optimize(init, esdf, optimizer);
     // The optimum must also stay where the path search may go: the ESDF knows only mapped obstacles,
     // and a smoothed corner can cut through space nobody has seen (or over the box's clearance).
-    if (spline && !staysFlyable(*spline, astar, voxel_clearance, config.snap_radius, &rep.unseen_at)) {
+    std::optional<Vec3> optimum_unseen;
+    if (spline && !staysFlyable(*spline, astar, voxel_clearance, config.snap_radius, &optimum_unseen)) {
       spline = common::Result<UniformBspline>::Error("the optimised trajectory leaves known flyable space");
       ++rep.left_flyable;
+      if (optimum_unseen) rep.unseen_at = optimum_unseen;
     }
     if (spline) break;
     std::optional<Vec3> fit_unseen;
