@@ -42,7 +42,7 @@ struct LocalPlannerConfig {
   double same_target_yaw = 0.3;
   /// m/s: a vehicle this slow within same_target_distance and same_target_yaw of its target has reached
   /// it (it is braking the last centimetres: the view from there is the view from the target)
-  double reached_speed = 0.4;
+  double reached_speed = 0.8;
   /// a viewpoint pose reached this many times (VisitedViewpoints) is no longer proposed: its frontier
   /// is not being cleared from there
   int max_visits = 3;
