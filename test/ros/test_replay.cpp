@@ -8,10 +8,10 @@
 #include <rosbag/bag.h>
 #include <nav_msgs/Odometry.h>
 
-#include <array>
-#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
-#include <memory>
+#include <fstream>
+#include <sstream>
 #include <string>
 
 #include "go_feap/world/scene_files.h"
@@ -20,16 +20,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Runs a shell command; returns its output (stdout and stderr).
-std::string run(const std::string& command) {
-  std::string output;
-  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen((command + " 2>&1").c_str(), "r"), pclose);
-  if (!pipe) return "popen failed";
-  std::array<char, 4096> buffer;
-  while (fgets(buffer.data(), buffer.size(), pipe.get())) output += buffer.data();
-  return output;
-}
-
 class Replay : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -37,12 +27,27 @@ class Replay : public ::testing::Test {
     fs::create_directories(dir_);
   }
   void TearDown() override { fs::remove_all(dir_); }
-  // roslaunch with a private master on `port`, logs under dir_.
+  // roslaunch with a private master on `port`, logs under dir_; returns its output (stdout and stderr).
+  // It runs in a session of its own, written to a file rather than a pipe: when the timeout has to kill
+  // roslaunch in the middle of its shutdown (seen on a loaded machine), the master and manager it had
+  // not stopped yet would hold a pipe open (the test read it for ever); here the session's leftovers
+  // are killed and the file read.
   std::string launch(int port, const std::string& args, int timeout_s) {
-    const std::string env = "ROS_MASTER_URI=http://localhost:" + std::to_string(port) + " ROS_HOME=" + dir_.string() +
+    const std::string tag = std::to_string(port);
+    const fs::path out = dir_ / ("launch_" + tag + ".out"), sid = dir_ / ("launch_" + tag + ".sid");
+    const std::string env = "ROS_MASTER_URI=http://localhost:" + tag + " ROS_HOME=" + dir_.string() +
                             " ROS_LOG_DIR=" + dir_.string() + "/log ROSCONSOLE_STDOUT_LINE_BUFFERED=1";
-    return run(env + " timeout --signal=INT --kill-after=20 " + std::to_string(timeout_s) + " roslaunch -p " +
-               std::to_string(port) + " go_feap " + args);
+    const std::string command = "setsid -w sh -c 'echo $$ > " + sid.string() + "; exec env " + env +
+                                " timeout --signal=INT --kill-after=20 " + std::to_string(timeout_s) +
+                                " roslaunch -p " + tag + " go_feap " + args + "' > " + out.string() + " 2>&1 < /dev/null";
+    const int status = std::system(command.c_str());
+    std::ifstream sid_file(sid);
+    int session = 0;
+    if (sid_file >> session && session > 1) std::system(("pkill -KILL -s " + std::to_string(session)).c_str());
+    std::ifstream out_file(out);
+    std::stringstream text;
+    text << out_file.rdbuf();
+    return text.str() + (status == 0 ? "" : "\n(launch exit status " + std::to_string(status) + ")");
   }
   fs::path dir_;
 };

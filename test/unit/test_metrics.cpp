@@ -306,7 +306,7 @@ TEST(TargetHysteresis, KeepsSwitchesAndReportsTargetsReachedInVain) {
   // Reached means close, facing it and slow.
   EXPECT_TRUE(go_feap::planning::targetReached(Vec3(0.1, 0, 1), 0.1, 0.05, a, c));
   EXPECT_TRUE(go_feap::planning::targetReached(Vec3(0.1, 0, 1), 0.1, 0.9 * c.reached_speed, a, c));  // braking the last centimetres
-  EXPECT_FALSE(go_feap::planning::targetReached(Vec3(0.1, 0, 1), 0.1, 0.5, a, c));
+  EXPECT_FALSE(go_feap::planning::targetReached(Vec3(0.1, 0, 1), 0.1, 1.1 * c.reached_speed, a, c));
   EXPECT_FALSE(go_feap::planning::targetReached(Vec3(0.1, 0, 1), 1.0, 0.05, a, c));
   EXPECT_FALSE(go_feap::planning::targetReached(Vec3(1.0, 0, 1), 0.0, 0.0, a, c));
 }
