@@ -306,30 +306,27 @@ void ExplorationRun::trajectoryStep() {
   }
   log(std::string("plan to frontier ") + std::to_string(target_->frontier) + " failed (" + trajectory::toString(reason) +
       "): " + planned.message());
-  // A start the search cannot leave is the vehicle's predicament, not the frontier's fault: look
-  // around (towards the target first) and try the same target again when the turn is nearly done.
-  if (trajectory::startEnclosed(report, config_.planner, map_->geometry().resolution())) {
-    log("the start region cannot be left (" + std::to_string(report.path_expansions) +
-        " voxels reachable): looking around");
-    trajectory_ = trajectory::lookAroundTrajectory(request, config_.planner, config_.optimizer);
-    return;
-  }
-  // A way refused only for unseen space beside it, where the camera has not looked (it stopped
-  // mid-turn, say): look there once before the frontier counts a failed attempt.
-  if (!target_->looked_at_unseen) {
-    if (auto look = trajectory::lookAtUnseen(request, report, config_.planner, config_.optimizer)) {
+  // Enclosed start: look around; a way refused for unseen space: look there once; else the failure counts.
+  trajectory::RecoveryPlan recovery = trajectory::recoverFromFailedPlan(
+      request, report, config_.planner, config_.optimizer, map_->geometry().resolution(), &target_->looked_at_unseen);
+  switch (recovery.kind) {
+    case trajectory::Recovery::kLookAround:
+      log("the start region cannot be left (" + std::to_string(report.path_expansions) +
+          " voxels reachable): looking around");
+      break;
+    case trajectory::Recovery::kLookAtUnseen: {
       std::ostringstream what;
       what << "the way to frontier " << target_->frontier << " touches unseen space at ("
            << report.unseen_at->transpose() << "): looking there";
       log(what.str());
-      target_->looked_at_unseen = true;
-      trajectory_ = std::move(*look);
-      return;
+      break;
     }
+    case trajectory::Recovery::kFail:
+      failed_.push_back(target_->frontier);
+      target_.reset();
+      break;
   }
-  failed_.push_back(target_->frontier);
-  trajectory_ = trajectory::stopTrajectory(request.start, request.velocity, request.yaw, config_.optimizer);
-  target_.reset();
+  trajectory_ = std::move(recovery.trajectory);
 }
 
 void ExplorationRun::sample() {

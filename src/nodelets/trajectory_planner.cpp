@@ -178,31 +178,28 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     if (!planned) {
       NODELET_WARN_STREAM(getName() << ": planning to frontier " << target_frontier_ << " failed ("
                                     << trajectory::toString(reason) << "): " << planned.message());
-      // A start the search cannot leave is the vehicle's predicament, not the frontier's fault: look
-      // around (towards the target first) and try the same target again when the turn is nearly done.
-      if (trajectory::startEnclosed(report, planner_, astar_->geometry().resolution())) {
-        NODELET_WARN_STREAM(getName() << ": the start region cannot be left (" << report.path_expansions
-                                      << " voxels reachable): looking around");
-        publish(now, trajectory::lookAroundTrajectory(request, planner_, optimizer_));
-        return;
-      }
-      // A way refused only for unseen space beside it, where the camera has not looked (it stopped
-      // mid-turn, say): look there once before the frontier counts a failed attempt.
-      if (!looked_at_unseen_) {
-        if (auto look = trajectory::lookAtUnseen(request, report, planner_, optimizer_)) {
+      // Enclosed start: look around; a way refused for unseen space: look there once; else the failure counts.
+      trajectory::RecoveryPlan recovery = trajectory::recoverFromFailedPlan(
+          request, report, planner_, optimizer_, astar_->geometry().resolution(), &looked_at_unseen_);
+      switch (recovery.kind) {
+        case trajectory::Recovery::kLookAround:
+          NODELET_WARN_STREAM(getName() << ": the start region cannot be left (" << report.path_expansions
+                                        << " voxels reachable): looking around");
+          break;
+        case trajectory::Recovery::kLookAtUnseen:
           NODELET_WARN_STREAM(getName() << ": the way to frontier " << target_frontier_ << " touches unseen space at ("
                                         << report.unseen_at->transpose() << "): looking there");
-          looked_at_unseen_ = true;
-          publish(now, std::move(*look));
-          return;
+          break;
+        case trajectory::Recovery::kFail: {
+          NODELET_WARN_STREAM(getName() << ": stopping; frontier " << target_frontier_ << " counts a failed attempt");
+          std_msgs::UInt32 failed;
+          failed.data = target_frontier_;
+          failed_pub_.publish(failed);
+          target_.reset();  // wait for a new target
+          break;
         }
       }
-      NODELET_WARN_STREAM(getName() << ": stopping; frontier " << target_frontier_ << " counts a failed attempt");
-      std_msgs::UInt32 failed;
-      failed.data = target_frontier_;
-      failed_pub_.publish(failed);
-      publish(now, trajectory::stopTrajectory(request.start, request.velocity, request.yaw, optimizer_));
-      target_.reset();  // wait for a new target
+      publish(now, std::move(recovery.trajectory));
       return;
     }
     publish(now, std::move(planned).value());

@@ -339,6 +339,28 @@ std::optional<Trajectory> lookAtUnseen(const PlanRequest& request, const PlanRep
   return turnTowards(request, yaw, optimizer);
 }
 
+RecoveryPlan recoverFromFailedPlan(const PlanRequest& request, const PlanReport& report,
+                                   const TrajectoryPlannerConfig& config, const OptimizerConfig& optimizer,
+                                   double resolution, bool* looked_at_unseen) {
+  RecoveryPlan out;
+  if (startEnclosed(report, config, resolution)) {
+    out.kind = Recovery::kLookAround;
+    out.trajectory = lookAroundTrajectory(request, config, optimizer);
+    return out;
+  }
+  if (!*looked_at_unseen) {
+    if (auto look = lookAtUnseen(request, report, config, optimizer)) {
+      *looked_at_unseen = true;
+      out.kind = Recovery::kLookAtUnseen;
+      out.trajectory = std::move(*look);
+      return out;
+    }
+  }
+  out.kind = Recovery::kFail;
+  out.trajectory = stopTrajectory(request.start, request.velocity, request.yaw, optimizer);
+  return out;
+}
+
 ReplanReason replanReason(const Trajectory* current, double t, const Vec3& target, bool target_changed,
                           const map::Esdf& esdf, const ReplanConfig& replan, const OptimizerConfig& optimizer,
                           const TrajectoryPlannerConfig& config) {

@@ -1047,4 +1047,61 @@ TEST(TrajectoryPlanner, AWayRefusedForUnseenSpaceBesideItLooksThere) {
   EXPECT_FALSE(report.unseen_at.has_value());
 }
 
+TEST(TrajectoryPlanner, FailedPlanRecoveryLooksAroundThenAtUnseenSpaceOnceThenFails) {
+  const OptimizerConfig optimizer = optimizerConfig();
+  const traj::TrajectoryPlannerConfig planner;
+  const double resolution = 0.1;
+  traj::PlanRequest request;
+  request.start = Vec3(1.0, 2.0, 1.0);
+  request.velocity = Vec3(0.6, 0.0, 0.0);
+  request.target = Vec3(5.0, 2.0, 1.0);
+  request.yaw = kPi / 2;
+  traj::PlanReport report;
+  report.path_status = PathStatus::kFound;
+  report.unseen_at = Vec3(3.0, 2.1, 1.0);  // ahead along +x, the heading faces +y
+  auto facesUnseen = [&](const traj::Trajectory& t) {
+    const Vec3 to = *report.unseen_at - request.start;
+    // The turn outlasts the braking: sample the end of the turn.
+    const double yaw = traj::sampleTrajectory(t, std::max(t.duration(), t.yaw.duration())).yaw;
+    return std::abs(std::remainder(yaw - std::atan2(to.y(), to.x()), 2 * kPi)) < 1e-6;
+  };
+  auto endsAtRest = [&](const traj::Trajectory& t) {
+    return traj::sampleTrajectory(t, t.duration()).velocity.norm() < 1e-6;
+  };
+
+  // An enclosed start looks around whatever else the report says, and the look at unseen space stays unused.
+  bool looked = false;
+  traj::PlanReport enclosed = report;
+  enclosed.path_status = PathStatus::kStartBlocked;
+  traj::RecoveryPlan r = traj::recoverFromFailedPlan(request, enclosed, planner, optimizer, resolution, &looked);
+  EXPECT_EQ(r.kind, traj::Recovery::kLookAround);
+  EXPECT_FALSE(looked);
+  EXPECT_TRUE(r.trajectory.partial);
+  EXPECT_LT((r.trajectory.goal - request.target).norm(), 1e-12);
+  EXPECT_TRUE(endsAtRest(r.trajectory));
+
+  // A way refused for unseen space: look there, once per target.
+  r = traj::recoverFromFailedPlan(request, report, planner, optimizer, resolution, &looked);
+  EXPECT_EQ(r.kind, traj::Recovery::kLookAtUnseen);
+  EXPECT_TRUE(looked);
+  EXPECT_TRUE(r.trajectory.partial);
+  EXPECT_TRUE(facesUnseen(r.trajectory));
+  EXPECT_TRUE(endsAtRest(r.trajectory));
+
+  // The second refusal for the same target counts: brake where the vehicle is, heading held.
+  r = traj::recoverFromFailedPlan(request, report, planner, optimizer, resolution, &looked);
+  EXPECT_EQ(r.kind, traj::Recovery::kFail);
+  EXPECT_FALSE(r.trajectory.partial);
+  EXPECT_TRUE(endsAtRest(r.trajectory));
+  EXPECT_NEAR(traj::sampleTrajectory(r.trajectory, r.trajectory.duration()).yaw, request.yaw, 1e-9);
+
+  // Any other failure counts at once, and leaves the flag alone.
+  bool fresh = false;
+  traj::PlanReport other;
+  other.path_status = PathStatus::kFound;
+  r = traj::recoverFromFailedPlan(request, other, planner, optimizer, resolution, &fresh);
+  EXPECT_EQ(r.kind, traj::Recovery::kFail);
+  EXPECT_FALSE(fresh);
+}
+
 }  // namespace

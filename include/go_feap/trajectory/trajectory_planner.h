@@ -195,6 +195,26 @@ Trajectory lookAroundTrajectory(const PlanRequest& request, const TrajectoryPlan
 std::optional<Trajectory> lookAtUnseen(const PlanRequest& request, const PlanReport& report,
                                        const TrajectoryPlannerConfig& config, const OptimizerConfig& optimizer);
 
+/// What follows a failed plan (recoverFromFailedPlan()).
+enum class Recovery {
+  kLookAround,    ///< the start region cannot be left: lookAroundTrajectory(), the target is kept
+  kLookAtUnseen,  ///< the way touches unseen space off the heading: lookAtUnseen(), the target is kept
+  kFail,          ///< neither: stopTrajectory(), the frontier counts a failed attempt
+};
+
+struct RecoveryPlan {
+  Recovery kind = Recovery::kFail;
+  Trajectory trajectory;
+};
+
+/// The one order both the bench and the trajectory_planner nodelet follow after planTrajectory() failed:
+/// an enclosed start (startEnclosed()) looks around; otherwise a way refused for unseen space looks there
+/// once per target (`*looked_at_unseen`, the caller's flag for its current target, is read and set);
+/// otherwise the vehicle brakes and the failure counts against the frontier.
+RecoveryPlan recoverFromFailedPlan(const PlanRequest& request, const PlanReport& report,
+                                   const TrajectoryPlannerConfig& config, const OptimizerConfig& optimizer,
+                                   double resolution, bool* looked_at_unseen);
+
 /// The replanning decision for a trajectory being flown (DESIGN §3.7). `current` is null when none is
 /// flown; t is the time since its start; target_changed is the caller's own notion of a new target.
 /// A new target is one farther than target_tolerance from the trajectory's goal. A trajectory that ends
