@@ -26,10 +26,6 @@ std::string num(double v) {
   return buf;
 }
 
-constexpr double kPi = 3.14159265358979323846;
-
-double wrapAngle(double a) { return std::remainder(a, 2.0 * kPi); }  // in [-pi, pi]
-
 }  // namespace
 
 Status OptimizerConfig::validate() const {
