@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 namespace go_feap::planning {
 
@@ -80,10 +81,12 @@ LayerOutputs LayerManager::output() const {
 LayerOutputs LayerManager::step(const LayerInputs& in, double t) {
   std::vector<Transition> transitions;
   bool ignored = false;
-  auto go = [&](ExplorationState to, const std::string& why) {
+  // `next_position`: the band (index into order_) the state moves to, when it changes.
+  auto go = [&](ExplorationState to, const std::string& why, std::optional<std::size_t> next_position = std::nullopt) {
     const int from_band = state_ == ExplorationState::kExplore ? order_[position_] : -1;
     const ExplorationState from = state_;
     state_ = to;
+    if (next_position) position_ = *next_position;
     const int to_band = state_ == ExplorationState::kExplore ? order_[position_] : -1;
     transitions.push_back({from, to, from_band, to_band, why});
     empty_since_ = -1.0;
@@ -139,8 +142,7 @@ LayerOutputs LayerManager::step(const LayerInputs& in, double t) {
                                                                std::to_string(blacklisted) +
                                                                " blacklisted after failed attempts)");
       } else if (position_ + 1 < order_.size()) {
-        ++position_;
-        go(ExplorationState::kExplore, "band explored");
+        go(ExplorationState::kExplore, "band explored", position_ + 1);
       } else {
         go(ExplorationState::kFinalPass, "every band explored");
       }

@@ -56,6 +56,8 @@ TEST(LayerManager, WalksEveryTransitionToComplete) {
   ASSERT_EQ(out.state, ExplorationState::kExplore);
   ASSERT_EQ(out.transitions.size(), 1u);
   EXPECT_EQ(out.transitions[0].to, ExplorationState::kExplore);
+  EXPECT_EQ(out.transitions[0].band_from, -1);
+  EXPECT_EQ(out.transitions[0].band_to, 2);
   EXPECT_EQ(out.band.index, 2);
   // A second trigger is ignored.
   out = m.step(trig, t += 0.1);
@@ -65,7 +67,12 @@ TEST(LayerManager, WalksEveryTransitionToComplete) {
   std::vector<int> visited{2};
   for (int guard = 0; guard < 100 && out.state == ExplorationState::kExplore; ++guard) {
     out = m.step(frontiers({}, {7}, ++progress), t += 0.5);
-    if (!out.transitions.empty() && out.state == ExplorationState::kExplore) visited.push_back(out.band.index);
+    if (out.transitions.empty()) continue;
+    // Each transition names the band left and the band entered (-1: none, in the final pass).
+    ASSERT_EQ(out.transitions.size(), 1u);
+    EXPECT_EQ(out.transitions[0].band_from, visited.back());
+    EXPECT_EQ(out.transitions[0].band_to, out.state == ExplorationState::kExplore ? out.band.index : -1);
+    if (out.state == ExplorationState::kExplore) visited.push_back(out.band.index);
   }
   EXPECT_EQ(visited, (std::vector<int>{2, 3, 4, 5, 1, 0}));
   ASSERT_EQ(out.state, ExplorationState::kFinalPass);
