@@ -62,3 +62,28 @@ build_package() {
   [ "$nounset" = 1 ] && set -u
   log "build ok"
 }
+
+# Runs a command (a roslaunch under `timeout`) in a session of its own and, once it has exited, kills
+# whatever is left of that session: a roslaunch killed in the middle of its shutdown leaves its master
+# and nodelet manager running, and they hold its output pipe open, so a reader of that pipe (tee, the
+# progress filter) would wait for ever. An INT or TERM to the caller is passed on to the whole session,
+# as a terminal's Ctrl-C reaches roslaunch and its nodes. Returns the command's exit status.
+run_in_own_session() {
+  local sid_file child status sid
+  sid_file=$(mktemp)
+  # In the background (so that `wait` below can be interrupted by the trap), which leaves SIGINT ignored
+  # in the command: env restores it, or neither Ctrl-C nor timeout's INT would stop roslaunch.
+  setsid -w env --default-signal=INT sh -c 'echo $$ > "$0"; exec "$@"' "$sid_file" "$@" &
+  child=$!
+  # shellcheck disable=SC2064
+  trap "pkill -INT -s \"\$(cat '$sid_file' 2>/dev/null)\" 2>/dev/null" INT TERM
+  # `wait` returns early when a trapped signal arrives: wait again until the command has exited, then
+  # once more for its exit status.
+  while kill -0 "$child" 2>/dev/null; do wait "$child" || true; done
+  if wait "$child"; then status=0; else status=$?; fi
+  trap - INT TERM
+  sid=$(cat "$sid_file" 2>/dev/null || true)
+  if [ -n "$sid" ] && [ "$sid" -gt 1 ]; then pkill -KILL -s "$sid" 2>/dev/null || true; fi
+  rm -f "$sid_file"
+  return "$status"
+}
