@@ -28,22 +28,20 @@ class Replay : public ::testing::Test {
   }
   void TearDown() override { fs::remove_all(dir_); }
   // roslaunch with a private master on `port`, logs under dir_; returns its output (stdout and stderr).
-  // It runs in a session of its own, written to a file rather than a pipe: when the timeout has to kill
-  // roslaunch in the middle of its shutdown (seen on a loaded machine), the master and manager it had
-  // not stopped yet would hold a pipe open (the test read it for ever); here the session's leftovers
-  // are killed and the file read.
+  // It runs as scripts/run runs it, through run_in_own_session (scripts/lib/common.sh), written to a file
+  // rather than a pipe: when the timeout has to kill roslaunch in the middle of its shutdown (seen on a
+  // loaded machine), the master and manager it had not stopped yet would hold a pipe open (the test read
+  // it for ever); the session's leftovers are killed and the file read.
   std::string launch(int port, const std::string& args, int timeout_s) {
     const std::string tag = std::to_string(port);
-    const fs::path out = dir_ / ("launch_" + tag + ".out"), sid = dir_ / ("launch_" + tag + ".sid");
+    const fs::path out = dir_ / ("launch_" + tag + ".out");
     const std::string env = "ROS_MASTER_URI=http://localhost:" + tag + " ROS_HOME=" + dir_.string() +
                             " ROS_LOG_DIR=" + dir_.string() + "/log ROSCONSOLE_STDOUT_LINE_BUFFERED=1";
-    const std::string command = "setsid -w sh -c 'echo $$ > " + sid.string() + "; exec env " + env +
-                                " timeout --signal=INT --kill-after=20 " + std::to_string(timeout_s) +
-                                " roslaunch -p " + tag + " go_feap " + args + "' > " + out.string() + " 2>&1 < /dev/null";
+    const std::string command = "bash -c 'source " GO_FEAP_SOURCE_DIR "/scripts/lib/common.sh && "
+                                "run_in_own_session env " + env + " timeout --signal=INT --kill-after=20 " +
+                                std::to_string(timeout_s) + " roslaunch -p " + tag + " go_feap " + args + "' > " +
+                                out.string() + " 2>&1 < /dev/null";
     const int status = std::system(command.c_str());
-    std::ifstream sid_file(sid);
-    int session = 0;
-    if (sid_file >> session && session > 1) std::system(("pkill -KILL -s " + std::to_string(session)).c_str());
     std::ifstream out_file(out);
     std::stringstream text;
     text << out_file.rdbuf();
