@@ -296,6 +296,14 @@ void ExplorationRun::trajectoryStep() {
                                             &report, &search_memory_, scout_astar_.get());
   recorder_.addTime("trajectory", msSince(t0));
   trajectory_start_ = t_;
+  if (planned && trajectory::scoutedTooOften(report, config_.planner, &target_->scouts)) {
+    log("frontier " + std::to_string(target_->frontier) + " scouted " + std::to_string(target_->scouts) +
+        " times without a known path: stopping, a failed attempt");
+    failed_.push_back(target_->frontier);
+    target_.reset();
+    trajectory_ = trajectory::stopTrajectory(request.start, request.velocity, request.yaw, config_.optimizer);
+    return;
+  }
   if (planned) {
     if (report.scouted)
       log("no known path to frontier " + std::to_string(target_->frontier) + ": scouting " +

@@ -100,7 +100,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     const bool renumbered = msg->target_seq != 0 && msg->target_seq != target_seq_;
     const bool new_target =
         !target_ || renumbered || trajectory::targetMoved(*target_, target_yaw_, target, msg->yaws.front(), replan_);
-    if (new_target) looked_at_unseen_ = false;
+    if (new_target) looked_at_unseen_ = false, scouts_ = 0;
     target_changed_ = target_changed_ || new_target;
     target_seq_ = msg->target_seq;
     target_ = target;
@@ -171,10 +171,17 @@ class TrajectoryPlanner : public nodelet::Nodelet {
       planned = trajectory::planTrajectory(request, *astar_, shared_->map->esdf(), optimizer_, planner_, &report,
                                            &search_memory_, scout_.get());
     }
+    ros_conv::publishComputeTime(compute_pub_, "trajectory", t_compute);
+    if (planned && trajectory::scoutedTooOften(report, planner_, &scouts_)) {
+      NODELET_WARN_STREAM(getName() << ": frontier " << target_frontier_ << " scouted " << scouts_
+                                    << " times without a known path: stopping; it counts a failed attempt");
+      failFrontier();
+      publish(now, trajectory::stopTrajectory(request.start, request.velocity, request.yaw, optimizer_));
+      return;
+    }
     if (planned && report.scouted)
       NODELET_INFO_STREAM(getName() << ": no known path to frontier " << target_frontier_
                                     << ": scouting along a way through unseen space");
-    ros_conv::publishComputeTime(compute_pub_, "trajectory", t_compute);
     if (!planned) {
       NODELET_WARN_STREAM(getName() << ": planning to frontier " << target_frontier_ << " failed ("
                                     << trajectory::toString(reason) << "): " << planned.message());
@@ -190,19 +197,23 @@ class TrajectoryPlanner : public nodelet::Nodelet {
           NODELET_WARN_STREAM(getName() << ": the way to frontier " << target_frontier_ << " touches unseen space at ("
                                         << report.unseen_at->transpose() << "): looking there");
           break;
-        case trajectory::Recovery::kFail: {
+        case trajectory::Recovery::kFail:
           NODELET_WARN_STREAM(getName() << ": stopping; frontier " << target_frontier_ << " counts a failed attempt");
-          std_msgs::UInt32 failed;
-          failed.data = target_frontier_;
-          failed_pub_.publish(failed);
-          target_.reset();  // wait for a new target
+          failFrontier();
           break;
-        }
       }
       publish(now, std::move(recovery.trajectory));
       return;
     }
     publish(now, std::move(planned).value());
+  }
+
+  // The target's frontier counts a failed attempt (frontier_failed); wait for a new target.
+  void failFrontier() {
+    std_msgs::UInt32 failed;
+    failed.data = target_frontier_;
+    failed_pub_.publish(failed);
+    target_.reset();
   }
 
   void publish(const ros::Time& now, trajectory::Trajectory planned) {
@@ -244,6 +255,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
   std::uint32_t target_seq_ = 0;  ///< ViewpointPath::target_seq of the target
   bool target_changed_ = false;
   bool looked_at_unseen_ = false;  ///< lookAtUnseen() was flown for this target
+  int scouts_ = 0;                 ///< scouting flights towards this target (scoutedTooOften())
   PositionCommand::ConstPtr command_;
   std::optional<ros_traj::Trajectory> current_;
   trajectory::SearchMemory search_memory_;  // flight searches that found no path lately

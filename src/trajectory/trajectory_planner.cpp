@@ -51,6 +51,7 @@ common::Status TrajectoryPlannerConfig::validate() const {
     return common::Status::Error("planner: scout_min_length must be finite and >= 0");
   if (!std::isfinite(look_tolerance) || look_tolerance < 0.0 || look_tolerance > M_PI)
     return common::Status::Error("planner: look_tolerance must be in [0, pi]");
+  if (max_scouts < 0) return common::Status::Error("planner: max_scouts must be >= 0");
   return common::Status::Ok();
 }
 
@@ -282,6 +283,12 @@ std::vector<Vec3> flyablePrefix(const std::vector<Vec3>& path, const planning::A
     out.push_back(path[i]);
   }
   return out;
+}
+
+bool scoutedTooOften(const PlanReport& report, const TrajectoryPlannerConfig& config, int* scouts) {
+  if (!report.scouted) return false;
+  ++*scouts;
+  return config.max_scouts > 0 && *scouts > config.max_scouts;
 }
 
 Trajectory stopTrajectory(const Vec3& p, const Vec3& v, double yaw, const OptimizerConfig& optimizer) {

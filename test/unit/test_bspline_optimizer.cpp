@@ -834,6 +834,58 @@ TEST(TrajectoryPlanner, WithoutAKnownWayItScoutsAlongAWayThroughUnseenSpace) {
   EXPECT_NE(planner.validate().message().find("scout_min_length"), std::string::npos);
 }
 
+// A way through unseen space that flying its known start does not bring into view (here the map never
+// changes, as when the camera cannot see the gap from where the scouts end): the target is scouted
+// max_scouts times, and the next scout counts a failed attempt instead of being flown. Plans that are not
+// scouts do not count; a new target starts from zero (the caller's count); 0 means no limit.
+TEST(TrajectoryPlanner, ATargetScoutedTooOftenCountsAFailedAttempt) {
+  World world(Vec3(8, 4, 2));
+  world.setFree(Index3(0, 0, 0), Index3(29, 39, 19));
+  world.setFree(Index3(40, 0, 0), Index3(79, 39, 19));
+  world.addBox(Index3(30, 0, 0), Index3(39, 24, 19));  // the gap at y 2.5-4 m stays unseen
+  world.sync();
+  const Astar astar(world.occupancy(), world.esdf(), flightAstarConfig());
+  AstarConfig scout_config;
+  scout_config.unknown_is_free = true;
+  scout_config.clearance = 0.3;
+  const Astar scout(world.occupancy(), world.esdf(), scout_config);
+  const OptimizerConfig optimizer = optimizerConfig();
+  traj::TrajectoryPlannerConfig planner;
+  planner.min_progress = 0.0;
+  ASSERT_EQ(planner.max_scouts, 5);
+  traj::PlanRequest request;
+  request.start = Vec3(1.0, 1.0, 1.0);
+  request.target = Vec3(6.0, 1.0, 1.0);
+  int scouts = 0;
+  for (int i = 1; i <= planner.max_scouts + 1; ++i) {
+    traj::PlanReport report;
+    const auto planned = traj::planTrajectory(request, astar, world.esdf(), optimizer, planner, &report, nullptr, &scout);
+    ASSERT_TRUE(planned) << planned.message();
+    ASSERT_TRUE(report.scouted);
+    EXPECT_EQ(traj::scoutedTooOften(report, planner, &scouts), i > planner.max_scouts) << "scout " << i;
+    EXPECT_EQ(scouts, i);  // the same way each time, as for a vehicle flown back and forth along it
+  }
+  // A plan through known space (the target in room A) is no scout and changes nothing.
+  traj::PlanRequest inside = request;
+  inside.target = Vec3(1.0, 1.0, 1.0);
+  traj::PlanReport known;
+  ASSERT_TRUE(traj::planTrajectory(inside, astar, world.esdf(), optimizer, planner, &known, nullptr, &scout));
+  EXPECT_FALSE(known.scouted);
+  int before = scouts;
+  EXPECT_FALSE(traj::scoutedTooOften(known, planner, &before));
+  EXPECT_EQ(before, scouts);
+  // No limit.
+  traj::TrajectoryPlannerConfig unlimited = planner;
+  unlimited.max_scouts = 0;
+  traj::PlanReport scouted;
+  scouted.scouted = true;
+  int many = 1000;
+  EXPECT_FALSE(traj::scoutedTooOften(scouted, unlimited, &many));
+  EXPECT_TRUE(unlimited.validate().ok());
+  unlimited.max_scouts = -1;
+  EXPECT_NE(unlimited.validate().message().find("max_scouts"), std::string::npos);
+}
+
 // A search that found no path is remembered: the same request (start within snap_radius, goal within
 // goal_tolerance) within failed_search_memory fails at once with the same status and expansions (so
 // startEnclosed() judges it the same); another goal, a later time or no memory searches again, and a

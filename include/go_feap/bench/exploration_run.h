@@ -144,6 +144,7 @@ class ExplorationRun {
     double committed_at;
     bool quicker = false;  ///< won on cost (planning::CurrentTarget::quicker)
     bool looked_at_unseen = false;  ///< trajectory::lookAtUnseen() was flown for it
+    int scouts = 0;                 ///< scouting flights towards it (trajectory::scoutedTooOften())
   };
   std::optional<Target> target_;
   planning::VisitedViewpoints visited_;

@@ -124,7 +124,7 @@ void readTrajectoryPlanner(R& p, trajectory::TrajectoryPlannerConfig& c) {
   p.get("planner/enclosed_turn", c.enclosed_turn).get("planner/min_progress", c.min_progress);
   p.get("planner/snap_radius", c.snap_radius).get("planner/goal_tolerance", c.goal_tolerance);
   p.get("planner/failed_search_memory", c.failed_search_memory).get("planner/scout_min_length", c.scout_min_length);
-  p.get("planner/look_tolerance", c.look_tolerance);
+  p.get("planner/look_tolerance", c.look_tolerance).get("planner/max_scouts", c.max_scouts);
 }
 
 template <class R>

@@ -66,6 +66,8 @@ struct TrajectoryPlannerConfig {
   /// rad: a plan refused where its spline touches unseen space (PlanReport::unseen_at) turns the camera
   /// there first, unless the heading is already this close to it (lookAtUnseen(); 0 = never)
   double look_tolerance = 0.5236;
+  /// scouting flights towards one target before the next counts a failed attempt (scoutedTooOften(); 0 = no limit)
+  int max_scouts = 5;
   /// Checks every key; the message names the bad one, e.g. "planner: path_spacing must be > 0".
   common::Status validate() const;
 };
@@ -206,6 +208,15 @@ struct RecoveryPlan {
   Recovery kind = Recovery::kFail;
   Trajectory trajectory;
 };
+
+/// Counts a scouting flight (report.scouted) towards the caller's current target in `*scouts`, the caller's
+/// count for that target (reset with it), and is true once the target has had more than config.max_scouts
+/// of them (never with max_scouts 0). Flying the known start of a way through unseen space normally brings
+/// the rest into view, and a path through known space follows within a scout or two; a way flown back and
+/// forth without that (seen in a large scene: one target scouted every 7 s for 270 s while the map grew by
+/// 0.1 m^3, which the layer manager's stuck timeout does not catch) then counts a failed attempt against
+/// the frontier, as a failed plan does: the callers brake instead of flying it.
+bool scoutedTooOften(const PlanReport& report, const TrajectoryPlannerConfig& config, int* scouts);
 
 /// The one order both the bench and the trajectory_planner nodelet follow after planTrajectory() failed:
 /// an enclosed start (startEnclosed()) looks around; otherwise a way refused for unseen space looks there
