@@ -100,7 +100,10 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     const bool renumbered = msg->target_seq != 0 && msg->target_seq != target_seq_;
     const bool new_target =
         !target_ || renumbered || trajectory::targetMoved(*target_, target_yaw_, target, msg->yaws.front(), replan_);
-    if (new_target) looked_at_unseen_ = false, scouts_ = 0;
+    if (new_target) {
+      looked_at_unseen_ = false;
+      scouts_ = 0;
+    }
     target_changed_ = target_changed_ || new_target;
     target_seq_ = msg->target_seq;
     target_ = target;
