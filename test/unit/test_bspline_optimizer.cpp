@@ -837,7 +837,7 @@ TEST(TrajectoryPlanner, WithoutAKnownWayItScoutsAlongAWayThroughUnseenSpace) {
 // A way through unseen space that flying its known start does not bring into view (here the map never
 // changes, as when the camera cannot see the gap from where the scouts end): the target is scouted
 // max_scouts times, and the next scout counts a failed attempt instead of being flown. Plans that are not
-// scouts do not count; a new target starts from zero (the caller's count); 0 means no limit.
+// scouts do not count; 0 means no limit. (Resetting the count with each new target is the callers' part.)
 TEST(TrajectoryPlanner, ATargetScoutedTooOftenCountsAFailedAttempt) {
   World world(Vec3(8, 4, 2));
   world.setFree(Index3(0, 0, 0), Index3(29, 39, 19));
