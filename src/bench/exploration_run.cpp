@@ -72,7 +72,7 @@ common::Result<ExplorationConfig> loadExplorationConfig(const std::string& confi
   config::readFrontier(exploration, c.frontier);
   config::readGlobalPlanner(exploration, c.global);
   exploration.get("global/rate", c.loop.plan_rate);
-  config::readAstar(exploration, c.distance_astar);
+  config::readAstar(exploration, c.distance_astar, "distance_astar");
   config::readLayers(exploration, c.layers);
   exploration.get("layers/rate", c.layer_rate);
   config::readViewpoints(exploration, c.viewpoints);

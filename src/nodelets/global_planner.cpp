@@ -33,7 +33,7 @@ class GlobalPlanner : public nodelet::Nodelet {
     ros_params::ParamReader p(getPrivateNodeHandle());
     config::readGlobalPlanner(p, config_);
     p.get("global/rate", rate_);
-    config::readAstar(p, astar_config_);
+    config::readAstar(p, astar_config_, "distance_astar");
     p.get("world_frame", world_frame_);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
     ros_params::requireOrThrow(std::isfinite(rate_) && rate_ > 0.0, getName(),

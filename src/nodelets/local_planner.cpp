@@ -41,7 +41,7 @@ class LocalPlanner : public nodelet::Nodelet {
     config::readViewpoints(p, v);
     config::readLocal(p, l);
     p.get("frontier/max_cluster_extent", frontier_extent_);
-    config::readAstar(p, astar_config_);
+    config::readAstar(p, astar_config_, "distance_astar");
     p.get("world_frame", world_frame_);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
     for (const common::Status& st : {v.validate(), l.validate(), astar_config_.validate()})

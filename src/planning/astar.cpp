@@ -25,6 +25,7 @@ constexpr double kClearanceRounding = 1e-6;
 constexpr double kCrossingTie = 1e-9;
 constexpr std::size_t kInitialBrickTableBits = 8;
 constexpr int kMaxExpansions = 50000000;
+constexpr int kMaxStride = 8;
 
 // The 26 neighbour offsets, the move type of each (number of axes changed minus one), and the
 // neighbours a move to it sweeps past: those whose offset takes, on every axis, either 0 or the move's
@@ -64,8 +65,11 @@ double movesCost(const std::int32_t m[3]) { return m[0] + m[1] * kSqrt2 + m[2] *
 
 // The cheapest obstacle-free move counts from a to b: as many space diagonals as the smallest
 // displacement, then face diagonals, then axis moves.
-void octileMoves(const Index3& a, const Index3& b, std::int32_t m[3]) {
+// On a lattice of step `stride` (a and b on it) the counts are of lattice moves.
+void octileMoves(const Index3& a, const Index3& b, std::int32_t m[3], int stride = 1) {
   std::array<int, 3> d = {std::abs(b.x() - a.x()), std::abs(b.y() - a.y()), std::abs(b.z() - a.z())};
+  if (stride > 1)
+    for (int& v : d) v /= stride;
   std::sort(d.begin(), d.end());
   m[2] = d[0];
   m[1] = d[1] - d[0];
@@ -94,9 +98,7 @@ bool sameGeometry(const GridGeometry& a, const GridGeometry& b) {
 }  // namespace
 
 Status AstarConfig::validate() const {
-  auto err = [](const char* key, const char* why) {
-    return Status::Error(std::string("astar: ") + key + " " + why);
-  };
+  auto err = [this](const char* key, const char* why) { return Status::Error(name + ": " + key + " " + why); };
   if (!(clearance >= 0.0 && std::isfinite(clearance))) return err("clearance", "must be finite and >= 0");
   // Each expansion adds at most 26 nodes, indexed by int32.
   if (max_expansions < 1 || max_expansions > kMaxExpansions)
@@ -105,13 +107,15 @@ Status AstarConfig::validate() const {
     return err("probe_expansions", ("must be in [0, " + std::to_string(kMaxExpansions) + "]").c_str());
   if (!(tie_breaker >= 1.0 && std::isfinite(tie_breaker)))
     return err("tie_breaker", "must be finite and >= 1");
+  if (stride < 1 || stride > kMaxStride)
+    return err("stride", ("must be in [1, " + std::to_string(kMaxStride) + "]").c_str());
   return Status::Ok();
 }
 
 Status AstarConfig::validate(const map::EsdfConfig& esdf) const {
   if (Status s = validate(); !s) return s;
   if (clearance > esdf.max_distance)
-    return Status::Error("astar: clearance must be <= the ESDF's max_distance (" +
+    return Status::Error(name + ": clearance must be <= the ESDF's max_distance (" +
                          std::to_string(esdf.max_distance) + " m, where distances are truncated), got " +
                          std::to_string(clearance));
   return Status::Ok();
@@ -205,14 +209,21 @@ bool Astar::freeAndKnown(const Index3& idx, std::size_t linear, bool surrounding
   return true;
 }
 
-bool Astar::snap(const Vec3& p, double radius, Index3& out, bool near_start) const {
+bool Astar::snap(const Vec3& p, double radius, Index3& out, bool near_start, const Index3* lattice) const {
   if (!p.allFinite() || !(radius >= 0.0)) return false;
+  const int step = lattice ? config_.stride : 1;
+  auto onLattice = [&](const Index3& idx) {
+    if (step == 1) return true;
+    for (int a = 0; a < 3; ++a)
+      if ((idx[a] - (*lattice)[a]) % step != 0) return false;
+    return true;
+  };
   auto pass = [&](const Index3& idx) {
     return near_start ? geo_.inside(idx) && traversableNearStart(idx, geo_.linear(idx)) : traversable(idx);
   };
   if (geo_.bounds().contains(p)) {
     const Index3 own = geo_.coordToIndex(p);
-    if (pass(own)) {
+    if (onLattice(own) && pass(own)) {
       out = own;
       return true;
     }
@@ -226,14 +237,15 @@ bool Astar::snap(const Vec3& p, double radius, Index3& out, bool near_start) con
     const double h = std::ceil((p[a] + radius - geo_.origin()[a]) / geo_.resolution() - 0.5);
     lo[a] = static_cast<int>(std::clamp(l, 0.0, n));
     hi[a] = static_cast<int>(std::clamp(h, -1.0, n - 1.0));
+    if (step > 1) lo[a] += (((*lattice)[a] - lo[a]) % step + step) % step;  // first lattice voxel
     if (lo[a] > hi[a]) return false;
   }
   const double r2 = radius * radius;
   double best = std::numeric_limits<double>::infinity();
   Index3 idx;
-  for (idx.z() = lo.z(); idx.z() <= hi.z(); ++idx.z())
-    for (idx.y() = lo.y(); idx.y() <= hi.y(); ++idx.y())
-      for (idx.x() = lo.x(); idx.x() <= hi.x(); ++idx.x()) {
+  for (idx.z() = lo.z(); idx.z() <= hi.z(); idx.z() += step)
+    for (idx.y() = lo.y(); idx.y() <= hi.y(); idx.y() += step)
+      for (idx.x() = lo.x(); idx.x() <= hi.x(); idx.x() += step) {
         const double d2 = (geo_.indexToCoord(idx) - p).squaredNorm();
         if (d2 <= r2 && d2 < best && pass(idx)) {
           best = d2;
@@ -287,6 +299,20 @@ bool Astar::segmentTraversable(const Vec3& a, const Vec3& b) const {
     }
   }
   return true;
+}
+
+bool Astar::moveClear(const Index3& a, const Index3& b, double esdf_a) const {
+  if (config_.unknown_is_free && !config_.known_clearance) {
+    // Every voxel the segment touches has its centre within half a voxel diagonal of a point of it, and a
+    // point at distance t from a lies at length - t from b: with distances 1-Lipschitz, every touched
+    // voxel is at least (d_a + d_b - length) / 2 - sqrt(3) / 2 voxel from every obstacle. Truncated
+    // distances are lower bounds too; one more voxel per end covers the ESDF's rare overestimates (a
+    // slightly farther obstacle, see Esdf). Whatever this cannot prove goes to the exact walk.
+    const double length = (b - a).cast<double>().norm() * geo_.resolution();
+    const double slack = (kSqrt3 + 2.0) * geo_.resolution();
+    if (esdf_a + esdf_.distance(b) > 2.0 * config_.clearance + length + slack) return true;
+  }
+  return segmentTraversable(geo_.indexToCoord(a), geo_.indexToCoord(b));
 }
 
 std::vector<Vec3> Astar::shorten(const std::vector<Vec3>& path) const {
@@ -418,9 +444,15 @@ std::int32_t Astar::run(const Index3& s, const Index3& g, const Index3& start, d
 
   // f = cost + heuristic is computed from summed move counts so that equal costs give bit-identical f
   // (h only breaks those ties, so single precision is enough for it).
+  const int stride = config_.stride;
+  // Lattice coordinates of a voxel on the run's lattice (the one through s): the scratch is indexed by
+  // them, so a coarse lattice fills its bricks densely.
+  Index3 residue = Index3::Zero();
+  for (int a = 0; a < 3; ++a) residue[a] = s[a] % stride;
+  auto lattice = [&](const Index3& q) { return stride == 1 ? q : Index3((q - residue) / stride); };
   auto open = [&](std::int32_t n) {
     std::int32_t h[3], f[3];
-    octileMoves(nodes_[n].idx, g, h);
+    octileMoves(nodes_[n].idx, g, h, stride);
     for (int i = 0; i < 3; ++i) f[i] = nodes_[n].moves[i] + h[i];
     const double hc = movesCost(h);
     heapPush(OpenEntry{movesCost(f) + w_extra * hc, static_cast<float>(hc), n});
@@ -428,7 +460,8 @@ std::int32_t Astar::run(const Index3& s, const Index3& g, const Index3& start, d
   // Cell of a voxel inside the grid; neighbouring voxels mostly share a brick, so the last one is kept.
   std::uint32_t cached_key = std::numeric_limits<std::uint32_t>::max();
   std::size_t cached_first = 0;
-  auto cellOf = [&](const Index3& q) {
+  auto cellOf = [&](const Index3& voxel) {
+    const Index3 q = lattice(voxel);
     const auto key = static_cast<std::uint32_t>(
         (q.x() >> kBrickBits) + (static_cast<std::size_t>(q.y() >> kBrickBits) +
                                  static_cast<std::size_t>(q.z() >> kBrickBits) * brick_dims_.y()) *
@@ -470,8 +503,9 @@ std::int32_t Astar::run(const Index3& s, const Index3& g, const Index3& start, d
     cells_[cellOf(idx)] = kCellClosed;  // later visits skip it without reading the node
     std::array<std::size_t, 26> cell;
     std::uint32_t free = 0;
+    const double esdf_here = stride > 1 ? esdf_.distance(idx) : 0.0;
     for (int k = 0; k < 26; ++k) {
-      const Index3 q = idx + nb.offset[k];
+      const Index3 q = idx + stride * nb.offset[k];
       if (!geo_.inside(q)) continue;
       cell[k] = cellOf(q);
       std::int32_t& c = cells_[cell[k]];
@@ -481,10 +515,14 @@ std::int32_t Astar::run(const Index3& s, const Index3& g, const Index3& start, d
             (q - start).squaredNorm() <= exempt2 ? traversableNearStart(q, linear) : traversable(q, linear);
         c = pass ? kCellFree : kCellBlocked;
       }
-      if (c != kCellBlocked) free |= std::uint32_t{1} << k;  // kCellClosed voxels are traversable too
+      // kCellClosed voxels are traversable too (and never entered again, so their moves need no check).
+      if (c != kCellBlocked && (stride == 1 || c == kCellClosed || moveClear(idx, q, esdf_here)))
+        free |= std::uint32_t{1} << k;
     }
     for (int k = 0; k < 26; ++k) {
-      if ((free & nb.swept[k]) != nb.swept[k]) continue;  // blocked, or cutting a blocked edge / corner
+      // Blocked, or (every voxel) cutting a blocked edge / corner, or (a coarse lattice) a blocked segment.
+      const std::uint32_t needed = stride == 1 ? nb.swept[k] : std::uint32_t{1} << k;
+      if ((free & needed) != needed) continue;
       std::int32_t m = cells_[cell[k]];
       if (m == kCellClosed) continue;
       std::int32_t moves[3] = {nodes_[n].moves[0], nodes_[n].moves[1], nodes_[n].moves[2]};
@@ -493,7 +531,7 @@ std::int32_t Astar::run(const Index3& s, const Index3& g, const Index3& start, d
         if (movesCost(moves) >= movesCost(nodes_[m].moves)) continue;
       } else {
         m = static_cast<std::int32_t>(nodes_.size());
-        nodes_.push_back(Node{idx + nb.offset[k], n, {0, 0, 0}, -1});
+        nodes_.push_back(Node{idx + stride * nb.offset[k], n, {0, 0, 0}, -1});
         cells_[cell[k]] = m;
       }
       nodes_[m].parent = n;
@@ -517,7 +555,7 @@ PathResult Astar::search(const Vec3& start, const Vec3& goal, double snap_radius
     result.status = PathStatus::kStartBlocked;
     return result;
   }
-  if (!snap(goal, snap_radius, g)) {
+  if (!snap(goal, snap_radius, g, false, config_.stride > 1 ? &s : nullptr)) {
     result.status = PathStatus::kGoalBlocked;
     return result;
   }
@@ -565,6 +603,10 @@ PathResult Astar::search(const Vec3& start, const Vec3& goal, double snap_radius
 }
 
 PathDistance pathDistance(const Astar& astar, const Vec3& a, const Vec3& b) {
+  // On a coarse lattice, a pair in plain sight is answered by the walk along it (no path is shorter):
+  // cheaper than a search whose every move is checked along its segment. On the every-voxel lattice the
+  // search there only expands the voxels of the straight path, and returns it.
+  if (astar.config().stride > 1 && astar.segmentTraversable(a, b)) return {(b - a).norm(), false};
   const PathResult r = astar.search(a, b);
   if (r.status != PathStatus::kFound) return {(b - a).norm(), true};
   return {(r.path.front() - a).norm() + r.length + (b - r.path.back()).norm(), false};

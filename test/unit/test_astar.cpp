@@ -167,10 +167,11 @@ bool moveAllowed(const GridGeometry& g, const std::vector<std::uint8_t>& ok, con
   return true;
 }
 
-// Shortest path costs (m) from `source` to every voxel over traversable voxels, 26-connected with move
-// costs 1, sqrt 2, sqrt 3 voxels and no corner cutting: textbook Dijkstra over the whole grid.
-std::vector<double> shortestCosts(const GridGeometry& g, const std::vector<std::uint8_t>& ok,
-                                  const Index3& source) {
+// Shortest path costs (m) from `source` over the lattice of voxels `stride` apart through it, by textbook
+// Dijkstra over every lattice voxel: a move from v to one of its 26 lattice neighbours v + stride * d
+// is taken when allowed(v, d). Voxels off the lattice stay at infinity.
+template <typename Allowed>
+std::vector<double> dijkstra(const GridGeometry& g, const Index3& source, int stride, Allowed&& allowed) {
   std::vector<double> cost(g.size(), kInf);
   using Item = std::pair<double, std::size_t>;
   std::priority_queue<Item, std::vector<Item>, std::greater<Item>> queue;
@@ -185,9 +186,9 @@ std::vector<double> shortestCosts(const GridGeometry& g, const std::vector<std::
       for (int dy = -1; dy <= 1; ++dy)
         for (int dx = -1; dx <= 1; ++dx) {
           const Index3 d(dx, dy, dz);
-          if (d == Index3::Zero() || !moveAllowed(g, ok, v, d)) continue;
-          const std::size_t n = g.linear(v + d);
-          const double next = c + kRes * std::sqrt(static_cast<double>(d.squaredNorm()));
+          if (d == Index3::Zero() || !allowed(v, d)) continue;
+          const std::size_t n = g.linear(v + stride * d);
+          const double next = c + stride * kRes * std::sqrt(static_cast<double>(d.squaredNorm()));
           if (next < cost[n]) {
             cost[n] = next;
             queue.push({next, n});
@@ -195,6 +196,13 @@ std::vector<double> shortestCosts(const GridGeometry& g, const std::vector<std::
         }
   }
   return cost;
+}
+
+// Shortest path costs (m) from `source` to every voxel over traversable voxels, 26-connected with move
+// costs 1, sqrt 2, sqrt 3 voxels and no corner cutting.
+std::vector<double> shortestCosts(const GridGeometry& g, const std::vector<std::uint8_t>& ok,
+                                  const Index3& source) {
+  return dijkstra(g, source, 1, [&](const Index3& v, const Index3& d) { return moveAllowed(g, ok, v, d); });
 }
 
 double polylineLength(const std::vector<Vec3>& path) {
@@ -217,7 +225,9 @@ void expectSegmentsTraversable(const Astar& astar, const std::vector<Vec3>& path
 
 // Shape of a found path: raw path continuous through traversable voxels between the two end voxels,
 // lengths consistent, shortened path traversable and between the straight line and the raw path.
-void expectWellFormed(const Astar& astar, const PathResult& r, const Index3& start, const Index3& goal) {
+// With `stride` > 1 the raw path's steps are moves on that lattice, each a traversable segment.
+void expectWellFormed(const Astar& astar, const PathResult& r, const Index3& start, const Index3& goal,
+                      int stride = 1) {
   const GridGeometry& g = astar.geometry();
   ASSERT_EQ(r.status, PathStatus::kFound);
   ASSERT_FALSE(r.raw_path.empty());
@@ -229,9 +239,11 @@ void expectWellFormed(const Astar& astar, const PathResult& r, const Index3& sta
     ASSERT_TRUE(astar.traversable(v)) << "raw voxel " << i << " blocked";
     if (i > 0) {
       const Index3 step = v - g.coordToIndex(r.raw_path[i - 1]);
-      ASSERT_EQ(step.cwiseAbs().maxCoeff(), 1) << "raw path jumps at " << i;
+      ASSERT_EQ(step.cwiseAbs().maxCoeff(), stride) << "raw path jumps at " << i;
+      for (int a = 0; a < 3; ++a) ASSERT_EQ(step[a] % stride, 0) << "raw path leaves the lattice at " << i;
     }
   }
+  if (stride > 1) expectSegmentsTraversable(astar, r.raw_path);
   EXPECT_NEAR(r.raw_length, polylineLength(r.raw_path), 1e-9);
   ASSERT_GE(r.path.size(), 1u);
   EXPECT_EQ(r.path.front(), r.raw_path.front());
@@ -243,6 +255,49 @@ void expectWellFormed(const Astar& astar, const PathResult& r, const Index3& sta
 }
 
 const Index3 kRandomDims(25, 20, 10);
+
+bool onLattice(const Index3& v, const Index3& anchor, int stride) {
+  for (int a = 0; a < 3; ++a)
+    if ((v[a] - anchor[a]) % stride != 0) return false;
+  return true;
+}
+
+// Whether the segment from the centre of voxel a to that of b meets the closed cube of every voxel it
+// touches only where `ok`: slab clipping of the segment against each cube of the index box spanned by
+// a and b (a segment between centres never leaves it), touching included.
+bool segmentOk(const GridGeometry& g, const std::vector<std::uint8_t>& ok, const Index3& a, const Index3& b) {
+  const Vec3 pa = a.cast<double>().array() + 0.5, d = (b - a).cast<double>();
+  const Index3 lo = a.cwiseMin(b), hi = a.cwiseMax(b);
+  for (int z = lo.z(); z <= hi.z(); ++z)
+    for (int y = lo.y(); y <= hi.y(); ++y)
+      for (int x = lo.x(); x <= hi.x(); ++x) {
+        const Index3 v(x, y, z);
+        double t0 = 0.0, t1 = 1.0;
+        for (int i = 0; i < 3 && t0 <= t1; ++i) {
+          const double lo_i = v[i] - 1e-9, hi_i = v[i] + 1.0 + 1e-9;
+          if (d[i] == 0.0) {
+            if (pa[i] < lo_i || pa[i] > hi_i) t1 = -1.0;
+            continue;
+          }
+          double ta = (lo_i - pa[i]) / d[i], tb = (hi_i - pa[i]) / d[i];
+          if (ta > tb) std::swap(ta, tb);
+          t0 = std::max(t0, ta);
+          t1 = std::min(t1, tb);
+        }
+        if (t0 <= t1 && (!g.inside(v) || !ok[g.linear(v)])) return false;
+      }
+  return true;
+}
+
+// Shortest path costs (m) from `source` over the lattice of voxels `stride` apart through it: a move to
+// one of the 26 lattice neighbours needs the neighbour traversable and segmentOk().
+std::vector<double> latticeCosts(const GridGeometry& g, const std::vector<std::uint8_t>& ok, const Index3& source,
+                                 int stride) {
+  return dijkstra(g, source, stride, [&](const Index3& v, const Index3& d) {
+    const Index3 n = v + stride * d;
+    return g.inside(n) && ok[g.linear(n)] && segmentOk(g, ok, v, n);
+  });
+}
 
 }  // namespace
 
@@ -263,6 +318,15 @@ TEST(AstarConfig, ValidateNamesTheBadKey) {
   c = AstarConfig();
   c.tie_breaker = 0.99;
   EXPECT_NE(c.validate().message().find("tie_breaker"), std::string::npos);
+  for (int stride : {0, 9}) {
+    c = AstarConfig();
+    c.stride = stride;
+    c.name = "distance_astar";
+    EXPECT_EQ(c.validate().message().rfind("distance_astar: stride", 0), 0u) << c.validate().message();
+  }
+  c = AstarConfig();
+  c.stride = 8;
+  EXPECT_TRUE(c.validate().ok());
   c = AstarConfig();
   c.clearance = 1.5;
   EXPECT_TRUE(c.validate().ok());
@@ -439,6 +503,101 @@ TEST(Astar, CostEqualsExhaustiveShortestPathInLargeMazes) {
   EXPECT_GE(found, 12);
 }
 
+TEST(Astar, CoarseLatticeCostEqualsExhaustiveShortestPathOnItsLattice) {
+  // stride > 1: the search runs over the voxels stride apart from the start's, each move checked along
+  // its segment (or proven clear by the ESDF at its ends); the oracle checks every move's segment
+  // against every cube it touches. Random maps as above, some cut by a one-voxel wall that a coarse
+  // lattice could step over if moves were not checked.
+  int found = 0, no_path = 0;
+  for (unsigned seed = 1; seed <= 6; ++seed) {
+    World world(kRandomDims);
+    Rng rng(seed + 100);
+    world.fill(VoxelState::kFree);
+    addRandomBoxes(world, rng, 6, VoxelState::kUnknown);
+    addRandomBoxes(world, rng, 10, VoxelState::kOccupied);
+    if (seed % 2 == 0) world.set(Index3(12, 0, 0), Index3(12, 100, 100), VoxelState::kOccupied);
+    for (int stride : {2, 3}) {
+      AstarConfig config = astarConfig(0.1 * (seed % 3), seed % 4 != 3);
+      config.stride = stride;
+      const Astar astar(world.occupancy(), world.esdf(), config);
+      const GridGeometry& g = world.geo();
+      std::vector<std::uint8_t> ok(g.size());
+      for (std::size_t l = 0; l < g.size(); ++l) ok[l] = astar.traversable(g.unlinear(l));
+      for (int query = 0; query < 4; ++query) {
+        Index3 start, goal;
+        do start = randomVoxel(rng, g.dims());
+        while (!ok[g.linear(start)]);
+        const std::vector<double> cost = latticeCosts(g, ok, start, stride);
+        for (int k = 0; k < 4; ++k) {
+          // A traversable goal on the start's lattice.
+          do goal = randomVoxel(rng, g.dims());
+          while (!ok[g.linear(goal)] || !onLattice(goal, start, stride));
+          SCOPED_TRACE("seed " + std::to_string(seed) + " stride " + std::to_string(stride) + " query " +
+                       std::to_string(query) + "/" + std::to_string(k));
+          const PathResult r = astar.search(g.indexToCoord(start), g.indexToCoord(goal), 0.0);
+          const double want = cost[g.linear(goal)];
+          if (want == kInf) {
+            EXPECT_EQ(r.status, PathStatus::kNoPath) << toString(r.status);
+            ++no_path;
+            continue;
+          }
+          expectWellFormed(astar, r, start, goal, stride);
+          EXPECT_NEAR(r.raw_length, want, 1e-9);
+          ++found;
+        }
+      }
+    }
+  }
+  EXPECT_GT(found, 60);
+  EXPECT_GT(no_path, 5);
+}
+
+TEST(Astar, CoarseLatticeCrossesOpenSpaceInFewExpansionsAndNeverThroughAThinWall) {
+  // A hall with a one-voxel wall across it and one doorway: 4-voxel moves (0.4 m, FUEL's grid) with the
+  // ESDF proving most of them clear. Same path cost as the exhaustive lattice search, and far fewer
+  // expansions than the every-voxel search, which finds a path at most a few moves shorter.
+  World world(Index3(80, 60, 20));
+  world.fill(VoxelState::kFree);
+  world.set(Index3(40, 0, 0), Index3(40, 59, 19), VoxelState::kOccupied);
+  world.set(Index3(40, 50, 4), Index3(40, 56, 12), VoxelState::kFree);
+  for (bool unknown_is_free : {true, false}) {
+    AstarConfig fine_config = astarConfig(0.0, unknown_is_free), coarse_config = fine_config;
+    coarse_config.stride = 4;
+    const Astar fine(world.occupancy(), world.esdf(), fine_config), coarse(world.occupancy(), world.esdf(), coarse_config);
+    const GridGeometry& g = world.geo();
+    std::vector<std::uint8_t> ok(g.size());
+    for (std::size_t l = 0; l < g.size(); ++l) ok[l] = coarse.traversable(g.unlinear(l));
+    const Index3 start(6, 6, 8), goal(74, 6, 8);
+    const std::vector<double> cost = latticeCosts(g, ok, start, 4);
+    const PathResult c = coarse.search(g.indexToCoord(start), g.indexToCoord(goal), 0.0);
+    expectWellFormed(coarse, c, start, goal, 4);
+    EXPECT_NEAR(c.raw_length, cost[g.linear(goal)], 1e-9);
+    const PathResult f = fine.search(g.indexToCoord(start), g.indexToCoord(goal), 0.0);
+    expectWellFormed(fine, f, start, goal);
+    EXPECT_GE(c.raw_length, f.raw_length - 1e-9);
+    EXPECT_LE(c.length, f.length + 4 * 4 * kRes);
+    EXPECT_LT(c.expansions * 10, f.expansions) << c.expansions << " against " << f.expansions;
+    // Through the doorway, not the wall: the path crosses x = 40 only at y in the doorway.
+    bool crossed = false;
+    for (std::size_t i = 1; i < c.raw_path.size(); ++i) {
+      const Index3 a = g.coordToIndex(c.raw_path[i - 1]), b = g.coordToIndex(c.raw_path[i]);
+      if (a.x() < 40 && b.x() >= 40) {
+        crossed = true;
+        EXPECT_GE(std::min(a.y(), b.y()), 50);
+        EXPECT_LE(std::max(a.y(), b.y()), 56);
+      }
+    }
+    EXPECT_TRUE(crossed);
+    // A goal off the lattice is snapped to the nearest lattice voxel within the radius.
+    const Vec3 off = g.indexToCoord(Index3(73, 7, 9));
+    const PathResult s = coarse.search(g.indexToCoord(start), off, 0.25);
+    ASSERT_EQ(s.status, PathStatus::kFound);
+    const Index3 end = g.coordToIndex(s.raw_path.back());
+    EXPECT_TRUE(onLattice(end, start, 4)) << end.transpose();
+    EXPECT_LE((s.raw_path.back() - off).norm(), 0.25);
+  }
+}
+
 TEST(Astar, CorridorNarrowerThanTwiceTheClearanceIsImpassable) {
   // A wall across the whole grid at x = 15 with a slot of `width` voxels in y over the full height;
   // with clearance 0.25 m the slot needs a voxel 2.5 voxels from both sides.
@@ -607,6 +766,30 @@ TEST(Astar, PathDistanceCountsTheSnapsToVoxelCentres) {
   const Vec3 ca = world.geo().indexToCoord(world.geo().coordToIndex(a));
   const Vec3 cb = world.geo().indexToCoord(world.geo().coordToIndex(b));
   EXPECT_NEAR(d.metres, (ca - a).norm() + (cb - ca).norm() + (b - cb).norm(), 1e-9);
+}
+
+TEST(Astar, CoarsePathDistanceIsTheStraightLineInPlainSight) {
+  World world(Index3(40, 20, 10));
+  world.fill(VoxelState::kFree);
+  AstarConfig config;
+  config.stride = 4;
+  const Astar open(world.occupancy(), world.esdf(), config);
+  // In plain sight: the straight line, however the lattice lies.
+  const Vec3 a(0.52, 0.51, 0.53), b(3.23, 0.87, 0.61);
+  ASSERT_TRUE(open.segmentTraversable(a, b));
+  const PathDistance d = pathDistance(open, a, b);
+  EXPECT_FALSE(d.euclidean_fallback);
+  EXPECT_DOUBLE_EQ(d.metres, (b - a).norm());
+  // Behind a wall: the lattice path between the snapped ends plus the snaps to them.
+  world.set(Index3(18, 0, 0), Index3(19, 14, 9), VoxelState::kOccupied);
+  const Astar behind(world.occupancy(), world.esdf(), config);
+  ASSERT_FALSE(behind.segmentTraversable(a, b));
+  const PathResult r = behind.search(a, b);
+  ASSERT_EQ(r.status, PathStatus::kFound);
+  const PathDistance around = pathDistance(behind, a, b);
+  EXPECT_FALSE(around.euclidean_fallback);
+  EXPECT_NEAR(around.metres, (r.path.front() - a).norm() + r.length + (b - r.path.back()).norm(), 1e-9);
+  EXPECT_GT(around.metres, (b - a).norm() + 1.0);  // round the wall's end at y = 1.5 m
 }
 
 TEST(Astar, ShortenKeepsCornersAroundObstacles) {

@@ -67,7 +67,8 @@ void readAstar(R& p, planning::AstarConfig& c, const std::string& ns = "astar") 
   p.get(ns + "/clearance", c.clearance).get(ns + "/unknown_is_free", c.unknown_is_free);
   p.get(ns + "/known_clearance", c.known_clearance);
   p.get(ns + "/max_expansions", c.max_expansions).get(ns + "/probe_expansions", c.probe_expansions);
-  p.get(ns + "/tie_breaker", c.tie_breaker);
+  p.get(ns + "/tie_breaker", c.tie_breaker).get(ns + "/stride", c.stride);
+  c.name = ns;
 }
 
 template <class R>
