@@ -76,15 +76,17 @@ TEST(Bench, SameSeedAndOptionsGiveTheSameRun) {
 }
 
 TEST(Bench, ModeOverlaysSetThePlannersDistanceSearchNotTheFlightSearch) {
-  // modes/fuel.yaml sets distance_astar/stride (FUEL's 0.4 m grid for its cost matrix); the flight and
-  // scout searches of trajectory.yaml, laid over by the same file, keep every voxel.
+  // modes/fuel.yaml sets global/s_near and distance_astar/stride (FUEL's 0.4 m grid for its cost
+  // matrix); the flight and scout searches of trajectory.yaml, laid over by the same file, keep every
+  // voxel.
   auto fuel = bench::loadExplorationConfig(GO_FEAP_CONFIG_DIR, "fuel");
   ASSERT_TRUE(fuel) << fuel.message();
   auto go_feap = bench::loadExplorationConfig(GO_FEAP_CONFIG_DIR, "go_feap");
   ASSERT_TRUE(go_feap) << go_feap.message();
-  EXPECT_EQ(fuel->distance_astar.stride, 4);
-  EXPECT_EQ(go_feap->distance_astar.stride, 1);
+  EXPECT_EQ(fuel->global.s_near, 1000.0);
+  EXPECT_LT(go_feap->global.s_near, 1000.0);
   for (const auto* c : {&*fuel, &*go_feap}) {
+    EXPECT_EQ(c->distance_astar.stride, 4);
     EXPECT_EQ(c->flight_astar.stride, 1);
     EXPECT_EQ(c->scout_astar.stride, 1);
     EXPECT_EQ(c->distance_astar.name, "distance_astar");

@@ -47,7 +47,7 @@ struct ExplorationConfig {
   map::MapConfig map;
   frontier::FrontierConfig frontier;
   planning::GlobalPlannerConfig global;
-  planning::AstarConfig distance_astar;  ///< exploration.yaml astar: path lengths for the tour
+  planning::AstarConfig distance_astar;  ///< exploration.yaml distance_astar: path lengths for the tour
   planning::LayerManagerConfig layers;
   double layer_rate = 5.0;  ///< Hz
   planning::ViewpointConfig viewpoints;
