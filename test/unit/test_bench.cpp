@@ -2,6 +2,10 @@
 // explores it to FINISHED(complete) with at least 95 % coverage and no collision, and the same
 // seed and options give the same run.
 #include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
 
 #include "go_feap/bench/exploration_run.h"
 #include "go_feap/world/scene_files.h"
@@ -76,25 +80,31 @@ TEST(Bench, SameSeedAndOptionsGiveTheSameRun) {
 }
 
 TEST(Bench, ModeOverlaysSetThePlannersDistanceSearchNotTheFlightSearch) {
-  // modes/fuel.yaml sets global/s_near and distance_astar/stride (FUEL's 0.4 m grid for its cost
-  // matrix); the flight and scout searches of trajectory.yaml, laid over by the same file, keep every
-  // voxel.
-  auto fuel = bench::loadExplorationConfig(GO_FEAP_CONFIG_DIR, "fuel");
-  ASSERT_TRUE(fuel) << fuel.message();
-  auto go_feap = bench::loadExplorationConfig(GO_FEAP_CONFIG_DIR, "go_feap");
-  ASSERT_TRUE(go_feap) << go_feap.message();
-  EXPECT_EQ(fuel->global.s_near, 1000.0);
-  EXPECT_LT(go_feap->global.s_near, 1000.0);
-  for (const auto* c : {&*fuel, &*go_feap}) {
-    EXPECT_EQ(c->distance_astar.stride, 4);
-    EXPECT_EQ(c->flight_astar.stride, 1);
-    EXPECT_EQ(c->scout_astar.stride, 1);
-    EXPECT_EQ(c->distance_astar.name, "distance_astar");
-    EXPECT_EQ(c->flight_astar.name, "astar");
-    EXPECT_EQ(c->scout_astar.name, "scout_astar");
-    EXPECT_FALSE(c->flight_astar.unknown_is_free);
-    EXPECT_TRUE(c->distance_astar.unknown_is_free);
-  }
+  // A mode file is laid over exploration.yaml and trajectory.yaml alike: its distance_astar keys must
+  // reach the planners' search only, its astar keys the flight search only. A copy of the package's
+  // config with such a mode.
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("go_feap_modes_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::copy(GO_FEAP_CONFIG_DIR, dir, fs::copy_options::recursive);
+  std::ofstream(dir / "modes" / "probe.yaml") << "distance_astar:\n  max_expansions: 777\n  stride: 3\n"
+                                               << "astar:\n  max_expansions: 999\n";
+  auto probe = bench::loadExplorationConfig(dir.string(), "probe");
+  auto plain = bench::loadExplorationConfig(dir.string(), "go_feap");
+  fs::remove_all(dir);
+  ASSERT_TRUE(probe) << probe.message();
+  ASSERT_TRUE(plain) << plain.message();
+  EXPECT_EQ(probe->distance_astar.max_expansions, 777);
+  EXPECT_EQ(probe->distance_astar.stride, 3);
+  EXPECT_EQ(probe->flight_astar.max_expansions, 999);
+  EXPECT_EQ(probe->flight_astar.stride, plain->flight_astar.stride);
+  EXPECT_EQ(probe->scout_astar.max_expansions, plain->scout_astar.max_expansions);
+  EXPECT_NE(plain->distance_astar.max_expansions, 777);
+  EXPECT_NE(plain->flight_astar.max_expansions, 999);
+  // Validation messages name the section.
+  EXPECT_EQ(probe->distance_astar.name, "distance_astar");
+  EXPECT_EQ(probe->flight_astar.name, "astar");
+  EXPECT_EQ(probe->scout_astar.name, "scout_astar");
 }
 
 TEST(Bench, ConfigErrorsNameTheModeOrKey) {

@@ -220,9 +220,10 @@ struct PathDistance {
 };
 
 /// With a coarse lattice (config.stride > 1), |a - b| when the segment between them passes
-/// Astar::segmentTraversable() (no path is shorter, so no search is run). Otherwise the length of the (shortened) A* path between a and b plus the two snaps
-/// from a and b to its end voxel centres (so never below |a - b|); when the search fails for any reason
-/// (blocked ends, no path, budget exceeded) |a - b| with euclidean_fallback set.
+/// Astar::segmentTraversable() (no path is shorter, so no search is run). Otherwise the length of the
+/// (shortened) A* path between a and b plus the two snaps from a and b to its end voxel centres (so never
+/// below |a - b|); when the search fails for any reason (blocked ends, no path, budget exceeded) |a - b|
+/// with euclidean_fallback set.
 PathDistance pathDistance(const Astar& astar, const Vec3& a, const Vec3& b);
 
 }  // namespace go_feap::planning
