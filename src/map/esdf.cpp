@@ -81,6 +81,8 @@ Esdf::Esdf(const GridGeometry& geometry, const EsdfConfig& config) : geometry_(g
   offsets_.assign(geometry.size(), Offset{kNone, 0, 0});
   touched_.assign((geometry.size() + 63) / 64, 0);
   buckets_.resize(static_cast<std::size_t>(max_key_) + 1);
+  metres_of_key_.resize(static_cast<std::size_t>(max_key_) + 1);
+  for (int k = 0; k <= max_key_; ++k) metres_of_key_[k] = geometry_.resolution() * std::sqrt(static_cast<double>(k));
   int i = 0;
   for (int z = -1; z <= 1; ++z)
     for (int y = -1; y <= 1; ++y)
@@ -267,7 +269,8 @@ bool Esdf::isObstacle(const Index3& idx) const {
 }
 
 double Esdf::distanceOfKey(int key) const {
-  return key < 0 ? config_.max_distance : geometry_.resolution() * std::sqrt(static_cast<double>(key));
+  if (key < 0) return config_.max_distance;
+  return key <= max_key_ ? metres_of_key_[key] : geometry_.resolution() * std::sqrt(static_cast<double>(key));
 }
 
 double Esdf::distance(const Index3& idx) const {
@@ -335,7 +338,7 @@ std::size_t Esdf::memoryBytes() const {
   std::size_t bytes = sizeof(*this) + offsets_.capacity() * sizeof(Offset) +
                       touched_.capacity() * sizeof(std::uint64_t) + changes_.capacity() * sizeof(Change) +
                       raise_stack_.capacity() * sizeof(std::uint32_t) +
-                      buckets_.capacity() * sizeof(buckets_[0]);
+                      buckets_.capacity() * sizeof(buckets_[0]) + metres_of_key_.capacity() * sizeof(double);
   for (const auto& b : buckets_) bytes += b.capacity() * sizeof(std::uint32_t);
   return bytes;
 }

@@ -58,10 +58,11 @@ Result<double> obstacleRatio(const cv::Mat& depth, double max_range) {
   if (!positiveFinite(max_range)) return Result<double>::Error("obstacle ratio: max_range must be > 0");
   std::size_t close = 0;
   if (depth.type() == CV_32FC1) {
+    // NaN fails both comparisons and +inf the second: no separate finiteness test (the loop vectorises).
+    const auto max_m = static_cast<float>(max_range);
     for (int v = 0; v < depth.rows; ++v) {
       const float* row = depth.ptr<float>(v);
-      for (int u = 0; u < depth.cols; ++u)
-        if (std::isfinite(row[u]) && row[u] > 0.0f && row[u] < max_range) ++close;
+      for (int u = 0; u < depth.cols; ++u) close += static_cast<std::size_t>((row[u] > 0.0f) & (row[u] < max_m));
     }
   } else if (depth.type() == CV_16UC1) {
     const double max_mm = max_range * 1000.0;

@@ -113,6 +113,7 @@ class Esdf {
   EsdfConfig config_;
   std::int64_t stride_y_ = 0, stride_z_ = 0;
   int max_key_ = 0;  // largest stored squared voxel distance
+  std::vector<double> metres_of_key_;  // resolution * sqrt(key) for keys 0..max_key_ (a lookup: no sqrt per query)
   std::vector<Offset> offsets_;
 
   std::int8_t nb_[26][3];       // neighbour offsets
