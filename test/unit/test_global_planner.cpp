@@ -193,11 +193,13 @@ struct Fixture {
     return (i == 2 && j == 4) ? 1.8 * d : d;
   }
   PathDistances distances() {
-    return {[this](std::size_t j) {
-              from_uav_calls.push_back(j);
-              return (frontiers[j].average - uav).norm();
-            },
-            [this](std::size_t i, std::size_t j) { return between(i, j); }};
+    PathDistances d;  // no lower bound: every active frontier is asked about
+    d.from_uav = [this](std::size_t j) {
+      from_uav_calls.push_back(j);
+      return (frontiers[j].average - uav).norm();
+    };
+    d.between = [this](std::size_t i, std::size_t j) { return between(i, j); };
+    return d;
   }
 };
 
