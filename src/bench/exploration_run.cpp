@@ -206,7 +206,7 @@ void ExplorationRun::planStep() {
   for (const frontier::Frontier& f : finder_->frontiers())
     if (!layers_->isBlacklisted(f.id)) summaries.push_back(planning::summarize(f, t_));
   auto t0 = Clock::now();
-  auto tour = tour_planner_->plan(summaries, position);
+  auto tour = tour_planner_->plan(summaries, position, t_);
   recorder_.addTime("global", msSince(t0));
   if (!tour || tour->frontier_ids.empty()) {
     if (!tour) log("no tour: " + tour.message());

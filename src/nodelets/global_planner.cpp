@@ -106,7 +106,7 @@ class GlobalPlanner : public nodelet::Nodelet {
     common::Result<planning::GlobalTour> tour = common::Result<planning::GlobalTour>::Error("");
     {
       std::shared_lock<std::shared_mutex> map_lock(shared_->mutex);
-      tour = planner_->plan(frontiers, *uav_, &fallbacks);
+      tour = planner_->plan(frontiers, *uav_, ros::Time::now().toSec(), &fallbacks);
     }
     ros_conv::publishComputeTime(compute_pub_, "global", t0);
     const double ms = std::chrono::duration<double, std::milli>(ros_conv::WallClock::now() - t0).count();

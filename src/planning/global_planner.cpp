@@ -22,6 +22,8 @@ Status GlobalPlannerConfig::validate() const {
   if (n_max_tsp < n_min_tsp) return err("n_max_tsp", "must be >= n_min_tsp");
   if (!(lambda >= 0.0 && std::isfinite(lambda))) return err("lambda", "must be >= 0");
   if (!(v_max > 0.0 && std::isfinite(v_max))) return err("v_max", "must be > 0");
+  if (!(reuse_cell >= 0.0 && std::isfinite(reuse_cell))) return err("reuse_cell", "must be finite and >= 0");
+  if (!(reuse_time >= 0.0 && std::isfinite(reuse_time))) return err("reuse_time", "must be finite and >= 0");
   if (max_exact < 0 || max_exact > kMaxExactFrontiers)
     return err("max_exact", ("must be in [0, " + std::to_string(kMaxExactFrontiers) + "]").c_str());
   if (Status s = omission.validate(); !s) return Status::Error("exploration/" + s.message());

@@ -1,5 +1,7 @@
 #include "go_feap/planning/tour_planner.h"
 
+#include <algorithm>
+#include <cmath>
 #include <set>
 #include <utility>
 
@@ -16,8 +18,29 @@ FrontierSummary summarize(const frontier::Frontier& frontier, double now) {
   return s;
 }
 
+PathDistance TourPlanner::search(const Vec3& a, const Vec3& b, double now) {
+  const double cell = config_.reuse_cell;
+  if (!(cell > 0.0)) return ++searches_, pathDistance(astar_, a, b);
+  CellPair key;
+  for (int i = 0; i < 3; ++i) {
+    key[i] = static_cast<std::int64_t>(std::floor(a[i] / cell));
+    key[i + 3] = static_cast<std::int64_t>(std::floor(b[i] / cell));
+  }
+  if (std::lexicographical_compare(key.begin() + 3, key.end(), key.begin(), key.begin() + 3))
+    std::rotate(key.begin(), key.begin() + 3, key.end());  // the same key either way round
+  auto it = recent_.find(key);
+  if (it != recent_.end()) return it->second.distance;
+  ++searches_;
+  const PathDistance d = pathDistance(astar_, a, b);
+  recent_.emplace(key, Recent{d, now});
+  return d;
+}
+
 common::Result<GlobalTour> TourPlanner::plan(const std::vector<FrontierSummary>& frontiers, const Vec3& uav,
-                                             std::size_t* fallbacks) {
+                                             double now, std::size_t* fallbacks) {
+  // Reused lengths expire (the map has grown since), and so does anything from a clock that went back.
+  for (auto it = recent_.begin(); it != recent_.end();)
+    it = now - it->second.time > config_.reuse_time || now < it->second.time ? recent_.erase(it) : std::next(it);
   std::set<unsigned> ids;
   for (const FrontierSummary& f : frontiers) ids.insert(f.id);
   for (auto it = cache_.begin(); it != cache_.end();)
@@ -27,7 +50,7 @@ common::Result<GlobalTour> TourPlanner::plan(const std::vector<FrontierSummary>&
   d.from_uav = [&](std::size_t j) {
     const double e = (frontiers[j].average - uav).norm();
     if (e >= config_.s_near) return e;
-    const PathDistance pd = pathDistance(astar_, uav, frontiers[j].average);
+    const PathDistance pd = search(uav, frontiers[j].average, now);
     local_fallbacks += pd.euclidean_fallback;
     return pd.metres;
   };
@@ -38,7 +61,7 @@ common::Result<GlobalTour> TourPlanner::plan(const std::vector<FrontierSummary>&
     if (frontiers[j].id < frontiers[i].id) std::swap(i, j);
     const auto key = std::make_pair(frontiers[i].id, frontiers[j].id);
     auto it = cache_.find(key);
-    if (it == cache_.end()) it = cache_.emplace(key, pathDistance(astar_, frontiers[i].average, frontiers[j].average)).first;
+    if (it == cache_.end()) it = cache_.emplace(key, search(frontiers[i].average, frontiers[j].average, now)).first;
     local_fallbacks += it->second.euclidean_fallback;
     return it->second.metres;
   };

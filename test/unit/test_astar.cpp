@@ -963,7 +963,7 @@ TEST(TourPlanner, SearchesEachPairOnceAndFindsTheShortestOpenTour) {
     frontiers.push_back(f);
   }
   const Vec3 uav(2.0, 0.5, 0.5);
-  const auto tour = planner.plan(frontiers, uav);
+  const auto tour = planner.plan(frontiers, uav, 0.0);
   ASSERT_TRUE(tour) << tour.message();
   const std::size_t n = frontiers.size();
   ASSERT_EQ(tour->indices.size(), n);
@@ -985,9 +985,76 @@ TEST(TourPlanner, SearchesEachPairOnceAndFindsTheShortestOpenTour) {
   EXPECT_NEAR(tour->cost, best, 1e-9);
 
   // Planning again searches nothing new; a frontier that is gone takes its pairs with it.
-  ASSERT_TRUE(planner.plan(frontiers, uav));
+  ASSERT_TRUE(planner.plan(frontiers, uav, 0.0));
   EXPECT_EQ(planner.cacheSize(), n * (n - 1) / 2);
   frontiers.pop_back();
-  ASSERT_TRUE(planner.plan(frontiers, uav));
+  ASSERT_TRUE(planner.plan(frontiers, uav, 0.0));
   EXPECT_EQ(planner.cacheSize(), (n - 1) * (n - 2) / 2);
+}
+
+// Regrown clusters (new ids, averages moved a little) and a UAV that moved a little reuse the lengths
+// searched between the same reuse_cell cells for reuse_time s, either way round; after that, or with
+// reuse_cell 0, they are searched again.
+TEST(TourPlanner, ReusesLengthsBetweenTheSameCellsForReuseTime) {
+  World world(Index3(60, 40, 10));
+  world.fill(VoxelState::kFree);
+  world.set(Index3(30, 0, 0), Index3(31, 29, 9), VoxelState::kOccupied);
+  const Astar astar(world.occupancy(), world.esdf(), astarConfig(0.2, true));
+  go_feap::planning::GlobalPlannerConfig config;
+  config.s_near = 100.0;  // every frontier's length from the UAV is searched
+  config.reuse_cell = 0.4;
+  config.reuse_time = 1.0;
+  // Cell centres (0.4 m cells from the origin), so that a 0.1 m move stays in the cell.
+  const std::vector<Vec3> at{Vec3(1.0, 1.0, 0.6), Vec3(5.0, 0.6, 0.6), Vec3(2.6, 3.4, 0.6), Vec3(4.2, 2.6, 0.6)};
+  auto summaries = [&](unsigned first_id, const Vec3& shift, bool reversed_ids) {
+    std::vector<go_feap::planning::FrontierSummary> out;
+    for (std::size_t k = 0; k < at.size(); ++k) {
+      go_feap::planning::FrontierSummary f;
+      f.id = first_id + static_cast<unsigned>(reversed_ids ? at.size() - 1 - k : k);
+      f.average = at[k] + shift;
+      f.cell_count = 100;
+      out.push_back(f);
+    }
+    return out;
+  };
+  const Vec3 uav(2.2, 0.6, 0.6);
+  const std::size_t n = at.size(), fresh = n + n * (n - 1) / 2;  // from the UAV, and between pairs
+
+  go_feap::planning::TourPlanner planner(config, astar);
+  const auto first = planner.plan(summaries(1, Vec3::Zero(), false), uav, 0.0);
+  ASSERT_TRUE(first) << first.message();
+  EXPECT_EQ(planner.searches(), fresh);
+  // New ids in the other order (each pair searched from its other end), everything 0.1 m away: no search.
+  const Vec3 shift(0.1, -0.1, 0.05);
+  const auto again = planner.plan(summaries(100, shift, true), uav + shift, 0.5);
+  ASSERT_TRUE(again) << again.message();
+  EXPECT_EQ(planner.searches(), fresh);
+  EXPECT_NEAR(again->cost, first->cost, 1e-9);
+  std::vector<Vec3> first_at, again_at;
+  for (const Vec3& p : first->waypoints) first_at.push_back(p);
+  for (const Vec3& p : again->waypoints) again_at.push_back(p - shift);
+  EXPECT_EQ(first_at, again_at);  // the same order
+  // 1.5 s after they were searched the lengths have expired: new ids search everything again.
+  ASSERT_TRUE(planner.plan(summaries(200, shift, false), uav, 1.5));
+  EXPECT_EQ(planner.searches(), 2 * fresh);
+  // A frontier moved into another cell is searched anew (its pairs and its length from the UAV).
+  auto moved = summaries(300, shift, false);
+  moved[0].average += Vec3(0.4, 0.0, 0.0);
+  ASSERT_TRUE(planner.plan(moved, uav, 1.6));
+  EXPECT_EQ(planner.searches(), 2 * fresh + n);
+
+  config.reuse_cell = 0.0;  // never reused
+  go_feap::planning::TourPlanner plain(config, astar);
+  ASSERT_TRUE(plain.plan(summaries(1, Vec3::Zero(), false), uav, 0.0));
+  ASSERT_TRUE(plain.plan(summaries(100, shift, true), uav + shift, 0.5));
+  EXPECT_EQ(plain.searches(), 2 * fresh);
+
+  for (double bad : {-0.1, kInf}) {
+    go_feap::planning::GlobalPlannerConfig c;
+    c.reuse_cell = bad;
+    EXPECT_NE(c.validate().message().find("reuse_cell"), std::string::npos);
+    c = go_feap::planning::GlobalPlannerConfig();
+    c.reuse_time = bad;
+    EXPECT_NE(c.validate().message().find("reuse_time"), std::string::npos);
+  }
 }

@@ -21,6 +21,11 @@ struct GlobalPlannerConfig {
   double lambda = 0.1;  ///< 1/s, weight of sum xi_k t_k against travel time (0: shortest path)
   double v_max = 2.0;   ///< m/s, turns path lengths into travel times
   int max_exact = 12;   ///< candidate sets up to this size are solved exactly (<= 16)
+  /// m: a path length searched between two points is reused for other points in the same two cells of
+  /// this size (cubes from the world origin; 0 = never), for reuse_time s. Clusters are regrown with new
+  /// ids and the UAV moves a little between calls: this spares most of their searches.
+  double reuse_cell = 0.4;
+  double reuse_time = 1.0;  ///< s
   OmissionConfig omission;
 
   /// Checks every key; the message names the bad one, e.g. "exploration: lambda must be >= 0"

@@ -4,6 +4,8 @@
 // frontier gets a new id). Shared by the GlobalPlanner nodelet and the lock-step bench.
 #pragma once
 
+#include <array>
+#include <cstdint>
 #include <map>
 #include <utility>
 #include <vector>
@@ -22,21 +24,33 @@ class TourPlanner {
   /// Keeps a reference to `astar` (and so to its map): the caller holds the map still during plan().
   TourPlanner(const GlobalPlannerConfig& config, const Astar& astar) : config_(config), astar_(astar) {}
 
-  /// planTour() over `frontiers` from `uav`. Beyond s_near (Euclidean, a lower bound of the path) a
-  /// frontier cannot be near: its Euclidean distance only orders the top-up, so no search is spent on
-  /// it. Lengths between frontiers are searched once per unordered pair (from the lower id) and cached
-  /// by id pair; cached lengths of frontiers no longer listed are dropped first. `fallbacks` (when not null)
-  /// counts the distances that fell back to Euclidean.
-  common::Result<GlobalTour> plan(const std::vector<FrontierSummary>& frontiers, const Vec3& uav,
+  /// planTour() over `frontiers` from `uav` at time `now` (s). Beyond s_near (Euclidean, a lower bound of
+  /// the path) a frontier cannot be near: its Euclidean distance only orders the top-up, so no search is
+  /// spent on it. Lengths between frontiers are searched once per unordered pair (from the lower id) and
+  /// cached by id pair; cached lengths of frontiers no longer listed are dropped first. A length to
+  /// search is first looked up among those searched in the last reuse_time s between the same two
+  /// reuse_cell cells (either way round). `fallbacks` (when not null) counts the distances that fell
+  /// back to Euclidean.
+  common::Result<GlobalTour> plan(const std::vector<FrontierSummary>& frontiers, const Vec3& uav, double now,
                                   std::size_t* fallbacks = nullptr);
 
   const GlobalPlannerConfig& config() const { return config_; }
   std::size_t cacheSize() const { return cache_.size(); }
+  std::size_t searches() const { return searches_; }  ///< path searches run so far
 
  private:
+  using CellPair = std::array<std::int64_t, 6>;
+  struct Recent {
+    PathDistance distance;
+    double time;
+  };
+  PathDistance search(const Vec3& a, const Vec3& b, double now);
+
   GlobalPlannerConfig config_;
   const Astar& astar_;
   std::map<std::pair<unsigned, unsigned>, PathDistance> cache_;
+  std::map<CellPair, Recent> recent_;
+  std::size_t searches_ = 0;
 };
 
 }  // namespace go_feap::planning
