@@ -942,11 +942,19 @@ TEST(Astar, ProbeFromTheGoalFailsFastWhenTheGoalIsCutOff) {
   EXPECT_NEAR(got.raw_length, want.raw_length, 1e-9);
 }
 
-TEST(TourPlanner, SearchesEachPairOnceAndFindsTheShortestOpenTour) {
-  // Free space split by a wall with one gap: the frontiers on either side are far apart by path.
-  World world(Index3(60, 40, 10));
+namespace {
+
+// Free space split by a wall with one gap (y >= 3 m): frontiers on either side are far apart by path.
+void splitByWallWithGap(World& world) {
   world.fill(VoxelState::kFree);
   world.set(Index3(30, 0, 0), Index3(31, 29, 9), VoxelState::kOccupied);
+}
+
+}  // namespace
+
+TEST(TourPlanner, SearchesEachPairOnceAndFindsTheShortestOpenTour) {
+  World world(Index3(60, 40, 10));
+  splitByWallWithGap(world);
   const Astar astar(world.occupancy(), world.esdf(), astarConfig(0.2, true));
   go_feap::planning::GlobalPlannerConfig config;
   config.lambda = 0.0;  // travel time only: the brute force below is the whole objective
@@ -997,8 +1005,7 @@ TEST(TourPlanner, SearchesEachPairOnceAndFindsTheShortestOpenTour) {
 // reuse_cell 0, they are searched again.
 TEST(TourPlanner, ReusesLengthsBetweenTheSameCellsForReuseTime) {
   World world(Index3(60, 40, 10));
-  world.fill(VoxelState::kFree);
-  world.set(Index3(30, 0, 0), Index3(31, 29, 9), VoxelState::kOccupied);
+  splitByWallWithGap(world);
   const Astar astar(world.occupancy(), world.esdf(), astarConfig(0.2, true));
   go_feap::planning::GlobalPlannerConfig config;
   config.s_near = 100.0;  // every frontier's length from the UAV is searched
