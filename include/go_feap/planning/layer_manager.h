@@ -22,7 +22,7 @@ struct LayerManagerConfig {
   double stuck_timeout = 30.0;    ///< s without map progress while frontiers remain: FINISHED(stuck)
   /// m^3 the known map must grow by for that to count as progress: a vehicle flying back and forth
   /// while a few voxels at a time come into view is stuck all the same
-  double stuck_min_volume = 0.0;
+  double stuck_min_volume = 0.5;
   common::Status validate() const;
 };
 
