@@ -169,6 +169,7 @@ void ExplorationRun::frame() {
   recorder_.addTime("mapping", msSince(t0));
   if (!update) return;  // cannot happen with the renderer's own images; skipped like the nodelet would
   if (update->frame.any_change) {
+    ++map_progress_;
     coverage_->update(map_->occupancy(), update->frame.changed);
     t0 = Clock::now();
     finder_->update(map_->occupancy(), update->frame.changed, t_);
@@ -181,7 +182,7 @@ void ExplorationRun::layerStep() {
   in.trigger = !triggered_;
   triggered_ = true;
   in.failed.swap(failed_);
-  in.known_volume = static_cast<double>(map_->occupancy().knownCount()) * std::pow(map_->geometry().resolution(), 3);
+  in.map_progress = map_progress_;
   for (const frontier::Frontier& f : finder_->frontiers()) {
     in.all_frontiers.push_back(f.id);
     if (f.average.z() >= layer_out_.band.z_min && f.average.z() <= layer_out_.band.z_max)

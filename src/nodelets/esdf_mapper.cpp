@@ -21,7 +21,6 @@
 #include <tf2_ros/transform_listener.h>
 
 #include <chrono>
-#include <cmath>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -167,7 +166,6 @@ class EsdfMapper : public nodelet::Nodelet {
     update.sequence = sequence;
     update.changed_voxels = static_cast<std::uint32_t>(info->frame.changed_voxels);
     update.resolution = shared_->map->geometry().resolution();
-    update.known_volume = static_cast<double>(shared_->map->occupancy().knownCount()) * std::pow(update.resolution, 3);
     if (info->frame.any_change) {
       update.changed_min.x = info->changed_box.min.x();
       update.changed_min.y = info->changed_box.min.y();

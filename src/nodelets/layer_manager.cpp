@@ -15,7 +15,6 @@
 #include <visualization_msgs/Marker.h>
 #include <std_srvs/Trigger.h>
 
-#include <cmath>
 #include <mutex>
 #include <optional>
 
@@ -78,7 +77,7 @@ class LayerManager : public nodelet::Nodelet {
   }
   void onMapUpdate(const MapUpdate::ConstPtr& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (std::isfinite(msg->known_volume)) known_volume_ = msg->known_volume;
+    if (msg->changed_voxels > 0) ++progress_;
   }
   void onFailed(const std_msgs::UInt32::ConstPtr& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -112,7 +111,7 @@ class LayerManager : public nodelet::Nodelet {
     in.trigger = pending_trigger_;
     pending_trigger_ = false;
     in.failed.swap(failed_);
-    in.known_volume = known_volume_;
+    in.map_progress = progress_;
     const planning::Band band = current_band_;
     if (frontiers_) {
       for (const auto& f : frontiers_->frontiers) {
@@ -192,7 +191,7 @@ class LayerManager : public nodelet::Nodelet {
   planning::Band current_band_;
   FrontierArray::ConstPtr frontiers_;
   std::vector<std::uint32_t> failed_;
-  double known_volume_ = 0.0;  // m^3, from the latest map_update
+  std::uint64_t progress_ = 0;
   bool pending_trigger_ = false, published_ = false;
   std::optional<ros::Time> t_start_;
   std::optional<common::Vec3> last_position_;

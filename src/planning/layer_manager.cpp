@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
-#include <sstream>
 
 namespace go_feap::planning {
 
@@ -16,8 +15,6 @@ common::Status LayerManagerConfig::validate() const {
   if (max_retries < 1) return bad("max_retries", "must be >= 1");
   if (!(time_limit > 0.0)) return bad("time_limit", "must be > 0");
   if (!(stuck_timeout > 0.0)) return bad("stuck_timeout", "must be > 0");
-  if (!(stuck_min_volume >= 0.0) || !std::isfinite(stuck_min_volume))
-    return bad("stuck_min_volume", "must be finite and >= 0");
   return common::Status::Ok();
 }
 
@@ -108,7 +105,7 @@ LayerOutputs LayerManager::step(const LayerInputs& in, double t) {
     if (in.trigger) {
       t_trigger_ = t;
       progress_time_ = t;
-      progress_volume_ = in.known_volume;
+      last_progress_ = in.map_progress;
       position_ = 0;
       go(ExplorationState::kExplore, "triggered");
     }
@@ -117,20 +114,14 @@ LayerOutputs LayerManager::step(const LayerInputs& in, double t) {
   }
 
   if (state_ == ExplorationState::kExplore || state_ == ExplorationState::kFinalPass) {
-    // Progress: the known map grew by stuck_min_volume since the last progress (or the trigger). A map
-    // that shrank (cleared by its owner) starts the count again from its new size.
-    if (!(in.known_volume >= progress_volume_) ||
-        in.known_volume - progress_volume_ >= std::max(config_.stuck_min_volume, 1e-12)) {
-      progress_volume_ = in.known_volume;
+    if (in.map_progress != last_progress_) {
+      last_progress_ = in.map_progress;
       progress_time_ = t;
     }
     if (t - t_trigger_ >= config_.time_limit) {
       finish(FinishReason::kTimeLimit, "time limit reached");
     } else if (t - progress_time_ >= config_.stuck_timeout) {
-      std::ostringstream why;
-      why << "no map progress for " << config_.stuck_timeout << " s (the known map grew by less than "
-          << config_.stuck_min_volume << " m^3)";
-      finish(FinishReason::kStuck, why.str());
+      finish(FinishReason::kStuck, "no map progress for " + std::to_string(config_.stuck_timeout) + " s");
     }
   }
   // A band (or, in the final pass, the box) without usable frontiers for settle_time is

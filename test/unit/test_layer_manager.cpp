@@ -1,9 +1,6 @@
 // The exploration state machine: every transition, band order, blacklist bound, termination.
 #include <gtest/gtest.h>
 
-#include <cmath>
-#include <utility>
-
 #include "go_feap/planning/layer_manager.h"
 
 using namespace go_feap::planning;
@@ -24,11 +21,11 @@ LayerManagerConfig config() {
   return c;
 }
 
-LayerInputs frontiers(std::vector<std::uint32_t> band, std::vector<std::uint32_t> all, double known_volume) {
+LayerInputs frontiers(std::vector<std::uint32_t> band, std::vector<std::uint32_t> all, std::uint64_t progress) {
   LayerInputs in;
   in.band_frontiers = std::move(band);
   in.all_frontiers = std::move(all);
-  in.known_volume = known_volume;  // m^3
+  in.map_progress = progress;
   return in;
 }
 
@@ -123,7 +120,7 @@ TEST(LayerManager, UnreachableFrontiersAreBlacklistedAfterBoundedRetries) {
   fail.failed = {9};
   LayerOutputs out = m.step(fail, 1.0);
   EXPECT_FALSE(m.isBlacklisted(9));
-  fail.known_volume = 2.0;
+  fail.map_progress = 2;
   out = m.step(fail, 2.0);  // second failure: max_retries = 2
   EXPECT_TRUE(m.isBlacklisted(9));
   // Only the blacklisted frontier is left: the band and then the final pass finish.
@@ -161,47 +158,6 @@ TEST(LayerManager, TimeLimitAndStuckTerminate) {
   EXPECT_NE(out.transitions.back().why.find("no map progress"), std::string::npos);
 }
 
-// Progress is growth of the known map by stuck_min_volume: a trickle of voxels does not hold a run open.
-TEST(LayerManager, StuckNeedsTheMapToGrowByTheMinimumVolume) {
-  LayerManagerConfig c = config();
-  c.stuck_timeout = 5.0;
-  c.stuck_min_volume = 0.5;
-  auto run = [&](double growth_per_step, double min_volume) {
-    c.stuck_min_volume = min_volume;
-    LayerManager m(c, kBox, 0.5);
-    LayerInputs trig = frontiers({1}, {1}, 100.0);
-    trig.trigger = true;
-    m.step(trig, 0.0);
-    double volume = 100.0;
-    LayerOutputs out;
-    double t = 0.0;
-    while (t < 30.0 && out.state != ExplorationState::kFinished)
-      out = m.step(frontiers({1}, {1}, volume += growth_per_step), t += 0.5);
-    return std::make_pair(out.reason, t);
-  };
-  // 0.1 m^3 per 5 s: stuck when the timeout has passed since the trigger, not a step later.
-  auto [reason, t] = run(0.01, 0.5);
-  EXPECT_EQ(reason, FinishReason::kStuck);
-  EXPECT_DOUBLE_EQ(t, 5.0);
-  // The same trickle is progress when any growth counts.
-  EXPECT_EQ(run(0.01, 0.0).first, FinishReason::kNone);
-  // 1 m^3 per 5 s reaches 0.5 m^3 every 2.5 s: never stuck.
-  EXPECT_EQ(run(0.1, 0.5).first, FinishReason::kNone);
-  // Just below the minimum over the whole timeout (0.45 m^3 in 5 s): stuck.
-  EXPECT_EQ(run(0.045, 0.5).first, FinishReason::kStuck);
-
-  // A map cleared by its owner (smaller than before) starts the count again: no stuck at the drop.
-  c.stuck_min_volume = 0.5;
-  LayerManager m(c, kBox, 0.5);
-  LayerInputs trig = frontiers({1}, {1}, 100.0);
-  trig.trigger = true;
-  m.step(trig, 0.0);
-  EXPECT_EQ(m.step(frontiers({1}, {1}, 100.0), 4.5).state, ExplorationState::kExplore);
-  EXPECT_EQ(m.step(frontiers({1}, {1}, 1.0), 4.9).state, ExplorationState::kExplore);
-  EXPECT_EQ(m.step(frontiers({1}, {1}, 1.2), 9.5).state, ExplorationState::kExplore);
-  EXPECT_EQ(m.step(frontiers({1}, {1}, 1.2), 9.9).reason, FinishReason::kStuck);
-}
-
 TEST(LayerManager, ValidateNamesKeys) {
   LayerManagerConfig c = config();
   c.layer_height = 0.0;
@@ -209,13 +165,6 @@ TEST(LayerManager, ValidateNamesKeys) {
   c = config();
   c.max_retries = 0;
   EXPECT_NE(c.validate().message().find("max_retries"), std::string::npos);
-  for (double bad : {-0.1, std::nan(""), static_cast<double>(INFINITY)}) {
-    c = config();
-    c.stuck_min_volume = bad;
-    EXPECT_NE(c.validate().message().find("stuck_min_volume"), std::string::npos) << bad;
-  }
-  c.stuck_min_volume = 0.0;
-  EXPECT_TRUE(c.validate().ok());
   EXPECT_STREQ(toString(FinishReason::kStuck), "stuck");
   EXPECT_STREQ(toString(ExplorationState::kFinalPass), "FINAL_PASS");
 }

@@ -134,6 +134,7 @@ class ExplorationRun {
   double next_frame_ = 0.0, next_layer_ = 0.0, next_plan_ = 0.0, next_replan_ = 0.0, next_sample_ = 0.0;
   bool ended_ = false, triggered_ = false;
   planning::LayerOutputs layer_out_;
+  std::uint64_t map_progress_ = 0;
   std::vector<std::uint32_t> failed_;
 
   struct Target {

@@ -20,9 +20,6 @@ struct LayerManagerConfig {
   int max_retries = 3;            ///< failed attempts on a frontier before it is blacklisted
   double time_limit = 600.0;      ///< s after the trigger: FINISHED(time_limit)
   double stuck_timeout = 30.0;    ///< s without map progress while frontiers remain: FINISHED(stuck)
-  /// m^3 the known map must grow by for that to count as progress: a vehicle flying back and forth
-  /// while a few voxels at a time come into view is stuck all the same
-  double stuck_min_volume = 0.5;
   common::Status validate() const;
 };
 
@@ -45,7 +42,7 @@ struct LayerInputs {
   std::vector<std::uint32_t> band_frontiers;  ///< ids of frontiers in the current band
   std::vector<std::uint32_t> all_frontiers;   ///< ids of every frontier in the box
   std::vector<std::uint32_t> failed;       ///< frontiers the planners failed to reach since the last step
-  double known_volume = 0.0;               ///< m^3 of the map known (free or occupied) now
+  std::uint64_t map_progress = 0;          ///< any counter that grows while the map grows (e.g. frames that changed it)
 };
 
 struct Transition {
@@ -89,7 +86,7 @@ class LayerManager {
   FinishReason reason_ = FinishReason::kNone;
   double t_trigger_ = 0.0;
   double empty_since_ = -1.0;  ///< when the current band (or box) last became free of usable frontiers
-  double progress_volume_ = 0.0;  ///< m^3 known at the last progress
+  std::uint64_t last_progress_ = 0;
   double progress_time_ = 0.0;
   std::map<std::uint32_t, int> failures_;
   std::set<std::uint32_t> blacklist_;
