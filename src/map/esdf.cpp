@@ -269,8 +269,8 @@ bool Esdf::isObstacle(const Index3& idx) const {
 }
 
 double Esdf::distanceOfKey(int key) const {
-  if (key < 0) return config_.max_distance;
-  return key <= max_key_ ? metres_of_key_[key] : geometry_.resolution() * std::sqrt(static_cast<double>(key));
+  // Stored keys never exceed max_key_: lower() does not store a farther site.
+  return key < 0 ? config_.max_distance : metres_of_key_[static_cast<std::size_t>(key)];
 }
 
 double Esdf::distance(const Index3& idx) const {

@@ -20,7 +20,10 @@ FrontierSummary summarize(const frontier::Frontier& frontier, double now) {
 
 PathDistance TourPlanner::search(const Vec3& a, const Vec3& b, double now) {
   const double cell = config_.reuse_cell;
-  if (!(cell > 0.0)) return ++searches_, pathDistance(astar_, a, b);
+  if (!(cell > 0.0)) {
+    ++searches_;
+    return pathDistance(astar_, a, b);
+  }
   CellPair key;
   for (int i = 0; i < 3; ++i) {
     key[i] = static_cast<std::int64_t>(std::floor(a[i] / cell));
