@@ -284,6 +284,7 @@ void ExplorationRun::trajectoryStep() {
   if (trajectory_) {
     const trajectory::TrajectorySample s = trajectory::sampleTrajectory(*trajectory_, t_ - trajectory_start_);
     request.start = s.position, request.velocity = s.velocity, request.yaw = s.yaw;
+    request.acceleration = s.acceleration;
   } else {
     request.start = hold_position_, request.yaw = hold_yaw_;
   }

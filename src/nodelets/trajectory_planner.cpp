@@ -148,21 +148,24 @@ class TrajectoryPlanner : public nodelet::Nodelet {
   }
 
   // Start state: the commanded state when recent (continuity of the reference), else odometry.
-  void startState(const ros::Time& now, common::Vec3& p, common::Vec3& v, double& yaw) const {
+  void startState(const ros::Time& now, trajectory::PlanRequest& request) const {
     if (command_ && (now - command_->header.stamp).toSec() < 0.1) {
-      p = common::Vec3(command_->position.x, command_->position.y, command_->position.z);
-      v = common::Vec3(command_->velocity.x, command_->velocity.y, command_->velocity.z);
-      yaw = command_->yaw;
+      request.start = common::Vec3(command_->position.x, command_->position.y, command_->position.z);
+      request.velocity = common::Vec3(command_->velocity.x, command_->velocity.y, command_->velocity.z);
+      request.acceleration =
+          common::Vec3(command_->acceleration.x, command_->acceleration.y, command_->acceleration.z);
+      request.yaw = command_->yaw;
     } else {
-      p = *odom_position_;
-      v.setZero();
-      yaw = odom_yaw_;
+      request.start = *odom_position_;
+      request.velocity.setZero();
+      request.acceleration.setZero();
+      request.yaw = odom_yaw_;
     }
   }
 
   void plan(const ros::Time& now, trajectory::ReplanReason reason) {
     trajectory::PlanRequest request;
-    startState(now, request.start, request.velocity, request.yaw);
+    startState(now, request);
     request.target = *target_;
     request.target_yaw = target_yaw_;
     request.time = now.toSec();

@@ -182,6 +182,28 @@ UniformBspline UniformBspline::fitPath(const std::vector<Vec3>& points, double d
   return fitPath(m, dt, start_vel, end_vel, 3, start_acc, end_acc);
 }
 
+UniformBspline UniformBspline::fromTimedSamples(const std::vector<Vec3>& points, double dt, const Vec3& start_vel,
+                                                const Vec3& start_acc) {
+  if (points.size() < 3) throw std::invalid_argument("UniformBspline::fromTimedSamples: needs at least 3 points");
+  if (!(dt > 0.0 && std::isfinite(dt)) || !start_vel.allFinite() || !start_acc.allFinite())
+    throw std::invalid_argument("UniformBspline::fromTimedSamples: dt must be finite and > 0, the start state finite");
+  for (const Vec3& p : points)
+    if (!p.allFinite()) throw std::invalid_argument("UniformBspline::fromTimedSamples: points must be finite");
+  // A cubic's state at the start of its first span: p = (q0 + 4 q1 + q2) / 6, v = (q2 - q0) / (2 dt),
+  // a = (q0 - 2 q1 + q2) / dt^2. Solved for the start state, then q_{k+1} = points[k] from k = 2 on, and
+  // the last point twice more: the last span ends there at rest.
+  const auto n = static_cast<Eigen::Index>(points.size());
+  Eigen::MatrixXd q(3, n + 3);
+  const Vec3 q1 = points[0] - start_acc * (dt * dt / 6.0);
+  q.col(0) = q1 - start_vel * dt + start_acc * (0.5 * dt * dt);
+  q.col(1) = q1;
+  q.col(2) = q1 + start_vel * dt + start_acc * (0.5 * dt * dt);
+  for (Eigen::Index k = 2; k < n; ++k) q.col(k + 1) = points[static_cast<std::size_t>(k)];
+  q.col(n + 1) = points.back();
+  q.col(n + 2) = points.back();
+  return UniformBspline(std::move(q), 3, dt);
+}
+
 std::vector<Vec3> UniformBspline::resamplePolyline(const std::vector<Vec3>& path, double spacing) {
   if (!(spacing > 0.0 && std::isfinite(spacing)))
     throw std::invalid_argument("UniformBspline::resamplePolyline: spacing must be finite and > 0");

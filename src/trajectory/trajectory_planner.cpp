@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace go_feap::trajectory {
 
@@ -52,6 +53,17 @@ common::Status TrajectoryPlannerConfig::validate() const {
   if (!std::isfinite(look_tolerance) || look_tolerance < 0.0 || look_tolerance > M_PI)
     return common::Status::Error("planner: look_tolerance must be in [0, pi]");
   if (max_scouts < 0) return common::Status::Error("planner: max_scouts must be >= 0");
+  if (fine_spans < 0 || fine_spans > 1000) return common::Status::Error("planner: fine_spans must be in [0, 1000]");
+  if (!std::isfinite(profile_acceleration) || profile_acceleration < 0.0 || profile_acceleration >= 1.0)
+    return common::Status::Error("planner: profile_acceleration must be in [0, 1) (a share of a_max)");
+  if (!positive(profile_knot_span) || profile_knot_span > 1.0)
+    return common::Status::Error("planner: profile_knot_span must be in (0, 1] s");
+  if (!std::isfinite(profile_ramp) || profile_ramp < 0.0 || profile_ramp > 2.0)
+    return common::Status::Error("planner: profile_ramp must be in [0, 2] s");
+  if (!std::isfinite(profile_corner_cut) || profile_corner_cut < 0.0)
+    return common::Status::Error("planner: profile_corner_cut must be finite and >= 0");
+  if (!std::isfinite(profile_max_cross_speed) || profile_max_cross_speed < 0.0)
+    return common::Status::Error("planner: profile_max_cross_speed must be finite and >= 0");
   return common::Status::Ok();
 }
 
@@ -97,6 +109,85 @@ std::optional<SearchMemory::Failure> SearchMemory::recall(const Vec3& start, con
     if ((e.start - start).norm() <= config.snap_radius && (e.goal - goal).norm() <= config.goal_tolerance)
       return e.failure;
   return std::nullopt;
+}
+
+std::vector<Vec3> profileSamples(const std::vector<Vec3>& path, double v_start, double a_start,
+                                 const SpeedProfile& profile, double* knot_span) {
+  auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
+  if (!positive(profile.cruise) || !positive(profile.acceleration) || !positive(profile.knot_span) ||
+      !(std::isfinite(profile.ramp) && profile.ramp >= 0.0) ||
+      !(std::isfinite(profile.corner_cut) && profile.corner_cut >= 0.0) || !std::isfinite(v_start) ||
+      !std::isfinite(a_start))
+    throw std::invalid_argument("profileSamples: cruise, acceleration and knot_span must be finite and > 0, ramp "
+                                "and corner_cut finite and >= 0, v_start and a_start finite");
+  if (path.size() < 2) return {};
+  std::vector<double> s(path.size(), 0.0);
+  for (std::size_t i = 1; i < path.size(); ++i) s[i] = s[i - 1] + (path[i] - path[i - 1]).norm();
+  const double length = s.back();
+  const double acc = profile.acceleration;
+  const double a0 = std::clamp(a_start, -acc, acc);
+  // The profile is integrated in steps of h and its arc length averaged over the last m steps (the
+  // ramp). Before t = 0 it is extended as a flight at constant acceleration a0, with the speed v0 that
+  // makes the average leave at v_start: the averaged curve then starts with v_start and about a0, and
+  // the averaging moves it back by `shift`, which the raw profile leaves out of its length.
+  constexpr double h = 0.002;
+  const int m = std::max(1, static_cast<int>(std::lround(profile.ramp / h)));
+  const double v0 = std::clamp(v_start + 0.5 * a0 * m * h, 0.0, profile.cruise);
+  auto before = [&](int j) { return v0 * j * h + 0.5 * a0 * (j * h) * (j * h); };  // j < 0
+  double shift = 0.0;
+  for (int q = -m; q < 0; ++q) shift -= before(q) / m;
+  const double raw = length - shift;
+  if (raw < 0.05) return {};
+  // Corner speeds: a circular turn by theta at `acc` whose apex stays within corner_cut of the vertex.
+  std::vector<std::pair<double, double>> corners;  // (raw arc length, speed)
+  for (std::size_t i = 1; i + 1 < path.size(); ++i) {
+    const Vec3 in = path[i] - path[i - 1], out = path[i + 1] - path[i];
+    if (in.norm() < 1e-9 || out.norm() < 1e-9) continue;
+    const double half = 0.5 * std::acos(std::clamp(in.dot(out) / (in.norm() * out.norm()), -1.0, 1.0));
+    const double excess = 1.0 / std::cos(std::min(half, 1.5)) - 1.0;  // apex cut per metre of radius
+    if (excess > 1e-9) corners.push_back({s[i] - shift, std::sqrt(acc * profile.corner_cut / excess)});
+  }
+  auto speed = [&](double x) {
+    double v = std::min({profile.cruise, std::sqrt(v0 * v0 + 2.0 * acc * x), std::sqrt(2.0 * acc * std::max(0.0, raw - x))});
+    for (const auto& [at, vc] : corners) v = std::min(v, std::sqrt(vc * vc + 2.0 * acc * std::abs(x - at)));
+    return v;
+  };
+  // Arc length at t = j h (midpoint steps; the speed's floor only ends the last, braking step).
+  std::vector<double> xs{0.0};
+  for (double x = 0.0; x < raw - 1e-9;) {
+    const double v = std::max(speed(x + 0.5 * h * speed(x)), 0.5 * acc * h);
+    x = std::min(raw, x + h * v);
+    xs.push_back(x);
+  }
+  const int n = static_cast<int>(xs.size());
+  auto extended = [&](int j) { return j < 0 ? before(j) : j < n ? xs[j] : raw; };
+  const int steps = n - 1 + m;
+  std::vector<double> averaged(steps + 1);
+  double sum = 0.0;
+  for (int q = -m; q < 0; ++q) sum += extended(q);
+  for (int j = 0; j <= steps; ++j) {
+    averaged[j] = std::clamp(sum / m + shift, 0.0, length);
+    sum += extended(j) - extended(j - m);
+  }
+  const double duration = steps * h;
+  const int spans = std::max(6, static_cast<int>(std::ceil(duration / profile.knot_span - 1e-9)));
+  if (knot_span) *knot_span = duration / spans;
+  std::vector<Vec3> out;
+  out.reserve(spans + 1);
+  std::size_t seg = 1;
+  for (int i = 0; i <= spans; ++i) {
+    const double at = static_cast<double>(steps) * i / spans;
+    const int j0 = std::min(steps, static_cast<int>(at));
+    const int j1 = std::min(steps, j0 + 1);
+    const double x = averaged[j0] + (at - j0) * (averaged[j1] - averaged[j0]);
+    while (seg + 1 < path.size() && s[seg] < x) ++seg;
+    const double seg_len = s[seg] - s[seg - 1];
+    const double f = seg_len > 0.0 ? std::clamp((x - s[seg - 1]) / seg_len, 0.0, 1.0) : 1.0;
+    out.push_back(path[seg - 1] + f * (path[seg] - path[seg - 1]));
+  }
+  out.front() = path.front();
+  out.back() = path.back();
+  return out;
 }
 
 common::Result<Trajectory> planTrajectory(const PlanRequest& request, const planning::Astar& astar,
@@ -205,18 +296,71 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
   const double total = std::max({length / (config.cruise_fraction * optimizer.v_max),
                                  2.5 * std::sqrt(length / optimizer.a_max), v0 / optimizer.a_max + 0.5});
   double duration = total;
+  // The reference's acceleration is kept as well (within the limits the optimiser aims at).
+  const double a_limit = optimizer.feasibility_margin * optimizer.a_max;
+  Vec3 start_acc = request.acceleration.allFinite() ? request.acceleration : Vec3::Zero();
+  if (start_acc.norm() > a_limit) start_acc *= a_limit / start_acc.norm();
   common::Result<UniformBspline> spline = common::Result<UniformBspline>::Error("not planned");
   // The optimiser checks min_clearance along the curve; a voxel's centre may be half a diagonal farther.
   const double voxel_clearance = optimizer.min_clearance - 0.5 * std::sqrt(3.0) * astar.geometry().resolution();
+  auto flyable = [&](const UniformBspline& candidate) {
+    return checkTrajectory(candidate, esdf, optimizer).ok() &&
+           staysFlyable(candidate, astar, voxel_clearance, config.snap_radius);
+  };
+  // The timed fit: the quickest flight along the path (within the profile), flown as it is if flyable.
+  const Vec3 first_leg = (points[1] - points[0]).normalized();
+  const double v_along = request.velocity.dot(first_leg);
+  const Vec3 v_cross = request.velocity - v_along * first_leg;
+  if (config.profile_acceleration > 0.0 && v_along >= 0.0 && v_cross.norm() <= config.profile_max_cross_speed) {
+    SpeedProfile profile;
+    profile.cruise = optimizer.feasibility_margin * optimizer.v_max;
+    profile.acceleration = config.profile_acceleration * optimizer.a_max;
+    profile.ramp = config.profile_ramp;
+    profile.corner_cut = config.profile_corner_cut;
+    profile.knot_span = config.profile_knot_span;
+    double dt = 0.0;
+    std::vector<Vec3> samples = profileSamples(points, v_along, start_acc.dot(first_leg), profile, &dt);
+    if (!samples.empty()) {
+      // The start velocity's part across the path decays on the way: an offset v_cross g(t), g(t) =
+      // t (1 - t / Te)^2 (g'(0) = 1, g(Te) = g'(Te) = 0, |g''| <= 4 / Te) with the acceleration the
+      // profile leaves: Te = 4 |v_cross| / a_cross.
+      const double a_cross = std::sqrt(std::max(0.0, a_limit * a_limit - profile.acceleration * profile.acceleration));
+      const double Te = a_cross > 0.0 ? 4.0 * v_cross.norm() / a_cross : 0.0;
+      // Likewise the reference's acceleration across the path (the profile starts with the part along it)
+      // fades out over Ta: a t^2 / 2 (1 - t / Ta)^3 has acceleration a at 0 and nothing left (nor speed) at
+      // Ta; along the path it also corrects what the profile's start is off by.
+      const double Ta = std::max(2.0 * profile.ramp, 4.0 * profile.knot_span);
+      const Vec3 a_fix = start_acc - (samples[2] - 2.0 * samples[1] + samples[0]).dot(first_leg) / (dt * dt) * first_leg;
+      for (std::size_t i = 0; i < samples.size(); ++i) {
+        const double t = dt * static_cast<double>(i);
+        if (t < Te) samples[i] += v_cross * (t * (1.0 - t / Te) * (1.0 - t / Te));
+        if (t < Ta) samples[i] += a_fix * (0.5 * t * t * std::pow(1.0 - t / Ta, 3));
+      }
+      UniformBspline fit = UniformBspline::fromTimedSamples(samples, dt, request.velocity, start_acc);
+      if (flyable(fit)) {
+        spline = std::move(fit);
+        rep.profiled = true;
+      }
+    }
+  }
+  // A finer optimisation beside the usual one (short paths only: long ones have their spans already).
+  std::optional<UniformBspline> fine;
+  if (!spline && config.fine_spans > 0 && length / config.fine_spans < spacing - 1e-9) {
+    const auto samples = UniformBspline::resamplePolyline(points, length / config.fine_spans);
+    const double dt = duration / static_cast<double>(samples.size() - 1);
+    auto optimum = optimize(UniformBspline::fitPath(samples, dt, request.velocity, Vec3::Zero(), start_acc), esdf,
+                            optimizer);
+    if (optimum && staysFlyable(*optimum, astar, voxel_clearance, config.snap_radius)) fine = std::move(optimum).value();
+  }
   // Optimise; when the result breaks a limit or a clearance, refit slower and closer to the path (half
   // the sample spacing, down to half a voxel: the fit then hugs the searched path, which keeps
   // astar.clearance) and try again; the start velocity is kept, so the reference stays continuous. A
   // refit that passes the same checks as an optimised spline is accepted as it is.
-  for (int attempt = 0; attempt <= config.max_refits; ++attempt) {
+  for (int attempt = 0; !rep.profiled && attempt <= config.max_refits; ++attempt) {
     rep.refits = attempt;
     const auto samples = UniformBspline::resamplePolyline(points, spacing);
     const double dt = duration / static_cast<double>(std::max<std::size_t>(1, samples.size() - 1));
-    const UniformBspline init = UniformBspline::fitPath(samples, dt, request.velocity, Vec3::Zero());
+    const UniformBspline init = UniformBspline::fitPath(samples, dt, request.velocity, Vec3::Zero(), start_acc);
     spline = optimize(init, esdf, optimizer);
     // The optimum must also stay where the path search may go: the ESDF knows only mapped obstacles,
     // and a smoothed corner can cut through space nobody has seen (or over the box's clearance).
@@ -242,6 +386,12 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
     if (duration >= total * config.max_slowdown) break;
     duration = std::min(duration * std::min(f, 4.0), total * config.max_slowdown);
     spacing = std::max(0.5 * astar.geometry().resolution(), 0.5 * spacing);
+  }
+  if (fine && (!spline || fine->duration() < spline->duration())) {
+    spline = std::move(*fine);
+    rep.fine = true;
+    rep.refits = 0;
+    rep.used_fit = false;
   }
   if (!spline) return R::Error("optimisation failed: " + spline.message());
   rep.unseen_at.reset();

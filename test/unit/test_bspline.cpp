@@ -183,6 +183,59 @@ TEST(Bspline, FitPathWithAccelerationsKeepsEndStatesExactly) {
   EXPECT_LT(s.evaluate(s.duration(), 1).norm() + s.evaluate(s.duration(), 2).norm(), 1e-8);
 }
 
+// Timed samples as control points: exact start state and rest at the end, within a dt^2 / 6 of each
+// sample (sample k at k dt), and speed and acceleration, sampled densely, never above the samples' own
+// first and second differences (or the start's). The samples: a random walk of bounded steps, so their
+// acceleration changes at every knot (an interpolating fit rings there).
+TEST(Bspline, FromTimedSamplesKeepsTheSamplesSpeedAndAcceleration) {
+  Rng rng(11);
+  for (int trial = 0; trial < 30; ++trial) {
+    const double dt = rng(0.02, 0.2);
+    const int n = 3 + trial;
+    std::vector<Vec3> points{Vec3(rng(-2, 2), rng(-2, 2), rng(0, 2))};
+    Vec3 v(rng(-1, 1), rng(-1, 1), rng(-1, 1));
+    for (int i = 1; i < n; ++i) {
+      v += dt * Vec3(rng(-2, 2), rng(-2, 2), rng(-2, 2));
+      points.push_back(points.back() + dt * v);
+    }
+    const Vec3 v0(rng(-1, 1), rng(-1, 1), rng(-1, 1)), a0(rng(-2, 2), rng(-2, 2), rng(-2, 2));
+    const UniformBspline s = UniformBspline::fromTimedSamples(points, dt, v0, a0);
+    EXPECT_NEAR(s.duration(), n * dt, 1e-12);
+    EXPECT_LT((s.position(0.0) - points.front()).norm(), 1e-12);
+    EXPECT_LT((Vec3(s.evaluate(0.0, 1)) - v0).norm(), 1e-9);
+    EXPECT_LT((Vec3(s.evaluate(0.0, 2)) - a0).norm(), 1e-9);
+    EXPECT_LT((s.position(s.duration()) - points.back()).norm(), 1e-12);
+    EXPECT_LT(s.evaluate(s.duration(), 1).norm() + s.evaluate(s.duration(), 2).norm(), 1e-9);
+    // Bounds from the control polygon the start state and the samples make.
+    const Vec3 q1 = points[0] - a0 * dt * dt / 6.0;
+    std::vector<Vec3> q{q1 - v0 * dt + a0 * dt * dt / 2.0, q1, q1 + v0 * dt + a0 * dt * dt / 2.0};
+    for (int i = 2; i < n; ++i) q.push_back(points[i]);
+    q.push_back(points.back());
+    q.push_back(points.back());
+    double v_bound = 0.0, a_bound = 0.0, sd_max = 0.0;
+    for (std::size_t i = 0; i + 1 < q.size(); ++i) v_bound = std::max(v_bound, (q[i + 1] - q[i]).norm() / dt);
+    for (std::size_t i = 1; i + 1 < q.size(); ++i)
+      a_bound = std::max(a_bound, (q[i + 1] - 2.0 * q[i] + q[i - 1]).norm() / (dt * dt));
+    for (int i = 2; i + 1 < n; ++i)
+      sd_max = std::max(sd_max, (points[i + 1] - 2.0 * points[i] + points[i - 1]).norm() / (dt * dt));
+    for (int k = 0; k <= 2000; ++k) {
+      const double t = s.duration() * k / 2000.0;
+      EXPECT_LE(s.evaluate(t, 1).norm(), v_bound + 1e-9);
+      EXPECT_LE(s.evaluate(t, 2).norm(), a_bound + 1e-9);
+    }
+    for (int i = 3; i + 2 < n; ++i)
+      EXPECT_LE((s.position(i * dt) - points[i]).norm(), sd_max * dt * dt / 6.0 + 1e-12) << "sample " << i;
+  }
+  EXPECT_THROW(UniformBspline::fromTimedSamples({Vec3::Zero(), Vec3::Ones()}, 0.1, Vec3::Zero(), Vec3::Zero()),
+               std::invalid_argument);
+  EXPECT_THROW(UniformBspline::fromTimedSamples({Vec3::Zero(), Vec3::Ones(), Vec3::Ones()}, 0.0, Vec3::Zero(),
+                                                Vec3::Zero()),
+               std::invalid_argument);
+  EXPECT_THROW(UniformBspline::fromTimedSamples({Vec3::Zero(), Vec3::Ones(), Vec3::Constant(std::nan(""))}, 0.1,
+                                                Vec3::Zero(), Vec3::Zero()),
+               std::invalid_argument);
+}
+
 TEST(Bspline, SetKnotSpanScalesTime) {
   Rng rng(5);
   UniformBspline s(randomPoints(rng, 3, 10, 2.0), 3, 0.2);

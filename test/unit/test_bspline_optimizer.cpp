@@ -97,6 +97,12 @@ class World {
         }
     centre_boxes_.push_back({geo().indexToCoord(lo), geo().indexToCoord(hi)});
   }
+  /// Occupies the bottom and top layers of voxels (a room without walls).
+  void addFloorAndCeiling() {
+    const Index3 dims = geo().dims();
+    addBox(Index3(0, 0, 0), Index3(dims.x() - 1, dims.y() - 1, 0));
+    addBox(Index3(0, 0, dims.z() - 1), Index3(dims.x() - 1, dims.y() - 1, dims.z() - 1));
+  }
   void setUnknown(const Index3& idx) { occupancy_.setState(idx, VoxelState::kUnknown); }
   /// Marks the voxels of an inclusive box free (mapped empty space).
   void setFree(const Index3& lo, const Index3& hi) {
@@ -128,8 +134,7 @@ class World {
 // 8 x 8 x 3 m with floor, ceiling, pillars and floating boxes.
 void fillRandomField(World& world, Rng& rng) {
   const Index3 dims = world.geo().dims();
-  world.addBox(Index3(0, 0, 0), Index3(dims.x() - 1, dims.y() - 1, 0));
-  world.addBox(Index3(0, 0, dims.z() - 1), Index3(dims.x() - 1, dims.y() - 1, dims.z() - 1));
+  world.addFloorAndCeiling();
   const int pillars = rng.integer(4, 9);
   for (int i = 0; i < pillars; ++i) {
     const Index3 lo(rng.integer(5, dims.x() - 10), rng.integer(5, dims.y() - 10), 0);
@@ -517,9 +522,7 @@ TEST(SafeStop, BrakesToRestWithinTheStoppingDistance) {
 // keeps v_max and a_max (finite differences of positions, 5 % slack).
 TEST(TrajectoryPlanner, HopsOfEveryLengthReachTheTargetWithinTheLimits) {
   World world(Vec3(8, 8, 3));
-  const Index3 dims = world.geo().dims();
-  world.addBox(Index3(0, 0, 0), Index3(dims.x() - 1, dims.y() - 1, 0));
-  world.addBox(Index3(0, 0, dims.z() - 1), Index3(dims.x() - 1, dims.y() - 1, dims.z() - 1));
+  world.addFloorAndCeiling();
   world.sync();
   AstarConfig astar_config;
   astar_config.unknown_is_free = true;  // the room is unmapped apart from floor and ceiling
@@ -559,15 +562,204 @@ TEST(TrajectoryPlanner, HopsOfEveryLengthReachTheTargetWithinTheLimits) {
   EXPECT_EQ(plans, 60);
 }
 
+// Arc length of the trapezoidal speed profile from rest (accelerate at a, cruise at v, brake at a to rest at
+// length L) at time t, in closed form: the oracle for profileSamples().
+double trapezoidArc(double t, double L, double v, double a) {
+  double peak = std::min(v, std::sqrt(a * L));  // a triangle when L is too short to reach v
+  const double t_acc = peak / a, d_acc = 0.5 * peak * t_acc;
+  const double t_cruise = (L - 2.0 * d_acc) / peak, T = 2.0 * t_acc + t_cruise;
+  if (t <= 0.0) return 0.0;
+  if (t < t_acc) return 0.5 * a * t * t;
+  if (t < t_acc + t_cruise) return d_acc + peak * (t - t_acc);
+  if (t < T) return L - 0.5 * a * (T - t) * (T - t);
+  return L;
+}
+
+// From rest along a straight line, the samples follow the trapezoidal profile averaged over the ramp
+// (x(t) = mean of the trapezoid's arc length over [t - ramp, t], computed here by quadrature of the closed
+// form), so the flight takes the trapezoid's time plus the ramp; speeds and accelerations of the samples
+// stay within cruise and acceleration. Short (triangular) and long (cruising) hops alike.
+TEST(ProfileSamples, FollowTheAveragedTrapezoidOnAStraightLine) {
+  traj::SpeedProfile profile;
+  profile.cruise = 1.9;
+  profile.acceleration = 1.8;
+  profile.ramp = 0.1;
+  profile.knot_span = 0.05;
+  for (double L : {0.4, 1.5, 5.0}) {
+    const Vec3 a(1, 2, 1.5), dir = Vec3(2, -1, 0.5).normalized();
+    double dt = 0.0;
+    const std::vector<Vec3> samples = traj::profileSamples({a, a + 0.5 * L * dir, a + L * dir}, 0.0, 0.0, profile, &dt);
+    ASSERT_GE(samples.size(), 7u) << L;
+    const double peak = std::min(profile.cruise, std::sqrt(profile.acceleration * L));
+    const double T_trap = 2.0 * peak / profile.acceleration + (L - peak * peak / profile.acceleration) / peak;
+    EXPECT_NEAR(dt * (samples.size() - 1), T_trap + profile.ramp, 0.01) << L;
+    EXPECT_LT((samples.front() - a).norm(), 1e-12);
+    EXPECT_LT((samples.back() - (a + L * dir)).norm(), 1e-12);
+    for (std::size_t i = 0; i < samples.size(); ++i) {
+      const double t = dt * i;
+      double mean = 0.0;
+      constexpr int kQuad = 400;
+      for (int q = 0; q < kQuad; ++q)
+        mean += trapezoidArc(t - profile.ramp * (q + 0.5) / kQuad, L, profile.cruise, profile.acceleration);
+      mean /= kQuad;
+      EXPECT_NEAR((samples[i] - a).dot(dir), mean, 3e-3) << "L " << L << " sample " << i;
+      EXPECT_LT((samples[i] - a - (samples[i] - a).dot(dir) * dir).norm(), 1e-9);  // on the line
+      if (i + 1 < samples.size()) {
+        EXPECT_LE((samples[i + 1] - samples[i]).norm() / dt, profile.cruise + 1e-3);
+      }
+      if (i + 2 < samples.size()) {
+        EXPECT_LE((samples[i + 2] - 2.0 * samples[i + 1] + samples[i]).norm() / (dt * dt), profile.acceleration + 0.02);
+      }
+    }
+  }
+}
+
+// Starting at speed: the samples leave at that speed, with no jump in acceleration (it ramps up from zero),
+// and still end at the path's end at rest; a corner is rounded no faster than its corner speed
+// sqrt(a cut / (1 / cos(theta / 2) - 1)); too short a path for the start speed, fewer than two points and a
+// bad profile are refused.
+TEST(ProfileSamples, StartAtSpeedSlowForCornersAndRefuseWhatTheyCannotTime) {
+  traj::SpeedProfile profile;
+  profile.cruise = 1.9;
+  profile.acceleration = 1.8;
+  profile.ramp = 0.1;
+  profile.knot_span = 0.02;
+  double dt = 0.0;
+  const std::vector<Vec3> line = traj::profileSamples({Vec3(0, 0, 1), Vec3(3, 0, 1)}, 1.0, 0.0, profile, &dt);
+  ASSERT_GE(line.size(), 7u);
+  EXPECT_NEAR((line[1] - line[0]).x() / dt, 1.0, 0.02);
+  EXPECT_NEAR((line[2] - 2.0 * line[1] + line[0]).x() / (dt * dt), 0.0, 0.5 * profile.acceleration);
+  const std::size_t n = line.size();
+  EXPECT_NEAR((line[n - 1] - line[n - 2]).norm() / dt, 0.0, 0.01);
+  EXPECT_LT((line.back() - Vec3(3, 0, 1)).norm(), 1e-12);
+  // Speeding up already: the samples leave with that acceleration too.
+  const std::vector<Vec3> pushing = traj::profileSamples({Vec3(0, 0, 1), Vec3(3, 0, 1)}, 1.0, 1.2, profile, &dt);
+  ASSERT_GE(pushing.size(), 7u);
+  EXPECT_NEAR((pushing[1] - pushing[0]).x() / dt, 1.0 + 0.5 * 1.2 * dt, 0.02);
+  EXPECT_NEAR((pushing[2] - 2.0 * pushing[1] + pushing[0]).x() / (dt * dt), 1.2, 0.2 * profile.acceleration);
+  EXPECT_LT((pushing.back() - Vec3(3, 0, 1)).norm(), 1e-12);
+
+  // A right angle at (2, 0): its corner speed with a 0.1 m cut.
+  profile.corner_cut = 0.1;
+  const std::vector<Vec3> bend = traj::profileSamples({Vec3(0, 0, 1), Vec3(2, 0, 1), Vec3(2, 2, 1)}, 0.0, 0.0, profile, &dt);
+  ASSERT_GE(bend.size(), 7u);
+  const double corner_speed = std::sqrt(profile.acceleration * profile.corner_cut / (1.0 / std::cos(kPi / 4) - 1.0));
+  double slowest_near_corner = 1e9;
+  for (std::size_t i = 0; i + 1 < bend.size(); ++i)
+    if ((bend[i] - Vec3(2, 0, 1)).norm() < 0.05)
+      slowest_near_corner = std::min(slowest_near_corner, (bend[i + 1] - bend[i]).norm() / dt);
+  EXPECT_LE(slowest_near_corner, corner_speed + 0.05);
+  EXPECT_GT(slowest_near_corner, 0.5 * corner_speed);  // slowed for the corner, not stopped
+
+  EXPECT_TRUE(traj::profileSamples({Vec3(0, 0, 1), Vec3(0.06, 0, 1)}, 1.9, 0.0, profile, &dt).empty());
+  EXPECT_TRUE(traj::profileSamples({Vec3(0, 0, 1)}, 0.0, 0.0, profile, &dt).empty());
+  traj::SpeedProfile bad = profile;
+  bad.acceleration = 0.0;
+  EXPECT_THROW(traj::profileSamples({Vec3(0, 0, 1), Vec3(3, 0, 1)}, 0.0, 0.0, bad, &dt), std::invalid_argument);
+  bad = profile;
+  bad.ramp = -0.1;
+  EXPECT_THROW(traj::profileSamples({Vec3(0, 0, 1), Vec3(3, 0, 1)}, 0.0, 0.0, bad, &dt), std::invalid_argument);
+  EXPECT_THROW(traj::profileSamples({Vec3(0, 0, 1), Vec3(3, 0, 1)}, std::nan(""), 0.0, profile, &dt), std::invalid_argument);
+  EXPECT_THROW(traj::profileSamples({Vec3(0, 0, 1), Vec3(3, 0, 1)}, 0.0, std::nan(""), profile, &dt), std::invalid_argument);
+}
+
+// Hops from rest in an empty room take little more than the quickest flight the limits allow (the
+// bang-bang oracle: accelerate at a_max, cruise at v_max, brake at a_max): the timed fit is flown, within
+// the limits (finite differences). Without it (profile_acceleration 0) the optimised spline is slower, and
+// the finer second optimisation (fine_spans) makes most short hops quicker than the 6-span one alone
+// (and none slower: the quicker one is kept).
+TEST(TrajectoryPlanner, HopsFromRestTakeCloseToTheQuickestFlight) {
+  World world(Vec3(12, 12, 3));
+  world.addFloorAndCeiling();
+  world.sync();
+  AstarConfig astar_config;
+  astar_config.unknown_is_free = true;
+  const Astar astar(world.occupancy(), world.esdf(), astar_config);
+  OptimizerConfig optimizer = optimizerConfig();
+  optimizer.lambda_feasibility = 10.0;  // the weights of config/trajectory.yaml
+  optimizer.lambda_time = 5.0;
+  traj::TrajectoryPlannerConfig planner;
+  traj::TrajectoryPlannerConfig optimised = planner;
+  optimised.profile_acceleration = 0.0;
+  traj::TrajectoryPlannerConfig coarse = optimised;
+  coarse.fine_spans = 0;
+  int fine_wins = 0;
+  for (double L : {1.0, 1.5, 3.0, 5.0}) {
+    for (double angle : {0.0, 0.7, 2.0}) {
+      traj::PlanRequest request;
+      request.start = Vec3(6.05, 6.05, 1.55);
+      request.target = request.start + L * Vec3(std::cos(angle), std::sin(angle), 0.0);
+      const double peak = std::min(optimizer.v_max, std::sqrt(optimizer.a_max * L));
+      const double quickest = 2.0 * peak / optimizer.a_max + (L - peak * peak / optimizer.a_max) / peak;
+      traj::PlanReport report;
+      const auto timed = traj::planTrajectory(request, astar, world.esdf(), optimizer, planner, &report);
+      ASSERT_TRUE(timed) << L << " " << angle << ": " << timed.message();
+      EXPECT_TRUE(report.profiled) << L << " " << angle;
+      EXPECT_LE(timed->duration(), 1.15 * quickest) << L << " " << angle;
+      double v = 0.0, a = 0.0;
+      finiteDifferenceDynamics(timed->position, 2000, v, a);
+      EXPECT_LE(v, 1.05 * optimizer.v_max);
+      EXPECT_LE(a, 1.05 * optimizer.a_max);
+      EXPECT_LT((timed->position.position(timed->duration()) - request.target).norm(), 0.5 * std::sqrt(3.0) * kRes + 1e-9);
+      const auto slow = traj::planTrajectory(request, astar, world.esdf(), optimizer, optimised, &report);
+      ASSERT_TRUE(slow) << slow.message();
+      EXPECT_FALSE(report.profiled);
+      EXPECT_LT(timed->duration(), slow->duration()) << L << " " << angle;
+      if (L <= 1.5) {
+        const bool fine = report.fine;
+        const auto six = traj::planTrajectory(request, astar, world.esdf(), optimizer, coarse, &report);
+        ASSERT_TRUE(six) << six.message();
+        EXPECT_FALSE(report.fine);
+        EXPECT_LE(slow->duration(), six->duration() + 1e-9) << L << " " << angle;  // the quicker one is kept
+        if (fine && slow->duration() < six->duration()) ++fine_wins;
+      }
+    }
+  }
+  EXPECT_GE(fine_wins, 3);  // of the 6 short hops
+}
+
+// A replan keeps the reference's acceleration as well as its velocity (clamped to the optimiser's
+// margin-reduced a_max), with the timed fit (start velocity along the path) and with the optimiser
+// (start velocity across it) alike.
+TEST(TrajectoryPlanner, ReplansKeepTheReferenceAcceleration) {
+  World world(Vec3(12, 12, 3));
+  world.addFloorAndCeiling();
+  world.sync();
+  AstarConfig astar_config;
+  astar_config.unknown_is_free = true;
+  const Astar astar(world.occupancy(), world.esdf(), astar_config);
+  const OptimizerConfig optimizer = optimizerConfig();
+  const traj::TrajectoryPlannerConfig planner;
+  struct Case {
+    Vec3 velocity, acceleration;
+    bool profiled;
+  };
+  const double limit = optimizer.feasibility_margin * optimizer.a_max;
+  for (const Case& c : {Case{Vec3(1.0, 0, 0), Vec3(0.8, 0.3, 0), true}, Case{Vec3(0, 1.0, 0), Vec3(-0.5, 0.6, 0), false},
+                        Case{Vec3(0, 1.0, 0), Vec3(0, 6.0, 0), false}}) {
+    traj::PlanRequest request;
+    request.start = Vec3(4.05, 6.05, 1.55);
+    request.target = Vec3(8.05, 6.05, 1.55);
+    request.velocity = c.velocity;
+    request.acceleration = c.acceleration;
+    traj::PlanReport report;
+    const auto planned = traj::planTrajectory(request, astar, world.esdf(), optimizer, planner, &report);
+    ASSERT_TRUE(planned) << planned.message();
+    EXPECT_EQ(report.profiled, c.profiled);
+    const traj::TrajectorySample first = traj::sampleTrajectory(*planned, 0.0);
+    EXPECT_LT((first.velocity - c.velocity).norm(), 1e-6);
+    const Vec3 expected = c.acceleration.norm() > limit ? Vec3(c.acceleration * (limit / c.acceleration.norm())) : c.acceleration;
+    EXPECT_LT((first.acceleration - expected).norm(), 1e-6) << c.acceleration.transpose();
+  }
+}
+
 // A path longer than the horizon is flown only that far along it (partial, the goal kept), and such a
 // trajectory is replanned when little time is left on it, while one that ends at its goal is not; a goal
 // farther than target_tolerance from the target is a new target. Without a horizon the whole corridor is
 // flown, no slower than max_slowdown times the first timing.
 TEST(TrajectoryPlanner, LongPathsAreFlownToTheHorizonAndReplannedOnTheWay) {
   World world(Vec3(20, 4, 3));
-  const Index3 dims = world.geo().dims();
-  world.addBox(Index3(0, 0, 0), Index3(dims.x() - 1, dims.y() - 1, 0));
-  world.addBox(Index3(0, 0, dims.z() - 1), Index3(dims.x() - 1, dims.y() - 1, dims.z() - 1));
+  world.addFloorAndCeiling();
   world.sync();
   AstarConfig astar_config;
   astar_config.unknown_is_free = true;
@@ -603,7 +795,8 @@ TEST(TrajectoryPlanner, LongPathsAreFlownToTheHorizonAndReplannedOnTheWay) {
   const auto whole = traj::planTrajectory(request, astar, world.esdf(), optimizer, planner);
   ASSERT_TRUE(whole) << whole.message();
   EXPECT_FALSE(whole->partial);
-  EXPECT_LT((whole->position.position(whole->duration()) - request.target).norm(), 0.5 * std::sqrt(3.0) * kRes);
+  // The target is a voxel corner: the path ends at a centre of its voxels, half a diagonal away.
+  EXPECT_LT((whole->position.position(whole->duration()) - request.target).norm(), 0.5 * std::sqrt(3.0) * kRes + 1e-9);
   EXPECT_EQ(reason(*whole, whole->duration() - 0.5 * replan.min_time_left, request.target), ReplanReason::kNone);
   const double length = (request.target - request.start).norm();
   EXPECT_LE(whole->duration(), planner.max_slowdown * length / (planner.cruise_fraction * optimizer.v_max) + 1e-9);

@@ -45,6 +45,17 @@ class UniformBspline {
   static UniformBspline fitPath(const std::vector<Vec3>& points, double dt, const Vec3& start_vel,
                                 const Vec3& end_vel, const Vec3& start_acc = Vec3::Zero(),
                                 const Vec3& end_acc = Vec3::Zero());
+  /// A cubic through timed samples (points[k] the position at k * dt, e.g. profileSamples()) that keeps
+  /// their speed and acceleration: the samples are its control points (p(k dt) is within
+  /// a dt^2 / 6 of points[k], a being their second difference / dt^2), so by the convex hull of its
+  /// derivatives its speed never exceeds the largest |points[k + 1] - points[k]| / dt, nor its
+  /// acceleration the largest second difference / dt^2 (or |start_acc|). An interpolating fit through
+  /// the same samples rings where their acceleration changes within a few knots (about 40 % above it).
+  /// It starts exactly at points[0] with start_vel and start_acc and ends at rest at points.back(), one
+  /// span after the last sample's time (duration (n) dt for n samples). Throws std::invalid_argument on
+  /// fewer than 3 points, dt <= 0 or non-finite input.
+  static UniformBspline fromTimedSamples(const std::vector<Vec3>& points, double dt, const Vec3& start_vel,
+                                         const Vec3& start_acc);
   /// Points at equal arc-length steps of at most `spacing` (m) along the polyline `path`, both ends
   /// included (at least 2 points; a single-point path gives that point twice). Empty for an empty path.
   static std::vector<Vec3> resamplePolyline(const std::vector<Vec3>& path, double spacing);

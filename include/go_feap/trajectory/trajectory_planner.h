@@ -68,6 +68,26 @@ struct TrajectoryPlannerConfig {
   double look_tolerance = 0.5236;
   /// scouting flights towards one target before the next counts a failed attempt (scoutedTooOften(); 0 = no limit)
   int max_scouts = 5;
+  /// A second optimisation with at least this many spline spans runs beside the usual one (at least 6
+  /// spans, path_spacing apart) whenever the path is short enough to get more: finer knots let the
+  /// acceleration switch faster, which on short hops a 6-span spline cannot; the quicker of the two
+  /// valid results is flown (0 = off).
+  int fine_spans = 12;
+  /// Timed fit (profileSamples()): before optimising, the path is timed with a speed profile that
+  /// accelerates and brakes at this share of a_max (cruising at feasibility_margin * v_max, slower
+  /// round corners), and the spline whose control points are its samples, profile_knot_span apart
+  /// (UniformBspline::fromTimedSamples(): within the profile's speed and acceleration), is flown as it is when
+  /// it passes the optimiser's checks (limits, clearance, staysFlyable). It is near the quickest
+  /// possible flight along the path; corners and starts moving across the path fall back to the
+  /// optimiser. 0 = off.
+  double profile_acceleration = 0.95;
+  double profile_knot_span = 0.05;  ///< s between the timed fit's knots
+  double profile_ramp = 0.1;        ///< s over which the profile's acceleration rises and falls (finite jerk)
+  /// m: round a corner turning by theta no faster than a circle with this much cut at its apex allows
+  /// (speed^2 <= a * cut / (1 / cos(theta / 2) - 1))
+  double profile_corner_cut = 0.1;
+  /// m/s: a start velocity with more than this across the path's first leg is left to the optimiser
+  double profile_max_cross_speed = 0.1;
   /// Checks every key; the message names the bad one, e.g. "planner: path_spacing must be > 0".
   common::Status validate() const;
 };
@@ -76,6 +96,9 @@ struct TrajectoryPlannerConfig {
 struct PlanRequest {
   Vec3 start = Vec3::Zero();     ///< m, where the reference is now
   Vec3 velocity = Vec3::Zero();  ///< m/s, the reference's velocity (kept, for continuity)
+  /// m/s^2, the reference's acceleration: kept too (up to feasibility_margin * a_max), so that a
+  /// replan does not first drop the acceleration to zero and build it up again
+  Vec3 acceleration = Vec3::Zero();
   double yaw = 0.0;              ///< rad, the reference's heading
   Vec3 target = Vec3::Zero();    ///< m, viewpoint position
   double target_yaw = 0.0;       ///< rad, viewpoint heading
@@ -86,6 +109,8 @@ struct PlanRequest {
 struct PlanReport {
   int refits = 0;              ///< slower refits needed
   bool used_fit = false;       ///< the unoptimised (refitted) spline was kept: it passed the checks
+  bool profiled = false;       ///< the timed fit (profileSamples()) was flown
+  bool fine = false;           ///< the optimisation with fine_spans spans was the quicker
   planning::PathStatus path_status = planning::PathStatus::kNoPath;
   double path_length = 0.0;    ///< m
   int left_flyable = 0;        ///< optimised splines refused by staysFlyable()
@@ -134,12 +159,39 @@ class SearchMemory {
 bool staysFlyable(const UniformBspline& spline, const planning::Astar& astar, double min_distance,
                   double exempt_radius, std::optional<Vec3>* unseen_at = nullptr);
 
+/// Speed profile of profileSamples().
+struct SpeedProfile {
+  double cruise = 1.9;        ///< m/s, top speed
+  double acceleration = 1.8;  ///< m/s^2, along the path when speeding up and braking
+  double ramp = 0.1;          ///< s, the acceleration changes linearly over this long (box-smoothed speed)
+  double corner_cut = 0.1;    ///< m, see TrajectoryPlannerConfig::profile_corner_cut
+  double knot_span = 0.05;    ///< s, the samples' time step (at most; at least 6 steps)
+};
+
+/// The polyline `path` timed for flying it from speed `v_start` and acceleration `a_start` (along its
+/// first leg; a_start clamped to +-acceleration) to rest at its end: the fastest speed profile over arc
+/// length that accelerates and brakes at `acceleration`, stays under `cruise` and under each corner's
+/// speed, with its arc length then averaged over `ramp` seconds (the acceleration then changes linearly
+/// over `ramp`, as a cubic spline can follow, and never exceeds `acceleration`), the start extended
+/// backwards at a_start so that the result leaves with v_start (exactly, when it is within [0, cruise])
+/// and about a_start. Returns the positions at equal time steps (the path's first and last points
+/// included, at least 7) and sets `knot_span` to the step. Empty when the path has fewer than 2 points or
+/// is too short for the start's averaging (shorter than about v_start * ramp / 2 plus 5 cm). Throws
+/// std::invalid_argument for a non-finite or non-positive cruise, acceleration, knot_span, a negative
+/// ramp or corner_cut, or a non-finite v_start or a_start.
+std::vector<Vec3> profileSamples(const std::vector<Vec3>& path, double v_start, double a_start,
+                                 const SpeedProfile& profile, double* knot_span);
+
 /// Plans a trajectory for `request`. A target within half a voxel of the start is a turn in place: the
 /// position brakes to rest there (safeStop) and the yaw spline turns to target_yaw. Otherwise: A* (known
 /// free space, the astar's clearance), spline fit through
-/// the resampled path starting exactly at request.start with request.velocity and ending at rest,
-/// optimize() (refitted slower up to max_refits times, and to at most max_slowdown times the first timing,
-/// while the optimum or the fit breaks a limit or leaves flyable space, staysFlyable()),
+/// the path starting exactly at request.start with request.velocity and request.acceleration and ending
+/// at rest: first the timed fit (profileSamples(), when profile_acceleration > 0 and the start velocity
+/// runs along the path's first leg within profile_max_cross_speed; its crossing part decays on the way),
+/// flown as it is when it passes checkTrajectory() and staysFlyable() (PlanReport::profiled); otherwise
+/// optimize() of the resampled path (refitted slower up to max_refits times, and to at most max_slowdown
+/// times the first timing, while the optimum or the fit breaks a limit or leaves flyable space,
+/// staysFlyable()), and beside it one optimisation with fine_spans spans, the quicker valid one kept,
 /// then yawTurn() from request.yaw to target_yaw, as fast as the limits allow (the camera faces the
 /// viewpoint's way early, so its frontier may be seen, and the target dropped, before the vehicle stops there). A target in the start's
 /// voxel (a one-voxel path) is flown to straight; a hop of any length gets at least 6 path segments. A path
