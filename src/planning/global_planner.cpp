@@ -24,6 +24,8 @@ Status GlobalPlannerConfig::validate() const {
   if (!(v_max > 0.0 && std::isfinite(v_max))) return err("v_max", "must be > 0");
   if (!(reuse_cell >= 0.0 && std::isfinite(reuse_cell))) return err("reuse_cell", "must be finite and >= 0");
   if (!(reuse_time >= 0.0 && std::isfinite(reuse_time))) return err("reuse_time", "must be finite and >= 0");
+  if (!(rest_weight >= 0.0 && std::isfinite(rest_weight))) return err("rest_weight", "must be finite and >= 0");
+  if (rest_frontiers < 1) return err("rest_frontiers", "must be >= 1");
   if (max_exact < 0 || max_exact > kMaxExactFrontiers)
     return err("max_exact", ("must be in [0, " + std::to_string(kMaxExactFrontiers) + "]").c_str());
   if (Status s = omission.validate(); !s) return Status::Error("exploration/" + s.message());
@@ -71,7 +73,9 @@ Result<GlobalTour> planTour(const std::vector<FrontierSummary>& frontiers, const
       if (frontiers[j].active) order.emplace_back(distances.from_uav_lower_bound(j), j);
     std::stable_sort(order.begin(), order.end(),
                      [](const auto& a, const auto& b) { return a.first < b.first; });
-    const auto cap = static_cast<std::size_t>(std::max(config.n_max_tsp, 0));
+    // With a rest leg, the rest_frontiers nearest beyond the candidates are needed too.
+    const auto cap = static_cast<std::size_t>(std::max(config.n_max_tsp, 0)) +
+                     (config.rest_weight > 0.0 ? static_cast<std::size_t>(config.rest_frontiers) : 0);
     std::priority_queue<double> nearest;  // the cap smallest distances found, largest on top
     for (const auto& [bound, j] : order) {
       if (cap == 0 || (nearest.size() == cap && bound >= nearest.top())) break;
@@ -83,9 +87,22 @@ Result<GlobalTour> planTour(const std::vector<FrontierSummary>& frontiers, const
   }
   const std::vector<std::size_t> candidates = selectCandidates(frontiers, from_uav, config);
 
+  // The rest: the reachable active frontiers outside the candidates, nearest the UAV first.
+  std::vector<std::size_t> rest;
+  if (config.rest_weight > 0.0 && !candidates.empty()) {
+    std::vector<bool> candidate(frontiers.size(), false);
+    for (std::size_t j : candidates) candidate[j] = true;
+    for (std::size_t j = 0; j < frontiers.size(); ++j)
+      if (frontiers[j].active && !candidate[j] && from_uav[j] >= 0.0 && std::isfinite(from_uav[j])) rest.push_back(j);
+    std::stable_sort(rest.begin(), rest.end(), [&](std::size_t a, std::size_t b) { return from_uav[a] < from_uav[b]; });
+    if (rest.size() > static_cast<std::size_t>(config.rest_frontiers)) rest.resize(config.rest_frontiers);
+  }
+
   const int n = static_cast<int>(candidates.size());
-  Eigen::MatrixXd cost = Eigen::MatrixXd::Zero(n + 1, n + 1);
-  std::vector<double> xi_of(n);
+  const bool rest_node = !rest.empty();
+  const int nodes = n + (rest_node ? 1 : 0);
+  Eigen::MatrixXd cost = Eigen::MatrixXd::Zero(nodes + 1, nodes + 1);
+  std::vector<double> xi_of(nodes, 0.0);
   for (int a = 0; a < n; ++a) {
     const FrontierSummary& f = frontiers[candidates[a]];
     cost(0, a + 1) = from_uav[candidates[a]] / config.v_max;
@@ -101,19 +118,45 @@ Result<GlobalTour> planTour(const std::vector<FrontierSummary>& frontiers, const
       cost(a + 1, b + 1) = s / config.v_max;
     }
   }
+  if (rest_node) {
+    // Node n + 1 ends the tour: a candidate's leg to it is the way on to the nearest rest frontier (a rest
+    // frontier it cannot reach does not count; none at all: no leg). Leaving it, or going to it first,
+    // costs more than any tour that ends with it, so the solver puts it last.
+    for (int a = 0; a < n; ++a) {
+      double best = std::numeric_limits<double>::infinity();
+      for (std::size_t r : rest) {
+        const double s = distances.between(candidates[a], r);
+        if (s >= 0.0 && std::isfinite(s)) best = std::min(best, s);
+      }
+      cost(a + 1, n + 1) = std::isfinite(best) ? config.rest_weight * best / config.v_max : 0.0;
+    }
+    double sum_xi = 0.0;
+    for (double x : xi_of) sum_xi += x;
+    // Any tour with the rest node last costs at most the sum of all entries times (1 + lambda sum xi).
+    const double never = 2.0 * (cost.sum() + 1.0) * (1.0 + config.lambda * sum_xi);
+    cost(0, n + 1) = never;
+    for (int b = 1; b <= n; ++b) cost(n + 1, b) = never;
+  }
 
-  const TourResult solved = solve(cost, xi_of, config.lambda, config.max_exact);
+  const int max_exact = std::min(config.max_exact + (rest_node ? 1 : 0), kMaxExactFrontiers);
+  const TourResult solved = solve(cost, xi_of, config.lambda, max_exact);
   if (!solved.status) return solved.status;
   GlobalTour tour;
   tour.cost = solved.cost;
   tour.lambda = config.lambda;
   tour.exact = solved.exact;
+  int previous = 0;
   for (int node : solved.order) {
+    if (node == n + 1 && rest_node) {
+      tour.rest_leg = cost(previous, node);
+      continue;
+    }
     const std::size_t j = candidates[node - 1];
     tour.frontier_ids.push_back(frontiers[j].id);
     tour.indices.push_back(j);
     tour.waypoints.push_back(frontiers[j].average);
     tour.xi.push_back(xi_of[node - 1]);
+    previous = node;
   }
   return tour;
 }

@@ -106,6 +106,9 @@ TEST(GlobalPlannerConfig, ValidateNamesTheKey) {
       {[](GlobalPlannerConfig& c) { c.lambda = -0.1; }, "exploration: lambda must be >= 0"},
       {[](GlobalPlannerConfig& c) { c.v_max = 0.0; }, "exploration: v_max must be > 0"},
       {[](GlobalPlannerConfig& c) { c.max_exact = 17; }, "exploration: max_exact must be in [0, 16]"},
+      {[](GlobalPlannerConfig& c) { c.rest_weight = -1.0; }, "exploration: rest_weight must be finite and >= 0"},
+      {[](GlobalPlannerConfig& c) { c.rest_weight = std::nan(""); }, "exploration: rest_weight must be finite and >= 0"},
+      {[](GlobalPlannerConfig& c) { c.rest_frontiers = 0; }, "exploration: rest_frontiers must be >= 1"},
       {[](GlobalPlannerConfig& c) { c.omission.t_max = -1.0; }, "exploration/omission: t_max must be > 0"},
   };
   for (const Row& r : rows) {
@@ -310,6 +313,90 @@ TEST(PlanTour, LowerBoundSkipsFrontiersThatCannotBeCandidates) {
         EXPECT_LT(asked.size(), 6u) << "n_max " << n_max;
       }
     }
+}
+
+// The rest leg against brute force: every order of the candidates, costed as the open path plus
+// rest_weight times the way on from the last one to the nearest of the rest_frontiers non-candidates
+// nearest the UAV. It changes the order on this fixture (the candidates away from the rest first), gives
+// the same tour with the lower bound of the UAV distances, and does nothing when every active frontier
+// is a candidate.
+TEST(PlanTour, RestLegMatchesBruteForceWithAnEndCost) {
+  Fixture fx;
+  int changed = 0;
+  for (int rest_frontiers : {1, 2, 3})
+    for (double weight : {0.5, 1.0, 3.0})
+      for (double s_near : {3.0, 3.5, 4.3}) {
+        GlobalPlannerConfig c;
+        c.s_near = s_near;
+        c.n_min_tsp = 2;
+        c.lambda = 0.4;
+        c.omission = omissionConfig();
+        c.rest_weight = weight;
+        c.rest_frontiers = rest_frontiers;
+        const auto result = planTour(fx.frontiers, fx.distances(), c);
+        ASSERT_TRUE(result.ok()) << result.message();
+        // Candidates and rest from the straight-line UAV distances of the fixture.
+        std::vector<std::size_t> active = {0, 1, 2, 3, 4, 5};
+        auto d_uav = [&](std::size_t j) { return (fx.frontiers[j].average - fx.uav).norm(); };
+        std::stable_sort(active.begin(), active.end(), [&](std::size_t a, std::size_t b) { return d_uav(a) < d_uav(b); });
+        std::size_t near = 0;
+        while (near < active.size() && d_uav(active[near]) < s_near) ++near;
+        near = std::max<std::size_t>(near, 2);
+        std::vector<std::size_t> order(active.begin(), active.begin() + near);
+        const std::vector<std::size_t> rest(active.begin() + near,
+                                            active.begin() + std::min(active.size(), near + rest_frontiers));
+        ASSERT_FALSE(rest.empty());
+        std::sort(order.begin(), order.end());
+        double best = std::numeric_limits<double>::infinity(), best_rest = 0.0;
+        std::vector<std::size_t> best_order;
+        do {
+          double t = d_uav(order[0]) / c.v_max;
+          const auto& f0 = fx.frontiers[order[0]];
+          double penalty = xi(c.omission, f0.cell_count, f0.duration, f0.n_near) * t;
+          for (std::size_t m = 1; m < order.size(); ++m) {
+            t += fx.between(order[m - 1], order[m]) / c.v_max;
+            const auto& f = fx.frontiers[order[m]];
+            penalty += xi(c.omission, f.cell_count, f.duration, f.n_near) * t;
+          }
+          double way_on = std::numeric_limits<double>::infinity();
+          for (std::size_t r : rest) way_on = std::min(way_on, fx.between(order.back(), r));
+          const double j = t + c.lambda * penalty + weight * way_on / c.v_max;
+          if (j < best - 1e-12) best = j, best_order = order, best_rest = weight * way_on / c.v_max;
+        } while (std::next_permutation(order.begin(), order.end()));
+        const std::string where = "rest_frontiers " + std::to_string(rest_frontiers) + " weight " +
+                                  std::to_string(weight) + " s_near " + std::to_string(s_near);
+        EXPECT_EQ(result->indices, best_order) << where;
+        EXPECT_NEAR(result->cost, best, 1e-9 * best) << where;
+        EXPECT_NEAR(result->rest_leg, best_rest, 1e-12) << where;
+        EXPECT_TRUE(result->exact);
+
+        PathDistances bounded = fx.distances();
+        bounded.from_uav_lower_bound = d_uav;
+        const auto with_bound = planTour(fx.frontiers, bounded, c);
+        ASSERT_TRUE(with_bound.ok());
+        EXPECT_EQ(with_bound->indices, result->indices) << where;
+
+        GlobalPlannerConfig open = c;
+        open.rest_weight = 0.0;
+        const auto open_tour = planTour(fx.frontiers, fx.distances(), open);
+        ASSERT_TRUE(open_tour.ok());
+        EXPECT_EQ(open_tour->rest_leg, 0.0);
+        changed += open_tour->indices != result->indices;
+      }
+  EXPECT_GE(changed, 3);
+
+  // Every active frontier a candidate: no rest, the open path.
+  GlobalPlannerConfig all;
+  all.s_near = 100.0;
+  all.lambda = 0.4;
+  all.omission = omissionConfig();
+  const auto open_tour = planTour(fx.frontiers, fx.distances(), all);
+  all.rest_weight = 2.0;
+  const auto rest_tour = planTour(fx.frontiers, fx.distances(), all);
+  ASSERT_TRUE(open_tour.ok() && rest_tour.ok());
+  EXPECT_EQ(rest_tour->indices, open_tour->indices);
+  EXPECT_EQ(rest_tour->cost, open_tour->cost);
+  EXPECT_EQ(rest_tour->rest_leg, 0.0);
 }
 
 TEST(PlanTour, EmptyAndBadInput) {

@@ -60,6 +60,7 @@ void readGlobalPlanner(R& p, planning::GlobalPlannerConfig& c) {
   p.get("global/s_near", c.s_near).get("global/n_min_tsp", c.n_min_tsp).get("global/n_max_tsp", c.n_max_tsp);
   p.get("global/lambda", c.lambda).get("global/v_max", c.v_max).get("global/max_exact", c.max_exact);
   p.get("global/reuse_cell", c.reuse_cell).get("global/reuse_time", c.reuse_time);
+  p.get("global/rest_weight", c.rest_weight).get("global/rest_frontiers", c.rest_frontiers);
   readOmission(p, c.omission);
 }
 

@@ -26,6 +26,13 @@ struct GlobalPlannerConfig {
   /// ids and the UAV moves a little between calls: this spares most of their searches.
   double reuse_cell = 0.4;
   double reuse_time = 1.0;  ///< s
+  /// Weight of the rest leg (0 = the paper's open path, eq. 3). When active frontiers remain beyond the
+  /// candidates, the tour ends with a leg from its last frontier to the nearest of the rest_frontiers
+  /// frontiers nearest the UAV outside the candidate set, weighted by this: the order then leaves
+  /// towards what is left to explore, and the candidates on the far side of it are visited first
+  /// instead of being left behind (a return flight later).
+  double rest_weight = 0.0;
+  int rest_frontiers = 3;  ///< frontiers outside the candidates the rest leg may end at (>= 1)
   OmissionConfig omission;
 
   /// Checks every key; the message names the bad one, e.g. "exploration: lambda must be >= 0"
@@ -69,7 +76,8 @@ struct GlobalTour {
   std::vector<std::size_t> indices;     ///< the same frontiers as indices into the input list
   std::vector<common::Vec3> waypoints;  ///< their P_avg, same order, m
   std::vector<double> xi;               ///< their omission likelihood, same order, s
-  double cost = 0.0;                    ///< J = travel time + lambda * sum xi_k t_k, s
+  double cost = 0.0;                    ///< J = travel time + lambda * sum xi_k t_k (+ the rest leg), s
+  double rest_leg = 0.0;                ///< s, the weighted rest leg J includes (0 without one)
   double lambda = 0.0;                  ///< omission weight used, 1/s
   bool exact = false;                   ///< true when solved by Held-Karp
 };
@@ -77,6 +85,10 @@ struct GlobalTour {
 /// Orders the NearCur_IDs candidates among `frontiers` (only active ones are considered):
 /// cost matrix M[0][j] = from_uav(j) / v_max, M[i][j] = between(i, j) / v_max, column 0 = 0,
 /// xi from config.omission, solved exactly up to max_exact candidates, heuristically above.
+/// With rest_weight > 0 and active reachable frontiers outside the candidates (the rest), the tour
+/// ends with a leg to the rest: rest_weight * min over the rest_frontiers rest frontiers nearest the
+/// UAV of between(last, r) / v_max (one more node, always last, which the solver's exact limit
+/// counts on top of max_exact). between is then also called for each candidate and those frontiers.
 /// from_uav is called once per active frontier (fewer with from_uav_lower_bound; the candidates are the
 /// same, distance ties aside), between once per ordered pair of candidates.
 /// No active reachable frontier gives an empty tour. Errors: an invalid config, or a
