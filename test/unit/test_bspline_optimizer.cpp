@@ -131,6 +131,24 @@ class World {
   std::vector<Aabb> centre_boxes_;
 };
 
+// A room of `size` with only its floor and ceiling mapped, and a flight search that takes unknown space as
+// free.
+struct OpenRoom {
+  explicit OpenRoom(const Vec3& size) : world(size), astar(furnished(world).occupancy(), world.esdf(), unknownFree()) {}
+  static World& furnished(World& w) {
+    w.addFloorAndCeiling();
+    w.sync();
+    return w;
+  }
+  static AstarConfig unknownFree() {
+    AstarConfig c;
+    c.unknown_is_free = true;
+    return c;
+  }
+  World world;
+  Astar astar;
+};
+
 // 8 x 8 x 3 m with floor, ceiling, pillars and floating boxes.
 void fillRandomField(World& world, Rng& rng) {
   const Index3 dims = world.geo().dims();
@@ -521,12 +539,9 @@ TEST(SafeStop, BrakesToRestWithinTheStoppingDistance) {
 // start at rest, ends at rest within a voxel's half-diagonal of the target with the target's yaw, and
 // keeps v_max and a_max (finite differences of positions, 5 % slack).
 TEST(TrajectoryPlanner, HopsOfEveryLengthReachTheTargetWithinTheLimits) {
-  World world(Vec3(8, 8, 3));
-  world.addFloorAndCeiling();
-  world.sync();
-  AstarConfig astar_config;
-  astar_config.unknown_is_free = true;  // the room is unmapped apart from floor and ceiling
-  const Astar astar(world.occupancy(), world.esdf(), astar_config);
+  OpenRoom room(Vec3(8, 8, 3));  // unmapped apart from floor and ceiling
+  World& world = room.world;
+  const Astar& astar = room.astar;
   const OptimizerConfig optimizer = optimizerConfig();
   const traj::TrajectoryPlannerConfig planner;
   Rng rng(7);
@@ -669,12 +684,9 @@ TEST(ProfileSamples, StartAtSpeedSlowForCornersAndRefuseWhatTheyCannotTime) {
 // the finer second optimisation (fine_spans) makes most short hops quicker than the 6-span one alone
 // (and none slower: the quicker one is kept).
 TEST(TrajectoryPlanner, HopsFromRestTakeCloseToTheQuickestFlight) {
-  World world(Vec3(12, 12, 3));
-  world.addFloorAndCeiling();
-  world.sync();
-  AstarConfig astar_config;
-  astar_config.unknown_is_free = true;
-  const Astar astar(world.occupancy(), world.esdf(), astar_config);
+  OpenRoom room(Vec3(12, 12, 3));  // unmapped apart from floor and ceiling
+  World& world = room.world;
+  const Astar& astar = room.astar;
   OptimizerConfig optimizer = optimizerConfig();
   optimizer.lambda_feasibility = 10.0;  // the weights of config/trajectory.yaml
   optimizer.lambda_time = 5.0;
@@ -722,12 +734,9 @@ TEST(TrajectoryPlanner, HopsFromRestTakeCloseToTheQuickestFlight) {
 // margin-reduced a_max), with the timed fit (start velocity along the path) and with the optimiser
 // (start velocity across it) alike.
 TEST(TrajectoryPlanner, ReplansKeepTheReferenceAcceleration) {
-  World world(Vec3(12, 12, 3));
-  world.addFloorAndCeiling();
-  world.sync();
-  AstarConfig astar_config;
-  astar_config.unknown_is_free = true;
-  const Astar astar(world.occupancy(), world.esdf(), astar_config);
+  OpenRoom room(Vec3(12, 12, 3));  // unmapped apart from floor and ceiling
+  World& world = room.world;
+  const Astar& astar = room.astar;
   const OptimizerConfig optimizer = optimizerConfig();
   const traj::TrajectoryPlannerConfig planner;
   struct Case {
@@ -758,12 +767,9 @@ TEST(TrajectoryPlanner, ReplansKeepTheReferenceAcceleration) {
 // farther than target_tolerance from the target is a new target. Without a horizon the whole corridor is
 // flown, no slower than max_slowdown times the first timing.
 TEST(TrajectoryPlanner, LongPathsAreFlownToTheHorizonAndReplannedOnTheWay) {
-  World world(Vec3(20, 4, 3));
-  world.addFloorAndCeiling();
-  world.sync();
-  AstarConfig astar_config;
-  astar_config.unknown_is_free = true;
-  const Astar astar(world.occupancy(), world.esdf(), astar_config);
+  OpenRoom room(Vec3(20, 4, 3));  // unmapped apart from floor and ceiling
+  World& world = room.world;
+  const Astar& astar = room.astar;
   const OptimizerConfig optimizer = optimizerConfig();
   traj::TrajectoryPlannerConfig planner;
   planner.horizon = 6.0;

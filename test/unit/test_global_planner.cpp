@@ -195,6 +195,19 @@ struct Fixture {
     const double d = (frontiers[i].average - frontiers[j].average).norm();
     return (i == 2 && j == 4) ? 1.8 * d : d;
   }
+  // Brute force's J of an order: travel time to the last one plus lambda * sum xi * arrival time, with
+  // the straight line from the UAV.
+  double openPathCost(const std::vector<std::size_t>& order, const GlobalPlannerConfig& c) const {
+    double t = (frontiers[order[0]].average - uav).norm() / c.v_max;
+    const auto& f0 = frontiers[order[0]];
+    double penalty = xi(c.omission, f0.cell_count, f0.duration, f0.n_near) * t;
+    for (std::size_t m = 1; m < order.size(); ++m) {
+      t += between(order[m - 1], order[m]) / c.v_max;
+      const auto& f = frontiers[order[m]];
+      penalty += xi(c.omission, f.cell_count, f.duration, f.n_near) * t;
+    }
+    return t + c.lambda * penalty;
+  }
   PathDistances distances() {
     PathDistances d;  // no lower bound: every active frontier is asked about
     d.from_uav = [this](std::size_t j) {
@@ -230,15 +243,7 @@ TEST(PlanTour, FixtureMatchesBruteForce) {
   double best = std::numeric_limits<double>::infinity();
   std::vector<std::size_t> best_order;
   do {
-    double t = (fx.frontiers[order[0]].average - fx.uav).norm() / c.v_max;
-    const auto& f0 = fx.frontiers[order[0]];
-    double penalty = xi(c.omission, f0.cell_count, f0.duration, f0.n_near) * t;
-    for (std::size_t m = 1; m < order.size(); ++m) {
-      t += fx.between(order[m - 1], order[m]) / c.v_max;
-      const auto& f = fx.frontiers[order[m]];
-      penalty += xi(c.omission, f.cell_count, f.duration, f.n_near) * t;
-    }
-    const double j = t + c.lambda * penalty;
+    const double j = fx.openPathCost(order, c);
     if (j < best) best = j, best_order = order;
   } while (std::next_permutation(order.begin(), order.end()));
 
@@ -350,17 +355,9 @@ TEST(PlanTour, RestLegMatchesBruteForceWithAnEndCost) {
         double best = std::numeric_limits<double>::infinity(), best_rest = 0.0;
         std::vector<std::size_t> best_order;
         do {
-          double t = d_uav(order[0]) / c.v_max;
-          const auto& f0 = fx.frontiers[order[0]];
-          double penalty = xi(c.omission, f0.cell_count, f0.duration, f0.n_near) * t;
-          for (std::size_t m = 1; m < order.size(); ++m) {
-            t += fx.between(order[m - 1], order[m]) / c.v_max;
-            const auto& f = fx.frontiers[order[m]];
-            penalty += xi(c.omission, f.cell_count, f.duration, f.n_near) * t;
-          }
           double way_on = std::numeric_limits<double>::infinity();
           for (std::size_t r : rest) way_on = std::min(way_on, fx.between(order.back(), r));
-          const double j = t + c.lambda * penalty + weight * way_on / c.v_max;
+          const double j = fx.openPathCost(order, c) + weight * way_on / c.v_max;
           if (j < best - 1e-12) best = j, best_order = order, best_rest = weight * way_on / c.v_max;
         } while (std::next_permutation(order.begin(), order.end()));
         const std::string where = "rest_frontiers " + std::to_string(rest_frontiers) + " weight " +
