@@ -21,14 +21,9 @@ FrontierFinder::FrontierFinder(const FrontierConfig& config, const common::GridG
       box_(box),
       is_frontier_((geometry.size() + 63) / 64, 0),
       scratch_((geometry.size() + 63) / 64, 0),
-      owner_(geometry.size(), 0) {
+      bricks_(((geometry.dims().array() + 3) / 4).matrix()),
+      owner_(static_cast<std::size_t>(bricks_.x()) * bricks_.y() * bricks_.z() * 64, 0) {
   geo_.centreRange(box, box_lo_, box_hi_);
-}
-
-bool FrontierFinder::isFrontierCell(const Index3& idx) const {
-  if (!geo_.inside(idx)) return false;
-  const std::size_t l = geo_.linear(idx);
-  return (is_frontier_[l >> 6] >> (l & 63)) & 1u;
 }
 
 bool FrontierFinder::computeFrontierCell(const map::OccupancyMap& map, const Index3& idx) const {
@@ -195,23 +190,25 @@ FrontierDelta FrontierFinder::regrow(std::unordered_set<std::uint32_t> affected,
   // A cell of a cluster not marked affected: while the fill is small, that cluster's region is being
   // rebuilt, so it goes too; past max_regrow_cells the cluster is kept and the fill goes around it, so
   // an update costs about the size of the clusters it touches, not of the whole connected region.
-  auto kept = [&](std::size_t l) {
-    const std::uint32_t own = owner_[l];
+  auto kept = [&](const Index3& idx) {
+    const std::uint32_t own = owner_[ownerSlot(idx)];
     if (own == 0 || affected.count(own) > 0) return false;
     if (visited.size() >= static_cast<std::size_t>(config_.max_regrow_cells)) return true;
     affected.insert(own);
     markRemoved(own);
     return false;
   };
+  std::vector<std::pair<std::size_t, Index3>> stack;
   for (std::size_t s : seeds) {
-    if (marked(s) || kept(s)) continue;
+    if (marked(s)) continue;
+    const Index3 seed = geo_.unlinear(s);
+    if (kept(seed)) continue;
     visit(s);
     std::vector<std::size_t> region;
-    std::vector<std::size_t> stack{s};
+    stack.assign(1, {s, seed});
     while (!stack.empty()) {
-      const std::size_t l = stack.back();
+      const auto [l, c] = stack.back();
       stack.pop_back();
-      const Index3 c = geo_.unlinear(l);
       region.push_back(l);
       for (int dz = -1; dz <= 1; ++dz)
         for (int dy = -1; dy <= 1; ++dy)
@@ -219,9 +216,9 @@ FrontierDelta FrontierFinder::regrow(std::unordered_set<std::uint32_t> affected,
             const Index3 nb = c + Index3(dx, dy, dz);
             if ((dx == 0 && dy == 0 && dz == 0) || !isFrontierCell(nb)) continue;
             const std::size_t ln = geo_.linear(nb);
-            if (marked(ln) || kept(ln)) continue;
+            if (marked(ln) || kept(nb)) continue;
             visit(ln);
-            stack.push_back(ln);
+            stack.emplace_back(ln, nb);
           }
     }
     regions.push_back(std::move(region));
@@ -255,7 +252,7 @@ FrontierDelta FrontierFinder::regrow(std::unordered_set<std::uint32_t> affected,
       f.cells.reserve(e - b);
       for (std::size_t i = b; i < e; ++i) {
         const Cell& c = cells[i];
-        const std::size_t l = geo_.linear(c.index);
+        const std::size_t l = ownerSlot(c.index);
         f.average += c.centre;
         f.box.min = f.box.min.cwiseMin(c.centre - Vec3::Constant(h));
         f.box.max = f.box.max.cwiseMax(c.centre + Vec3::Constant(h));
@@ -277,7 +274,7 @@ FrontierDelta FrontierFinder::regrow(std::unordered_set<std::uint32_t> affected,
     const Frontier* f = find(id);
     if (!f) continue;
     for (const Index3& c : f->cells) {
-      std::uint32_t& own = owner_[geo_.linear(c)];
+      std::uint32_t& own = owner_[ownerSlot(c)];
       if (own == id) own = 0;
     }
     delta.removed.push_back(id);
@@ -297,9 +294,15 @@ void FrontierFinder::splitRange(std::vector<Cell>& cells, std::size_t begin, std
   Vec3 mean = Vec3::Zero();
   for (std::size_t i = begin; i < end; ++i) mean += cells[i].centre;
   mean /= static_cast<double>(n);
-  double spread2 = 0.0;
-  for (std::size_t i = begin; i < end; ++i) spread2 = std::max(spread2, (cells[i].centre - mean).squaredNorm());
-  if (std::sqrt(spread2) <= config_.max_cluster_extent || n < 2) {
+  // Wide when a cell lies farther than max_cluster_extent from the mean: the first such cell decides
+  // (the square root only near the limit, so the test is exactly that of the farthest cell's distance).
+  const double extent = config_.max_cluster_extent, below = extent * extent * (1.0 - 1e-9);
+  bool wide = false;
+  for (std::size_t i = begin; i < end && !wide; ++i) {
+    const double d2 = (cells[i].centre - mean).squaredNorm();
+    wide = d2 >= below && std::sqrt(d2) > extent;
+  }
+  if (!wide || n < 2) {
     out.emplace_back(begin, end);
     return;
   }
