@@ -37,7 +37,8 @@ common::Status ExplorationConfig::validate() const {
        {quadrotor.validate(), controller.validate(), camera.validate(), map.validate(), frontier.validate(),
         global.validate(), distance_astar.validate(map.esdf), layers.validate(), viewpoints.validate(),
         local.validate(), optimizer.validate(map.esdf), replan.validate(), planner.validate(),
-        flight_astar.validate(map.esdf), scout_astar.validate(map.esdf), loop.validate()})
+        flight_astar.validate(map.esdf), scout_astar.validate(map.esdf), coarse_astar.validate(map.esdf),
+        loop.validate()})
     if (!st.ok()) return st;
   if (!positiveFinite(camera_rate) || camera_rate > 100.0)
     return common::Status::Error("depth_camera: rate must be in (0, 100] Hz");
@@ -86,6 +87,7 @@ common::Result<ExplorationConfig> loadExplorationConfig(const std::string& confi
   traj.get("planner/rate", c.planner_rate);
   config::readAstar(traj, c.flight_astar);
   config::readAstar(traj, c.scout_astar, "scout_astar");
+  config::readAstar(traj, c.coarse_astar, "coarse_astar");
   if (!traj.ok()) return traj.status();
   common::YamlReader bench(config_dir + "/bench.yaml");
   bench.get("loop/control_rate", c.loop.control_rate);
@@ -114,6 +116,7 @@ ExplorationRun::ExplorationRun(const world::Scene& scene, const ExplorationConfi
   distance_astar_ = std::make_unique<planning::Astar>(map_->occupancy(), map_->esdf(), config.distance_astar);
   flight_astar_ = std::make_unique<planning::Astar>(map_->occupancy(), map_->esdf(), config.flight_astar);
   scout_astar_ = std::make_unique<planning::Astar>(map_->occupancy(), map_->esdf(), config.scout_astar);
+  coarse_astar_ = std::make_unique<planning::Astar>(map_->occupancy(), map_->esdf(), config.coarse_astar);
   tour_planner_ = std::make_unique<planning::TourPlanner>(config.global, *distance_astar_);
   // The run's simulated-time budget is the exploration's time limit (layers/time_limit is the ROS chain's).
   planning::LayerManagerConfig layers = config.layers;
@@ -294,7 +297,7 @@ void ExplorationRun::trajectoryStep() {
   const auto t0 = Clock::now();
   trajectory::PlanReport report;
   auto planned = trajectory::planTrajectory(request, *flight_astar_, map_->esdf(), config_.optimizer, config_.planner,
-                                            &report, &search_memory_, scout_astar_.get());
+                                            &report, &search_memory_, scout_astar_.get(), coarse_astar_.get());
   recorder_.addTime("trajectory", msSince(t0));
   trajectory_start_ = t_;
   if (planned && trajectory::scoutedTooOften(report, config_.planner, &target_->scouts)) {
@@ -306,6 +309,9 @@ void ExplorationRun::trajectoryStep() {
     return;
   }
   if (planned) {
+    if (report.coarse)
+      log("flight search to frontier " + std::to_string(target_->frontier) + " over budget: coarse path of " +
+          std::to_string(report.path_length) + " m");
     if (report.scouted)
       log("no known path to frontier " + std::to_string(target_->frontier) + ": scouting " +
           std::to_string((planned->position.position(planned->duration()) - request.start).norm()) +

@@ -37,10 +37,12 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     p.get("planner/rate", rate_).get("planner/odom_timeout", odom_timeout_);
     config::readAstar(p, astar_config_);
     config::readAstar(p, scout_config_, "scout_astar");
+    config::readAstar(p, coarse_config_, "coarse_astar");
     p.get("world_frame", world_frame_);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
     for (const common::Status& st :
-         {o.validate(), replan_.validate(), astar_config_.validate(), scout_config_.validate(), planner_.validate()})
+         {o.validate(), replan_.validate(), astar_config_.validate(), scout_config_.validate(), coarse_config_.validate(),
+          planner_.validate()})
       ros_params::requireOrThrow(st.ok(), getName(), st.message());
     ros_params::requireOrThrow(std::isfinite(rate_) && rate_ > 0.0, getName(),
                                "parameter '" + p.fullName("planner/rate") + "' must be > 0");
@@ -63,8 +65,9 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     auto map = ros_map::acceptHandle(*msg, [&](const map::EsdfConfig& esdf) {
       const common::Status st = optimizer_.validate(esdf);
       if (!st.ok()) return st;
-      const common::Status flight = astar_config_.validate(esdf);
-      return flight.ok() ? scout_config_.validate(esdf) : flight;
+      for (const planning::AstarConfig* c : {&astar_config_, &scout_config_, &coarse_config_})
+        if (const common::Status s = c->validate(esdf); !s.ok()) return s;
+      return common::Status::Ok();
     });
     if (!map) {
       NODELET_ERROR_STREAM_THROTTLE(10.0, getName() << ": " << map.message());
@@ -73,6 +76,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     shared_ = *map;
     astar_ = std::make_unique<planning::Astar>(shared_->map->occupancy(), shared_->map->esdf(), astar_config_);
     scout_ = std::make_unique<planning::Astar>(shared_->map->occupancy(), shared_->map->esdf(), scout_config_);
+    coarse_ = std::make_unique<planning::Astar>(shared_->map->occupancy(), shared_->map->esdf(), coarse_config_);
   }
   void onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
     const auto& p = msg->pose.pose.position;
@@ -175,7 +179,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     {
       std::shared_lock<std::shared_mutex> map_lock(shared_->mutex);
       planned = trajectory::planTrajectory(request, *astar_, shared_->map->esdf(), optimizer_, planner_, &report,
-                                           &search_memory_, scout_.get());
+                                           &search_memory_, scout_.get(), coarse_.get());
     }
     ros_conv::publishComputeTime(compute_pub_, "trajectory", t_compute);
     if (planned && trajectory::scoutedTooOften(report, planner_, &scouts_)) {
@@ -185,6 +189,9 @@ class TrajectoryPlanner : public nodelet::Nodelet {
       publish(now, trajectory::stopTrajectory(request.start, request.velocity, request.yaw, optimizer_));
       return;
     }
+    if (planned && report.coarse)
+      NODELET_DEBUG_STREAM(getName() << ": flight search to frontier " << target_frontier_
+                                     << " over budget: flying the coarse search's path (" << report.path_length << " m)");
     if (planned && report.scouted)
       NODELET_INFO_STREAM(getName() << ": no known path to frontier " << target_frontier_
                                     << ": scouting along a way through unseen space");
@@ -246,7 +253,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
 
   trajectory::OptimizerConfig optimizer_;
   trajectory::ReplanConfig replan_;
-  planning::AstarConfig astar_config_, scout_config_;
+  planning::AstarConfig astar_config_, scout_config_, coarse_config_;
   trajectory::TrajectoryPlannerConfig planner_;
   double rate_ = 10.0, odom_timeout_ = 0.5;
   ros::Time odom_time_;
@@ -254,7 +261,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
   std::string world_frame_;
   std::mutex mutex_;
   std::shared_ptr<ros_map::SharedMap> shared_;
-  std::unique_ptr<planning::Astar> astar_, scout_;
+  std::unique_ptr<planning::Astar> astar_, scout_, coarse_;
   std::optional<common::Vec3> odom_position_, target_;
   double odom_yaw_ = 0.0, target_yaw_ = 0.0;
   unsigned target_frontier_ = 0;

@@ -256,13 +256,18 @@ bool Astar::snap(const Vec3& p, double radius, Index3& out, bool near_start, con
 }
 
 bool Astar::segmentTraversable(const Vec3& a, const Vec3& b) const {
+  return segmentPasses(a, b, [this](const Index3& v) { return traversable(v); });
+}
+
+template <typename Pass>
+bool Astar::segmentPasses(const Vec3& a, const Vec3& b, const Pass& pass) const {
   if (!a.allFinite() || !b.allFinite()) return false;
   const GridGeometry& g = geo_;
   if (!g.bounds().contains(a) || !g.bounds().contains(b)) return false;
   const Vec3 pa = (a - g.origin()) / g.resolution(), pb = (b - g.origin()) / g.resolution();
   Index3 cur = pa.array().floor().cast<int>();
   const Index3 last = pb.array().floor().cast<int>();
-  if (!traversable(cur) || !traversable(last)) return false;
+  if (!pass(cur) || !pass(last)) return false;
   const Vec3 d = pb - pa;
   Index3 step, remaining;
   Vec3 t_max, t_delta;
@@ -290,7 +295,7 @@ bool Astar::segmentTraversable(const Vec3& a, const Vec3& b) const {
       Index3 v = cur;
       for (int k = 0; k < n; ++k)
         if (mask & (1 << k)) v[axes[k]] += step[axes[k]];
-      if (!traversable(v)) return false;
+      if (!pass(v)) return false;
     }
     for (int k = 0; k < n; ++k) {
       cur[axes[k]] += step[axes[k]];
@@ -301,7 +306,7 @@ bool Astar::segmentTraversable(const Vec3& a, const Vec3& b) const {
   return true;
 }
 
-bool Astar::moveClear(const Index3& a, const Index3& b, double esdf_a) const {
+bool Astar::moveClear(const Index3& a, const Index3& b, double esdf_a, const Index3& start, int exempt2) const {
   if (config_.unknown_is_free && !config_.known_clearance) {
     // Every voxel the segment touches has its centre within half a voxel diagonal of a point of it, and a
     // point at distance t from a lies at length - t from b: with distances 1-Lipschitz, every touched
@@ -312,7 +317,16 @@ bool Astar::moveClear(const Index3& a, const Index3& b, double esdf_a) const {
     const double slack = (kSqrt3 + 2.0) * geo_.resolution();
     if (esdf_a + esdf_.distance(b) > 2.0 * config_.clearance + length + slack) return true;
   }
-  return segmentTraversable(geo_.indexToCoord(a), geo_.indexToCoord(b));
+  const Vec3 ca = geo_.indexToCoord(a), cb = geo_.indexToCoord(b);
+  if (!config_.known_clearance || ((a - start).squaredNorm() > exempt2 && (b - start).squaredNorm() > exempt2))
+    return segmentTraversable(ca, cb);
+  // A move near the start: the voxels there need not have known surroundings (as on the every-voxel
+  // lattice), or a vehicle that has only looked ahead could not leave on a coarse lattice either.
+  return segmentPasses(ca, cb, [&](const Index3& v) {
+    if (!geo_.inside(v)) return false;
+    const std::size_t linear = geo_.linear(v);
+    return (v - start).squaredNorm() <= exempt2 ? traversableNearStart(v, linear) : traversable(v, linear);
+  });
 }
 
 std::vector<Vec3> Astar::shorten(const std::vector<Vec3>& path) const {
@@ -515,21 +529,20 @@ std::int32_t Astar::run(const Index3& s, const Index3& g, const Index3& start, d
             (q - start).squaredNorm() <= exempt2 ? traversableNearStart(q, linear) : traversable(q, linear);
         c = pass ? kCellFree : kCellBlocked;
       }
-      // kCellClosed voxels are traversable too (and never entered again, so their moves need no check).
-      if (c != kCellBlocked && (stride == 1 || c == kCellClosed || moveClear(idx, q, esdf_here)))
-        free |= std::uint32_t{1} << k;
+      if (c != kCellBlocked) free |= std::uint32_t{1} << k;
     }
     for (int k = 0; k < 26; ++k) {
-      // Blocked, or (every voxel) cutting a blocked edge / corner, or (a coarse lattice) a blocked segment.
+      // Blocked, or (every voxel) cutting a blocked edge / corner; on a coarse lattice the move's segment is
+      // checked below, only when the move would open or improve a node (the check is the costly part there).
       const std::uint32_t needed = stride == 1 ? nb.swept[k] : std::uint32_t{1} << k;
       if ((free & needed) != needed) continue;
       std::int32_t m = cells_[cell[k]];
       if (m == kCellClosed) continue;
       std::int32_t moves[3] = {nodes_[n].moves[0], nodes_[n].moves[1], nodes_[n].moves[2]};
       ++moves[nb.type[k]];
-      if (m >= 0) {
-        if (movesCost(moves) >= movesCost(nodes_[m].moves)) continue;
-      } else {
+      if (m >= 0 && movesCost(moves) >= movesCost(nodes_[m].moves)) continue;
+      if (stride > 1 && !moveClear(idx, idx + stride * nb.offset[k], esdf_here, start, exempt2)) continue;
+      if (m < 0) {
         m = static_cast<std::int32_t>(nodes_.size());
         nodes_.push_back(Node{idx + stride * nb.offset[k], n, {0, 0, 0}, -1});
         cells_[cell[k]] = m;

@@ -193,7 +193,8 @@ std::vector<Vec3> profileSamples(const std::vector<Vec3>& path, double v_start, 
 common::Result<Trajectory> planTrajectory(const PlanRequest& request, const planning::Astar& astar,
                                           const map::Esdf& esdf, const OptimizerConfig& optimizer,
                                           const TrajectoryPlannerConfig& config, PlanReport* report,
-                                          SearchMemory* memory, const planning::Astar* scout) {
+                                          SearchMemory* memory, const planning::Astar* scout,
+                                          const planning::Astar* coarse) {
   using R = common::Result<Trajectory>;
   PlanReport local;
   PlanReport& rep = report ? *report : local;
@@ -222,9 +223,29 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
                       std::to_string(request.time - failure->t) + " s ago)");
     }
   }
-  const planning::PathResult path = astar.search(request.start, request.target, config.snap_radius);
+  planning::PathResult path = astar.search(request.start, request.target, config.snap_radius);
   rep.path_status = path.status;
   rep.path_expansions = path.expansions;
+  // The fine search ran out of budget: a long way round (a concave structure between) floods more voxels
+  // than it may expand. The same question on a coarse lattice covers stride^3 times the volume.
+  if (path.status == planning::PathStatus::kBudgetExceeded && coarse) {
+    planning::PathResult way = coarse->search(request.start, request.target, config.snap_radius);
+    rep.path_expansions += way.expansions;
+    if (way.status == planning::PathStatus::kFound) {
+      // The lattice voxel nearest the target may be a little off it: join the target's own voxel when the
+      // segment there is flyable; otherwise the way is flown as a partial path and replanned near its end.
+      const common::GridGeometry& geo = astar.geometry();
+      const Vec3 goal_voxel = geo.indexToCoord(geo.coordToIndex(request.target));
+      if ((way.path.back() - goal_voxel).norm() > 1e-9 && geo.bounds().contains(request.target) &&
+          astar.segmentTraversable(way.path.back(), goal_voxel))
+        way.path.push_back(goal_voxel);
+      way.length = 0.0;
+      for (std::size_t i = 1; i < way.path.size(); ++i) way.length += (way.path[i] - way.path[i - 1]).norm();
+      rep.coarse = true;
+      rep.path_status = planning::PathStatus::kFound;
+      path = std::move(way);
+    }
+  }
   // No path through known space (yet): when the search got min_progress closer to the target, fly
   // there (a partial trajectory, replanned on the way, as the space between comes into view);
   // otherwise the plan fails.
@@ -255,7 +276,8 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
   const std::vector<Vec3>& found = rep.scouted ? scouted : toward ? path.toward : path.path;
   rep.path_length = partial_way ? 0.0 : path.length;
   // The start may snap out of a blocked voxel; the goal may not wander off the viewpoint.
-  if (!partial_way && (path.path.back() - request.target).norm() > config.goal_tolerance) {
+  const bool coarse_short = rep.coarse && (path.path.back() - request.target).norm() > config.goal_tolerance;
+  if (!partial_way && !coarse_short && (path.path.back() - request.target).norm() > config.goal_tolerance) {
     rep.path_status = planning::PathStatus::kGoalBlocked;
     return R::Error("no path: goal_blocked (the nearest flyable voxel is " +
                     std::to_string((path.path.back() - request.target).norm()) + " m from the target)");
@@ -270,7 +292,7 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
     points = {request.start, request.target};
     length = (request.target - request.start).norm();
   }
-  bool partial = partial_way;
+  bool partial = partial_way || coarse_short;
   if (config.horizon > 0.0 && length > config.horizon) {
     // Keep the first `horizon` metres of the polyline.
     std::vector<Vec3> kept{points.front()};

@@ -876,6 +876,46 @@ TEST(Astar, KnownSurroundingsRuleIsWaivedNearTheStart) {
   EXPECT_GT(stuck.expansions, 0);
 }
 
+TEST(Astar, CoarseLatticeWaivesTheKnownSurroundingsRuleNearTheStartToo) {
+  // The flight search's rules on a 0.2 m lattice (the retry of a flight search over budget): a vehicle in
+  // a known tube whose surroundings are unseen must be able to leave on it as on the every-voxel lattice.
+  // Oracle: the exhaustive lattice search over voxels that pass the rule without surroundings within
+  // snap_radius of the start and the full rule elsewhere, every touched voxel of each move checked.
+  World world(Index3(60, 20, 20));
+  world.fill(VoxelState::kUnknown);
+  world.set(Index3(10, 9, 9), Index3(30, 11, 11), VoxelState::kFree);
+  world.set(Index3(30, 2, 2), Index3(55, 17, 17), VoxelState::kFree);
+  world.set(Index3(40, 2, 2), Index3(41, 12, 17), VoxelState::kOccupied);  // a wall to go round
+  AstarConfig config = astarConfig(0.2, false);
+  config.known_clearance = true;
+  config.stride = 2;
+  const Astar astar(world.occupancy(), world.esdf(), config);
+  AstarConfig bare = config;
+  bare.known_clearance = false;
+  const GridGeometry& g = world.geo();
+  const std::vector<std::uint8_t> full = bruteForceTraversable(world, config);
+  const std::vector<std::uint8_t> near = bruteForceTraversable(world, bare);
+  const double snap_radius = 1.0;
+  const double exempt = snap_radius / kRes;
+  const Index3 start(22, 10, 10), goal(48, 10, 10);
+  ASSERT_FALSE(full[g.linear(start)]);  // its own surroundings are unknown
+  std::vector<std::uint8_t> ok(g.size());
+  for (std::size_t l = 0; l < g.size(); ++l)
+    ok[l] = (g.unlinear(l) - start).squaredNorm() <= std::floor(exempt * exempt) ? near[l] : full[l];
+  const double want = latticeCosts(g, ok, start, 2)[g.linear(goal)];
+  ASSERT_LT(want, kInf);
+  const PathResult r = astar.search(g.indexToCoord(start), g.indexToCoord(goal), snap_radius);
+  ASSERT_EQ(r.status, PathStatus::kFound) << toString(r.status);
+  EXPECT_EQ(r.raw_path.front(), g.indexToCoord(start));
+  EXPECT_NEAR(r.raw_length, want, 1e-9);
+  EXPECT_GT(r.raw_length, (g.indexToCoord(goal) - g.indexToCoord(start)).norm() + 0.2);  // round the wall
+  for (std::size_t i = 1; i < r.raw_path.size(); ++i)
+    EXPECT_TRUE(segmentOk(g, ok, g.coordToIndex(r.raw_path[i - 1]), g.coordToIndex(r.raw_path[i]))) << i;
+  // From deeper in the tube, farther than snap_radius from known surroundings: no way out.
+  const PathResult stuck = astar.search(g.indexToCoord(Index3(12, 10, 10)), g.indexToCoord(goal), snap_radius);
+  EXPECT_EQ(stuck.status, PathStatus::kNoPath) << toString(stuck.status);
+}
+
 // A search that finds no path returns, in `toward`, the shortened path to the expanded voxel nearest
 // the goal: through a wall without an opening, the voxel next to the wall in front of the goal; with the
 // budget exhausted, a path that ends nearer the goal than the start. A found path has none.

@@ -79,19 +79,24 @@ TEST(Bench, SameSeedAndOptionsGiveTheSameRun) {
   EXPECT_NE(a.samples.back().position, c.samples.back().position);
 }
 
-TEST(Bench, ModeOverlaysSetThePlannersDistanceSearchNotTheFlightSearch) {
-  // A mode file is laid over exploration.yaml and trajectory.yaml alike: its distance_astar keys must
-  // reach the planners' search only, its astar keys the flight search only. A copy of the package's
-  // config with such a mode.
+// A copy of the package's config in a fresh temporary folder, with modes/<mode>.yaml holding `yaml`.
+std::filesystem::path configWithMode(const std::string& mode, const std::string& yaml) {
   namespace fs = std::filesystem;
   const fs::path dir = fs::temp_directory_path() / ("go_feap_modes_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::copy(GO_FEAP_CONFIG_DIR, dir, fs::copy_options::recursive);
-  std::ofstream(dir / "modes" / "probe.yaml") << "distance_astar:\n  max_expansions: 777\n  stride: 3\n"
-                                               << "astar:\n  max_expansions: 999\n";
+  std::ofstream(dir / "modes" / (mode + ".yaml")) << yaml;
+  return dir;
+}
+
+TEST(Bench, ModeOverlaysSetThePlannersDistanceSearchNotTheFlightSearch) {
+  // A mode file is laid over exploration.yaml and trajectory.yaml alike: its distance_astar keys must
+  // reach the planners' search only, its astar keys the flight search only.
+  const std::filesystem::path dir =
+      configWithMode("probe", "distance_astar:\n  max_expansions: 777\n  stride: 3\nastar:\n  max_expansions: 999\n");
   auto probe = bench::loadExplorationConfig(dir.string(), "probe");
   auto plain = bench::loadExplorationConfig(dir.string(), "go_feap");
-  fs::remove_all(dir);
+  std::filesystem::remove_all(dir);
   ASSERT_TRUE(probe) << probe.message();
   ASSERT_TRUE(plain) << plain.message();
   EXPECT_EQ(probe->distance_astar.max_expansions, 777);
@@ -99,12 +104,14 @@ TEST(Bench, ModeOverlaysSetThePlannersDistanceSearchNotTheFlightSearch) {
   EXPECT_EQ(probe->flight_astar.max_expansions, 999);
   EXPECT_EQ(probe->flight_astar.stride, plain->flight_astar.stride);
   EXPECT_EQ(probe->scout_astar.max_expansions, plain->scout_astar.max_expansions);
+  EXPECT_EQ(probe->coarse_astar.max_expansions, plain->coarse_astar.max_expansions);
   EXPECT_NE(plain->distance_astar.max_expansions, 777);
   EXPECT_NE(plain->flight_astar.max_expansions, 999);
   // Validation messages name the section.
   EXPECT_EQ(probe->distance_astar.name, "distance_astar");
   EXPECT_EQ(probe->flight_astar.name, "astar");
   EXPECT_EQ(probe->scout_astar.name, "scout_astar");
+  EXPECT_EQ(probe->coarse_astar.name, "coarse_astar");
 }
 
 TEST(Bench, ConfigErrorsNameTheModeOrKey) {
@@ -113,6 +120,12 @@ TEST(Bench, ConfigErrorsNameTheModeOrKey) {
   EXPECT_NE(unknown.message().find("unknown planner 'warp'"), std::string::npos) << unknown.message();
   auto missing = bench::loadExplorationConfig("/nonexistent", "go_feap");
   EXPECT_FALSE(missing);
+  // A bad key of the coarse flight search stops the run with its section and key.
+  const std::filesystem::path dir = configWithMode("bad", "coarse_astar:\n  stride: 0\n");
+  auto bad = bench::loadExplorationConfig(dir.string(), "bad");
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.message().find("coarse_astar: stride"), std::string::npos) << bad.message();
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -1033,6 +1033,72 @@ TEST(TrajectoryPlanner, WithoutAKnownWayItScoutsAlongAWayThroughUnseenSpace) {
   EXPECT_NE(planner.validate().message().find("scout_min_length"), std::string::npos);
 }
 
+// A start inside a cup whose bottom faces the target: the way out and round is 13 m long, and the fine
+// search's budget runs out flooding the cup. The coarse search (the flight search's rules on a 0.3 m lattice)
+// finds the way round; it is flown whole, joined to the target's voxel off the lattice, within the limits,
+// in flyable space, and no shorter than the exhaustive fine search's path. Without a coarse search, or with
+// one that runs out as well, the plan fails with the fine search's status as before.
+TEST(TrajectoryPlanner, AFlightSearchOverBudgetIsSearchedAgainOnTheCoarseLattice) {
+  World world(Vec3(8, 8, 2));
+  world.setFree(Index3(0, 0, 0), Index3(79, 79, 19));
+  world.addBox(Index3(50, 10, 0), Index3(51, 70, 19));  // the cup's bottom, x 5.0-5.2 m
+  world.addBox(Index3(20, 10, 0), Index3(51, 11, 19));  // its sides, y 1.0-1.2 m and 6.9-7.1 m
+  world.addBox(Index3(20, 69, 0), Index3(51, 70, 19));
+  world.sync();
+  AstarConfig fine_config = flightAstarConfig();
+  fine_config.max_expansions = 5000;
+  const Astar astar(world.occupancy(), world.esdf(), fine_config);
+  AstarConfig coarse_config = flightAstarConfig();
+  coarse_config.stride = 3;
+  coarse_config.max_expansions = 5000;
+  const Astar coarse(world.occupancy(), world.esdf(), coarse_config);
+  const OptimizerConfig optimizer = optimizerConfig();
+  traj::TrajectoryPlannerConfig planner;
+  planner.horizon = 0.0;  // the whole way
+  traj::PlanRequest request;
+  request.start = Vec3(4.05, 4.05, 1.05);
+  request.target = Vec3(6.55, 4.05, 1.05);  // a voxel centre, 2.5 m from the start: off the start's lattice
+  traj::PlanReport report;
+  const auto fine_only = traj::planTrajectory(request, astar, world.esdf(), optimizer, planner, &report);
+  ASSERT_FALSE(fine_only);
+  EXPECT_NE(fine_only.message().find("budget_exceeded"), std::string::npos) << fine_only.message();
+  EXPECT_FALSE(report.coarse);
+
+  const auto planned =
+      traj::planTrajectory(request, astar, world.esdf(), optimizer, planner, &report, nullptr, nullptr, &coarse);
+  ASSERT_TRUE(planned) << planned.message();
+  EXPECT_TRUE(report.coarse);
+  EXPECT_EQ(report.path_status, PathStatus::kFound);
+  EXPECT_GT(report.path_expansions, fine_config.max_expansions);  // both searches counted
+  EXPECT_FALSE(planned->partial);
+  const Vec3 end = planned->position.position(planned->duration());
+  EXPECT_LT((end - request.target).norm(), 0.05) << end.transpose();
+  AstarConfig exhaustive_config = flightAstarConfig();
+  exhaustive_config.max_expansions = 5000000;
+  const Astar exhaustive(world.occupancy(), world.esdf(), exhaustive_config);
+  const PathResult shortest = exhaustive.search(request.start, request.target, planner.snap_radius);
+  ASSERT_EQ(shortest.status, PathStatus::kFound);
+  EXPECT_GT(shortest.expansions, fine_config.max_expansions);
+  EXPECT_GE(report.path_length, shortest.length - 1e-9);
+  EXPECT_LE(report.path_length, 1.2 * shortest.length);
+  const double res = world.geo().resolution();
+  EXPECT_TRUE(traj::staysFlyable(planned->position, astar, optimizer.min_clearance - 0.5 * std::sqrt(3.0) * res,
+                                 planner.snap_radius));
+  EXPECT_TRUE(traj::checkTrajectory(planned->position, world.esdf(), optimizer).ok());
+  for (int i = 0; i <= 400; ++i) {  // never through the cup
+    const Vec3 p = planned->position.position(planned->duration() * i / 400.0);
+    EXPECT_GT(world.boxDistance(p), optimizer.min_clearance - 1e-6) << p.transpose();
+  }
+
+  coarse_config.max_expansions = 50;
+  const Astar starved(world.occupancy(), world.esdf(), coarse_config);
+  const auto neither =
+      traj::planTrajectory(request, astar, world.esdf(), optimizer, planner, &report, nullptr, nullptr, &starved);
+  ASSERT_FALSE(neither);
+  EXPECT_NE(neither.message().find("budget_exceeded"), std::string::npos) << neither.message();
+  EXPECT_FALSE(report.coarse);
+}
+
 // A way through unseen space that flying its known start does not bring into view (here the map never
 // changes, as when the camera cannot see the gap from where the scouts end): the target is scouted
 // max_scouts times, and the next scout counts a failed attempt instead of being flown. Plans that are not

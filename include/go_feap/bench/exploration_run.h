@@ -58,6 +58,7 @@ struct ExplorationConfig {
   double planner_rate = 10.0;          ///< Hz: replanning checks
   planning::AstarConfig flight_astar;  ///< trajectory.yaml astar: paths to fly
   planning::AstarConfig scout_astar;   ///< trajectory.yaml scout_astar: the way on through unseen space
+  planning::AstarConfig coarse_astar;  ///< trajectory.yaml coarse_astar: the flight search on a coarse lattice
   LoopConfig loop;
   /// Every group's validate(), plus the rates and the extrinsic; names the bad key.
   common::Status validate() const;
@@ -120,7 +121,7 @@ class ExplorationRun {
   map::DepthIntrinsics intrinsics_;
   std::unique_ptr<map::VoxelMap> map_;
   std::unique_ptr<frontier::FrontierFinder> finder_;
-  std::unique_ptr<planning::Astar> distance_astar_, flight_astar_, scout_astar_;
+  std::unique_ptr<planning::Astar> distance_astar_, flight_astar_, scout_astar_, coarse_astar_;
   std::unique_ptr<planning::TourPlanner> tour_planner_;
   planning::ObstacleWindow window_;
   planning::ViewpointCache viewpoint_cache_;

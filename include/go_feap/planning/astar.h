@@ -171,8 +171,13 @@ class Astar {
             const Index3* lattice = nullptr) const;
   /// A move between the traversable lattice voxels a and b (config.stride > 1): true when the ESDF at both
   /// ends proves the segment clear (unknown_is_free without known_clearance only), else segmentTraversable()
-  /// of their centres.
-  bool moveClear(const Index3& a, const Index3& b, double esdf_a) const;
+  /// of their centres, with the known-surroundings rule waived for the voxels whose squared distance from
+  /// voxel `start` is at most exempt2 (squared voxels), as the search waives it near the start.
+  bool moveClear(const Index3& a, const Index3& b, double esdf_a, const Index3& start, int exempt2) const;
+  /// True when pass(v) holds for every voxel v the segment from a to b touches (both ends inside the
+  /// grid's bounds); where the segment crosses an edge or corner, every voxel around it.
+  template <typename Pass>
+  bool segmentPasses(const Vec3& a, const Vec3& b, const Pass& pass) const;
   /// One A* run from voxel `from` to voxel `to` with at most `budget` expansions; the known-surroundings
   /// rule is waived within snap_radius of voxel `start` (the vehicle's, whichever way the run goes).
   /// Sets result.status and result.expansions; returns the node that reached `to` (-1 when none) and

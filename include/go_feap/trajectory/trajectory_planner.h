@@ -118,6 +118,8 @@ struct PlanReport {
   bool toward = false;         ///< no path was found: the trajectory goes towards the target (PathResult::toward)
   bool remembered = false;     ///< failed without searching: the same search failed lately (SearchMemory)
   bool scouted = false;        ///< no known path, nor toward: the known start of the scout search's path is flown
+  /// The flight search ran out of budget and the coarse search found the path that is flown
+  bool coarse = false;
   /// A failed plan whose path was found but whose spline was refused where it touched unseen space
   /// (staysFlyable(), the last such refusal): a look there may mend it (lookAtUnseen()).
   std::optional<Vec3> unseen_at;
@@ -213,10 +215,18 @@ std::vector<Vec3> profileSamples(const std::vector<Vec3>& path, double v_start, 
 /// with `scout`; the longest start of that path that `astar` could fly (segmentTraversable) is flown
 /// when it is scout_min_length long or more: a partial trajectory facing along the path
 /// (PlanReport::scouted), replanned on the way as the space beyond comes into view.
+///
+/// With a `coarse` search (the flight search's rules on a lattice of stride > 1 voxels, whose moves pass
+/// `astar`'s segmentTraversable()), a request whose flight search runs out of budget is searched again
+/// with it before anything else is tried: a way round a large structure floods more voxels than the
+/// fine budget, and the coarse lattice covers stride^3 times the volume for the same count. Its path is
+/// flown (PlanReport::coarse), joined to the target's voxel when that segment is flyable too; when not,
+/// the path is flown as a partial one (it ends within about a lattice step of the target).
 common::Result<Trajectory> planTrajectory(const PlanRequest& request, const planning::Astar& astar,
                                           const map::Esdf& esdf, const OptimizerConfig& optimizer,
                                           const TrajectoryPlannerConfig& config, PlanReport* report = nullptr,
-                                          SearchMemory* memory = nullptr, const planning::Astar* scout = nullptr);
+                                          SearchMemory* memory = nullptr, const planning::Astar* scout = nullptr,
+                                          const planning::Astar* coarse = nullptr);
 
 /// The longest start of `path` (from path.front()) whose every piece passes astar.segmentTraversable(),
 /// checked in steps of half a voxel: the path's vertices up to the last such point, and that point.
