@@ -228,9 +228,11 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
   rep.path_expansions = path.expansions;
   // The fine search ran out of budget: a long way round (a concave structure between) floods more voxels
   // than it may expand. The same question on a coarse lattice covers stride^3 times the volume.
+  std::string coarse_failure;  // what the coarse search said, for the error message
   if (path.status == planning::PathStatus::kBudgetExceeded && coarse) {
     planning::PathResult way = coarse->search(request.start, request.target, config.snap_radius);
     rep.path_expansions += way.expansions;
+    coarse_failure = std::string(" (coarse search: ") + planning::toString(way.status) + ")";
     if (way.status == planning::PathStatus::kFound) {
       // The lattice voxel nearest the target may be a little off it: join the target's own voxel when the
       // segment there is flyable; otherwise the way is flown as a partial path and replanned near its end.
@@ -268,7 +270,7 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
   }
   if (path.status != planning::PathStatus::kFound && !toward && scouted.empty()) {
     if (memory && no_path) memory->remember(request.start, request.target, path.status, path.expansions, request.time);
-    return R::Error(std::string("no path: ") + planning::toString(path.status));
+    return R::Error(std::string("no path: ") + planning::toString(path.status) + coarse_failure);
   }
   rep.toward = toward;
   rep.scouted = !scouted.empty();

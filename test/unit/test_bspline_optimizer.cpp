@@ -1095,7 +1095,8 @@ TEST(TrajectoryPlanner, AFlightSearchOverBudgetIsSearchedAgainOnTheCoarseLattice
   const auto neither =
       traj::planTrajectory(request, astar, world.esdf(), optimizer, planner, &report, nullptr, nullptr, &starved);
   ASSERT_FALSE(neither);
-  EXPECT_NE(neither.message().find("budget_exceeded"), std::string::npos) << neither.message();
+  EXPECT_NE(neither.message().find("budget_exceeded (coarse search: budget_exceeded)"), std::string::npos)
+      << neither.message();
   EXPECT_FALSE(report.coarse);
 }
 
