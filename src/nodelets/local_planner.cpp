@@ -209,6 +209,10 @@ class LocalPlanner : public nodelet::Nodelet {
       last_out_.reset();
       return;
     }
+    if (visited_.choose(proposal, now, local_config_))
+      NODELET_INFO_STREAM(getName() << ": the place of the target for frontier " << plan->frontier_ids.front()
+                                    << " was chosen " << local_config_.max_choices << " times within "
+                                    << local_config_.choice_window << " s: it is not proposed again");
     target_ = proposal;
     target_quicker_ = decision == planning::TargetDecision::kSwitchQuicker;
     target_frontier_ = plan->frontier_ids.front();

@@ -49,6 +49,9 @@ Status LocalPlannerConfig::validate() const {
   if (!(same_target_yaw >= 0.0 && std::isfinite(same_target_yaw))) return err("same_target_yaw", "must be finite and >= 0");
   if (!(reached_speed > 0.0 && std::isfinite(reached_speed))) return err("reached_speed", "must be finite and > 0");
   if (max_visits < 1) return err("max_visits", "must be >= 1");
+  if (max_choices < 0) return err("max_choices", "must be >= 0");
+  if (!positiveFinite(choice_window)) return err("choice_window", "must be finite and > 0");
+  if (!(choice_radius >= 0.0 && std::isfinite(choice_radius))) return err("choice_radius", "must be finite and >= 0");
   if (!(scan_step > 0.0 && scan_step < 3.14159)) return err("scan_step", "must be in (0, pi)");
   return Status::Ok();
 }
@@ -221,9 +224,31 @@ void VisitedViewpoints::add(const Viewpoint& reached, const LocalPlannerConfig& 
   visits_.push_back({reached.position, reached.yaw, 1});
 }
 
+namespace {
+// Within choice_radius and same_target_yaw: choices of the same place.
+bool samePlace(const Vec3& p, double yaw, const Viewpoint& vp, const LocalPlannerConfig& config) {
+  return (p - vp.position).norm() <= config.choice_radius && std::abs(wrapAngle(yaw - vp.yaw)) <= config.same_target_yaw;
+}
+}  // namespace
+
+bool VisitedViewpoints::choose(const Viewpoint& chosen, double t, const LocalPlannerConfig& config) {
+  if (config.max_choices == 0) return false;
+  choices_.erase(std::remove_if(choices_.begin(), choices_.end(),
+                                [&](const Choice& c) { return c.t < t - config.choice_window; }),
+                 choices_.end());
+  choices_.push_back({chosen.position, chosen.yaw, t});
+  const auto same = std::count_if(choices_.begin(), choices_.end(),
+                                  [&](const Choice& c) { return samePlace(c.position, c.yaw, chosen, config); });
+  if (same < config.max_choices) return false;
+  exhausted_places_.push_back(choices_.back());
+  return true;
+}
+
 bool VisitedViewpoints::exhausted(const Viewpoint& viewpoint, const LocalPlannerConfig& config) const {
   for (const Visit& v : visits_)
     if (v.count >= config.max_visits && samePose(v.position, v.yaw, viewpoint, config)) return true;
+  for (const Choice& c : exhausted_places_)
+    if (samePlace(c.position, c.yaw, viewpoint, config)) return true;
   return false;
 }
 

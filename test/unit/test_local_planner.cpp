@@ -64,6 +64,9 @@ TEST(LocalPlannerConfig, ValidateNamesTheBadKey) {
   expectBad("max_range", [](LocalPlannerConfig& c) { c.max_range = 0; });
   expectBad("min_dist", [](LocalPlannerConfig& c) { c.min_dist = 0; });
   expectBad("max_visits", [](LocalPlannerConfig& c) { c.max_visits = 0; });
+  expectBad("max_choices", [](LocalPlannerConfig& c) { c.max_choices = -1; });
+  expectBad("choice_window", [](LocalPlannerConfig& c) { c.choice_window = 0; });
+  expectBad("choice_radius", [](LocalPlannerConfig& c) { c.choice_radius = std::nan(""); });
 }
 
 TEST(ObstacleRatio, SyntheticImages) {

@@ -608,3 +608,67 @@ TEST(Viewpoints, PosesReachedMaxVisitsTimesAreNoLongerProposed) {
                 std::abs(go_feap::planning::wrapAngle(other->path.front().yaw - chosen.yaw)),
             0.1);
 }
+
+// A place chosen max_choices times within choice_window is exhausted, reached or not, at any height within
+// choice_radius and heading within same_target_yaw, and left out of the local plan: two viewpoints whose
+// frontier regrows with a new id on every pass (so that neither is reached nor its frontier failed) cannot
+// take turns for ever. Choices further apart in time than the window, or of other places, do not add up.
+TEST(Viewpoints, PlacesChosenMaxChoicesTimesWithinTheWindowAreNoLongerProposed) {
+  const ViewpointConfig cfg = testConfig();
+  World w(Index3(40, 40, 20));
+  w.set(Index3(25, 15, 5), Index3(30, 25, 15), VoxelState::kUnknown);
+  const Frontier f = frontierOf(w);
+  go_feap::planning::LocalPlannerConfig local;
+  local.max_choices = 3;
+  local.choice_window = 60.0;
+  local.choice_radius = 1.0;
+  go_feap::planning::ObstacleWindow window(local.window_size, local.clutter_threshold);
+  go_feap::planning::AstarConfig ac;
+  ac.clearance = 0.2;
+  ac.unknown_is_free = true;
+  const go_feap::planning::Astar astar(w.map(), w.esdf(), ac);
+  const Vec3 vehicle(0.8, 2.0, 1.0);
+  auto plan = [&](const go_feap::planning::VisitedViewpoints* visited) {
+    return go_feap::planning::chooseLocalTarget(vehicle, 0.0, {f}, 0.5, 1.5, w.map(), w.esdf(), astar, window, cfg,
+                                                local, nullptr, visited);
+  };
+  const auto first = plan(nullptr);
+  ASSERT_TRUE(first) << first.message();
+  const Viewpoint a = first->path.front();
+  Viewpoint higher = a, elsewhere = a, turned = a;
+  higher.position.z() += 0.8;                      // the same place, offered at another height
+  elsewhere.position.x() += 2.0 * local.choice_radius;  // the other end of a ping-pong
+  turned.yaw += 2.0 * local.same_target_yaw;
+  go_feap::planning::VisitedViewpoints visited;
+  EXPECT_FALSE(visited.choose(a, 0.0, local));
+  EXPECT_FALSE(visited.choose(elsewhere, 3.0, local));
+  EXPECT_FALSE(visited.choose(higher, 6.0, local));
+  EXPECT_FALSE(visited.choose(elsewhere, 9.0, local));
+  EXPECT_FALSE(visited.exhausted(a, local));
+  auto again = plan(&visited);
+  ASSERT_TRUE(again) << again.message();
+  EXPECT_LT((again->path.front().position - a.position).norm(), 1e-9);
+  EXPECT_TRUE(visited.choose(a, 12.0, local));  // the third choice of this place in 12 s
+  EXPECT_TRUE(visited.exhausted(a, local));
+  EXPECT_TRUE(visited.exhausted(higher, local));
+  EXPECT_FALSE(visited.exhausted(turned, local));
+  EXPECT_FALSE(visited.exhausted(elsewhere, local));
+  EXPECT_EQ(visited.size(), 0u);  // nothing was reached
+  const auto other = plan(&visited);
+  ASSERT_TRUE(other) << other.message();
+  EXPECT_FALSE(visited.exhausted(other->path.front(), local));
+  EXPECT_GT((other->path.front().position - a.position).norm() +
+                std::abs(go_feap::planning::wrapAngle(other->path.front().yaw - a.yaw)),
+            0.1);
+  EXPECT_TRUE(visited.exhausted(a, local));  // for good: long after the window
+  EXPECT_FALSE(visited.choose(turned, 1000.0, local));
+
+  // Choices a window apart never add up; with max_choices 0 nothing is ever exhausted.
+  go_feap::planning::VisitedViewpoints spread;
+  for (int k = 0; k < 5; ++k) EXPECT_FALSE(spread.choose(a, k * (local.choice_window + 1.0), local)) << k;
+  EXPECT_FALSE(spread.exhausted(a, local));
+  local.max_choices = 0;
+  go_feap::planning::VisitedViewpoints off;
+  for (int k = 0; k < 5; ++k) EXPECT_FALSE(off.choose(a, k, local)) << k;
+  EXPECT_FALSE(off.exhausted(a, local));
+}

@@ -46,6 +46,14 @@ struct LocalPlannerConfig {
   /// a viewpoint pose reached this many times (VisitedViewpoints) is no longer proposed: its frontier
   /// is not being cleared from there
   int max_visits = 3;
+  /// A place chosen as the target this many times within choice_window s (VisitedViewpoints::choose())
+  /// is exhausted, reached or not: two viewpoints whose frontiers regrow with new ids on every pass take
+  /// turns without either being reached or its frontier failing (0 = off)
+  int max_choices = 3;
+  double choice_window = 60.0;  ///< s
+  /// m: choices within this distance of each other (and same_target_yaw) are of the same place; the
+  /// viewpoint sampler offers a place at several heights
+  double choice_radius = 1.0;
   /// rad: when no viewpoint can be planned (at the start, facing a wall, nothing known around), the
   /// vehicle turns in place by this much to look around (scanTarget()).
   double scan_step = 2.0943951023931953;
@@ -193,10 +201,18 @@ int remainingVisible(const frontier::Viewpoint& viewpoint, const std::vector<fro
 /// does every frame), so the blacklist of failed frontiers cannot stop two viewpoints whose frontiers
 /// are never cleared from taking turns for ever (seen in the powerplant: 1700 s between two poses 4 m
 /// apart). A pose reached max_visits times (within same_target_distance and same_target_yaw) is
-/// exhausted: chooseLocalTarget() no longer proposes it.
+/// exhausted: chooseLocalTarget() no longer proposes it. Some such pairs are never reached either: each
+/// pass shows a few voxels of the frontier, which regrows with a new id whose best viewpoint is the
+/// other one (seen in the powerplant: 137 s between two poses 3.9 m apart, at a frontier along the box's
+/// face). So a place chosen max_choices times within choice_window s (choose()) is exhausted too.
 class VisitedViewpoints {
  public:
+  /// Counts a visit to the pose `reached`.
   void add(const frontier::Viewpoint& reached, const LocalPlannerConfig& config);
+  /// Counts `chosen` as the target chosen at time t (s); the choice that makes max_choices of one place
+  /// (within choice_radius and same_target_yaw) in the last choice_window s exhausts that place for good.
+  /// Returns true when this choice exhausted it.
+  bool choose(const frontier::Viewpoint& chosen, double t, const LocalPlannerConfig& config);
   bool exhausted(const frontier::Viewpoint& viewpoint, const LocalPlannerConfig& config) const;
   std::size_t size() const { return visits_.size(); }
 
@@ -206,7 +222,14 @@ class VisitedViewpoints {
     double yaw;
     int count;
   };
+  struct Choice {
+    common::Vec3 position;
+    double yaw;
+    double t;
+  };
   std::vector<Visit> visits_;
+  std::vector<Choice> choices_;            ///< within the last choice_window s
+  std::vector<Choice> exhausted_places_;  ///< chosen max_choices times within choice_window
 };
 
 /// Candidate viewpoints kept per frontier between planning steps (FUEL keeps them in the frontier
