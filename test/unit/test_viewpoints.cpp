@@ -565,23 +565,35 @@ TEST(Viewpoints, TargetsAreComparedByPathNotStraightLine) {
 
 // A pose reached max_visits times is exhausted and left out of the local plan: two viewpoints whose
 // frontiers are never cleared (and get new ids every frame) cannot take turns for ever.
+// One unknown block's frontier in an open room, and the local plan for it from a fixed pose.
+struct OneFrontierPlan {
+  OneFrontierPlan() : w(Index3(40, 40, 20)), f(unknownBlock(w)), astar(w.map(), w.esdf(), searchConfig()) {}
+  static Frontier unknownBlock(World& world) {
+    world.set(Index3(25, 15, 5), Index3(30, 25, 15), VoxelState::kUnknown);
+    return frontierOf(world);
+  }
+  static go_feap::planning::AstarConfig searchConfig() {
+    go_feap::planning::AstarConfig ac;
+    ac.clearance = 0.2;
+    ac.unknown_is_free = true;
+    return ac;
+  }
+  go_feap::common::Result<go_feap::planning::LocalPlan> operator()(
+      const go_feap::planning::LocalPlannerConfig& local, const go_feap::planning::VisitedViewpoints* visited) const {
+    go_feap::planning::ObstacleWindow window(local.window_size, local.clutter_threshold);
+    return go_feap::planning::chooseLocalTarget(Vec3(0.8, 2.0, 1.0), 0.0, {f}, 0.5, 1.5, w.map(), w.esdf(), astar,
+                                                window, testConfig(), local, nullptr, visited);
+  }
+  World w;
+  Frontier f;
+  go_feap::planning::Astar astar;
+};
+
 TEST(Viewpoints, PosesReachedMaxVisitsTimesAreNoLongerProposed) {
-  const ViewpointConfig cfg = testConfig();
-  World w(Index3(40, 40, 20));
-  w.set(Index3(25, 15, 5), Index3(30, 25, 15), VoxelState::kUnknown);
-  const Frontier f = frontierOf(w);
   go_feap::planning::LocalPlannerConfig local;
   local.max_visits = 2;
-  go_feap::planning::ObstacleWindow window(local.window_size, local.clutter_threshold);
-  go_feap::planning::AstarConfig ac;
-  ac.clearance = 0.2;
-  ac.unknown_is_free = true;
-  const go_feap::planning::Astar astar(w.map(), w.esdf(), ac);
-  const Vec3 vehicle(0.8, 2.0, 1.0);
-  auto plan = [&](const go_feap::planning::VisitedViewpoints* visited) {
-    return go_feap::planning::chooseLocalTarget(vehicle, 0.0, {f}, 0.5, 1.5, w.map(), w.esdf(), astar, window, cfg,
-                                                local, nullptr, visited);
-  };
+  const OneFrontierPlan one;
+  auto plan = [&](const go_feap::planning::VisitedViewpoints* visited) { return one(local, visited); };
   const auto first = plan(nullptr);
   ASSERT_TRUE(first) << first.message();
   const Viewpoint chosen = first->path.front();
@@ -614,24 +626,12 @@ TEST(Viewpoints, PosesReachedMaxVisitsTimesAreNoLongerProposed) {
 // frontier regrows with a new id on every pass (so that neither is reached nor its frontier failed) cannot
 // take turns for ever. Choices further apart in time than the window, or of other places, do not add up.
 TEST(Viewpoints, PlacesChosenMaxChoicesTimesWithinTheWindowAreNoLongerProposed) {
-  const ViewpointConfig cfg = testConfig();
-  World w(Index3(40, 40, 20));
-  w.set(Index3(25, 15, 5), Index3(30, 25, 15), VoxelState::kUnknown);
-  const Frontier f = frontierOf(w);
   go_feap::planning::LocalPlannerConfig local;
   local.max_choices = 3;
   local.choice_window = 60.0;
   local.choice_radius = 1.0;
-  go_feap::planning::ObstacleWindow window(local.window_size, local.clutter_threshold);
-  go_feap::planning::AstarConfig ac;
-  ac.clearance = 0.2;
-  ac.unknown_is_free = true;
-  const go_feap::planning::Astar astar(w.map(), w.esdf(), ac);
-  const Vec3 vehicle(0.8, 2.0, 1.0);
-  auto plan = [&](const go_feap::planning::VisitedViewpoints* visited) {
-    return go_feap::planning::chooseLocalTarget(vehicle, 0.0, {f}, 0.5, 1.5, w.map(), w.esdf(), astar, window, cfg,
-                                                local, nullptr, visited);
-  };
+  const OneFrontierPlan one;
+  auto plan = [&](const go_feap::planning::VisitedViewpoints* visited) { return one(local, visited); };
   const auto first = plan(nullptr);
   ASSERT_TRUE(first) << first.message();
   const Viewpoint a = first->path.front();
