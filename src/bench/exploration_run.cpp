@@ -269,7 +269,9 @@ void ExplorationRun::planStep() {
   what << "target frontier " << plan->frontier_ids.front() << " viewpoint " << vp.position.transpose() << " yaw "
        << vp.yaw << " (tour of " << tour->frontier_ids.size() << ", " << summaries.size() << " frontiers)";
   log(what.str());
-  if (visited_.choose(vp, t_, config_.local))
+  // Only a target replacing another counts: after a failed plan the same target is chosen anew, which
+  // the failed attempts on its frontier already count.
+  if (current && visited_.choose(vp, t_, config_.local))
     log("this target's place was chosen " + std::to_string(config_.local.max_choices) + " times within " +
         std::to_string(config_.local.choice_window) + " s: it is not proposed again");
   target_ = Target{vp.position, vp.yaw, plan->frontier_ids.front(), t_,

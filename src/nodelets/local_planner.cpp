@@ -209,7 +209,9 @@ class LocalPlanner : public nodelet::Nodelet {
       last_out_.reset();
       return;
     }
-    if (visited_.choose(proposal, now, local_config_))
+    // Only a target replacing another counts: after a failed plan the same target is chosen anew, which
+    // the failed attempts on its frontier already count.
+    if (current && visited_.choose(proposal, now, local_config_))
       NODELET_INFO_STREAM(getName() << ": the place of the target for frontier " << plan->frontier_ids.front()
                                     << " was chosen " << local_config_.max_choices << " times within "
                                     << local_config_.choice_window << " s: it is not proposed again");

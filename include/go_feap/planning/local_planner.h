@@ -46,7 +46,7 @@ struct LocalPlannerConfig {
   /// a viewpoint pose reached this many times (VisitedViewpoints) is no longer proposed: its frontier
   /// is not being cleared from there
   int max_visits = 3;
-  /// A place chosen as the target this many times within choice_window s (VisitedViewpoints::choose())
+  /// A place chosen to replace the target this many times within choice_window s (VisitedViewpoints::choose())
   /// is exhausted, reached or not: two viewpoints whose frontiers regrow with new ids on every pass take
   /// turns without either being reached or its frontier failing (0 = off)
   int max_choices = 3;
@@ -209,7 +209,8 @@ class VisitedViewpoints {
  public:
   /// Counts a visit to the pose `reached`.
   void add(const frontier::Viewpoint& reached, const LocalPlannerConfig& config);
-  /// Counts `chosen` as the target chosen at time t (s); the choice that makes max_choices of one place
+  /// Counts `chosen` as the target chosen at time t (s) to replace another (the callers leave out a target
+  /// chosen anew after a failed plan: failed attempts on its frontier count those); the choice that makes max_choices of one place
   /// (within choice_radius and same_target_yaw) in the last choice_window s exhausts that place for good.
   /// Returns true when this choice exhausted it.
   bool choose(const frontier::Viewpoint& chosen, double t, const LocalPlannerConfig& config);
