@@ -229,7 +229,7 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
   // The fine search ran out of budget: a long way round (a concave structure between) floods more voxels
   // than it may expand. The same question on a coarse lattice covers stride^3 times the volume.
   std::string coarse_failure;  // what the coarse search said, for the error message
-  if (path.status == planning::PathStatus::kBudgetExceeded && coarse) {
+  if (path.status == planning::PathStatus::kBudgetExceeded && coarse && config.coarse_retry) {
     planning::PathResult way = coarse->search(request.start, request.target, config.snap_radius);
     rep.path_expansions += way.expansions;
     coarse_failure = std::string(" (coarse search: ") + planning::toString(way.status) + ")";

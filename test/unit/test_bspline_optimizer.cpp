@@ -1090,6 +1090,15 @@ TEST(TrajectoryPlanner, AFlightSearchOverBudgetIsSearchedAgainOnTheCoarseLattice
     EXPECT_GT(world.boxDistance(p), optimizer.min_clearance - 1e-6) << p.transpose();
   }
 
+  planner.coarse_retry = false;  // switched off: as without a coarse search
+  const auto off =
+      traj::planTrajectory(request, astar, world.esdf(), optimizer, planner, &report, nullptr, nullptr, &coarse);
+  ASSERT_FALSE(off);
+  EXPECT_NE(off.message().find("budget_exceeded"), std::string::npos) << off.message();
+  EXPECT_EQ(off.message().find("coarse"), std::string::npos) << off.message();
+  EXPECT_FALSE(report.coarse);
+  planner.coarse_retry = true;
+
   coarse_config.max_expansions = 50;
   const Astar starved(world.occupancy(), world.esdf(), coarse_config);
   const auto neither =

@@ -73,6 +73,9 @@ struct TrajectoryPlannerConfig {
   /// acceleration switch faster, which on short hops a 6-span spline cannot; the quicker of the two
   /// valid results is flown (0 = off).
   int fine_spans = 12;
+  /// A flight search over its budget is asked again with the coarse search given to planTrajectory()
+  /// (false: the coarse search is never used)
+  bool coarse_retry = true;
   /// Timed fit (profileSamples()): before optimising, the path is timed with a speed profile that
   /// accelerates and brakes at this share of a_max (cruising at feasibility_margin * v_max, slower
   /// round corners), and the spline whose control points are its samples, profile_knot_span apart
@@ -216,7 +219,7 @@ std::vector<Vec3> profileSamples(const std::vector<Vec3>& path, double v_start, 
 /// when it is scout_min_length long or more: a partial trajectory facing along the path
 /// (PlanReport::scouted), replanned on the way as the space beyond comes into view.
 ///
-/// With a `coarse` search (the flight search's rules on a lattice of stride > 1 voxels, whose moves pass
+/// With a `coarse` search and config.coarse_retry (the flight search's rules on a lattice of stride > 1 voxels, whose moves pass
 /// `astar`'s segmentTraversable()), a request whose flight search runs out of budget is searched again
 /// with it before anything else is tried: a way round a large structure floods more voxels than the
 /// fine budget, and the coarse lattice covers stride^3 times the volume for the same count. Its path is
