@@ -271,9 +271,12 @@ void ExplorationRun::planStep() {
   log(what.str());
   // Only a target replacing another counts: after a failed plan the same target is chosen anew, which
   // the failed attempts on its frontier already count.
-  if (current && visited_.choose(vp, t_, config_.local))
-    log("this target's place was chosen " + std::to_string(config_.local.max_choices) + " times within " +
-        std::to_string(config_.local.choice_window) + " s: it is not proposed again");
+  if (current && visited_.choose(vp, t_, config_.local)) {
+    std::ostringstream exhausted;
+    exhausted << "this target's place was chosen " << config_.local.max_choices << " times within "
+              << config_.local.choice_window << " s: it is not proposed again";
+    log(exhausted.str());
+  }
   target_ = Target{vp.position, vp.yaw, plan->frontier_ids.front(), t_,
                    decision == planning::TargetDecision::kSwitchQuicker};
 }

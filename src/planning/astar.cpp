@@ -189,6 +189,10 @@ bool Astar::traversable(const Index3& idx, std::size_t linear) const {
   return freeAndKnown(idx, linear, true) && esdf_.distance(idx) >= blocked_below_;
 }
 
+bool Astar::traversableFrom(const Index3& idx, std::size_t linear, const Index3& start, int exempt2) const {
+  return (idx - start).squaredNorm() <= exempt2 ? traversableNearStart(idx, linear) : traversable(idx, linear);
+}
+
 bool Astar::traversableNearStart(const Index3& idx, std::size_t linear) const {
   if ((idx.array() < box_lo_.array()).any() || (idx.array() > box_hi_.array()).any()) return false;
   return freeAndKnown(idx, linear, false) && esdf_.distance(idx) >= blocked_below_;
@@ -317,15 +321,10 @@ bool Astar::moveClear(const Index3& a, const Index3& b, double esdf_a, const Ind
     const double slack = (kSqrt3 + 2.0) * geo_.resolution();
     if (esdf_a + esdf_.distance(b) > 2.0 * config_.clearance + length + slack) return true;
   }
-  const Vec3 ca = geo_.indexToCoord(a), cb = geo_.indexToCoord(b);
-  if (!config_.known_clearance || ((a - start).squaredNorm() > exempt2 && (b - start).squaredNorm() > exempt2))
-    return segmentTraversable(ca, cb);
-  // A move near the start: the voxels there need not have known surroundings (as on the every-voxel
-  // lattice), or a vehicle that has only looked ahead could not leave on a coarse lattice either.
-  return segmentPasses(ca, cb, [&](const Index3& v) {
-    if (!geo_.inside(v)) return false;
-    const std::size_t linear = geo_.linear(v);
-    return (v - start).squaredNorm() <= exempt2 ? traversableNearStart(v, linear) : traversable(v, linear);
+  // The voxels near the start need not have known surroundings here either, or a vehicle that has only
+  // looked ahead could not leave on a coarse lattice.
+  return segmentPasses(geo_.indexToCoord(a), geo_.indexToCoord(b), [&](const Index3& v) {
+    return geo_.inside(v) && traversableFrom(v, geo_.linear(v), start, exempt2);
   });
 }
 
@@ -525,9 +524,7 @@ std::int32_t Astar::run(const Index3& s, const Index3& g, const Index3& start, d
       std::int32_t& c = cells_[cell[k]];
       if (c == kCellUnseen) {
         const std::size_t linear = geo_.linear(q);
-        const bool pass =
-            (q - start).squaredNorm() <= exempt2 ? traversableNearStart(q, linear) : traversable(q, linear);
-        c = pass ? kCellFree : kCellBlocked;
+        c = traversableFrom(q, linear, start, exempt2) ? kCellFree : kCellBlocked;
       }
       if (c != kCellBlocked) free |= std::uint32_t{1} << k;
     }

@@ -238,11 +238,11 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
       // segment there is flyable; otherwise the way is flown as a partial path and replanned near its end.
       const common::GridGeometry& geo = astar.geometry();
       const Vec3 goal_voxel = geo.indexToCoord(geo.coordToIndex(request.target));
-      if ((way.path.back() - goal_voxel).norm() > 1e-9 && geo.bounds().contains(request.target) &&
-          astar.segmentTraversable(way.path.back(), goal_voxel))
+      const double last_leg = (goal_voxel - way.path.back()).norm();
+      if (last_leg > 1e-9 && astar.segmentTraversable(way.path.back(), goal_voxel)) {
         way.path.push_back(goal_voxel);
-      way.length = 0.0;
-      for (std::size_t i = 1; i < way.path.size(); ++i) way.length += (way.path[i] - way.path[i - 1]).norm();
+        way.length += last_leg;
+      }
       rep.coarse = true;
       rep.path_status = planning::PathStatus::kFound;
       path = std::move(way);
@@ -278,8 +278,10 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
   const std::vector<Vec3>& found = rep.scouted ? scouted : toward ? path.toward : path.path;
   rep.path_length = partial_way ? 0.0 : path.length;
   // The start may snap out of a blocked voxel; the goal may not wander off the viewpoint.
-  const bool coarse_short = rep.coarse && (path.path.back() - request.target).norm() > config.goal_tolerance;
-  if (!partial_way && !coarse_short && (path.path.back() - request.target).norm() > config.goal_tolerance) {
+  // A coarse path ending short of the target (its last leg not flyable) is flown as a partial one instead.
+  const bool short_of_goal = !partial_way && (path.path.back() - request.target).norm() > config.goal_tolerance;
+  const bool coarse_short = short_of_goal && rep.coarse;
+  if (short_of_goal && !rep.coarse) {
     rep.path_status = planning::PathStatus::kGoalBlocked;
     return R::Error("no path: goal_blocked (the nearest flyable voxel is " +
                     std::to_string((path.path.back() - request.target).norm()) + " m from the target)");

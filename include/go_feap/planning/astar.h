@@ -162,6 +162,9 @@ class Astar {
   bool traversable(const Index3& idx, std::size_t linear) const;
   /// traversable() without the known-surroundings rule: what a voxel near the search's start needs.
   bool traversableNearStart(const Index3& idx, std::size_t linear) const;
+  /// traversableNearStart() within sqrt(exempt2) voxels of voxel `start` (squared voxel distance at most
+  /// exempt2), traversable() beyond: what a search from `start` needs of a voxel.
+  bool traversableFrom(const Index3& idx, std::size_t linear, const Index3& start, int exempt2) const;
   /// Not occupied, unknown only when config.unknown_is_free, and (with `surroundings` and
   /// config.known_clearance) the voxels config.clearance away along each axis known.
   bool freeAndKnown(const Index3& idx, std::size_t linear, bool surroundings) const;
@@ -171,8 +174,8 @@ class Astar {
             const Index3* lattice = nullptr) const;
   /// A move between the traversable lattice voxels a and b (config.stride > 1): true when the ESDF at both
   /// ends proves the segment clear (unknown_is_free without known_clearance only), else segmentTraversable()
-  /// of their centres, with the known-surroundings rule waived for the voxels whose squared distance from
-  /// voxel `start` is at most exempt2 (squared voxels), as the search waives it near the start.
+  /// of their centres with each touched voxel judged by traversableFrom(start, exempt2), as the search judges
+  /// its voxels.
   bool moveClear(const Index3& a, const Index3& b, double esdf_a, const Index3& start, int exempt2) const;
   /// True when pass(v) holds for every voxel v the segment from a to b touches (both ends inside the
   /// grid's bounds); where the segment crosses an edge or corner, every voxel around it.
