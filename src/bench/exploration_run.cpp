@@ -317,6 +317,9 @@ void ExplorationRun::trajectoryStep() {
     return;
   }
   if (planned) {
+    if (report.braked)
+      log("no flyable trajectory to frontier " + std::to_string(target_->frontier) + " from " +
+          std::to_string(request.velocity.norm()) + " m/s: braking to plan again from rest");
     if (report.coarse)
       log("flight search to frontier " + std::to_string(target_->frontier) + " over budget: coarse path of " +
           std::to_string(report.path_length) + " m");

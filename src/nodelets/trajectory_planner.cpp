@@ -192,6 +192,9 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     if (planned && report.coarse)
       NODELET_DEBUG_STREAM(getName() << ": flight search to frontier " << target_frontier_
                                      << " over budget: flying the coarse search's path (" << report.path_length << " m)");
+    if (planned && report.braked)
+      NODELET_INFO_STREAM(getName() << ": no flyable trajectory to frontier " << target_frontier_ << " from "
+                                    << request.velocity.norm() << " m/s: braking to plan again from rest");
     if (planned && report.scouted)
       NODELET_INFO_STREAM(getName() << ": no known path to frontier " << target_frontier_
                                     << ": scouting along a way through unseen space");

@@ -50,6 +50,8 @@ common::Status TrajectoryPlannerConfig::validate() const {
     return common::Status::Error("planner: failed_search_memory must be finite and >= 0");
   if (!std::isfinite(scout_min_length) || scout_min_length < 0.0)
     return common::Status::Error("planner: scout_min_length must be finite and >= 0");
+  if (!std::isfinite(brake_speed) || brake_speed < 0.0)
+    return common::Status::Error("planner: brake_speed must be finite and >= 0");
   if (!std::isfinite(look_tolerance) || look_tolerance < 0.0 || look_tolerance > M_PI)
     return common::Status::Error("planner: look_tolerance must be in [0, pi]");
   if (max_scouts < 0) return common::Status::Error("planner: max_scouts must be >= 0");
@@ -189,6 +191,24 @@ std::vector<Vec3> profileSamples(const std::vector<Vec3>& path, double v_start, 
   out.back() = path.back();
   return out;
 }
+
+namespace {
+
+/// Brake to a stop where the reference is while turning to `yaw`; at rest, hold still for as long as
+/// the turn takes (the replanning rule goes by the position's duration). Moving: the next plan comes
+/// from wherever the braking has got to. Partial, with the target as goal.
+Trajectory turnTowards(const PlanRequest& request, double yaw, const OptimizerConfig& optimizer) {
+  Trajectory out;
+  out.position = safeStop(request.start, request.velocity, optimizer.a_max);
+  auto turn = yawTurn(request.yaw, yaw, out.position.duration(), optimizer);
+  out.yaw = turn ? std::move(turn).value() : UniformBspline(Eigen::MatrixXd::Constant(1, 4, request.yaw), 3, 0.1);
+  if (request.velocity.norm() < 1e-9) out.position = UniformBspline(request.start.replicate(1, 4), 3, out.yaw.duration());
+  out.goal = request.target;
+  out.partial = true;
+  return out;
+}
+
+}  // namespace
 
 common::Result<Trajectory> planTrajectory(const PlanRequest& request, const planning::Astar& astar,
                                           const map::Esdf& esdf, const OptimizerConfig& optimizer,
@@ -419,7 +439,17 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
     rep.refits = 0;
     rep.used_fit = false;
   }
-  if (!spline) return R::Error("optimisation failed: " + spline.message());
+  if (!spline) {
+    // From a start moving faster than brake_speed (most often a turn-around: a new target behind or beside
+    // the vehicle) the optimiser keeps the start velocity, and its curve swings out of the space the
+    // search vouched for. Brake to rest, turning towards the target, and ask again from there (a partial
+    // trajectory, replanned as it ends) rather than fail the target.
+    if (config.brake_speed > 0.0 && v0 > config.brake_speed) {
+      rep.braked = true;
+      return turnTowards(request, request.target_yaw, optimizer);
+    }
+    return R::Error("optimisation failed: " + spline.message());
+  }
   rep.unseen_at.reset();
   Trajectory out;
   out.position = std::move(spline).value();
@@ -483,24 +513,6 @@ bool startEnclosed(const PlanReport& report, const TrajectoryPlannerConfig& conf
   const double r = config.snap_radius / resolution;
   return report.path_expansions < 4.0 / 3.0 * M_PI * r * r * r;
 }
-
-namespace {
-
-/// Brake to a stop where the reference is while turning to `yaw`; at rest, hold still for as long as
-/// the turn takes (the replanning rule goes by the position's duration). Moving: the next plan comes
-/// from wherever the braking has got to. Partial, with the target as goal.
-Trajectory turnTowards(const PlanRequest& request, double yaw, const OptimizerConfig& optimizer) {
-  Trajectory out;
-  out.position = safeStop(request.start, request.velocity, optimizer.a_max);
-  auto turn = yawTurn(request.yaw, yaw, out.position.duration(), optimizer);
-  out.yaw = turn ? std::move(turn).value() : UniformBspline(Eigen::MatrixXd::Constant(1, 4, request.yaw), 3, 0.1);
-  if (request.velocity.norm() < 1e-9) out.position = UniformBspline(request.start.replicate(1, 4), 3, out.yaw.duration());
-  out.goal = request.target;
-  out.partial = true;
-  return out;
-}
-
-}  // namespace
 
 Trajectory lookAroundTrajectory(const PlanRequest& request, const TrajectoryPlannerConfig& config,
                                 const OptimizerConfig& optimizer) {

@@ -1308,13 +1308,16 @@ TEST(TrajectoryPlanner, StaysFlyableFollowsTheSearchRulesWithTheGivenClearance) 
 // mid-turn and never looked there) lets the search through and refuses every spline along it. The plan
 // fails and says where; the vehicle turns to look there (once the heading is more than look_tolerance
 // off it) instead of failing the frontier, and with that voxel seen the same plan succeeds.
+// Every voxel mapped free but `unseen`, when given.
+void mapFreeBut(World& world, const std::optional<Vec3>& unseen) {
+  world.setFree(Index3::Zero(), world.geo().dims() - Index3::Ones());
+  if (unseen) world.setUnknown(world.geo().coordToIndex(*unseen));
+  world.sync();
+}
+
 TEST(TrajectoryPlanner, AWayRefusedForUnseenSpaceBesideItLooksThere) {
   const Vec3 unseen(3.05, 2.15, 1.05);  // beside the way's voxels at y 2.05
-  auto corridor = [&](World& world, bool seen) {
-    world.setFree(Index3::Zero(), world.geo().dims() - Index3::Ones());
-    if (!seen) world.setUnknown(world.geo().coordToIndex(unseen));
-    world.sync();
-  };
+  auto corridor = [&](World& world, bool seen) { mapFreeBut(world, seen ? std::nullopt : std::optional<Vec3>(unseen)); };
   World world(Vec3(6, 4, 2));
   corridor(world, false);
   const Astar astar(world.occupancy(), world.esdf(), flightAstarConfig());
@@ -1372,6 +1375,69 @@ TEST(TrajectoryPlanner, AWayRefusedForUnseenSpaceBesideItLooksThere) {
   const auto planned = traj::planTrajectory(request, seen_astar, seen.esdf(), optimizer, planner, &report);
   ASSERT_TRUE(planned) << planned.message();
   EXPECT_FALSE(report.unseen_at.has_value());
+}
+
+TEST(TrajectoryPlanner, NoFlyableSplineFromAMovingStartBrakesToPlanAgainFromRest) {
+  // The way from (1, 2) to (5, 2) passes an unseen voxel: no spline along it stays in known flyable space.
+  World world(Vec3(6, 4, 2));
+  mapFreeBut(world, Vec3(3.05, 2.15, 1.05));
+  const Astar astar(world.occupancy(), world.esdf(), flightAstarConfig());
+  const OptimizerConfig optimizer = optimizerConfig();
+  traj::TrajectoryPlannerConfig planner;
+  planner.brake_speed = 0.3;
+  traj::PlanRequest request;
+  request.start = Vec3(1.05, 2.05, 1.05);
+  request.velocity = Vec3(-0.6, 0.8, 0.0);  // 1 m/s, away from the target and across the way
+  request.yaw = kPi / 2;
+  request.target = Vec3(5.05, 2.05, 1.05);
+  request.target_yaw = -0.5;
+  traj::PlanReport report;
+  const auto braked = traj::planTrajectory(request, astar, world.esdf(), optimizer, planner, &report);
+  ASSERT_TRUE(braked) << braked.message();
+  EXPECT_TRUE(report.braked);
+  EXPECT_TRUE(braked->partial);  // replanned as it ends
+  EXPECT_LT((braked->goal - request.target).norm(), 1e-12);
+  // Continuous with the reference, braking along its velocity within a_max to rest, turning to the target's heading.
+  const traj::TrajectorySample first = traj::sampleTrajectory(*braked, 0.0);
+  EXPECT_LT((first.position - request.start).norm(), 1e-9);
+  EXPECT_LT((first.velocity - request.velocity).norm(), 1e-9);
+  double v_max = 0.0, a_max = 0.0;
+  finiteDifferenceDynamics(braked->position, 2000, v_max, a_max);
+  EXPECT_LE(a_max, optimizer.a_max * 1.01);
+  const traj::TrajectorySample last = traj::sampleTrajectory(*braked, braked->duration());
+  EXPECT_LT(last.velocity.norm(), 1e-6);
+  const double stopping = request.velocity.squaredNorm() / (2.0 * optimizer.a_max);
+  EXPECT_LE((last.position - request.start).norm(), stopping * 1.05 + 1e-6);
+  EXPECT_GT((last.position - request.start).dot(request.velocity), 0.0);
+  EXPECT_NEAR(std::remainder(traj::sampleTrajectory(*braked, braked->yaw.duration()).yaw - request.target_yaw, 2 * kPi),
+              0.0, 1e-9);
+
+  // From rest there is nothing to brake: the failure stands (and counts), as it does with braking off or
+  // from a start slower than brake_speed.
+  traj::PlanRequest at_rest = request;
+  at_rest.velocity.setZero();
+  auto failed = traj::planTrajectory(at_rest, astar, world.esdf(), optimizer, planner, &report);
+  ASSERT_FALSE(failed);
+  EXPECT_FALSE(report.braked);
+  EXPECT_NE(failed.message().find("leaves known flyable space"), std::string::npos) << failed.message();
+  traj::PlanRequest slow = request;
+  slow.velocity = request.velocity * 0.25;
+  EXPECT_FALSE(traj::planTrajectory(slow, astar, world.esdf(), optimizer, planner, &report));
+  traj::TrajectoryPlannerConfig off = planner;
+  off.brake_speed = 0.0;
+  failed = traj::planTrajectory(request, astar, world.esdf(), optimizer, off, &report);
+  ASSERT_FALSE(failed);
+  EXPECT_FALSE(report.braked);
+  // Where the spline is flyable, braking is not needed: the moving start plans straight on.
+  World seen(Vec3(6, 4, 2));
+  mapFreeBut(seen, std::nullopt);
+  const Astar seen_astar(seen.occupancy(), seen.esdf(), flightAstarConfig());
+  const auto planned = traj::planTrajectory(request, seen_astar, seen.esdf(), optimizer, planner, &report);
+  ASSERT_TRUE(planned) << planned.message();
+  EXPECT_FALSE(report.braked);
+  EXPECT_FALSE(planned->partial);
+  off.brake_speed = -0.1;
+  EXPECT_NE(off.validate().message().find("brake_speed"), std::string::npos);
 }
 
 TEST(TrajectoryPlanner, FailedPlanRecoveryLooksAroundThenAtUnseenSpaceOnceThenFails) {

@@ -131,7 +131,7 @@ void readTrajectoryPlanner(R& p, trajectory::TrajectoryPlannerConfig& c) {
   p.get("planner/failed_search_memory", c.failed_search_memory).get("planner/scout_min_length", c.scout_min_length);
   p.get("planner/look_tolerance", c.look_tolerance).get("planner/max_scouts", c.max_scouts);
   p.get("planner/fine_spans", c.fine_spans).get("planner/profile_acceleration", c.profile_acceleration);
-  p.get("planner/coarse_retry", c.coarse_retry);
+  p.get("planner/coarse_retry", c.coarse_retry).get("planner/brake_speed", c.brake_speed);
   p.get("planner/profile_knot_span", c.profile_knot_span).get("planner/profile_ramp", c.profile_ramp);
   p.get("planner/profile_corner_cut", c.profile_corner_cut);
   p.get("planner/profile_max_cross_speed", c.profile_max_cross_speed);

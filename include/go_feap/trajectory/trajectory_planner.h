@@ -73,6 +73,11 @@ struct TrajectoryPlannerConfig {
   /// acceleration switch faster, which on short hops a 6-span spline cannot; the quicker of the two
   /// valid results is flown (0 = off).
   int fine_spans = 12;
+  /// m/s: when no flyable spline is found from a start moving faster than this, the vehicle brakes to
+  /// rest, turning towards the target, and the plan is asked again from there (PlanReport::braked; the
+  /// optimiser keeps the start velocity, which on a turn-around swings the curve out of known space)
+  /// instead of failing the target (0 = never)
+  double brake_speed = 0.3;
   /// A flight search over its budget is asked again with the coarse search given to planTrajectory()
   /// (false: the coarse search is never used)
   bool coarse_retry = true;
@@ -113,6 +118,8 @@ struct PlanReport {
   int refits = 0;              ///< slower refits needed
   bool used_fit = false;       ///< the unoptimised (refitted) spline was kept: it passed the checks
   bool profiled = false;       ///< the timed fit (profileSamples()) was flown
+  /// No flyable spline from a start faster than brake_speed: braking to rest (partial) is flown instead
+  bool braked = false;
   bool fine = false;           ///< the optimisation with fine_spans spans was the quicker
   planning::PathStatus path_status = planning::PathStatus::kNoPath;
   double path_length = 0.0;    ///< m
