@@ -334,7 +334,8 @@ void ExplorationRun::trajectoryStep() {
       "): " + planned.message());
   // Enclosed start: look around; a way refused for unseen space: look there once; else the failure counts.
   trajectory::RecoveryPlan recovery = trajectory::recoverFromFailedPlan(
-      request, report, config_.planner, config_.optimizer, map_->geometry().resolution(), &target_->looked_at_unseen);
+      request, report, config_.planner, config_.optimizer, map_->geometry().resolution(), &target_->looked_at_unseen,
+      &search_memory_);
   switch (recovery.kind) {
     case trajectory::Recovery::kLookAround:
       log("the start region cannot be left (" + std::to_string(report.path_expansions) +
@@ -342,7 +343,7 @@ void ExplorationRun::trajectoryStep() {
       break;
     case trajectory::Recovery::kLookAtUnseen: {
       std::ostringstream what;
-      what << "the way to frontier " << target_->frontier << " touches unseen space at ("
+      what << "the way to frontier " << target_->frontier << " leads through unseen space at ("
            << report.unseen_at->transpose() << "): looking there";
       log(what.str());
       break;

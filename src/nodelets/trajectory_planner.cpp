@@ -203,14 +203,14 @@ class TrajectoryPlanner : public nodelet::Nodelet {
                                     << trajectory::toString(reason) << "): " << planned.message());
       // Enclosed start: look around; a way refused for unseen space: look there once; else the failure counts.
       trajectory::RecoveryPlan recovery = trajectory::recoverFromFailedPlan(
-          request, report, planner_, optimizer_, astar_->geometry().resolution(), &looked_at_unseen_);
+          request, report, planner_, optimizer_, astar_->geometry().resolution(), &looked_at_unseen_, &search_memory_);
       switch (recovery.kind) {
         case trajectory::Recovery::kLookAround:
           NODELET_WARN_STREAM(getName() << ": the start region cannot be left (" << report.path_expansions
                                         << " voxels reachable): looking around");
           break;
         case trajectory::Recovery::kLookAtUnseen:
-          NODELET_WARN_STREAM(getName() << ": the way to frontier " << target_frontier_ << " touches unseen space at ("
+          NODELET_WARN_STREAM(getName() << ": the way to frontier " << target_frontier_ << " leads through unseen space at ("
                                         << report.unseen_at->transpose() << "): looking there");
           break;
         case trajectory::Recovery::kFail:

@@ -113,6 +113,15 @@ std::optional<SearchMemory::Failure> SearchMemory::recall(const Vec3& start, con
   return std::nullopt;
 }
 
+void SearchMemory::forget(const Vec3& start, const Vec3& goal, const TrajectoryPlannerConfig& config) {
+  entries_.erase(std::remove_if(entries_.begin(), entries_.end(),
+                                [&](const Entry& e) {
+                                  return (e.start - start).norm() <= config.snap_radius &&
+                                         (e.goal - goal).norm() <= config.goal_tolerance;
+                                }),
+                 entries_.end());
+}
+
 std::vector<Vec3> profileSamples(const std::vector<Vec3>& path, double v_start, double a_start,
                                  const SpeedProfile& profile, double* knot_span) {
   auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
@@ -290,6 +299,9 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
   }
   if (path.status != planning::PathStatus::kFound && !toward && scouted.empty()) {
     if (memory && no_path) memory->remember(request.start, request.target, path.status, path.expansions, request.time);
+    // Known space does not lead there, and no known start of a way does: the way is through space not yet
+    // seen, which a look towards the target may show.
+    if (path.status == planning::PathStatus::kNoPath) rep.unseen_at = request.target;
     return R::Error(std::string("no path: ") + planning::toString(path.status) + coarse_failure);
   }
   rep.toward = toward;
@@ -536,7 +548,7 @@ std::optional<Trajectory> lookAtUnseen(const PlanRequest& request, const PlanRep
 
 RecoveryPlan recoverFromFailedPlan(const PlanRequest& request, const PlanReport& report,
                                    const TrajectoryPlannerConfig& config, const OptimizerConfig& optimizer,
-                                   double resolution, bool* looked_at_unseen) {
+                                   double resolution, bool* looked_at_unseen, SearchMemory* memory) {
   RecoveryPlan out;
   if (startEnclosed(report, config, resolution)) {
     out.kind = Recovery::kLookAround;
@@ -546,6 +558,7 @@ RecoveryPlan recoverFromFailedPlan(const PlanRequest& request, const PlanReport&
   if (!*looked_at_unseen) {
     if (auto look = lookAtUnseen(request, report, config, optimizer)) {
       *looked_at_unseen = true;
+      if (memory) memory->forget(request.start, request.target, config);
       out.kind = Recovery::kLookAtUnseen;
       out.trajectory = std::move(*look);
       return out;

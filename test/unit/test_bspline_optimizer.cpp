@@ -1440,6 +1440,53 @@ TEST(TrajectoryPlanner, NoFlyableSplineFromAMovingStartBrakesToPlanAgainFromRest
   EXPECT_NE(off.validate().message().find("brake_speed"), std::string::npos);
 }
 
+TEST(TrajectoryPlanner, NoWayThroughKnownSpaceLooksTowardsTheTargetOnceAndSearchesAgain) {
+  // Two rooms mapped free with an unseen gap between: no way through known space, nor a known start of one.
+  World world(Vec3(8, 4, 2));
+  twoRooms(world);
+  const Astar astar(world.occupancy(), world.esdf(), flightAstarConfig());
+  const OptimizerConfig optimizer = optimizerConfig();
+  traj::TrajectoryPlannerConfig planner;
+  planner.min_progress = 0.0;
+  traj::SearchMemory memory;
+  traj::PlanRequest request;
+  request.start = Vec3(1.0, 2.0, 1.0);
+  request.target = Vec3(7.0, 2.0, 1.0);
+  request.yaw = kPi / 2;  // facing +y; the target lies along +x
+  request.time = 10.0;
+  traj::PlanReport report;
+  ASSERT_FALSE(traj::planTrajectory(request, astar, world.esdf(), optimizer, planner, &report, &memory));
+  EXPECT_EQ(report.path_status, PathStatus::kNoPath);
+  ASSERT_TRUE(report.unseen_at.has_value());  // the way is through unseen space: towards the target
+  EXPECT_LT((*report.unseen_at - request.target).norm(), 1e-12);
+  EXPECT_EQ(memory.size(), 1u);
+  // Asked again at once, the memory answers, without a point to look at.
+  traj::PlanReport remembered;
+  ASSERT_FALSE(traj::planTrajectory(request, astar, world.esdf(), optimizer, planner, &remembered, &memory));
+  EXPECT_TRUE(remembered.remembered);
+  EXPECT_FALSE(remembered.unseen_at.has_value());
+
+  // The recovery turns to face the target once and forgets the failed search, so that the plan after the
+  // look searches the map it shows; the next failure for that target counts.
+  bool looked = false;
+  traj::RecoveryPlan r = traj::recoverFromFailedPlan(request, report, planner, optimizer, 0.1, &looked, &memory);
+  ASSERT_EQ(r.kind, traj::Recovery::kLookAtUnseen);
+  EXPECT_TRUE(looked);
+  EXPECT_NEAR(std::remainder(traj::sampleTrajectory(r.trajectory, r.trajectory.yaw.duration()).yaw, 2 * kPi), 0.0,
+              1e-9);
+  EXPECT_EQ(memory.size(), 0u);
+  traj::PlanReport after;
+  ASSERT_FALSE(traj::planTrajectory(request, astar, world.esdf(), optimizer, planner, &after, &memory));
+  EXPECT_FALSE(after.remembered);
+  EXPECT_EQ(traj::recoverFromFailedPlan(request, after, planner, optimizer, 0.1, &looked, &memory).kind,
+            traj::Recovery::kFail);
+  // Another request's memory is kept by a forget that does not match it.
+  memory.forget(request.start + Vec3(2.0, 0.0, 0.0), request.target, planner);
+  EXPECT_EQ(memory.size(), 1u);
+  memory.forget(request.start + Vec3(0.5, 0.0, 0.0), request.target + Vec3(0.0, 0.2, 0.0), planner);
+  EXPECT_EQ(memory.size(), 0u);
+}
+
 TEST(TrajectoryPlanner, FailedPlanRecoveryLooksAroundThenAtUnseenSpaceOnceThenFails) {
   const OptimizerConfig optimizer = optimizerConfig();
   const traj::TrajectoryPlannerConfig planner;

@@ -131,7 +131,8 @@ struct PlanReport {
   /// The flight search ran out of budget and the coarse search found the path that is flown
   bool coarse = false;
   /// A failed plan whose path was found but whose spline was refused where it touched unseen space
-  /// (staysFlyable(), the last such refusal): a look there may mend it (lookAtUnseen()).
+  /// (staysFlyable(), the last such refusal), or whose search found no way through known space (the
+  /// target: the way there is through space not yet seen): a look there may mend it (lookAtUnseen()).
   std::optional<Vec3> unseen_at;
 };
 
@@ -151,6 +152,9 @@ class SearchMemory {
     double t;
   };
   std::optional<Failure> recall(const Vec3& start, const Vec3& goal, double t, const TrajectoryPlannerConfig& config);
+  /// Drops what is remembered for (start, goal) (matched as recall() does): the map around has changed
+  /// (a look there), and the next request searches again.
+  void forget(const Vec3& start, const Vec3& goal, const TrajectoryPlannerConfig& config);
   std::size_t size() const { return entries_.size(); }
 
  private:
@@ -291,12 +295,13 @@ struct RecoveryPlan {
 bool scoutedTooOften(const PlanReport& report, const TrajectoryPlannerConfig& config, int* scouts);
 
 /// The one order both the bench and the trajectory_planner nodelet follow after planTrajectory() failed:
-/// an enclosed start (startEnclosed()) looks around; otherwise a way refused for unseen space looks there
-/// once per target (`*looked_at_unseen`, the caller's flag for its current target, is read and set);
-/// otherwise the vehicle brakes and the failure counts against the frontier.
+/// an enclosed start (startEnclosed()) looks around; otherwise a way refused for unseen space (or not
+/// found through known space) looks there once per target (`*looked_at_unseen`, the caller's flag for its
+/// current target, is read and set; the request's failed search is dropped from `memory`, so that the plan
+/// after the look searches again); otherwise the vehicle brakes and the failure counts against the frontier.
 RecoveryPlan recoverFromFailedPlan(const PlanRequest& request, const PlanReport& report,
                                    const TrajectoryPlannerConfig& config, const OptimizerConfig& optimizer,
-                                   double resolution, bool* looked_at_unseen);
+                                   double resolution, bool* looked_at_unseen, SearchMemory* memory = nullptr);
 
 /// The replanning decision for a trajectory being flown (DESIGN §3.7). `current` is null when none is
 /// flown; t is the time since its start; target_changed is the caller's own notion of a new target.
