@@ -108,17 +108,13 @@ std::optional<SearchMemory::Failure> SearchMemory::recall(const Vec3& start, con
                                 }),
                  entries_.end());
   for (const Entry& e : entries_)
-    if ((e.start - start).norm() <= config.snap_radius && (e.goal - goal).norm() <= config.goal_tolerance)
-      return e.failure;
+    if (e.matches(start, goal, config)) return e.failure;
   return std::nullopt;
 }
 
 void SearchMemory::forget(const Vec3& start, const Vec3& goal, const TrajectoryPlannerConfig& config) {
   entries_.erase(std::remove_if(entries_.begin(), entries_.end(),
-                                [&](const Entry& e) {
-                                  return (e.start - start).norm() <= config.snap_radius &&
-                                         (e.goal - goal).norm() <= config.goal_tolerance;
-                                }),
+                                [&](const Entry& e) { return e.matches(start, goal, config); }),
                  entries_.end());
 }
 
@@ -458,6 +454,7 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
     // trajectory, replanned as it ends) rather than fail the target.
     if (config.brake_speed > 0.0 && v0 > config.brake_speed) {
       rep.braked = true;
+      rep.unseen_at.reset();  // not a failure: nothing to look at
       return turnTowards(request, request.target_yaw, optimizer);
     }
     return R::Error("optimisation failed: " + spline.message());

@@ -1165,19 +1165,36 @@ TEST(TrajectoryPlanner, ATargetScoutedTooOftenCountsAFailedAttempt) {
 // goal_tolerance) within failed_search_memory fails at once with the same status and expansions (so
 // startEnclosed() judges it the same); another goal, a later time or no memory searches again, and a
 // toward trajectory is not a failure to remember.
-TEST(TrajectoryPlanner, FailedSearchesAreRememberedForAWhile) {
-  World world(Vec3(8, 4, 2));
-  twoRooms(world);
-  const Astar astar(world.occupancy(), world.esdf(), flightAstarConfig());
-  const OptimizerConfig optimizer = optimizerConfig();
+// Two rooms mapped free with an unseen gap between, and a request from the first to the second: no way
+// through known space, nor a known start of one, nor (min_progress 0) flying towards the target.
+struct NoWayBetweenRooms {
+  NoWayBetweenRooms() : world(Vec3(8, 4, 2)), astar(mapped(world).occupancy(), world.esdf(), flightAstarConfig()) {
+    planner.min_progress = 0.0;  // no flying towards: the room's far side is a plain failure
+    planner.failed_search_memory = 3.0;
+    request.start = Vec3(1.0, 2.0, 1.0);
+    request.target = Vec3(7.0, 2.0, 1.0);
+    request.time = 10.0;
+  }
+  static World& mapped(World& w) {
+    twoRooms(w);
+    return w;
+  }
+  World world;
+  Astar astar;
+  OptimizerConfig optimizer = optimizerConfig();
   traj::TrajectoryPlannerConfig planner;
-  planner.min_progress = 0.0;  // no flying towards: the room's far side is a plain failure
-  planner.failed_search_memory = 3.0;
   traj::SearchMemory memory;
   traj::PlanRequest request;
-  request.start = Vec3(1.0, 2.0, 1.0);
-  request.target = Vec3(7.0, 2.0, 1.0);
-  request.time = 10.0;
+};
+
+TEST(TrajectoryPlanner, FailedSearchesAreRememberedForAWhile) {
+  NoWayBetweenRooms rooms;
+  const World& world = rooms.world;
+  const Astar& astar = rooms.astar;
+  const OptimizerConfig& optimizer = rooms.optimizer;
+  traj::TrajectoryPlannerConfig& planner = rooms.planner;
+  traj::SearchMemory& memory = rooms.memory;
+  const traj::PlanRequest request = rooms.request;
   auto plan = [&](const traj::PlanRequest& r, traj::SearchMemory* m, traj::PlanReport& report) {
     return traj::planTrajectory(r, astar, world.esdf(), optimizer, planner, &report, m);
   };
@@ -1441,19 +1458,14 @@ TEST(TrajectoryPlanner, NoFlyableSplineFromAMovingStartBrakesToPlanAgainFromRest
 }
 
 TEST(TrajectoryPlanner, NoWayThroughKnownSpaceLooksTowardsTheTargetOnceAndSearchesAgain) {
-  // Two rooms mapped free with an unseen gap between: no way through known space, nor a known start of one.
-  World world(Vec3(8, 4, 2));
-  twoRooms(world);
-  const Astar astar(world.occupancy(), world.esdf(), flightAstarConfig());
-  const OptimizerConfig optimizer = optimizerConfig();
-  traj::TrajectoryPlannerConfig planner;
-  planner.min_progress = 0.0;
-  traj::SearchMemory memory;
-  traj::PlanRequest request;
-  request.start = Vec3(1.0, 2.0, 1.0);
-  request.target = Vec3(7.0, 2.0, 1.0);
+  NoWayBetweenRooms rooms;
+  const World& world = rooms.world;
+  const Astar& astar = rooms.astar;
+  const OptimizerConfig& optimizer = rooms.optimizer;
+  const traj::TrajectoryPlannerConfig& planner = rooms.planner;
+  traj::SearchMemory& memory = rooms.memory;
+  traj::PlanRequest request = rooms.request;
   request.yaw = kPi / 2;  // facing +y; the target lies along +x
-  request.time = 10.0;
   traj::PlanReport report;
   ASSERT_FALSE(traj::planTrajectory(request, astar, world.esdf(), optimizer, planner, &report, &memory));
   EXPECT_EQ(report.path_status, PathStatus::kNoPath);

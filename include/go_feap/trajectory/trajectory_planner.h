@@ -161,6 +161,10 @@ class SearchMemory {
   struct Entry {
     Vec3 start, goal;
     Failure failure;
+    /// The same request: start within snap_radius, goal within goal_tolerance.
+    bool matches(const Vec3& s, const Vec3& g, const TrajectoryPlannerConfig& config) const {
+      return (start - s).norm() <= config.snap_radius && (goal - g).norm() <= config.goal_tolerance;
+    }
   };
   std::vector<Entry> entries_;
 };
