@@ -455,9 +455,7 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
     if (config.brake_speed > 0.0 && v0 > config.brake_speed) {
       rep.braked = true;
       rep.unseen_at.reset();  // not a failure: nothing to look at
-      Trajectory brake = turnTowards(request, request.target_yaw, optimizer);
-      brake.hold = std::min(brake.duration(), (v0 - config.brake_speed) / optimizer.a_max);
-      return brake;
+      return turnTowards(request, request.target_yaw, optimizer);
     }
     return R::Error("optimisation failed: " + spline.message());
   }
@@ -584,9 +582,6 @@ ReplanReason replanReason(const Trajectory* current, double t, const Vec3& targe
   // A trajectory that ends at its target needs no replanning for running out: it arrives.
   const bool ends_at_target = current && !current->partial && in.target_distance_to_end <= replan.target_tolerance;
   if (ends_at_target && reason == ReplanReason::kShortTimeLeft) return ReplanReason::kNone;
-  // A brake is flown until the speed is down to brake_speed (Trajectory::hold).
-  if (current && current->partial && t < current->hold && reason == ReplanReason::kShortTimeLeft)
-    return ReplanReason::kNone;
   return reason;
 }
 

@@ -22,10 +22,6 @@ struct Trajectory {
   UniformBspline yaw;
   Vec3 goal = Vec3::Zero();  ///< m, the target it was planned for (its end, unless partial)
   bool partial = false;      ///< ends short of the goal, `horizon` along the path: replanned before its end
-  /// s: a partial trajectory is not replanned for running out before this time (a brake after no flyable
-  /// spline from a moving start: until the speed is down to brake_speed, so that the plan is asked again
-  /// from a start it can answer, not from one as fast as before)
-  double hold = 0.0;
   double duration() const { return position.duration(); }
 };
 
