@@ -1161,10 +1161,6 @@ TEST(TrajectoryPlanner, ATargetScoutedTooOftenCountsAFailedAttempt) {
   EXPECT_NE(unlimited.validate().message().find("max_scouts"), std::string::npos);
 }
 
-// A search that found no path is remembered: the same request (start within snap_radius, goal within
-// goal_tolerance) within failed_search_memory fails at once with the same status and expansions (so
-// startEnclosed() judges it the same); another goal, a later time or no memory searches again, and a
-// toward trajectory is not a failure to remember.
 // Two rooms mapped free with an unseen gap between, and a request from the first to the second: no way
 // through known space, nor a known start of one, nor (min_progress 0) flying towards the target.
 struct NoWayBetweenRooms {
@@ -1187,6 +1183,10 @@ struct NoWayBetweenRooms {
   traj::PlanRequest request;
 };
 
+// A search that found no path is remembered: the same request (start within snap_radius, goal within
+// goal_tolerance) within failed_search_memory fails at once with the same status and expansions (so
+// startEnclosed() judges it the same); another goal, a later time or no memory searches again, and a
+// toward trajectory is not a failure to remember.
 TEST(TrajectoryPlanner, FailedSearchesAreRememberedForAWhile) {
   NoWayBetweenRooms rooms;
   const World& world = rooms.world;
@@ -1320,11 +1320,6 @@ TEST(TrajectoryPlanner, StaysFlyableFollowsTheSearchRulesWithTheGivenClearance) 
   EXPECT_FALSE(unseen_at.has_value());
 }
 
-// The flight search checks the known surroundings of a voxel 0.3 m out along each axis, the flight check
-// every voxel within min_clearance: one unseen voxel right beside a straight way (the vehicle stopped
-// mid-turn and never looked there) lets the search through and refuses every spline along it. The plan
-// fails and says where; the vehicle turns to look there (once the heading is more than look_tolerance
-// off it) instead of failing the frontier, and with that voxel seen the same plan succeeds.
 // Every voxel mapped free but `unseen`, when given.
 void mapFreeBut(World& world, const std::optional<Vec3>& unseen) {
   world.setFree(Index3::Zero(), world.geo().dims() - Index3::Ones());
@@ -1332,6 +1327,11 @@ void mapFreeBut(World& world, const std::optional<Vec3>& unseen) {
   world.sync();
 }
 
+// The flight search checks the known surroundings of a voxel 0.3 m out along each axis, the flight check
+// every voxel within min_clearance: one unseen voxel right beside a straight way (the vehicle stopped
+// mid-turn and never looked there) lets the search through and refuses every spline along it. The plan
+// fails and says where; the vehicle turns to look there (once the heading is more than look_tolerance
+// off it) instead of failing the frontier, and with that voxel seen the same plan succeeds.
 TEST(TrajectoryPlanner, AWayRefusedForUnseenSpaceBesideItLooksThere) {
   const Vec3 unseen(3.05, 2.15, 1.05);  // beside the way's voxels at y 2.05
   auto corridor = [&](World& world, bool seen) { mapFreeBut(world, seen ? std::nullopt : std::optional<Vec3>(unseen)); };
