@@ -223,7 +223,8 @@ void ExplorationRun::planStep() {
   for (unsigned id : tour->frontier_ids)
     if (const frontier::Frontier* f = finder_->find(id)) ordered.push_back(*f);
   t0 = Clock::now();
-  auto plan = planning::chooseLocalTarget(position, yaw(), std::move(ordered), layer_out_.band.z_min,
+  const common::Vec3 velocity = vehicle_.state().velocity;
+  auto plan = planning::chooseLocalTarget(position, velocity, yaw(), std::move(ordered), layer_out_.band.z_min,
                                           layer_out_.band.z_max, map_->occupancy(), map_->esdf(), *distance_astar_,
                                           window_, config_.viewpoints, config_.local, &viewpoint_cache_, &visited_);
   recorder_.addTime("local", msSince(t0));
@@ -252,7 +253,7 @@ void ExplorationRun::planStep() {
   const double heading = yaw();
   const planning::TargetDecision decision = planning::decideTarget(
       current ? &*current : nullptr, vp,
-      [&](const frontier::Viewpoint& v) { return planning::pathCost(*distance_astar_, position, heading, v, config_.local); },
+      [&](const frontier::Viewpoint& v) { return planning::pathCost(*distance_astar_, position, velocity, heading, v, config_.local); },
       t_, config_.viewpoints.min_visible, config_.local);
   if (decision == planning::TargetDecision::kKeep) return;
   if (current && current->reached) visited_.add(current->viewpoint, config_.local);

@@ -12,6 +12,7 @@
 #include <sensor_msgs/Image.h>
 #include <visualization_msgs/MarkerArray.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <mutex>
 #include <std_msgs/UInt32.h>
@@ -83,9 +84,12 @@ class LocalPlanner : public nodelet::Nodelet {
     if (!pos.allFinite() || !std::isfinite(yaw)) return;
     position_ = pos;
     yaw_ = yaw;
+    // nav_msgs/Odometry: the twist is in the child (body) frame; the planner wants it in the world.
     const auto& v = msg->twist.twist.linear;
-    speed_ = std::sqrt(v.x * v.x + v.y * v.y + v.z * v.z);  // a norm: the same in the body or world frame
-    if (!std::isfinite(speed_)) speed_ = 0.0;
+    const Eigen::Quaterniond attitude(q.w, q.x, q.y, q.z);
+    const common::Vec3 v_world = attitude.normalized() * common::Vec3(v.x, v.y, v.z);
+    velocity_ = v_world.allFinite() ? v_world : common::Vec3::Zero();
+    speed_ = velocity_.norm();
   }
   void onDepth(const sensor_msgs::Image::ConstPtr& msg) {
     cv_bridge::CvImageConstPtr image;
@@ -144,7 +148,7 @@ class LocalPlanner : public nodelet::Nodelet {
     std::vector<std::uint32_t> ids;
     for (const auto& f : frontiers_->frontiers) ids.push_back(f.id);
     cache_.retain(ids);
-    auto plan = planning::chooseLocalTarget(*position_, yaw_, std::move(tour_frontiers), band_.first, band_.second,
+    auto plan = planning::chooseLocalTarget(*position_, velocity_, yaw_, std::move(tour_frontiers), band_.first, band_.second,
                                             m.occupancy(), m.esdf(), *astar_, *window_, viewpoint_config_,
                                             local_config_, &cache_, &visited_);
     if (!plan) {
@@ -189,7 +193,7 @@ class LocalPlanner : public nodelet::Nodelet {
     // Targets are compared by path, not straight line (pathCost()): under the map lock.
     const planning::TargetDecision decision = planning::decideTarget(
         current ? &*current : nullptr, proposal,
-        [&](const frontier::Viewpoint& v) { return planning::pathCost(*astar_, *position_, yaw_, v, local_config_); },
+        [&](const frontier::Viewpoint& v) { return planning::pathCost(*astar_, *position_, velocity_, yaw_, v, local_config_); },
         now, viewpoint_config_.min_visible, local_config_);
     ros_conv::publishComputeTime(compute_pub_, "local", t_compute);
     map_lock.unlock();
@@ -261,6 +265,7 @@ class LocalPlanner : public nodelet::Nodelet {
   std::unique_ptr<planning::ObstacleWindow> window_;
   std::optional<common::Vec3> position_;
   double yaw_ = 0.0;
+  common::Vec3 velocity_ = common::Vec3::Zero();  ///< world frame
   std::pair<double, double> band_{-1e18, 1e18};
   FrontierArray::ConstPtr frontiers_;
   ros::Publisher compute_pub_;

@@ -47,6 +47,7 @@ Status LocalPlannerConfig::validate() const {
   if (!(same_target_distance >= 0.0 && std::isfinite(same_target_distance)))
     return err("same_target_distance", "must be finite and >= 0");
   if (!(same_target_yaw >= 0.0 && std::isfinite(same_target_yaw))) return err("same_target_yaw", "must be finite and >= 0");
+  if (!(a_max >= 0.0 && std::isfinite(a_max))) return err("a_max", "must be finite and >= 0");
   if (!(reached_speed > 0.0 && std::isfinite(reached_speed))) return err("reached_speed", "must be finite and > 0");
   if (max_visits < 1) return err("max_visits", "must be >= 1");
   if (max_choices < 0) return err("max_choices", "must be >= 0");
@@ -140,7 +141,17 @@ double edgeCost(double dist, double yaw_a, double yaw_b, const LocalPlannerConfi
   return std::max(dist / config.v_max, std::abs(wrapAngle(yaw_b - yaw_a)) / config.yaw_rate_max);
 }
 
-Result<LocalPlan> planLocal(const Vec3& position, double yaw, const std::vector<frontier::Frontier>& tour,
+double startCost(const Vec3& position, const Vec3& velocity, double yaw, const Viewpoint& target, double dist,
+                 const LocalPlannerConfig& config) {
+  if (config.a_max <= 0.0) return edgeCost(dist, yaw, target.yaw, config);
+  const Vec3 offset = target.position - position;
+  const double speed = velocity.norm();
+  const double along = offset.norm() > 1e-6 ? velocity.dot(offset.normalized()) : 0.0;
+  const double fly = dist / config.v_max + (speed - along) / config.a_max;
+  return std::max(fly, std::abs(wrapAngle(target.yaw - yaw)) / config.yaw_rate_max);
+}
+
+Result<LocalPlan> planLocal(const Vec3& position, const Vec3& velocity, double yaw, const std::vector<frontier::Frontier>& tour,
                             const std::vector<FrontierType>& types, const LocalPlannerConfig& config,
                             const DistanceFn& distance) {
   if (Status s = config.validate(); !s) return s;
@@ -169,7 +180,7 @@ Result<LocalPlan> planLocal(const Vec3& position, double yaw, const std::vector<
     for (std::size_t v = 0; v < layer.size(); ++v) {
       if (i == 0) {
         const double d = dist(position, layer[v].position);
-        if (std::isfinite(d)) cost[0][v] = edgeCost(d, yaw, layer[v].yaw, config);
+        if (std::isfinite(d)) cost[0][v] = startCost(position, velocity, yaw, layer[v], d, config);
         continue;
       }
       const std::vector<Viewpoint>& prev = plan.layers[i - 1];
@@ -264,9 +275,9 @@ bool targetReached(const common::Vec3& position, double yaw, double speed, const
   return samePose(position, yaw, target, config) && speed < config.reached_speed;
 }
 
-double pathCost(const Astar& astar, const common::Vec3& position, double yaw, const frontier::Viewpoint& target,
-                const LocalPlannerConfig& config) {
-  return edgeCost(pathDistance(astar, position, target.position).metres, yaw, target.yaw, config);
+double pathCost(const Astar& astar, const common::Vec3& position, const common::Vec3& velocity, double yaw,
+                const frontier::Viewpoint& target, const LocalPlannerConfig& config) {
+  return startCost(position, velocity, yaw, target, pathDistance(astar, position, target.position).metres, config);
 }
 
 TargetDecision decideTarget(const CurrentTarget* current, const frontier::Viewpoint& proposal,
@@ -323,7 +334,7 @@ void ViewpointCache::retain(const std::vector<std::uint32_t>& ids) {
   entries_.swap(kept);
 }
 
-common::Result<LocalPlan> chooseLocalTarget(const common::Vec3& position, double yaw,
+common::Result<LocalPlan> chooseLocalTarget(const common::Vec3& position, const common::Vec3& velocity, double yaw,
                                             std::vector<frontier::Frontier> tour, double z_min, double z_max,
                                             const map::OccupancyMap& map, const map::Esdf& esdf, const Astar& astar,
                                             const ObstacleWindow& window, const ViewpointConfig& viewpoint_config,
@@ -348,7 +359,7 @@ common::Result<LocalPlan> chooseLocalTarget(const common::Vec3& position, double
     ordered.push_back(std::move(f));
   }
   if (ordered.empty()) return common::Result<LocalPlan>::Error("no viewpoint found for the first tour frontiers");
-  return planLocal(position, yaw, ordered, types, config);
+  return planLocal(position, velocity, yaw, ordered, types, config);
 }
 
 }  // namespace go_feap::planning

@@ -154,7 +154,7 @@ int main(int argc, char** argv) {
     }
     const double yaw = std::atan2(T.linear()(1, 2), T.linear()(0, 2));  // optical z axis
     auto local = ordered.empty() ? common::Result<planning::LocalPlan>::Error("no viewpoints")
-                                 : planning::planLocal(uav, yaw, ordered, types, local_config);
+                                 : planning::planLocal(uav, common::Vec3::Zero(), yaw, ordered, types, local_config);
     const auto t7 = Clock::now();
     const double lm = std::chrono::duration<double, std::milli>(t7 - t6).count();
     local_total += lm, local_max = std::max(local_max, lm);

@@ -240,7 +240,7 @@ TEST_F(CornerFixture, SteeringRatePicksTurnInPlace) {
   EXPECT_LT((picked[0].position - uav_).norm(), 0.15);
   EXPECT_GT(std::abs(wrapAngle(picked[0].yaw - uav_yaw_)), 2.5);
   // The plan flies there.
-  auto plan = planLocal(uav_, uav_yaw_, {frontier_}, {type}, cfg);
+  auto plan = planLocal(uav_, Vec3::Zero(), uav_yaw_, {frontier_}, {type}, cfg);
   ASSERT_TRUE(plan.ok()) << plan.message();
   EXPECT_EQ(plan->path[0].position, picked[0].position);
   EXPECT_EQ(plan->frontier_ids, std::vector<unsigned>{4});
@@ -269,13 +269,21 @@ TEST_F(CornerFixture, OpenFrontierPicksMostVisibleCells) {
 
 // --- DAG search against brute force --------------------------------------------------------------------
 
-double pathCost(const Vec3& p, double yaw, const std::vector<Viewpoint>& path, const DistanceFn& dist,
-                const LocalPlannerConfig& cfg) {
+// The first leg starts with velocity `vel`: the speed not directed at the viewpoint is cancelled at
+// cfg.a_max first (the velocity's component along the straight line to it is kept).
+double pathCost(const Vec3& p, const Vec3& vel, double yaw, const std::vector<Viewpoint>& path,
+                const DistanceFn& dist, const LocalPlannerConfig& cfg) {
   double cost = 0.0;
   Vec3 at = p;
   double heading = yaw;
   for (const Viewpoint& v : path) {
-    cost += edgeCost(dist(at, v.position), heading, v.yaw, cfg);
+    double leg = edgeCost(dist(at, v.position), heading, v.yaw, cfg);
+    if (at == p && cfg.a_max > 0.0) {  // the speed not leading straight to the viewpoint is cancelled first
+      const Vec3 dir = (v.position - p).normalized();
+      leg = std::max(dist(at, v.position) / cfg.v_max + (vel.norm() - vel.dot(dir)) / cfg.a_max,
+                     std::abs(wrapAngle(v.yaw - heading)) / cfg.yaw_rate_max);
+    }
+    cost += leg;
     at = v.position;
     heading = v.yaw;
   }
@@ -283,14 +291,14 @@ double pathCost(const Vec3& p, double yaw, const std::vector<Viewpoint>& path, c
 }
 
 // Minimum over every choice of one viewpoint per layer.
-double bruteForce(const Vec3& p, double yaw, const std::vector<std::vector<Viewpoint>>& layers,
+double bruteForce(const Vec3& p, const Vec3& vel, double yaw, const std::vector<std::vector<Viewpoint>>& layers,
                   const DistanceFn& dist, const LocalPlannerConfig& cfg) {
   double best = kInf;
   std::vector<std::size_t> choice(layers.size(), 0);
   for (;;) {
     std::vector<Viewpoint> path;
     for (std::size_t i = 0; i < layers.size(); ++i) path.push_back(layers[i][choice[i]]);
-    best = std::min(best, pathCost(p, yaw, path, dist, cfg));
+    best = std::min(best, pathCost(p, vel, yaw, path, dist, cfg));
     std::size_t i = 0;
     while (i < layers.size() && ++choice[i] == layers[i].size()) choice[i++] = 0;
     if (i == layers.size()) return best;
@@ -312,6 +320,7 @@ TEST(PlanLocal, EqualsBruteForceOnRandomInstances) {
       return lo + static_cast<int>(rng() % static_cast<unsigned>(hi - lo + 1));
     };
     LocalPlannerConfig cfg;
+    cfg.a_max = seed % 2 ? 0.0 : uni(0.5, 4.0);  // every other instance starts moving
     cfg.k_frontiers = pick(1, 4);
     cfg.top_k = pick(2, 5);
     const int n_frontiers = pick(1, 6);
@@ -326,6 +335,7 @@ TEST(PlanLocal, EqualsBruteForceOnRandomInstances) {
     }
     const Vec3 p(uni(-5, 5), uni(-5, 5), uni(0, 2));
     const double yaw = uni(-kPi, kPi);
+    const Vec3 vel(uni(-2, 2), uni(-2, 2), uni(-0.5, 0.5));
 
     // The layers the planner should build.
     std::vector<std::vector<Viewpoint>> layers;
@@ -338,8 +348,8 @@ TEST(PlanLocal, EqualsBruteForceOnRandomInstances) {
     }
     for (const DistanceFn* dist : {&euclid, &detour}) {
       const auto plan =
-          dist == &euclid ? planLocal(p, yaw, tour, types, cfg) : planLocal(p, yaw, tour, types, cfg, *dist);
-      const double expected = bruteForce(p, yaw, layers, *dist, cfg);
+          dist == &euclid ? planLocal(p, vel, yaw, tour, types, cfg) : planLocal(p, vel, yaw, tour, types, cfg, *dist);
+      const double expected = bruteForce(p, vel, yaw, layers, *dist, cfg);
       if (!std::isfinite(expected)) {
         EXPECT_FALSE(plan.ok()) << seed;
         ++unreachable;
@@ -348,7 +358,7 @@ TEST(PlanLocal, EqualsBruteForceOnRandomInstances) {
       ASSERT_TRUE(plan.ok()) << seed << ": " << plan.message();
       ++planned;
       EXPECT_NEAR(plan->cost, expected, 1e-9) << seed;
-      EXPECT_NEAR(pathCost(p, yaw, plan->path, *dist, cfg), plan->cost, 1e-9) << seed;
+      EXPECT_NEAR(pathCost(p, vel, yaw, plan->path, *dist, cfg), plan->cost, 1e-9) << seed;
       EXPECT_EQ(plan->frontier_ids, ids);
       ASSERT_EQ(plan->layers.size(), layers.size());
       for (std::size_t i = 0; i < layers.size(); ++i) {
@@ -367,17 +377,51 @@ TEST(PlanLocal, Errors) {
   LocalPlannerConfig cfg;
   Frontier f;
   f.id = 3;
-  EXPECT_FALSE(planLocal(Vec3::Zero(), 0.0, {f}, {FrontierType::kOpen}, cfg).ok());  // no viewpoints
+  EXPECT_FALSE(planLocal(Vec3::Zero(), Vec3::Zero(), 0.0, {f}, {FrontierType::kOpen}, cfg).ok());  // no viewpoints
   f.viewpoints.push_back({Vec3(1, 0, 0), 0.0, 10});
-  EXPECT_FALSE(planLocal(Vec3::Zero(), 0.0, {f}, {}, cfg).ok());  // types do not match
+  EXPECT_FALSE(planLocal(Vec3::Zero(), Vec3::Zero(), 0.0, {f}, {}, cfg).ok());  // types do not match
   cfg.top_k = 0;
-  const auto bad = planLocal(Vec3::Zero(), 0.0, {f}, {FrontierType::kOpen}, cfg);
+  const auto bad = planLocal(Vec3::Zero(), Vec3::Zero(), 0.0, {f}, {FrontierType::kOpen}, cfg);
   ASSERT_FALSE(bad.ok());
   EXPECT_NE(bad.message().find("top_k"), std::string::npos);
   cfg.top_k = 2;
-  const auto ok = planLocal(Vec3::Zero(), 0.0, {f}, {FrontierType::kOpen}, cfg);
+  const auto ok = planLocal(Vec3::Zero(), Vec3::Zero(), 0.0, {f}, {FrontierType::kOpen}, cfg);
   ASSERT_TRUE(ok.ok()) << ok.message();
   EXPECT_NEAR(ok->cost, 0.5, 1e-12);  // 1 m at 2 m/s, no turn
+  cfg.a_max = -1.0;
+  const auto bad_acc = planLocal(Vec3::Zero(), Vec3::Zero(), 0.0, {f}, {FrontierType::kOpen}, cfg);
+  ASSERT_FALSE(bad_acc.ok());
+  EXPECT_NE(bad_acc.message().find("a_max"), std::string::npos);
+}
+
+// A vehicle flying at 2 m/s along +x, two viewpoints of one frontier: 1.5 m behind it and 2.5 m ahead.
+// At rest the nearer one behind is quicker; in flight turning back costs braking to zero and
+// regaining 2 m/s (2 s at 2 m/s^2), more than the extra metre ahead (0.5 s).
+TEST(PlanLocal, MovingVehicleKeepsGoing) {
+  LocalPlannerConfig cfg;
+  cfg.a_max = 2.0;
+  Frontier f;
+  f.id = 7;
+  f.viewpoints.push_back({Vec3(-1.5, 0, 1), 0.0, 50});
+  f.viewpoints.push_back({Vec3(2.5, 0, 1), 0.0, 50});
+  const Vec3 p(0, 0, 1), moving(2, 0, 0);
+  const auto at_rest = planLocal(p, Vec3::Zero(), 0.0, {f}, {FrontierType::kOpen}, cfg);
+  const auto flying = planLocal(p, moving, 0.0, {f}, {FrontierType::kOpen}, cfg);
+  ASSERT_TRUE(at_rest.ok() && flying.ok());
+  EXPECT_EQ(at_rest->path[0].position, Vec3(-1.5, 0, 1));
+  EXPECT_EQ(flying->path[0].position, Vec3(2.5, 0, 1));
+  EXPECT_NEAR(flying->cost, 2.5 / 2.0, 1e-12);  // straight on: nothing to cancel
+  // Sideways: the 2 m/s across are braked (1 s) on top of the 1 m (0.5 s).
+  Frontier side = f;
+  side.viewpoints = {{Vec3(0, 1, 1), 0.0, 50}};
+  const auto across = planLocal(p, moving, 0.0, {side}, {FrontierType::kOpen}, cfg);
+  ASSERT_TRUE(across.ok());
+  EXPECT_NEAR(across->cost, 0.5 + 1.0, 1e-12);
+  // With a_max 0 the velocity is ignored (the pose-only cost of the paper's DAG).
+  cfg.a_max = 0.0;
+  const auto ignored = planLocal(p, moving, 0.0, {f}, {FrontierType::kOpen}, cfg);
+  ASSERT_TRUE(ignored.ok());
+  EXPECT_EQ(ignored->path[0].position, Vec3(-1.5, 0, 1));
 }
 
 }  // namespace

@@ -545,8 +545,8 @@ TEST(Viewpoints, TargetsAreComparedByPathNotStraightLine) {
   ahead.position = Vec3(1.5, 2.5, 1.0);   // 1.5 m away, in the open
   behind.yaw = ahead.yaw = 0.0;
   const double straight_behind = go_feap::planning::edgeCost(1.1, 0.0, 0.0, local);
-  const double cost_behind = go_feap::planning::pathCost(astar, vehicle, 0.0, behind, local);
-  const double cost_ahead = go_feap::planning::pathCost(astar, vehicle, 0.0, ahead, local);
+  const double cost_behind = go_feap::planning::pathCost(astar, vehicle, Vec3::Zero(), 0.0, behind, local);
+  const double cost_ahead = go_feap::planning::pathCost(astar, vehicle, Vec3::Zero(), 0.0, ahead, local);
   const auto d = go_feap::planning::pathDistance(astar, vehicle, behind.position);
   ASSERT_FALSE(d.euclidean_fallback);
   EXPECT_DOUBLE_EQ(cost_behind, go_feap::planning::edgeCost(d.metres, 0.0, 0.0, local));
@@ -558,7 +558,7 @@ TEST(Viewpoints, TargetsAreComparedByPathNotStraightLine) {
   go_feap::planning::CurrentTarget current;
   current.viewpoint = ahead;
   current.remaining_visible = 50;
-  auto cost = [&](const Viewpoint& v) { return go_feap::planning::pathCost(astar, vehicle, 0.0, v, local); };
+  auto cost = [&](const Viewpoint& v) { return go_feap::planning::pathCost(astar, vehicle, Vec3::Zero(), 0.0, v, local); };
   EXPECT_EQ(go_feap::planning::decideTarget(&current, behind, cost, 100.0, 10, local),
             go_feap::planning::TargetDecision::kKeep);
 }
@@ -581,7 +581,7 @@ struct OneFrontierPlan {
   go_feap::common::Result<go_feap::planning::LocalPlan> operator()(
       const go_feap::planning::LocalPlannerConfig& local, const go_feap::planning::VisitedViewpoints* visited) const {
     go_feap::planning::ObstacleWindow window(local.window_size, local.clutter_threshold);
-    return go_feap::planning::chooseLocalTarget(Vec3(0.8, 2.0, 1.0), 0.0, {f}, 0.5, 1.5, w.map(), w.esdf(), astar,
+    return go_feap::planning::chooseLocalTarget(Vec3(0.8, 2.0, 1.0), Vec3::Zero(), 0.0, {f}, 0.5, 1.5, w.map(), w.esdf(), astar,
                                                 window, testConfig(), local, nullptr, visited);
   }
   World w;

@@ -57,6 +57,10 @@ struct LocalPlannerConfig {
   /// rad: when no viewpoint can be planned (at the start, facing a wall, nothing known around), the
   /// vehicle turns in place by this much to look around (scanTarget()).
   double scan_step = 2.0943951023931953;
+  /// m/s^2, the vehicle's acceleration: a leg from the vehicle adds the time to cancel the part of
+  /// its velocity that does not lead to the leg's end, (|v| - v . dir) / a_max (startCost()): going on
+  /// is free, a right angle costs |v| / a_max, turning back 2 |v| / a_max (0 = the velocity is ignored).
+  double a_max = 0.0;
 
   /// Checks every key; the message names the bad one, e.g. "local_planner: top_k must be >= 1".
   common::Status validate() const;
@@ -116,6 +120,13 @@ using DistanceFn = std::function<double(const common::Vec3& a, const common::Vec
 /// Time lower bound (s) between two poses: max(dist / v_max, |wrapped dyaw| / yaw_rate_max).
 double edgeCost(double dist, double yaw_a, double yaw_b, const LocalPlannerConfig& config);
 
+/// Time (s) of a leg from the moving vehicle at `position` (velocity, yaw) to `target` over a path of
+/// `dist` metres: max(dist / v_max + (|v| - v . dir) / a_max, |wrapped dyaw| / yaw_rate_max), where dir
+/// is the straight direction to the target (a target at the position: the whole speed is cancelled).
+/// With a_max 0, edgeCost().
+double startCost(const common::Vec3& position, const common::Vec3& velocity, double yaw,
+                 const frontier::Viewpoint& target, double dist, const LocalPlannerConfig& config);
+
 struct LocalPlan {
   std::vector<frontier::Viewpoint> path;  ///< one viewpoint per layer; path[0] is the next to fly to
   std::vector<unsigned> frontier_ids;     ///< the frontier of each path entry
@@ -126,11 +137,11 @@ struct LocalPlan {
 /// Shortest path from the start pose through the layered DAG: layer i holds the filtered viewpoints
 /// (filterViewpoints() with types[j]) of the i-th frontier of `tour` that has any, for the first
 /// k_frontiers such frontiers; edges lead from the start to layer 0 and from layer i to layer i + 1,
-/// with edgeCost(distance(a, b), ...). The DAG is relaxed layer by layer in topological order, which
+/// with edgeCost(distance(a, b), ...) (the edges from the start: startCost() with `velocity`). The DAG is relaxed layer by layer in topological order, which
 /// gives Dijkstra's result in O(edges); ties keep the earlier viewpoint. `distance` defaults to the
 /// Euclidean distance. Errors: invalid config, types.size() != tour.size(), no frontier with
 /// viewpoints, or no finite path.
-common::Result<LocalPlan> planLocal(const common::Vec3& position, double yaw,
+common::Result<LocalPlan> planLocal(const common::Vec3& position, const common::Vec3& velocity, double yaw,
                                     const std::vector<frontier::Frontier>& tour,
                                     const std::vector<FrontierType>& types, const LocalPlannerConfig& config,
                                     const DistanceFn& distance = DistanceFn());
@@ -171,11 +182,11 @@ bool targetReached(const common::Vec3& position, double yaw, double speed, const
 /// kSwitchQuicker: switched for the commitment rule (the proposal is quicker to reach); the caller
 /// marks the new target CurrentTarget::quicker.
 enum class TargetDecision { kKeep, kSwitch, kSwitchQuicker, kReachedInVain };
-/// The time to reach a viewpoint from the vehicle's pose, for comparing targets: edgeCost() over the
+/// The time to reach a viewpoint from the vehicle's state, for comparing targets: startCost() over the
 /// path distance (pathDistance() on `astar`), not the straight line, which through a wall makes a
 /// target far round it look as near as one in front.
-double pathCost(const Astar& astar, const common::Vec3& position, double yaw, const frontier::Viewpoint& target,
-                const LocalPlannerConfig& config);
+double pathCost(const Astar& astar, const common::Vec3& position, const common::Vec3& velocity, double yaw,
+                const frontier::Viewpoint& target, const LocalPlannerConfig& config);
 
 /// Whether `proposal` (the planner's newest first viewpoint) replaces `current` at time t: always when
 /// there is no current target; when the proposal is the same target (within same_target_distance and
@@ -267,7 +278,7 @@ class ViewpointCache {
 /// replaced. Errors as planLocal(), or "no viewpoint" when no tour frontier has one. With a `cache`,
 /// viewpoints come from it (ViewpointCache::get()) instead of being sampled every time. With `visited`,
 /// exhausted poses (VisitedViewpoints::exhausted()) are left out.
-common::Result<LocalPlan> chooseLocalTarget(const common::Vec3& position, double yaw,
+common::Result<LocalPlan> chooseLocalTarget(const common::Vec3& position, const common::Vec3& velocity, double yaw,
                                             std::vector<frontier::Frontier> tour, double z_min, double z_max,
                                             const map::OccupancyMap& map, const map::Esdf& esdf, const Astar& astar,
                                             const ObstacleWindow& window, const ViewpointConfig& viewpoint_config,
