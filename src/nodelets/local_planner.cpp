@@ -12,7 +12,6 @@
 #include <sensor_msgs/Image.h>
 #include <visualization_msgs/MarkerArray.h>
 
-#include <Eigen/Geometry>
 #include <algorithm>
 #include <mutex>
 #include <std_msgs/UInt32.h>
@@ -84,10 +83,7 @@ class LocalPlanner : public nodelet::Nodelet {
     if (!pos.allFinite() || !std::isfinite(yaw)) return;
     position_ = pos;
     yaw_ = yaw;
-    // nav_msgs/Odometry: the twist is in the child (body) frame; the planner wants it in the world.
-    const auto& v = msg->twist.twist.linear;
-    const Eigen::Quaterniond attitude(q.w, q.x, q.y, q.z);
-    const common::Vec3 v_world = attitude.normalized() * common::Vec3(v.x, v.y, v.z);
+    const common::Vec3 v_world = ros_conv::worldVelocity(q, msg->twist.twist.linear);
     velocity_ = v_world.allFinite() ? v_world : common::Vec3::Zero();
     speed_ = velocity_.norm();
   }

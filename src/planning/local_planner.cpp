@@ -137,18 +137,25 @@ std::vector<Viewpoint> filterViewpoints(const std::vector<Viewpoint>& viewpoints
   return out;
 }
 
+namespace {
+double turnTime(double yaw_a, double yaw_b, const LocalPlannerConfig& config) {
+  return std::abs(wrapAngle(yaw_b - yaw_a)) / config.yaw_rate_max;
+}
+}  // namespace
+
 double edgeCost(double dist, double yaw_a, double yaw_b, const LocalPlannerConfig& config) {
-  return std::max(dist / config.v_max, std::abs(wrapAngle(yaw_b - yaw_a)) / config.yaw_rate_max);
+  return std::max(dist / config.v_max, turnTime(yaw_a, yaw_b, config));
 }
 
 double startCost(const Vec3& position, const Vec3& velocity, double yaw, const Viewpoint& target, double dist,
                  const LocalPlannerConfig& config) {
-  if (config.a_max <= 0.0) return edgeCost(dist, yaw, target.yaw, config);
-  const Vec3 offset = target.position - position;
-  const double speed = velocity.norm();
-  const double along = offset.norm() > 1e-6 ? velocity.dot(offset.normalized()) : 0.0;
-  const double fly = dist / config.v_max + (speed - along) / config.a_max;
-  return std::max(fly, std::abs(wrapAngle(target.yaw - yaw)) / config.yaw_rate_max);
+  double cancel = 0.0;  // s, braking the velocity that does not lead to the target
+  if (config.a_max > 0.0) {
+    const Vec3 offset = target.position - position;
+    const double along = offset.norm() > 1e-6 ? velocity.dot(offset.normalized()) : 0.0;
+    cancel = (velocity.norm() - along) / config.a_max;
+  }
+  return std::max(dist / config.v_max + cancel, turnTime(yaw, target.yaw, config));
 }
 
 Result<LocalPlan> planLocal(const Vec3& position, const Vec3& velocity, double yaw, const std::vector<frontier::Frontier>& tour,

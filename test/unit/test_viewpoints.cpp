@@ -554,6 +554,12 @@ TEST(Viewpoints, TargetsAreComparedByPathNotStraightLine) {
   EXPECT_GT(d.metres, 4.0);
   EXPECT_GT(cost_behind, 3.0 * straight_behind);
   EXPECT_NEAR(cost_ahead, 1.5 / local.v_max, 0.1);
+  // A vehicle moving at 1 m/s along +x (away from `ahead`'s direction, +y, at a right angle) pays for
+  // braking that speed at a_max on top of the path: 1 / 2 s more; moving towards it, nothing more.
+  local.a_max = 2.0;
+  EXPECT_NEAR(go_feap::planning::pathCost(astar, vehicle, Vec3(1, 0, 0), 0.0, ahead, local), cost_ahead + 0.5, 1e-9);
+  EXPECT_NEAR(go_feap::planning::pathCost(astar, vehicle, Vec3(0, 1, 0), 0.0, ahead, local), cost_ahead, 1e-9);
+  local.a_max = 0.0;
   // Kept past the commitment: the target in front is not dropped for the one behind the wall.
   go_feap::planning::CurrentTarget current;
   current.viewpoint = ahead;

@@ -137,8 +137,9 @@ struct LocalPlan {
 /// Shortest path from the start pose through the layered DAG: layer i holds the filtered viewpoints
 /// (filterViewpoints() with types[j]) of the i-th frontier of `tour` that has any, for the first
 /// k_frontiers such frontiers; edges lead from the start to layer 0 and from layer i to layer i + 1,
-/// with edgeCost(distance(a, b), ...) (the edges from the start: startCost() with `velocity`). The DAG is relaxed layer by layer in topological order, which
-/// gives Dijkstra's result in O(edges); ties keep the earlier viewpoint. `distance` defaults to the
+/// with edgeCost(distance(a, b), ...), from the start with startCost() (`velocity` in the world frame).
+/// The DAG is relaxed layer by layer in topological order, which gives Dijkstra's result in O(edges);
+/// ties keep the earlier viewpoint. `distance` defaults to the
 /// Euclidean distance. Errors: invalid config, types.size() != tour.size(), no frontier with
 /// viewpoints, or no finite path.
 common::Result<LocalPlan> planLocal(const common::Vec3& position, const common::Vec3& velocity, double yaw,
