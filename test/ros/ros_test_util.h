@@ -4,8 +4,13 @@
 #include <gtest/gtest.h>
 #include <ros/ros.h>
 
+#include <rosgraph_msgs/Log.h>
+
 #include <Eigen/Core>
 #include <cmath>
+#include <deque>
+#include <sstream>
+#include <string>
 
 #include "go_feap/PositionCommand.h"
 #include "go_feap/world/scene.h"
@@ -75,6 +80,30 @@ bool turnInPlace(ros::Publisher& cmd_pub, const Eigen::Vector3d& centre, Done do
       },
       wall_timeout);
 }
+
+/// What the nodes said: the last `keep` messages at INFO or above on /rosout, for a failure
+/// message (rostest keeps no node output).
+class NodeLog {
+ public:
+  explicit NodeLog(ros::NodeHandle& nh, std::size_t keep = 40) : keep_(keep) {
+    sub_ = nh.subscribe<rosgraph_msgs::Log>("/rosout", 200, [this](const rosgraph_msgs::Log::ConstPtr& m) {
+      if (m->level < rosgraph_msgs::Log::INFO) return;
+      lines_.push_back(std::to_string(m->header.stamp.toSec()) + " [" + m->name + "] " + m->msg);
+      if (lines_.size() > keep_) lines_.pop_front();
+    });
+  }
+  std::string str() const {
+    std::ostringstream out;
+    out << "last " << lines_.size() << " node messages:\n";
+    for (const std::string& l : lines_) out << "  " << l << "\n";
+    return out.str();
+  }
+
+ private:
+  std::size_t keep_;
+  std::deque<std::string> lines_;
+  ros::Subscriber sub_;
+};
 
 }  // namespace go_feap::test
 

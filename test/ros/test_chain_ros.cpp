@@ -5,6 +5,7 @@
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
 
+#include "go_feap/Bspline.h"
 #include "go_feap/PositionCommand.h"
 #include "go_feap/ViewpointPath.h"
 #include "go_feap/world/scene_files.h"
@@ -21,7 +22,10 @@ TEST(Chain, FliesToAViewpointWithoutCollision) {
   auto scene = go_feap::test::sceneFromParams();
   ASSERT_TRUE(scene) << scene.message();
 
+  go_feap::test::NodeLog node_log(nh);
   std::vector<Vec3> targets, path;
+  int trajectories = 0;
+  auto bspline_sub = nh.subscribe<go_feap::Bspline>("bspline", 5, [&](const go_feap::Bspline::ConstPtr&) { ++trajectories; });
   go_feap::PositionCommand::ConstPtr last_cmd;
   double max_cmd_jump = 0.0, max_cmd_vel_jump = 0.0;
   auto target_sub = nh.subscribe<go_feap::ViewpointPath>("local_target", 5, [&](const go_feap::ViewpointPath::ConstPtr& m) {
@@ -53,8 +57,9 @@ TEST(Chain, FliesToAViewpointWithoutCollision) {
       if ((path.back() - t).norm() < 0.4) return true;
     return false;
   };
-  ASSERT_TRUE(spinUntil(reached, 200.0)) << targets.size() << " targets; vehicle at "
-                                         << (path.empty() ? Vec3::Zero() : path.back()).transpose();
+  ASSERT_TRUE(spinUntil(reached, 200.0)) << targets.size() << " targets, " << trajectories << " trajectories; vehicle at "
+                                         << (path.empty() ? Vec3::Zero() : path.back()).transpose() << "\n"
+                                         << node_log.str();
   double min_clearance = 1.0;
   for (std::size_t i = 0; i < path.size(); i += 2)
     min_clearance = std::min(min_clearance, latticeClearance(*scene, path[i], 0.3));
