@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <queue>
 #include <string>
 
@@ -58,7 +59,7 @@ std::vector<std::size_t> selectCandidates(const std::vector<FrontierSummary>& fr
 }
 
 Result<GlobalTour> planTour(const std::vector<FrontierSummary>& frontiers, const PathDistances& distances,
-                            const GlobalPlannerConfig& config) {
+                            const GlobalPlannerConfig& config, const std::vector<unsigned>& hint) {
   if (Status s = config.validate(); !s) return s;
   constexpr double kUnreachable = std::numeric_limits<double>::infinity();
   std::vector<double> from_uav(frontiers.size(), kUnreachable);
@@ -139,7 +140,15 @@ Result<GlobalTour> planTour(const std::vector<FrontierSummary>& frontiers, const
   }
 
   const int max_exact = std::min(config.max_exact + (rest_node ? 1 : 0), kMaxExactFrontiers);
-  const TourResult solved = solve(cost, xi_of, config.lambda, max_exact);
+  // The hint in node numbers: its frontiers that are candidates now, in its order.
+  std::vector<int> hint_nodes;
+  if (!hint.empty() && nodes > max_exact) {
+    std::map<unsigned, int> node_of;
+    for (int a = 0; a < n; ++a) node_of.emplace(frontiers[candidates[a]].id, a + 1);
+    for (unsigned id : hint)
+      if (auto it = node_of.find(id); it != node_of.end()) hint_nodes.push_back(it->second);
+  }
+  const TourResult solved = solve(cost, xi_of, config.lambda, max_exact, hint_nodes);
   if (!solved.status) return solved.status;
   GlobalTour tour;
   tour.cost = solved.cost;

@@ -68,7 +68,8 @@ common::Result<GlobalTour> TourPlanner::plan(const std::vector<FrontierSummary>&
     local_fallbacks += it->second.euclidean_fallback;
     return it->second.metres;
   };
-  auto tour = planTour(frontiers, d, config_);
+  auto tour = planTour(frontiers, d, config_, last_tour_);
+  if (tour) last_tour_ = tour->frontier_ids;
   if (fallbacks) *fallbacks = local_fallbacks;
   return tour;
 }

@@ -251,6 +251,20 @@ std::vector<int> greedyPath(const Eigen::MatrixXd& cost, const std::vector<doubl
   return path;
 }
 
+// Where node v (not on the path) is inserted at the least change of J: after p[k] for the returned k.
+int cheapestInsertion(const OpenPath& path, int v) {
+  int best_k = 0;
+  double best_delta = std::numeric_limits<double>::infinity();
+  for (int k = 0; k <= path.size(); ++k) {
+    const double delta = path.insertionDelta(v, k);
+    if (delta < best_delta) {
+      best_delta = delta;
+      best_k = k;
+    }
+  }
+  return best_k;
+}
+
 // Cheapest insertion with the exact change of J, inserting nodes nearest to the UAV first.
 std::vector<int> insertionPath(const Eigen::MatrixXd& cost, const std::vector<double>& x, double lambda) {
   const int n = static_cast<int>(cost.rows()) - 1;
@@ -259,18 +273,27 @@ std::vector<int> insertionPath(const Eigen::MatrixXd& cost, const std::vector<do
   std::stable_sort(nodes.begin(), nodes.end(), [&](int a, int b) { return cost(0, a) < cost(0, b); });
   OpenPath path(cost, x, lambda);
   path.assign({0});
-  for (int v : nodes) {
-    int best_k = 0;
-    double best_delta = std::numeric_limits<double>::infinity();
-    for (int k = 0; k <= path.size(); ++k) {
-      const double delta = path.insertionDelta(v, k);
-      if (delta < best_delta) {
-        best_delta = delta;
-        best_k = k;
-      }
-    }
-    path.insert(v, best_k);
-  }
+  for (int v : nodes) path.insert(v, cheapestInsertion(path, v));
+  return path.path();
+}
+
+// The hint's nodes in its order (repeats and nodes outside 1..N skipped), then every other node by
+// cheapest insertion, nearest the UAV first; empty when the hint holds no node.
+std::vector<int> hintedPath(const Eigen::MatrixXd& cost, const std::vector<double>& x, double lambda,
+                            const std::vector<int>& hint) {
+  const int n = static_cast<int>(cost.rows()) - 1;
+  std::vector<bool> used(n + 1, false);
+  std::vector<int> start{0};
+  for (int v : hint)
+    if (v >= 1 && v <= n && !used[v]) used[v] = true, start.push_back(v);
+  if (start.size() == 1) return {};
+  std::vector<int> missing;
+  for (int v = 1; v <= n; ++v)
+    if (!used[v]) missing.push_back(v);
+  std::stable_sort(missing.begin(), missing.end(), [&](int a, int b) { return cost(0, a) < cost(0, b); });
+  OpenPath path(cost, x, lambda);
+  path.assign(std::move(start));
+  for (int v : missing) path.insert(v, cheapestInsertion(path, v));
   return path.path();
 }
 
@@ -481,23 +504,31 @@ TourResult solveExact(const Eigen::MatrixXd& cost, const std::vector<double>& xi
   return fromPath(path, true, cost, xi, lambda);
 }
 
-TourResult solveHeuristic(const Eigen::MatrixXd& cost, const std::vector<double>& xi, double lambda) {
+TourResult solveHeuristic(const Eigen::MatrixXd& cost, const std::vector<double>& xi, double lambda,
+                          const std::vector<int>& hint) {
   if (Status s = checkTourProblem(cost, xi, lambda); !s) return failure(s);
   const int n = static_cast<int>(xi.size());
   if (n == 0) return fromPath({0}, false, cost, xi, lambda);
   const std::vector<double> x = nodeXi(xi);
 
-  std::vector<std::vector<int>> starts = {greedyPath(cost, x, lambda, false),
-                                          greedyPath(cost, x, lambda, true), insertionPath(cost, x, lambda)};
-  // Local optima of asymmetric instances differ mostly in how they begin, so greedy paths
-  // also start from each of the most promising first frontiers.
-  std::vector<int> firsts(n);
-  std::iota(firsts.begin(), firsts.end(), 1);
-  std::stable_sort(firsts.begin(), firsts.end(), [&](int a, int b) {
-    return cost(0, a) / (1.0 / n + lambda * x[a]) < cost(0, b) / (1.0 / n + lambda * x[b]);
-  });
-  firsts.resize(std::min(n, kFirstNodeStarts));
-  for (int first : firsts) starts.push_back(greedyPath(cost, x, lambda, true, first));
+  std::vector<std::vector<int>> starts;
+  std::vector<int> warm = hintedPath(cost, x, lambda, hint);
+  if (!warm.empty()) {
+    // A warm start (the last tour, new frontiers inserted) is near a local optimum already, and a tour
+    // no better than the greedy path is left by the comparison below.
+    starts = {std::move(warm), greedyPath(cost, x, lambda, false)};
+  } else {
+    starts = {greedyPath(cost, x, lambda, false), greedyPath(cost, x, lambda, true), insertionPath(cost, x, lambda)};
+    // Local optima of asymmetric instances differ mostly in how they begin, so greedy paths
+    // also start from each of the most promising first frontiers.
+    std::vector<int> firsts(n);
+    std::iota(firsts.begin(), firsts.end(), 1);
+    std::stable_sort(firsts.begin(), firsts.end(), [&](int a, int b) {
+      return cost(0, a) / (1.0 / n + lambda * x[a]) < cost(0, b) / (1.0 / n + lambda * x[b]);
+    });
+    firsts.resize(std::min(n, kFirstNodeStarts));
+    for (int first : firsts) starts.push_back(greedyPath(cost, x, lambda, true, first));
+  }
   const Neighbours nb = nearestNeighbours(cost);
   OpenPath path(cost, x, lambda);
   std::vector<int> best;
@@ -530,10 +561,11 @@ TourResult solveHeuristic(const Eigen::MatrixXd& cost, const std::vector<double>
   return fromPath(best, false, cost, xi, lambda);
 }
 
-TourResult solve(const Eigen::MatrixXd& cost, const std::vector<double>& xi, double lambda, int max_exact) {
+TourResult solve(const Eigen::MatrixXd& cost, const std::vector<double>& xi, double lambda, int max_exact,
+                 const std::vector<int>& hint) {
   if (static_cast<int>(xi.size()) <= std::min(max_exact, kMaxExactFrontiers))
     return solveExact(cost, xi, lambda);
-  return solveHeuristic(cost, xi, lambda);
+  return solveHeuristic(cost, xi, lambda, hint);
 }
 
 }  // namespace go_feap::planning

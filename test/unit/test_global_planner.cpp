@@ -285,6 +285,38 @@ TEST(PlanTour, UsesOnlyNearCandidatesAndTheHeuristicAboveMaxExact) {
   EXPECT_EQ(result->indices.size(), 6u);
 }
 
+// The hint (frontier ids, the last tour) warm-starts the heuristic: with every frontier at the same
+// distance from the UAV and from each other except along a line, an equally good order in the hint is
+// kept, named by id; ids that are not candidates (an inactive frontier, an unknown id) are skipped.
+TEST(PlanTour, HintOfIdsWarmStartsTheHeuristic) {
+  Fixture fx;
+  fx.frontiers.resize(6);
+  const double xs[] = {1.0, 2.0, 3.0, -1.0, -2.0, -3.0};
+  for (int j = 0; j < 6; ++j) fx.frontiers[j].average = Vec3(xs[j], 0.0, 1.0);
+  fx.uav = Vec3(0.0, 0.0, 1.0);
+  PathDistances d;
+  d.from_uav = [&](std::size_t j) { return (fx.frontiers[j].average - fx.uav).norm(); };
+  d.between = [&](std::size_t i, std::size_t j) { return (fx.frontiers[i].average - fx.frontiers[j].average).norm(); };
+  GlobalPlannerConfig c;
+  c.s_near = 100.0;
+  c.lambda = 0.0;
+  c.max_exact = 0;
+  const auto cold = planTour(fx.frontiers, d, c);
+  ASSERT_TRUE(cold.ok()) << cold.message();
+  EXPECT_FALSE(cold->exact);
+  std::vector<unsigned> mirrored;  // the same order on the other side
+  for (std::size_t j : cold->indices) mirrored.push_back(fx.frontiers[(j + 3) % 6].id);
+  std::vector<unsigned> hint = mirrored;
+  hint.insert(hint.begin() + 2, 9999u);  // not a frontier
+  const auto warm = planTour(fx.frontiers, d, c, hint);
+  ASSERT_TRUE(warm.ok()) << warm.message();
+  EXPECT_EQ(warm->frontier_ids, mirrored);
+  EXPECT_DOUBLE_EQ(warm->cost, cold->cost);
+  // Exact solving ignores the hint.
+  c.max_exact = 12;
+  EXPECT_EQ(planTour(fx.frontiers, d, c, mirrored)->frontier_ids, planTour(fx.frontiers, d, c)->frontier_ids);
+}
+
 // With a lower bound of the UAV distances (here the straight line, the fixture's UAV distances being
 // straight lines scaled up by a detour factor per frontier), the tour is the same as with every
 // distance asked for, and frontiers that cannot be among the n_max_tsp nearest are not asked about.

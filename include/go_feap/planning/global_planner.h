@@ -91,9 +91,13 @@ struct GlobalTour {
 /// counts on top of max_exact). between is then also called for each candidate and those frontiers.
 /// from_uav is called once per active frontier (fewer with from_uav_lower_bound; the candidates are the
 /// same, distance ties aside), between once per ordered pair of candidates.
+/// `hint` (frontier ids, typically the last tour's order) warm-starts the heuristic solver when
+/// the candidates are too many to solve exactly (solveHeuristic()); ids that are not candidates now
+/// are skipped. Exact solutions ignore it.
 /// No active reachable frontier gives an empty tour. Errors: an invalid config, or a
 /// non-finite or negative distance between two candidates (named by frontier id).
 common::Result<GlobalTour> planTour(const std::vector<FrontierSummary>& frontiers,
-                                    const PathDistances& distances, const GlobalPlannerConfig& config);
+                                    const PathDistances& distances, const GlobalPlannerConfig& config,
+                                    const std::vector<unsigned>& hint = {});
 
 }  // namespace go_feap::planning

@@ -30,7 +30,8 @@ class TourPlanner {
   /// cached by id pair; cached lengths of frontiers no longer listed are dropped first. A length to
   /// search is first looked up among those searched in the last reuse_time s between the same two
   /// reuse_cell cells (either way round). `fallbacks` (when not null) counts the distances that fell
-  /// back to Euclidean.
+  /// back to Euclidean. The last tour warm-starts the next (planTour()'s hint): a large tour is
+  /// improved from where it was, not rebuilt from scratch at every call.
   common::Result<GlobalTour> plan(const std::vector<FrontierSummary>& frontiers, const Vec3& uav, double now,
                                   std::size_t* fallbacks = nullptr);
 
@@ -50,6 +51,7 @@ class TourPlanner {
   const Astar& astar_;
   std::map<std::pair<unsigned, unsigned>, PathDistance> cache_;
   std::map<CellPair, Recent> recent_;
+  std::vector<unsigned> last_tour_;  ///< frontier ids of the last tour, in order
   std::size_t searches_ = 0;
 };
 

@@ -58,9 +58,17 @@ TourResult solveExact(const Eigen::MatrixXd& cost, const std::vector<double>& xi
 /// frontiers moves are restricted to 10-nearest candidate lists, so N = 300 takes about
 /// 0.1-0.3 s. Deterministic: the kicks come from a fixed-seed generator, so the same problem
 /// always gives the same tour. Refuses invalid problems.
-TourResult solveHeuristic(const Eigen::MatrixXd& cost, const std::vector<double>& xi, double lambda);
+///
+/// `hint` warm-starts it: a visiting order of some of the nodes (1..N; others and repeats are
+/// ignored), typically the last call's tour. The missing nodes are added by cheapest insertion
+/// and only that path and the nearest-neighbour path are improved, before the same kicks: a
+/// replan of a slowly changing problem costs one local search instead of 15.
+TourResult solveHeuristic(const Eigen::MatrixXd& cost, const std::vector<double>& xi, double lambda,
+                          const std::vector<int>& hint = {});
 
-/// solveExact() when N <= max_exact (at most kMaxExactFrontiers), solveHeuristic() otherwise.
-TourResult solve(const Eigen::MatrixXd& cost, const std::vector<double>& xi, double lambda, int max_exact);
+/// solveExact() when N <= max_exact (at most kMaxExactFrontiers), solveHeuristic() (with `hint`)
+/// otherwise.
+TourResult solve(const Eigen::MatrixXd& cost, const std::vector<double>& xi, double lambda, int max_exact,
+                 const std::vector<int>& hint = {});
 
 }  // namespace go_feap::planning
