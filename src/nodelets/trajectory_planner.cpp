@@ -1,7 +1,8 @@
 // TrajectoryPlanner: turns the local target into a smooth, feasible trajectory. A* in known
 // free space to the target viewpoint, a cubic B-spline fitted to it and optimised with NLopt,
 // a yaw spline; replans on a new target, little time left or a predicted collision, and
-// stops safely when planning fails. In: local_target, odom, position_cmd (continuity),
+// stops safely when planning fails, and plans again when the server dropped the trajectory (its
+// position_cmd names another or none). In: local_target, odom, position_cmd (continuity),
 // map_handle. Out: bspline (go_feap/Bspline), trajectory_marker, frontier_failed.
 #include <nav_msgs/Odometry.h>
 #include <nodelet/nodelet.h>
@@ -34,7 +35,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     config::readOptimizer(p, o);
     config::readReplan(p, replan_);
     config::readTrajectoryPlanner(p, planner_);
-    p.get("planner/rate", rate_).get("planner/odom_timeout", odom_timeout_);
+    p.get("planner/rate", rate_).get("planner/odom_timeout", odom_timeout_).get("planner/drop_grace", drop_grace_);
     config::readAstar(p, astar_config_);
     config::readAstar(p, scout_config_, "scout_astar");
     config::readAstar(p, coarse_config_, "coarse_astar");
@@ -48,6 +49,8 @@ class TrajectoryPlanner : public nodelet::Nodelet {
                                "parameter '" + p.fullName("planner/rate") + "' must be > 0");
     ros_params::requireOrThrow(std::isfinite(odom_timeout_) && odom_timeout_ > 0.0, getName(),
                                "parameter '" + p.fullName("planner/odom_timeout") + "' must be > 0");
+    ros_params::requireOrThrow(std::isfinite(drop_grace_) && drop_grace_ > 0.0, getName(),
+                               "parameter '" + p.fullName("planner/drop_grace") + "' must be > 0");
     compute_pub_ = nh.advertise<ComputeTime>("compute_time", 20);
     bspline_pub_ = nh.advertise<Bspline>("bspline", 5);
     marker_pub_ = nh.advertise<visualization_msgs::Marker>("trajectory_marker", 2);
@@ -130,6 +133,17 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     if (odom_gap_) {
       NODELET_WARN_STREAM(getName() << ": odometry is back: replanning");
       odom_gap_ = false;
+      target_changed_ = true;
+    }
+    // The server dropped the trajectory (an odometry gap it saw and this timer missed): the vehicle holds
+    // position, so plan again; counted on, a trajectory ending at its target was never replanned.
+    if (current_ && command_ &&
+        trajectory::serverDropped(static_cast<std::uint32_t>(current_->id), current_->start_time.toSec(),
+                                  command_->trajectory_flag != PositionCommand::TRAJECTORY_STATUS_EMPTY,
+                                  command_->trajectory_id, command_->header.stamp.toSec(), drop_grace_)) {
+      NODELET_WARN_STREAM(getName() << ": the trajectory server is not following trajectory " << current_->id
+                                    << " (it follows " << command_->trajectory_id << "): replanning");
+      current_.reset();
       target_changed_ = true;
     }
     if (!last_plan_.isZero() && (now - last_plan_).toSec() < planner_.min_time_between_plans) return;
@@ -258,7 +272,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
   trajectory::ReplanConfig replan_;
   planning::AstarConfig astar_config_, scout_config_, coarse_config_;
   trajectory::TrajectoryPlannerConfig planner_;
-  double rate_ = 10.0, odom_timeout_ = 0.5;
+  double rate_ = 10.0, odom_timeout_ = 0.5, drop_grace_ = 0.5;
   ros::Time odom_time_;
   bool odom_gap_ = false;
   std::string world_frame_;

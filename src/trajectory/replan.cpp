@@ -50,6 +50,12 @@ ReplanReason shouldReplan(const ReplanInputs& inputs, const ReplanConfig& config
   return ReplanReason::kNone;
 }
 
+bool serverDropped(std::uint32_t current_id, double start_time, bool following, std::uint32_t following_id,
+                   double report_time, double grace) {
+  if (!(report_time >= start_time + grace)) return false;  // a report from before it could arrive
+  return !following || following_id != current_id;
+}
+
 std::optional<double> firstCollisionTime(const UniformBspline& trajectory, double t_now,
                                          const map::Esdf& esdf, double min_clearance, double horizon) {
   if (trajectory.empty() || trajectory.dimension() != 3) return std::nullopt;

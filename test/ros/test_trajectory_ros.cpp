@@ -35,6 +35,7 @@ class TrajectoryTargetTest : public ::testing::Test {
     target_pub_ = nh_.advertise<go_feap::ViewpointPath>("local_target", 5);
     odom_sub_ = nh_.subscribe("odom", 20, &TrajectoryTargetTest::onOdom, this);
     bspline_sub_ = nh_.subscribe("bspline", 20, &TrajectoryTargetTest::onBspline, this);
+    foreign_pub_ = nh_.advertise<go_feap::Bspline>("bspline", 5);
   }
   void onOdom(const nav_msgs::Odometry::ConstPtr& m) {
     const auto& p = m->pose.pose.position;
@@ -43,9 +44,11 @@ class TrajectoryTargetTest : public ::testing::Test {
     speed_ = Vec3(v.x, v.y, v.z).norm();
   }
   void onBspline(const go_feap::Bspline::ConstPtr& m) {
+    if (m->traj_id >= kForeignIds) return;  // this test's own
     auto t = go_feap::ros_traj::fromMsg(*m);
     ASSERT_TRUE(t) << t.message();
     ++trajectories_;
+    last_ = m;
     end_ = t->position.position(t->position.duration());
   }
   go_feap::ViewpointPath target(const Vec3& p, std::uint32_t seq) const {
@@ -79,8 +82,10 @@ class TrajectoryTargetTest : public ::testing::Test {
   }
   bool atRestNear(const Vec3& p) const { return (position_ - p).norm() < 0.08 && speed_ < 0.1; }
 
+  static constexpr std::int64_t kForeignIds = 1000000;  ///< trajectory ids from here on are this test's
   ros::NodeHandle nh_;
-  ros::Publisher target_pub_;
+  ros::Publisher target_pub_, foreign_pub_;
+  go_feap::Bspline::ConstPtr last_;  ///< the planner's last trajectory
   ros::Subscriber odom_sub_, bspline_sub_;
   Vec3 start_, forward_, position_ = Vec3::Constant(1e9), end_ = Vec3::Constant(1e9);
   double yaw_ = 0.0, speed_ = 0.0;
@@ -126,6 +131,40 @@ TEST_F(TrajectoryTargetTest, ANewlyNumberedTargetIsFlownToExactlyEvenNearTheLast
   ASSERT_TRUE(publishWhile(target(t3, 3), 20.0, [&] { return atRestNear(t3); }))
       << "not at target 3; vehicle at " << position_.transpose();
   EXPECT_LT((end_ - t3).norm(), 0.01);
+}
+
+// The server follows a trajectory the planner did not send (as after an odometry gap only the server saw,
+// when it drops the planner's and holds): the planner, whose trajectory ends at the target and so would
+// never be replanned, sees that in position_cmd and plans again; the vehicle arrives. Runs after the test
+// above (gtest keeps the order): the vehicle starts where that one left it.
+TEST_F(TrajectoryTargetTest, ATrajectoryTheServerDroppedIsPlannedAgain) {
+  ASSERT_TRUE(spinUntil(
+      [&] {
+        return position_.x() < 1e8 && ros::Time::now().toSec() > 3.0 && bspline_sub_.getNumPublishers() > 0 &&
+               target_pub_.getNumSubscribers() > 0 && foreign_pub_.getNumSubscribers() >= 2 && speed_ < 0.1;
+      },
+      60.0))
+      << "no odometry, or the trajectory planner or server is not connected";
+  double resolution = 0.0;
+  ASSERT_TRUE(ros::param::get("/esdf_mapper/occupancy/resolution", resolution) && resolution > 0.0);
+  // Target 1 of the test above, 0.4 m behind the vehicle: flown to exactly there.
+  const Vec3 goal = Vec3((((start_ + 1.0 * forward_) / resolution).array().floor() + 0.5) * resolution);
+  ASSERT_GT((position_ - goal).norm(), 0.3);
+  const int before = trajectories_;
+  ASSERT_TRUE(publishWhile(target(goal, 40), 5.0, [&] { return trajectories_ > before; })) << "no trajectory planned";
+  // The planner's trajectory is replaced at the server by one holding where the vehicle is.
+  go_feap::Bspline hold = *last_;
+  hold.traj_id = kForeignIds + last_->traj_id;
+  hold.start_time = ros::Time::now();
+  for (auto& q : hold.pos_pts) q.x = position_.x(), q.y = position_.y(), q.z = position_.z();
+  for (double& y : hold.yaw_pts) y = last_->yaw_pts.front();
+  foreign_pub_.publish(hold);
+  const Vec3 held = position_;
+  // The target repeated as a kept one is: only a new plan brings the vehicle there.
+  ASSERT_TRUE(publishWhile(target(goal, 40), 20.0, [&] { return atRestNear(goal); }))
+      << "not at the target; vehicle at " << position_.transpose() << " at " << speed_ << " m/s (held at " << held.transpose() << "), "
+      << trajectories_ - before << " trajectories planned, the last ending at " << end_.transpose() << "; target " << goal.transpose();
+  EXPECT_GE(trajectories_ - before, 2);
 }
 
 }  // namespace

@@ -473,6 +473,21 @@ TEST(Replan, EachReasonInPriorityOrder) {
   EXPECT_NE(bad.validate().message().find("target_tolerance"), std::string::npos);
 }
 
+// The server's report against the planner's trajectory 7, published at t = 10 s, grace 0.5 s.
+TEST(Replan, ServerDroppedOnlyWhenAReportAfterTheGraceFollowsAnotherOrNone) {
+  // Followed (running or completed): not dropped, however late the report.
+  EXPECT_FALSE(go_feap::trajectory::serverDropped(7, 10.0, true, 7, 10.6, 0.5));
+  EXPECT_FALSE(go_feap::trajectory::serverDropped(7, 10.0, true, 7, 100.0, 0.5));
+  // Holding (no trajectory) or following another after the grace: dropped.
+  EXPECT_TRUE(go_feap::trajectory::serverDropped(7, 10.0, false, 0, 10.5, 0.5));
+  EXPECT_TRUE(go_feap::trajectory::serverDropped(7, 10.0, false, 7, 12.0, 0.5));
+  EXPECT_TRUE(go_feap::trajectory::serverDropped(7, 10.0, true, 6, 10.7, 0.5));
+  // Reports from before the trajectory could have reached the server say nothing about it.
+  EXPECT_FALSE(go_feap::trajectory::serverDropped(7, 10.0, true, 6, 10.49, 0.5));
+  EXPECT_FALSE(go_feap::trajectory::serverDropped(7, 10.0, false, 0, 9.0, 0.5));
+  EXPECT_FALSE(go_feap::trajectory::serverDropped(7, 10.0, false, 0, std::nan(""), 0.5));
+}
+
 TEST(Replan, FirstCollisionTimeMatchesFineSampling) {
   World world(Vec3(6.0, 4.0, 2.0));
   world.addBox(Index3(30, 0, 0), Index3(32, 39, 19));  // wall at x in [3.0, 3.3]

@@ -2,6 +2,7 @@
 // the caller gathers the inputs (its clock, its target) and acts on the answer.
 #pragma once
 
+#include <cstdint>
 #include <optional>
 
 #include "go_feap/common/result.h"
@@ -37,6 +38,14 @@ struct ReplanInputs {
 /// (target_changed or target_distance_to_end > target_tolerance), short time left
 /// (time_left < min_time_left); kNone otherwise.
 ReplanReason shouldReplan(const ReplanInputs& inputs, const ReplanConfig& config);
+
+/// The trajectory server's last report (PositionCommand), stamped `report_time` (s): whether it follows a
+/// trajectory and which (`following_id`). True when such a report, stamped at least `grace` s after
+/// trajectory `current_id` started (`start_time`, s), shows the server following another trajectory or
+/// none: it dropped this one (on an odometry gap of its own, say) and holds position. A planner still
+/// counting on a trajectory that ends at its target would wait for the vehicle to arrive for ever.
+bool serverDropped(std::uint32_t current_id, double start_time, bool following, std::uint32_t following_id,
+                   double report_time, double grace);
 
 /// A new target, not the current one moved a little: its position moved more than target_tolerance or its
 /// heading turned more than yaw_tolerance (wrapped).
