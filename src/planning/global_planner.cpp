@@ -141,13 +141,11 @@ Result<GlobalTour> planTour(const std::vector<FrontierSummary>& frontiers, const
 
   const int max_exact = std::min(config.max_exact + (rest_node ? 1 : 0), kMaxExactFrontiers);
   // The hint in node numbers: its frontiers that are candidates now, in its order.
+  std::map<unsigned, int> node_of;
+  for (int a = 0; a < n; ++a) node_of.emplace(frontiers[candidates[a]].id, a + 1);
   std::vector<int> hint_nodes;
-  if (!hint.empty() && nodes > max_exact) {
-    std::map<unsigned, int> node_of;
-    for (int a = 0; a < n; ++a) node_of.emplace(frontiers[candidates[a]].id, a + 1);
-    for (unsigned id : hint)
-      if (auto it = node_of.find(id); it != node_of.end()) hint_nodes.push_back(it->second);
-  }
+  for (unsigned id : hint)
+    if (auto it = node_of.find(id); it != node_of.end()) hint_nodes.push_back(it->second);
   const TourResult solved = solve(cost, xi_of, config.lambda, max_exact, hint_nodes);
   if (!solved.status) return solved.status;
   GlobalTour tour;

@@ -265,28 +265,13 @@ int cheapestInsertion(const OpenPath& path, int v) {
   return best_k;
 }
 
-// Cheapest insertion with the exact change of J, inserting nodes nearest to the UAV first.
-std::vector<int> insertionPath(const Eigen::MatrixXd& cost, const std::vector<double>& x, double lambda) {
-  const int n = static_cast<int>(cost.rows()) - 1;
-  std::vector<int> nodes(n);
-  std::iota(nodes.begin(), nodes.end(), 1);
-  std::stable_sort(nodes.begin(), nodes.end(), [&](int a, int b) { return cost(0, a) < cost(0, b); });
-  OpenPath path(cost, x, lambda);
-  path.assign({0});
-  for (int v : nodes) path.insert(v, cheapestInsertion(path, v));
-  return path.path();
-}
-
-// The hint's nodes in its order (repeats and nodes outside 1..N skipped), then every other node by
-// cheapest insertion, nearest the UAV first; empty when the hint holds no node.
-std::vector<int> hintedPath(const Eigen::MatrixXd& cost, const std::vector<double>& x, double lambda,
-                            const std::vector<int>& hint) {
+// `start` (0 first, then distinct frontier nodes) with every other node added by cheapest insertion (exact
+// change of J), nearest the UAV first.
+std::vector<int> insertRest(const Eigen::MatrixXd& cost, const std::vector<double>& x, double lambda,
+                            std::vector<int> start) {
   const int n = static_cast<int>(cost.rows()) - 1;
   std::vector<bool> used(n + 1, false);
-  std::vector<int> start{0};
-  for (int v : hint)
-    if (v >= 1 && v <= n && !used[v]) used[v] = true, start.push_back(v);
-  if (start.size() == 1) return {};
+  for (int v : start) used[v] = true;
   std::vector<int> missing;
   for (int v = 1; v <= n; ++v)
     if (!used[v]) missing.push_back(v);
@@ -295,6 +280,24 @@ std::vector<int> hintedPath(const Eigen::MatrixXd& cost, const std::vector<doubl
   path.assign(std::move(start));
   for (int v : missing) path.insert(v, cheapestInsertion(path, v));
   return path.path();
+}
+
+// Cheapest insertion from the UAV alone.
+std::vector<int> insertionPath(const Eigen::MatrixXd& cost, const std::vector<double>& x, double lambda) {
+  return insertRest(cost, x, lambda, {0});
+}
+
+// The hint's nodes in its order (repeats and nodes outside 1..N skipped), then the others by cheapest
+// insertion; empty when the hint holds no node.
+std::vector<int> hintedPath(const Eigen::MatrixXd& cost, const std::vector<double>& x, double lambda,
+                            const std::vector<int>& hint) {
+  const int n = static_cast<int>(cost.rows()) - 1;
+  std::vector<bool> used(n + 1, false);
+  std::vector<int> start{0};
+  for (int v : hint)
+    if (v >= 1 && v <= n && !used[v]) used[v] = true, start.push_back(v);
+  if (start.size() == 1) return {};
+  return insertRest(cost, x, lambda, std::move(start));
 }
 
 // Windows reordered exactly hold the most nodes w <= kMaxWindow with N 2^w w^2 <= kWindowWork,
