@@ -206,6 +206,16 @@ void ExplorationRun::planStep() {
       layer_out_.state != planning::ExplorationState::kFinalPass)
     return;
   const common::Vec3 position = vehicle_.state().position;
+  std::optional<planning::CurrentTarget> current;
+  if (target_)
+    current = planning::assessTarget({target_->position, target_->yaw, 0}, target_->committed_at, position, yaw(),
+                                     vehicle_.state().velocity.norm(), finder_->frontiers(), map_->occupancy(),
+                                     config_.viewpoints, config_.frontier.max_cluster_extent, config_.local);
+  if (current) current->quicker = target_->quicker;
+  if (!planning::planDue(current ? &*current : nullptr, t_, last_tour_time_, config_.viewpoints.min_visible,
+                         config_.local))
+    return;
+  last_tour_time_ = t_;
   std::vector<planning::FrontierSummary> summaries;
   for (const frontier::Frontier& f : finder_->frontiers())
     if (!layers_->isBlacklisted(f.id)) summaries.push_back(planning::summarize(f, t_));
@@ -244,12 +254,6 @@ void ExplorationRun::planStep() {
     return;
   }
   const frontier::Viewpoint& vp = plan->path.front();
-  std::optional<planning::CurrentTarget> current;
-  if (target_)
-    current = planning::assessTarget({target_->position, target_->yaw, 0}, target_->committed_at, position, yaw(),
-                                     vehicle_.state().velocity.norm(), finder_->frontiers(), map_->occupancy(),
-                                     config_.viewpoints, config_.frontier.max_cluster_extent, config_.local);
-  if (current) current->quicker = target_->quicker;
   const double heading = yaw();
   const planning::TargetDecision decision = planning::decideTarget(
       current ? &*current : nullptr, vp,

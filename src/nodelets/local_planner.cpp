@@ -141,6 +141,20 @@ class LocalPlanner : public nodelet::Nodelet {
       const auto it = std::find_if(all.begin(), all.end(), [&](const frontier::Frontier& f) { return f.id == id; });
       if (it != all.end()) tour_frontiers.push_back(*it);  // else: it changed since the tour was planned
     }
+    // The current target first: while planning could not replace it (planning::planDue()), repeat it.
+    const double now = ros::Time::now().toSec();
+    std::optional<planning::CurrentTarget> current;
+    if (target_)
+      current = planning::assessTarget(*target_, committed_at_, *position_, yaw_, speed_, all, m.occupancy(),
+                                       viewpoint_config_, frontier_extent_, local_config_);
+    if (current) current->quicker = target_quicker_;
+    if (!planning::planDue(current ? &*current : nullptr, now, last_plan_, viewpoint_config_.min_visible,
+                           local_config_)) {
+      map_lock.unlock();  // no compute time: nothing was planned (as in go_feap_bench)
+      if (last_out_) target_pub_.publish(*last_out_);
+      return;
+    }
+    last_plan_ = now;
     std::vector<std::uint32_t> ids;
     for (const auto& f : frontiers_->frontiers) ids.push_back(f.id);
     cache_.retain(ids);
@@ -179,13 +193,7 @@ class LocalPlanner : public nodelet::Nodelet {
     }
     // Target hysteresis (the same rule as go_feap_bench): keep the current viewpoint while it is
     // worth flying to; report a frontier that its reached viewpoint does not clear.
-    const double now = ros::Time::now().toSec();
     const frontier::Viewpoint& proposal = plan->path.front();
-    std::optional<planning::CurrentTarget> current;
-    if (target_)
-      current = planning::assessTarget(*target_, committed_at_, *position_, yaw_, speed_, all, m.occupancy(),
-                                       viewpoint_config_, frontier_extent_, local_config_);
-    if (current) current->quicker = target_quicker_;
     // Targets are compared by path, not straight line (pathCost()): under the map lock.
     const planning::TargetDecision decision = planning::decideTarget(
         current ? &*current : nullptr, proposal,
@@ -274,6 +282,7 @@ class LocalPlanner : public nodelet::Nodelet {
   std::uint32_t target_seq_ = 0;  ///< ViewpointPath::target_seq of the last new target
   bool target_quicker_ = false;  ///< the target won on cost (planning::CurrentTarget::quicker)
   double committed_at_ = 0.0, speed_ = 0.0, frontier_extent_ = 2.0;
+  double last_plan_ = -1e9;  ///< s (ROS time), when a tour was last planned against (planning::planDue())
   ros::Subscriber handle_sub_, odom_sub_, depth_sub_, layer_sub_, frontier_sub_, tour_sub_, failed_sub_;
 };
 

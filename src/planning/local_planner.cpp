@@ -43,6 +43,7 @@ Status LocalPlannerConfig::validate() const {
   if (!positiveFinite(max_range)) return err("max_range", "must be > 0");
   if (!positiveFinite(min_dist)) return err("min_dist", "must be > 0");
   if (!(commit_time >= 0.0 && std::isfinite(commit_time))) return err("commit_time", "must be finite and >= 0");
+  if (!(replan_period >= 0.0 && std::isfinite(replan_period))) return err("replan_period", "must be finite and >= 0");
   if (!(min_view_fraction >= 0.0 && min_view_fraction <= 1.0)) return err("min_view_fraction", "must be in [0, 1]");
   if (!(same_target_distance >= 0.0 && std::isfinite(same_target_distance)))
     return err("same_target_distance", "must be finite and >= 0");
@@ -298,6 +299,13 @@ TargetDecision decideTarget(const CurrentTarget* current, const frontier::Viewpo
       cost(proposal) < cost(current->viewpoint))
     return TargetDecision::kSwitchQuicker;
   return TargetDecision::kKeep;
+}
+
+bool planDue(const CurrentTarget* current, double t, double last_plan, int min_visible,
+             const LocalPlannerConfig& config) {
+  if (!current || current->reached || current->remaining_visible < min_visible) return true;
+  if (current->quicker || t - current->committed_at < config.commit_time) return false;
+  return t - last_plan >= config.replan_period;
 }
 
 int remainingVisible(const frontier::Viewpoint& viewpoint, const std::vector<frontier::Frontier>& frontiers,

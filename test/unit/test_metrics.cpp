@@ -311,4 +311,62 @@ TEST(TargetHysteresis, KeepsSwitchesAndReportsTargetsReachedInVain) {
   EXPECT_FALSE(go_feap::planning::targetReached(Vec3(1.0, 0, 1), 0.0, 0.0, a, c));
 }
 
+// planDue() may skip planning only where decideTarget() would keep the target whatever were proposed:
+// checked over every combination of the target's state, the time and proposals near, far, cheaper and
+// dearer; past commit_time a kept target is planned against every replan_period.
+TEST(TargetHysteresis, PlanningIsSkippedOnlyWhereAnyProposalWouldBeRefused) {
+  using go_feap::planning::TargetDecision;
+  go_feap::planning::LocalPlannerConfig c;
+  c.commit_time = 1.5;
+  c.replan_period = 0.0;
+  go_feap::frontier::Viewpoint a;
+  a.position = Vec3(0, 0, 1);
+  std::vector<go_feap::frontier::Viewpoint> proposals(3, a);
+  proposals[1].position.x() += 0.1;  // the same target
+  proposals[2].position = Vec3(3, 0, 1);
+  proposals[2].yaw = 1.0;
+  EXPECT_TRUE(go_feap::planning::planDue(nullptr, 0.0, -1e9, 10, c));
+  int skipped = 0, due = 0;
+  for (bool reached : {false, true})
+    for (bool quicker : {false, true})
+      for (int visible : {0, 9, 10, 50})
+        for (double t : {0.0, 1.0, 1.49, 1.5, 2.0, 10.0}) {
+          go_feap::planning::CurrentTarget cur;
+          cur.viewpoint = a;
+          cur.reached = reached;
+          cur.quicker = quicker;
+          cur.remaining_visible = visible;
+          if (!go_feap::planning::planDue(&cur, t, t - 0.1, 10, c)) {
+            ++skipped;
+            for (const auto& p : proposals)
+              for (double cost_p : {0.5, 5.0}) {
+                auto cost = [&](const go_feap::frontier::Viewpoint& v) { return &v == &p ? cost_p : 1.0; };
+                EXPECT_EQ(go_feap::planning::decideTarget(&cur, p, cost, t, 10, c), TargetDecision::kKeep)
+                    << "reached " << reached << " quicker " << quicker << " visible " << visible << " t " << t;
+              }
+          } else {
+            ++due;
+          }
+        }
+  // Skipped exactly where the target is held: not reached, in sight, and committed or won on cost.
+  EXPECT_EQ(skipped, 2 /*visible*/ * (3 /*t < commit*/ + 6 /*quicker*/));
+  EXPECT_EQ(due, 96 - skipped);
+  // Past commit_time a target that did not win on cost is planned against once per replan_period.
+  c.replan_period = 1.5;
+  go_feap::planning::CurrentTarget cur;
+  cur.viewpoint = a;
+  cur.remaining_visible = 50;
+  EXPECT_FALSE(go_feap::planning::planDue(&cur, 1.0, 0.0, 10, c));  // committed
+  EXPECT_TRUE(go_feap::planning::planDue(&cur, 2.0, 0.0, 10, c));
+  EXPECT_FALSE(go_feap::planning::planDue(&cur, 2.1, 2.0, 10, c));
+  EXPECT_TRUE(go_feap::planning::planDue(&cur, 3.5, 2.0, 10, c));
+  cur.remaining_visible = 5;  // seen out: at once
+  EXPECT_TRUE(go_feap::planning::planDue(&cur, 2.1, 2.0, 10, c));
+  cur.remaining_visible = 50;
+  cur.reached = true;  // reached: at once
+  EXPECT_TRUE(go_feap::planning::planDue(&cur, 0.2, 0.1, 10, c));
+  c.replan_period = -1.0;
+  EXPECT_NE(c.validate().message().find("replan_period"), std::string::npos);
+}
+
 }  // namespace

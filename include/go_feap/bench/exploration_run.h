@@ -153,6 +153,7 @@ class ExplorationRun {
   std::optional<trajectory::Trajectory> trajectory_;
   trajectory::SearchMemory search_memory_;  ///< flight searches that found no path lately
   double trajectory_start_ = 0.0, last_plan_ = -1e9;
+  double last_tour_time_ = -1e9;  ///< s, when planStep() last planned a tour (planning::planDue())
   common::Vec3 hold_position_;
   double hold_yaw_ = 0.0;
   cv::Mat depth_;

@@ -95,6 +95,7 @@ void readLocal(R& p, planning::LocalPlannerConfig& l) {
   p.get("local/v_max", l.v_max).get("local/yaw_rate_max", l.yaw_rate_max).get("local/window_size", l.window_size);
   p.get("local/clutter_threshold", l.clutter_threshold).get("local/max_range", l.max_range);
   p.get("local/min_dist", l.min_dist).get("local/commit_time", l.commit_time);
+  p.get("local/replan_period", l.replan_period);
   p.get("local/min_view_fraction", l.min_view_fraction).get("local/scan_step", l.scan_step);
   p.get("local/same_target_distance", l.same_target_distance).get("local/same_target_yaw", l.same_target_yaw);
   p.get("local/reached_speed", l.reached_speed).get("local/max_visits", l.max_visits);

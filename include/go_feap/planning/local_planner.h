@@ -34,6 +34,9 @@ struct LocalPlannerConfig {
   /// to see from it, or it has been reached): stops the target from flickering between near-equal
   /// viewpoints as the map grows frame by frame.
   double commit_time = 1.5;
+  /// s: past commit_time, a kept target is planned against (tour and viewpoint, for kSwitchQuicker) at
+  /// most this often (planDue()); 0 = at every planning tick. FUEL replans every 1.5 s (replan_thresh3).
+  double replan_period = 0.0;
   /// Near or cluttered frontiers: only viewpoints seeing at least this share of the frontier's best
   /// N_view are ranked by steering rate, so turning in place never settles for a poor view (0: all).
   double min_view_fraction = 0.0;
@@ -201,6 +204,14 @@ double pathCost(const Astar& astar, const common::Vec3& position, const common::
 TargetDecision decideTarget(const CurrentTarget* current, const frontier::Viewpoint& proposal,
                             const std::function<double(const frontier::Viewpoint&)>& cost, double t,
                             int min_visible, const LocalPlannerConfig& config);
+
+/// Whether planning (global tour, then local viewpoint) at time t could change the target: always with
+/// no current target, or one reached or seen out (remaining_visible < min_visible); never while
+/// decideTarget() would keep it whatever was proposed (committed for less than commit_time, or won on
+/// cost); past that, when replan_period has passed since the last plan at `last_plan` (s). The callers
+/// skip both planners otherwise: a tour whose only use is a proposal that cannot be taken.
+bool planDue(const CurrentTarget* current, double t, double last_plan, int min_visible,
+             const LocalPlannerConfig& config);
 
 /// Frontier cells of `frontiers` (those whose average lies within sensor_range + max_cluster_extent of the
 /// viewpoint) that the viewpoint sees: its remaining value, counted up to min_visible (the only
