@@ -440,10 +440,15 @@ bool ExplorationRun::step() {
   return !ended_;
 }
 
-void ExplorationRun::run(const std::function<void(const Progress&)>& progress) {
+void ExplorationRun::run(const std::function<void(const Progress&)>& progress, const std::atomic<bool>* interrupt) {
   const auto t0 = Clock::now();
   double next_report = 0.0;
   while (step()) {
+    if (interrupt && interrupt->load(std::memory_order_relaxed)) {
+      log("interrupted");
+      finish("interrupted");
+      break;
+    }
     if (progress && t_ >= next_report) {
       progress(this->progress());
       next_report += 1.0;

@@ -1,9 +1,13 @@
 // go_feap_bench: headless lock-step exploration runs (the core classes the nodelets wrap, in
 // simulated time, as fast as the CPU allows) for several scenes, planner modes and seeds, with
 // per-run results and the aggregate tables of the paper (Tables II–IV).
+#include <pthread.h>
 #include <sys/resource.h>
 
 #include <atomic>
+#include <csignal>
+#include <cstdlib>
+#include <cstring>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -39,7 +43,9 @@ int usage(const char* why) {
          "DIR/table.json and DIR/<scene>_coverage.png. Defaults: maze, seed 0, 1 run, go_feap,\n"
          "900 s, results/bench-<UTC time>, 1 job, config " GO_FEAP_CONFIG_DIR ".\n"
          "--max-sim-time is each run's time limit in simulated seconds (FINISHED(time_limit) there).\n"
-         "--perf prints per-block timings and the speed-up over simulated time.\n";
+         "--perf prints per-block timings and the speed-up over simulated time.\n"
+         "SIGINT (Ctrl-C) or SIGTERM: runs in progress end where they stand (\"interrupted\") and are\n"
+         "written with the tables, runs not started are skipped, exit status 130; a second one stops at once.\n";
   return 2;
 }
 
@@ -78,6 +84,13 @@ double peakRssMb() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // SIGINT and SIGTERM are taken by a thread of their own (sigtimedwait below), blocked in every other
+  // thread: blocked here, before any thread exists, so that every thread inherits the mask.
+  sigset_t stop_signals;
+  sigemptyset(&stop_signals);
+  sigaddset(&stop_signals, SIGINT);
+  sigaddset(&stop_signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
   std::map<std::string, std::string> args;
   bool help = false;
   const std::string error = tools::parseArgs(argc, argv,
@@ -152,10 +165,33 @@ int main(int argc, char** argv) {
     line << "   ";
     std::cerr << line.str() << std::flush;
   };
+  // The first SIGINT or SIGTERM ends the runs in progress where they stand (finish reason "interrupted",
+  // written with the tables as usual) and skips those not started; a second one ends the process at once.
+  std::atomic<bool> interrupted{false}, all_done{false};
+  std::thread signal_thread([&] {
+    const timespec poll{0, 200000000};
+    while (!all_done) {
+      const int sig = sigtimedwait(&stop_signals, nullptr, &poll);
+      if (sig != SIGINT && sig != SIGTERM) continue;
+      std::lock_guard<std::mutex> lock(print_mutex);
+      if (interrupted) {
+        std::cerr << "\ngo_feap_bench: " << strsignal(sig) << " again: stopping without results\n";
+        std::_Exit(130);
+      }
+      interrupted = true;
+      std::cerr << "\ngo_feap_bench: " << strsignal(sig)
+                << ": the runs in progress end where they stand and are written; again to stop at once\n";
+    }
+  });
   auto worker = [&](std::size_t job_index) {
     for (std::size_t i; (i = next++) < queue.size();) {
       const Job& job = queue[i];
       Outcome& out = outcomes[i];
+      if (interrupted) {
+        out.error = "not run: interrupted";
+        ++done;
+        continue;
+      }
       try {
         auto scene = world::makeScene(job.scene_spec, job.seed);
         if (!scene) throw std::runtime_error(scene.message());
@@ -164,7 +200,7 @@ int main(int argc, char** argv) {
           std::lock_guard<std::mutex> lock(print_mutex);
           sim_time[job_index] = p.t;
           report();
-        });
+        }, &interrupted);
         out.summary = run.recorder().summary();
         out.samples = run.recorder().samples();
         std::ostringstream dir;
@@ -185,6 +221,8 @@ int main(int argc, char** argv) {
   std::vector<std::thread> threads;
   for (std::size_t j = 0; j < jobs; ++j) threads.emplace_back(worker, j);
   for (auto& t : threads) t.join();
+  all_done = true;
+  signal_thread.join();
   std::cerr << "\n";
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
 
@@ -241,5 +279,6 @@ int main(int argc, char** argv) {
               << sim / std::max(1e-9, run_wall) << "x real time; total wall " << wall << " s with " << jobs
               << " job(s); peak memory " << peakRssMb() << " MB\n";
   }
+  if (interrupted) return 130;
   return failures == 0 ? 0 : 1;
 }

@@ -2,6 +2,8 @@
 // explores it to FINISHED(complete) with at least 95 % coverage and no collision, and the same
 // seed and options give the same run.
 #include <gtest/gtest.h>
+
+#include <atomic>
 #include <unistd.h>
 
 #include <filesystem>
@@ -56,6 +58,28 @@ TEST_P(PlannerModes, ExploreTheSmallMazeCompletely) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Bench, PlannerModes, ::testing::Values("go_feap", "fuel", "nearest"));
+
+// go_feap_bench's SIGINT/SIGTERM: a run whose interrupt flag is raised ends at its next step with what it
+// has, finish reason "interrupted", the time series ending there; without the flag it would go on.
+TEST(Bench, AnInterruptedRunEndsWhereItStands) {
+  auto config = bench::loadExplorationConfig(GO_FEAP_CONFIG_DIR, "go_feap");
+  ASSERT_TRUE(config) << config.message();
+  auto scene = go_feap::world::makeScene(kSmallMaze, 0);
+  ASSERT_TRUE(scene) << scene.message();
+  bench::ExplorationRun run(*scene, *config, "go_feap", 300.0);
+  std::atomic<bool> interrupt{false};
+  run.run([&](const bench::Progress& p) { interrupt = interrupt || p.t >= 8.0; }, &interrupt);
+  const auto& s = run.recorder().summary();
+  EXPECT_TRUE(run.ended());
+  EXPECT_EQ(s.finish_reason, "interrupted");
+  EXPECT_GE(s.exploration_time_s, 8.0);
+  EXPECT_LT(s.exploration_time_s, 8.1);
+  EXPECT_GT(s.coverage, 0.0);
+  EXPECT_LT(s.coverage, 0.95);  // the small maze takes far longer (ExploreTheSmallMazeCompletely)
+  ASSERT_FALSE(run.recorder().samples().empty());
+  EXPECT_DOUBLE_EQ(run.recorder().samples().back().t, s.exploration_time_s);
+  EXPECT_FALSE(run.step());  // ended for good
+}
 
 TEST(Bench, SameSeedAndOptionsGiveTheSameRun) {
   // 20 s: well before seed 1 of the small maze is explored (35.0 s), so the limit ends the run.

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <atomic>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -90,8 +91,10 @@ class ExplorationRun {
 
   /// Advances one control period. False once the run has ended (FINISHED or max_sim_time).
   bool step();
-  /// Steps to the end; calls `progress` about once per simulated second. Fills the summary.
-  void run(const std::function<void(const Progress&)>& progress = {});
+  /// Steps to the end; calls `progress` about once per simulated second. Fills the summary. When
+  /// `interrupt` is given and becomes true (go_feap_bench sets it on SIGINT/SIGTERM), the run ends at
+  /// its next step as it stands, finish reason "interrupted": what was explored so far is kept.
+  void run(const std::function<void(const Progress&)>& progress = {}, const std::atomic<bool>* interrupt = nullptr);
 
   double time() const { return t_; }
   bool ended() const { return ended_; }
