@@ -303,6 +303,7 @@ TargetDecision decideTarget(const CurrentTarget* current, const frontier::Viewpo
 
 bool planDue(const CurrentTarget* current, double t, double last_plan, int min_visible,
              const LocalPlannerConfig& config) {
+  if (!(config.replan_period > 0.0)) return true;
   if (!current || current->reached || current->remaining_visible < min_visible) return true;
   if (current->quicker || t - current->committed_at < config.commit_time) return false;
   return t - last_plan >= config.replan_period;

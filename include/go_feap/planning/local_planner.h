@@ -34,8 +34,9 @@ struct LocalPlannerConfig {
   /// to see from it, or it has been reached): stops the target from flickering between near-equal
   /// viewpoints as the map grows frame by frame.
   double commit_time = 1.5;
-  /// s: past commit_time, a kept target is planned against (tour and viewpoint, for kSwitchQuicker) at
-  /// most this often (planDue()); 0 = at every planning tick. FUEL replans every 1.5 s (replan_thresh3).
+  /// s: FUEL's replan cadence (planDue()): no planning while the target is held (committed or won on
+  /// cost, not reached, not seen out), and past commit_time at most this often; FUEL replans every 1.5 s
+  /// (replan_thresh3). 0 = plan at every planning tick, whatever the target's state.
   double replan_period = 0.0;
   /// Near or cluttered frontiers: only viewpoints seeing at least this share of the frontier's best
   /// N_view are ranked by steering rate, so turning in place never settles for a poor view (0: all).
@@ -205,11 +206,12 @@ TargetDecision decideTarget(const CurrentTarget* current, const frontier::Viewpo
                             const std::function<double(const frontier::Viewpoint&)>& cost, double t,
                             int min_visible, const LocalPlannerConfig& config);
 
-/// Whether planning (global tour, then local viewpoint) at time t could change the target: always with
-/// no current target, or one reached or seen out (remaining_visible < min_visible); never while
-/// decideTarget() would keep it whatever was proposed (committed for less than commit_time, or won on
-/// cost); past that, when replan_period has passed since the last plan at `last_plan` (s). The callers
-/// skip both planners otherwise: a tour whose only use is a proposal that cannot be taken.
+/// Whether to plan (global tour, then local viewpoint) at time t. With replan_period 0 always (go_feap:
+/// the planners' caches then see every tick, as the shipped figures were measured). Otherwise FUEL's
+/// cadence: always with no current target, or one reached or seen out (remaining_visible <
+/// min_visible); never while decideTarget() would keep it whatever was proposed (committed for less
+/// than commit_time, or won on cost); past that, when replan_period has passed since the last plan at
+/// `last_plan` (s). The callers skip both planners when it is false.
 bool planDue(const CurrentTarget* current, double t, double last_plan, int min_visible,
              const LocalPlannerConfig& config);
 
