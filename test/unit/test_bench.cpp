@@ -2,10 +2,9 @@
 // explores it to FINISHED(complete) with at least 95 % coverage and no collision, and the same
 // seed and options give the same run.
 #include <gtest/gtest.h>
-
-#include <atomic>
 #include <unistd.h>
 
+#include <atomic>
 #include <filesystem>
 #include <fstream>
 
