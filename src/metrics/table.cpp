@@ -7,6 +7,7 @@
 #include <iomanip>
 #include <numeric>
 #include <sstream>
+#include <tuple>
 
 namespace go_feap::metrics {
 
@@ -68,6 +69,69 @@ std::vector<TableRow> aggregate(const std::vector<Summary>& runs) {
   return rows;
 }
 
+std::vector<Comparison> compare(const std::vector<Summary>& runs) {
+  // Scenes and, per scene, planners in order of first appearance; each (scene, planner, seed) once.
+  std::vector<std::string> scenes;
+  std::map<std::string, std::vector<std::string>> planners;
+  std::map<std::tuple<std::string, std::string, std::uint64_t>, const Summary*> by_seed;
+  for (const Summary& s : runs) {
+    if (std::find(scenes.begin(), scenes.end(), s.scene) == scenes.end()) scenes.push_back(s.scene);
+    std::vector<std::string>& p = planners[s.scene];
+    if (std::find(p.begin(), p.end(), s.planner) == p.end()) p.push_back(s.planner);
+    by_seed.emplace(std::make_tuple(s.scene, s.planner, s.seed), &s);
+  }
+  std::vector<Comparison> out;
+  for (const std::string& scene : scenes) {
+    const std::vector<std::string>& p = planners[scene];
+    for (std::size_t b = 1; b < p.size(); ++b) {
+      Comparison c;
+      c.scene = scene;
+      c.planner = p[0];
+      c.baseline = p[b];
+      std::vector<double> diffs;
+      double time = 0.0, base_time = 0.0, distance = 0.0, base_distance = 0.0;
+      for (const auto& [key, s] : by_seed) {
+        if (std::get<0>(key) != scene || std::get<1>(key) != c.planner) continue;
+        const auto base = by_seed.find(std::make_tuple(scene, c.baseline, std::get<2>(key)));
+        if (base == by_seed.end()) continue;
+        const Summary& o = *base->second;
+        ++c.pairs;
+        c.both_finished += s->finish_reason == "complete" && o.finish_reason == "complete";
+        c.faster += s->exploration_time_s < o.exploration_time_s;
+        time += s->exploration_time_s, base_time += o.exploration_time_s;
+        distance += s->flight_distance_m, base_distance += o.flight_distance_m;
+        diffs.push_back(s->exploration_time_s - o.exploration_time_s);
+      }
+      if (c.pairs > 0) {
+        c.time_ratio = base_time > 0.0 ? time / base_time : 0.0;
+        c.distance_ratio = base_distance > 0.0 ? distance / base_distance : 0.0;
+        const Stats d = stats(diffs);
+        c.time_diff_avg = d.avg;
+        const double n = static_cast<double>(c.pairs);
+        // Population std from stats(), turned into the sample std for the standard error.
+        if (c.pairs >= 2) c.time_diff_se = d.std * std::sqrt(n / (n - 1.0)) / std::sqrt(n);
+      }
+      out.push_back(std::move(c));
+    }
+  }
+  return out;
+}
+
+std::string comparisonJson(const std::vector<Comparison>& comparisons) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const Comparison& c : comparisons)
+    out.push_back({{"scene", c.scene},
+                   {"planner", c.planner},
+                   {"baseline", c.baseline},
+                   {"pairs", c.pairs},
+                   {"both_finished", c.both_finished},
+                   {"time_ratio", c.time_ratio},
+                   {"distance_ratio", c.distance_ratio},
+                   {"time_diff_s", {{"avg", c.time_diff_avg}, {"se", c.time_diff_se}}},
+                   {"faster", c.faster}});
+  return out.dump(2);
+}
+
 std::string tableJson(const std::vector<TableRow>& rows) {
   nlohmann::json out = nlohmann::json::array();
   auto st = [](const Stats& s) { return nlohmann::json{{"avg", s.avg}, {"std", s.std}, {"max", s.max}, {"min", s.min}}; };
@@ -87,7 +151,7 @@ std::string tableJson(const std::vector<TableRow>& rows) {
   return out.dump(2);
 }
 
-std::string tableMarkdown(const std::vector<TableRow>& rows) {
+std::string tableMarkdown(const std::vector<TableRow>& rows, const std::vector<Comparison>& comparisons) {
   std::ostringstream md;
   md << std::fixed;
   md << "### Exploration time (s) and flight distance (m) (Tables II/III)\n\n"
@@ -111,6 +175,15 @@ std::string tableMarkdown(const std::vector<TableRow>& rows) {
     }
     md << " |\n";
   }
+  if (comparisons.empty()) return md.str();
+  md << "\n### Paired by seed (same scene instance and start)\n\n"
+     << "| scene | planner | against | pairs | both finished | time ratio | distance ratio | time difference (s) | "
+        "standard error (s) | faster |\n"
+     << "|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const Comparison& c : comparisons)
+    md << "| " << c.scene << " | " << c.planner << " | " << c.baseline << " | " << c.pairs << " | " << c.both_finished
+       << std::setprecision(3) << " | " << c.time_ratio << " | " << c.distance_ratio << std::setprecision(1) << " | "
+       << c.time_diff_avg << " | " << c.time_diff_se << " | " << c.faster << " of " << c.pairs << " |\n";
   return md.str();
 }
 

@@ -40,7 +40,8 @@ int usage(const char* why) {
          "                     [--jobs J] [--perf] [--config DIR]\n"
          "Runs N explorations per scene and planner (seeds S .. S+N-1) in simulated lock-step time and\n"
          "writes DIR/<scene>/<planner>/seed<k>/{summary.json,metrics.csv,coverage.png}, DIR/table.md,\n"
-         "DIR/table.json and DIR/<scene>_coverage.png. Defaults: maze, seed 0, 1 run, go_feap,\n"
+         "DIR/table.json and DIR/<scene>_coverage.png; with several planners the first against each other,\n"
+         "paired by seed, in table.md and DIR/comparison.json. Defaults: maze, seed 0, 1 run, go_feap,\n"
          "900 s, results/bench-<UTC time>, 1 job, config " GO_FEAP_CONFIG_DIR ".\n"
          "--max-sim-time is each run's time limit in simulated seconds (FINISHED(time_limit) there).\n"
          "--perf prints per-block timings and the speed-up over simulated time.\n"
@@ -246,7 +247,9 @@ int main(int argc, char** argv) {
   const auto rows = metrics::aggregate(summaries);
   std::filesystem::create_directories(out_dir);
   std::ofstream(out_dir + "/table.json") << metrics::tableJson(rows) << "\n";
-  const std::string md = metrics::tableMarkdown(rows);
+  const auto comparisons = metrics::compare(summaries);
+  if (!comparisons.empty()) std::ofstream(out_dir + "/comparison.json") << metrics::comparisonJson(comparisons) << "\n";
+  const std::string md = metrics::tableMarkdown(rows, comparisons);
   std::ofstream(out_dir + "/table.md") << md;
   // Side-by-side coverage curves per scene (first seed of each planner).
   for (const std::string& s : scenes) {

@@ -88,6 +88,54 @@ TEST(Table, AggregatesPerSceneAndPlannerWithPopulationStd) {
   EXPECT_NE(md.find("| maze | go_feap | 3 | 2 | 110.0 |"), std::string::npos) << md;
 }
 
+TEST(Table, ComparesTheFirstPlannerWithEachOtherPairedBySeed) {
+  auto run = [](const std::string& scene, const std::string& planner, std::uint64_t seed, double time,
+                double distance, const std::string& reason) {
+    metrics::Summary s = summary(scene, planner, time, distance, 1.0, 0, reason, 1.0);
+    s.seed = seed;
+    return s;
+  };
+  const std::vector<metrics::Summary> runs = {
+      run("maze", "go_feap", 0, 100, 200, "complete"),  run("maze", "fuel", 0, 110, 210, "complete"),
+      run("maze", "go_feap", 1, 120, 220, "max_sim_time"), run("maze", "fuel", 1, 100, 230, "complete"),
+      run("maze", "go_feap", 2, 90, 180, "complete"),   // no fuel run of seed 2
+      run("maze", "fuel", 3, 200, 400, "complete"),     // no go_feap run of seed 3
+      run("maze", "nearest", 0, 150, 300, "complete"),
+      run("maze", "nearest", 0, 999, 999, "complete"),  // a second run of one seed: the first is paired
+      run("pillar", "go_feap", 0, 50, 60, "complete"),  // one planner: nothing to compare
+  };
+  const auto c = metrics::compare(runs);
+  ASSERT_EQ(c.size(), 2u);
+  EXPECT_EQ(c[0].scene, "maze");
+  EXPECT_EQ(c[0].planner, "go_feap");
+  EXPECT_EQ(c[0].baseline, "fuel");
+  EXPECT_EQ(c[0].pairs, 2);
+  EXPECT_EQ(c[0].both_finished, 1);
+  EXPECT_DOUBLE_EQ(c[0].time_ratio, 220.0 / 210.0);
+  EXPECT_DOUBLE_EQ(c[0].distance_ratio, 420.0 / 440.0);
+  EXPECT_DOUBLE_EQ(c[0].time_diff_avg, 5.0);  // differences -10 and +20
+  EXPECT_NEAR(c[0].time_diff_se, 15.0, 1e-9);  // sample std sqrt(450) over sqrt(2)
+  EXPECT_EQ(c[0].faster, 1);
+  EXPECT_EQ(c[1].baseline, "nearest");
+  EXPECT_EQ(c[1].pairs, 1);
+  EXPECT_DOUBLE_EQ(c[1].time_ratio, 100.0 / 150.0);
+  EXPECT_DOUBLE_EQ(c[1].time_diff_avg, -50.0);
+  EXPECT_DOUBLE_EQ(c[1].time_diff_se, 0.0);
+  EXPECT_EQ(c[1].faster, 1);
+
+  const nlohmann::json j = nlohmann::json::parse(metrics::comparisonJson(c));
+  ASSERT_TRUE(j.is_array());
+  ASSERT_EQ(j.size(), 2u);
+  EXPECT_EQ(j[0]["baseline"], "fuel");
+  EXPECT_EQ(j[0]["pairs"], 2);
+  EXPECT_DOUBLE_EQ(j[0]["time_ratio"].get<double>(), 220.0 / 210.0);
+  EXPECT_DOUBLE_EQ(j[0]["time_diff_s"]["avg"].get<double>(), 5.0);
+  EXPECT_NEAR(j[0]["time_diff_s"]["se"].get<double>(), 15.0, 1e-9);
+  const std::string md = metrics::tableMarkdown(metrics::aggregate(runs), c);
+  EXPECT_NE(md.find("| maze | go_feap | fuel | 2 | 1 | 1.048 | 0.955 | 5.0 | 15.0 | 1 of 2 |"), std::string::npos) << md;
+  EXPECT_EQ(metrics::tableMarkdown(metrics::aggregate(runs)).find("Paired by seed"), std::string::npos);
+}
+
 TEST(Metrics, ObstacleDistanceMatchesBruteForceOverVoxelCubes) {
   auto scene = smallMaze(3);
   ASSERT_TRUE(scene) << scene.message();

@@ -30,10 +30,33 @@ struct TableRow {
 /// One row per (scene, planner), in order of first appearance in `runs`.
 std::vector<TableRow> aggregate(const std::vector<Summary>& runs);
 
+/// A planner against a baseline on the same scene, paired by seed (the same seed is the same scene
+/// instance and start): the comparison the per-planner averages blur, since seeds differ far more
+/// from each other than planners do on one seed.
+struct Comparison {
+  std::string scene, planner, baseline;
+  int pairs = 0;          ///< seeds both ran (a seed run twice by one planner pairs its first run)
+  int both_finished = 0;  ///< pairs where both runs reached FINISHED(complete)
+  /// planner's mean exploration time over the pairs / the baseline's (0 without pairs)
+  double time_ratio = 0.0;
+  double distance_ratio = 0.0;  ///< likewise for the flight distance
+  /// per pair, planner's time - baseline's: mean, and its standard error (sample std / sqrt(pairs); 0 below 2 pairs)
+  double time_diff_avg = 0.0, time_diff_se = 0.0;
+  int faster = 0;  ///< pairs where the planner's time is below the baseline's
+};
+
+/// Per scene, the first planner in `runs` (order of first appearance) against each other planner of
+/// that scene, over the seeds both ran; in order of first appearance. Empty where a scene has one planner.
+std::vector<Comparison> compare(const std::vector<Summary>& runs);
+
 /// table.json: a list with one object per row: scene, planner, runs, finished, exploration_time_s and
 /// flight_distance_m ({avg, std, max, min}), coverage ({avg, min}), collisions, compute_ms.
 std::string tableJson(const std::vector<TableRow>& rows);
-/// table.md: the same as Markdown tables (Tables II/III: time and distance; Table IV: compute).
-std::string tableMarkdown(const std::vector<TableRow>& rows);
+/// table.md: the same as Markdown tables (Tables II/III: time and distance; Table IV: compute), and
+/// with `comparisons` a third table of them (paired by seed).
+std::string tableMarkdown(const std::vector<TableRow>& rows, const std::vector<Comparison>& comparisons = {});
+/// comparison.json: a list with one object per comparison: scene, planner, baseline, pairs,
+/// both_finished, time_ratio, distance_ratio, time_diff_s ({avg, se}), faster.
+std::string comparisonJson(const std::vector<Comparison>& comparisons);
 
 }  // namespace go_feap::metrics
