@@ -1,6 +1,9 @@
 // GlobalPlanner: orders the frontiers near the UAV with the omission-aware objective.
-// In: frontiers (go_feap/FrontierArray), odom, map_handle. Out: global_tour
-// (go_feap/GlobalTour) and global_tour_marker (line strip from the UAV through the tour).
+// In: frontiers (go_feap/FrontierArray), odom, map_handle, blacklist, tour_wanted (std_msgs/Bool from
+// the local planner: false while it holds its target, planning::planDue()). Out: global_tour
+// (go_feap/GlobalTour) and global_tour_marker (line strip from the UAV through the tour). While no
+// tour is wanted the last one is sent again at the same rate, marked `repeated`, without planning
+// (the fuel mode's cadence, as go_feap_bench skips both planners then).
 // The planning step itself is the core's TourPlanner (A* path lengths on the shared map,
 // cached per frontier pair).
 #include <nav_msgs/Odometry.h>
@@ -13,6 +16,7 @@
 #include <mutex>
 #include <optional>
 #include <set>
+#include <std_msgs/Bool.h>
 #include <std_msgs/UInt32MultiArray.h>
 
 #include "go_feap/FrontierArray.h"
@@ -47,6 +51,12 @@ class GlobalPlanner : public nodelet::Nodelet {
     odom_sub_ = nh.subscribe("odom", 5, &GlobalPlanner::onOdom, this);
     frontier_sub_ = nh.subscribe("frontiers", 2, &GlobalPlanner::onFrontiers, this);
     blacklist_sub_ = nh.subscribe("blacklist", 1, &GlobalPlanner::onBlacklist, this);
+    wanted_sub_ = nh.subscribe("tour_wanted", 2, &GlobalPlanner::onWanted, this);
+  }
+
+  void onWanted(const std_msgs::Bool::ConstPtr& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    wanted_ = msg->data;
   }
 
   void onHandle(const boost::shared_ptr<const ros_map::MapHandle>& msg) {
@@ -89,6 +99,13 @@ class GlobalPlanner : public nodelet::Nodelet {
     const ros::Time now = ros::Time::now();
     if (!last_plan_.isZero() && (now - last_plan_).toSec() < 1.0 / rate_ - 1e-6) return;
     last_plan_ = now;
+    if (!wanted_ && last_tour_) {
+      GlobalTour again = *last_tour_;
+      again.header.stamp = msg->header.stamp;
+      again.repeated = true;
+      tour_pub_.publish(again);
+      return;
+    }
     std::vector<planning::FrontierSummary> frontiers;
     for (const auto& f : msg->frontiers) {
       if (blacklist_.count(f.id)) continue;  // the layer manager gave up on it
@@ -137,6 +154,7 @@ class GlobalPlanner : public nodelet::Nodelet {
       line.points.push_back(out.waypoints.back());
     }
     tour_pub_.publish(out);
+    last_tour_ = out;
     marker_pub_.publish(line);
   }
 
@@ -148,12 +166,14 @@ class GlobalPlanner : public nodelet::Nodelet {
   std::unique_ptr<planning::Astar> astar_;
   std::optional<common::Vec3> uav_;
   std::unique_ptr<planning::TourPlanner> planner_;
+  bool wanted_ = true;                  ///< the local planner's last tour_wanted (none yet: plan)
+  std::optional<GlobalTour> last_tour_;  ///< sent again while no tour is wanted
   std::set<std::uint32_t> blacklist_;
   double rate_ = 5.0;
   ros::Time last_plan_;
   ros::Publisher compute_pub_;
   ros::Publisher tour_pub_, marker_pub_;
-  ros::Subscriber handle_sub_, odom_sub_, frontier_sub_, blacklist_sub_;
+  ros::Subscriber handle_sub_, odom_sub_, frontier_sub_, blacklist_sub_, wanted_sub_;
 };
 
 }  // namespace go_feap

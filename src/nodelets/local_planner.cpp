@@ -3,7 +3,9 @@
 // rate; open: N_view) and runs the viewpoint DAG. In: global_tour, frontiers, odom, depth
 // (obstacle-ratio window), layer, map_handle, frontier_failed (drops a failed target). Out:
 // local_target (go_feap/ViewpointPath, numbered: a kept target is repeated with its number),
-// frontier_failed, viewpoint_markers.
+// frontier_failed, viewpoint_markers, tour_wanted (std_msgs/Bool, planning::planDue() at each tour: the
+// global planner sends its last tour again, `repeated`, instead of planning while it is false; a
+// repeated tour is never planned against, so a due plan waits for the next planned tour).
 #include <cv_bridge/cv_bridge.h>
 #include <nav_msgs/Odometry.h>
 #include <nodelet/nodelet.h>
@@ -14,6 +16,7 @@
 
 #include <algorithm>
 #include <mutex>
+#include <std_msgs/Bool.h>
 #include <std_msgs/UInt32.h>
 #include <optional>
 
@@ -58,6 +61,7 @@ class LocalPlanner : public nodelet::Nodelet {
     frontier_sub_ = nh.subscribe("frontiers", 2, &LocalPlanner::onFrontiers, this);
     tour_sub_ = nh.subscribe("global_tour", 2, &LocalPlanner::onTour, this);
     failed_pub_ = nh.advertise<std_msgs::UInt32>("frontier_failed", 100);
+    wanted_pub_ = nh.advertise<std_msgs::Bool>("tour_wanted", 2);
     failed_sub_ = nh.subscribe("frontier_failed", 100, &LocalPlanner::onFailed, this);
   }
 
@@ -148,8 +152,12 @@ class LocalPlanner : public nodelet::Nodelet {
       current = planning::assessTarget(*target_, committed_at_, *position_, yaw_, speed_, all, m.occupancy(),
                                        viewpoint_config_, frontier_extent_, local_config_);
     if (current) current->quicker = target_quicker_;
-    if (!planning::planDue(current ? &*current : nullptr, now, last_plan_, viewpoint_config_.min_visible,
-                           local_config_)) {
+    const bool due = planning::planDue(current ? &*current : nullptr, now, last_plan_, viewpoint_config_.min_visible,
+                                       local_config_);
+    std_msgs::Bool wanted;
+    wanted.data = due;
+    wanted_pub_.publish(wanted);
+    if (!due || tour->repeated) {
       map_lock.unlock();  // no compute time: nothing was planned (as in go_feap_bench)
       if (last_out_) target_pub_.publish(*last_out_);
       return;
@@ -273,7 +281,7 @@ class LocalPlanner : public nodelet::Nodelet {
   std::pair<double, double> band_{-1e18, 1e18};
   FrontierArray::ConstPtr frontiers_;
   ros::Publisher compute_pub_;
-  ros::Publisher target_pub_, marker_pub_, failed_pub_;
+  ros::Publisher target_pub_, marker_pub_, failed_pub_, wanted_pub_;
   std::optional<frontier::Viewpoint> target_;
   std::optional<ViewpointPath> last_out_;
   planning::ViewpointCache cache_;

@@ -7,9 +7,11 @@
 
 #include <cmath>
 
+#include <std_msgs/Bool.h>
 #include <std_msgs/UInt32.h>
 #include <std_srvs/Trigger.h>
 
+#include "go_feap/ComputeTime.h"
 #include "go_feap/ExplorationStatus.h"
 #include "go_feap/FrontierArray.h"
 #include "go_feap/LayerBounds.h"
@@ -173,6 +175,52 @@ TEST_F(FrontierPlannerTest, AFailedTargetIsDroppedAndChosenAgain) {
   failed_pub.publish(failed);
   EXPECT_TRUE(spinUntil([&] { return target_->header.stamp > kept->header.stamp; }, 5.0))
       << "the local planner kept its target for frontier " << failed.data << " after it failed";
+}
+
+// The fuel mode's planners (beside the go_feap ones, on fuel/...): while the local planner holds its
+// target (planning::planDue() false) the global planner sends its last tour again, marked repeated,
+// instead of planning one at global/rate 10 Hz; a planned tour costs a compute_time message, a repeated
+// one none. When the target is dropped (a failed attempt on its frontier) a tour is due: the local
+// planner wants one, the global planner plans it, and a new target follows.
+TEST_F(FrontierPlannerTest, FuelModeGlobalPlannerPlansOnlyWhenTheLocalPlannerWantsATour) {
+  int planned = 0, repeated = 0, computed = 0, not_wanted = 0;
+  bool counting = false;
+  go_feap::ViewpointPath::ConstPtr fuel_target;
+  ros::Subscriber tours = nh_.subscribe<go_feap::GlobalTour>("fuel/global_tour", 50, [&](const go_feap::GlobalTour::ConstPtr& m) {
+    if (counting) (m->repeated ? repeated : planned) += 1;
+  });
+  ros::Subscriber times = nh_.subscribe<go_feap::ComputeTime>("fuel/compute_time", 50, [&](const go_feap::ComputeTime::ConstPtr& m) {
+    if (counting && m->block == "global") ++computed;
+  });
+  ros::Subscriber want = nh_.subscribe<std_msgs::Bool>("fuel/tour_wanted", 50, [&](const std_msgs::Bool::ConstPtr& m) {
+    if (counting && !m->data) ++not_wanted;
+  });
+  ros::Subscriber targets = nh_.subscribe<go_feap::ViewpointPath>(
+      "fuel/local_target", 5, [&](const go_feap::ViewpointPath::ConstPtr& m) { fuel_target = m; });
+  ASSERT_TRUE(spinUntil([&] { return fuel_target && !fuel_target->frontier_ids.empty() && fuel_target->frontier_ids.front() != 0; }, 90.0))
+      << "no fuel/local_target at a frontier";
+  // Held: the vehicle does not fly here, so nothing reaches or clears the target within commit_time.
+  counting = true;
+  const ros::Time start = ros::Time::now();
+  ASSERT_TRUE(spinUntil([&] { return (ros::Time::now() - start).toSec() >= 1.2; }, 30.0));
+  counting = false;
+  EXPECT_GE(repeated, 5) << "the last tour was not sent again while the target was held";
+  EXPECT_GE(not_wanted, 5);
+  EXPECT_LE(planned, 2) << "the global planner planned " << planned << " tours while the target was held";
+  EXPECT_EQ(computed, planned) << "a repeated tour cost a planning call";
+
+  // Dropped: a tour is due, planned, and a new target chosen from it.
+  const std::uint32_t seq = fuel_target->target_seq;
+  ros::Publisher failed_pub = nh_.advertise<std_msgs::UInt32>("fuel/frontier_failed", 10);
+  ASSERT_TRUE(spinUntil([&] { return failed_pub.getNumSubscribers() >= 1; }, 10.0));
+  planned = 0;
+  counting = true;
+  std_msgs::UInt32 failed;
+  failed.data = fuel_target->frontier_ids.front();
+  failed_pub.publish(failed);
+  EXPECT_TRUE(spinUntil([&] { return planned >= 1 && fuel_target->target_seq > seq; }, 20.0))
+      << "no tour was planned and no new target chosen after the target was dropped (" << planned << " planned)";
+  counting = false;
 }
 
 }  // namespace
