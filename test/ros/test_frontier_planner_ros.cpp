@@ -207,7 +207,10 @@ TEST_F(FrontierPlannerTest, FuelModeGlobalPlannerPlansOnlyWhenTheLocalPlannerWan
   EXPECT_GE(repeated, 5) << "the last tour was not sent again while the target was held";
   EXPECT_GE(not_wanted, 5);
   EXPECT_LE(planned, 2) << "the global planner planned " << planned << " tours while the target was held";
-  EXPECT_EQ(computed, planned) << "a repeated tour cost a planning call";
+  // Planning calls while held (a failed plan sends no tour, and a call at the window's edge may have its
+  // tour outside it, so they are not matched one to one with planned tours): a repeat that planned would
+  // count as many calls as repeats.
+  EXPECT_LE(computed, 2) << computed << " planning calls while the target was held (" << repeated << " repeated tours)";
 
   // Dropped: a tour is due, planned, and a new target chosen from it.
   const std::uint32_t seq = fuel_target->target_seq;
@@ -221,6 +224,48 @@ TEST_F(FrontierPlannerTest, FuelModeGlobalPlannerPlansOnlyWhenTheLocalPlannerWan
   EXPECT_TRUE(spinUntil([&] { return planned >= 1 && fuel_target->target_seq > seq; }, 20.0))
       << "no tour was planned and no new target chosen after the target was dropped (" << planned << " planned)";
   counting = false;
+}
+
+// A local planner never plans against a repeated tour (the global planner's last tour sent again while
+// no tour was wanted): fed the chain's own tour marked repeated, the probe planner (go_feap mode, so it
+// always wants a tour) answers each with tour_wanted but chooses no target and spends no compute time;
+// fed the same tour unmarked, it chooses a target at one of its frontiers.
+TEST_F(FrontierPlannerTest, LocalPlannerNeverPlansAgainstARepeatedTour) {
+  int wanted = 0, computed = 0;
+  go_feap::ViewpointPath::ConstPtr probe_target;
+  ros::Subscriber want = nh_.subscribe<std_msgs::Bool>("probe/tour_wanted", 50, [&](const std_msgs::Bool::ConstPtr& m) {
+    if (m->data) ++wanted;
+  });
+  ros::Subscriber times = nh_.subscribe<go_feap::ComputeTime>("probe/compute_time", 50, [&](const go_feap::ComputeTime::ConstPtr& m) {
+    if (m->block == "local") ++computed;
+  });
+  ros::Subscriber targets = nh_.subscribe<go_feap::ViewpointPath>(
+      "probe/local_target", 5, [&](const go_feap::ViewpointPath::ConstPtr& m) { probe_target = m; });
+  ros::Publisher tour_pub = nh_.advertise<go_feap::GlobalTour>("probe/global_tour", 10);
+  ASSERT_TRUE(spinUntil([&] { return tour_ && tour_pub.getNumSubscribers() >= 1; }, 90.0)) << "no tour to feed the probe";
+  auto feed = [&](bool repeated, double seconds) {
+    const ros::Time start = ros::Time::now();
+    ros::Time last;
+    return spinUntil([&] {
+      if (last.isZero() || (ros::Time::now() - last).toSec() >= 0.1) {
+        go_feap::GlobalTour tour = *tour_;  // the chain's latest: its frontiers exist
+        tour.repeated = repeated;
+        tour_pub.publish(tour);
+        last = ros::Time::now();
+      }
+      return (ros::Time::now() - start).toSec() >= seconds || (!repeated && probe_target);
+    }, 60.0);
+  };
+  ASSERT_TRUE(feed(true, 1.5));
+  EXPECT_GE(wanted, 5) << "the probe did not take up the repeated tours";
+  EXPECT_FALSE(probe_target) << "a target was chosen from a repeated tour";
+  EXPECT_EQ(computed, 0) << "planning against a repeated tour";
+
+  ASSERT_TRUE(feed(false, 10.0));
+  ASSERT_TRUE(probe_target) << "no target from the same tour unmarked";
+  ASSERT_FALSE(probe_target->frontier_ids.empty());
+  EXPECT_NE(probe_target->frontier_ids.front(), 0u) << "the probe looked around instead of choosing a viewpoint";
+  EXPECT_GE(computed, 1);
 }
 
 }  // namespace
