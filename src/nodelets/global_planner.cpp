@@ -3,7 +3,8 @@
 // the local planner: false while it holds its target, planning::planDue()). Out: global_tour
 // (go_feap/GlobalTour) and global_tour_marker (line strip from the UAV through the tour). While no
 // tour is wanted the last one is sent again at the same rate, marked `repeated`, without planning
-// (the fuel mode's cadence, as go_feap_bench skips both planners then).
+// (the fuel mode's cadence, as go_feap_bench skips both planners then); when a tour is wanted again,
+// it is planned at once from the last frontiers, as go_feap_bench plans it in the same tick.
 // The planning step itself is the core's TourPlanner (A* path lengths on the shared map,
 // cached per frontier pair).
 #include <nav_msgs/Odometry.h>
@@ -56,7 +57,14 @@ class GlobalPlanner : public nodelet::Nodelet {
 
   void onWanted(const std_msgs::Bool::ConstPtr& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
+    const bool again = !wanted_ && msg->data;
     wanted_ = msg->data;
+    // Wanted again (the target was reached, seen out or is due for its periodic replan): plan now rather
+    // than at the next frontier message past global/rate, which would hold the vehicle up to a period.
+    if (again && last_frontiers_ && shared_ && uav_) {
+      last_plan_ = ros::Time::now();
+      plan(*last_frontiers_);
+    }
   }
 
   void onHandle(const boost::shared_ptr<const ros_map::MapHandle>& msg) {
@@ -91,6 +99,7 @@ class GlobalPlanner : public nodelet::Nodelet {
 
   void onFrontiers(const FrontierArray::ConstPtr& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
+    last_frontiers_ = msg;
     if (!shared_ || !uav_) {
       NODELET_WARN_THROTTLE(5.0, "%s: waiting for %s", getName().c_str(), !shared_ ? "map_handle" : "odom");
       return;
@@ -106,8 +115,13 @@ class GlobalPlanner : public nodelet::Nodelet {
       tour_pub_.publish(again);
       return;
     }
+    plan(*msg);
+  }
+
+  /// Plans a tour over `msg`'s frontiers and publishes it (mutex_ held; shared_ and uav_ set).
+  void plan(const FrontierArray& msg) {
     std::vector<planning::FrontierSummary> frontiers;
-    for (const auto& f : msg->frontiers) {
+    for (const auto& f : msg.frontiers) {
       if (blacklist_.count(f.id)) continue;  // the layer manager gave up on it
       planning::FrontierSummary s;
       s.id = f.id;
@@ -134,7 +148,7 @@ class GlobalPlanner : public nodelet::Nodelet {
     NODELET_DEBUG_STREAM(getName() << ": tour of " << tour->frontier_ids.size() << " frontiers in " << ms << " ms ("
                                    << fallbacks << " Euclidean fallbacks)");
     GlobalTour out;
-    out.header.stamp = msg->header.stamp;
+    out.header.stamp = msg.header.stamp;
     out.header.frame_id = world_frame_;
     out.frontier_ids.assign(tour->frontier_ids.begin(), tour->frontier_ids.end());
     out.cost = tour->cost;
@@ -168,6 +182,7 @@ class GlobalPlanner : public nodelet::Nodelet {
   std::unique_ptr<planning::TourPlanner> planner_;
   bool wanted_ = true;                  ///< the local planner's last tour_wanted (none yet: plan)
   std::optional<GlobalTour> last_tour_;  ///< sent again while no tour is wanted
+  FrontierArray::ConstPtr last_frontiers_;  ///< planned from at once when a tour is wanted again
   std::set<std::uint32_t> blacklist_;
   double rate_ = 5.0;
   ros::Time last_plan_;

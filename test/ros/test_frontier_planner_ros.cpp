@@ -6,6 +6,7 @@
 #include <ros/ros.h>
 
 #include <cmath>
+#include <functional>
 
 #include <std_msgs/Bool.h>
 #include <std_msgs/UInt32.h>
@@ -266,6 +267,54 @@ TEST_F(FrontierPlannerTest, LocalPlannerNeverPlansAgainstARepeatedTour) {
   ASSERT_FALSE(probe_target->frontier_ids.empty());
   EXPECT_NE(probe_target->frontier_ids.front(), 0u) << "the probe looked around instead of choosing a viewpoint";
   EXPECT_GE(computed, 1);
+}
+
+// When a tour is wanted again, the fuel-mode global planner plans it at once from the last frontiers
+// (go_feap_bench plans it in the same tick), not at the next frontier message past global/rate. The
+// probe planner, fed by the test: a frontier message gives a planned tour; told no tour is wanted, it
+// answers the next frontier message with that tour repeated; told a tour is wanted again, it plans one
+// with no frontier message after.
+TEST_F(FrontierPlannerTest, FuelModeGlobalPlannerPlansAtOnceWhenATourIsWantedAgain) {
+  int planned = 0, repeated = 0;
+  ros::Subscriber tours = nh_.subscribe<go_feap::GlobalTour>("probe/fuel_tour", 20, [&](const go_feap::GlobalTour::ConstPtr& m) {
+    (m->repeated ? repeated : planned) += 1;
+  });
+  ros::Publisher frontier_pub = nh_.advertise<go_feap::FrontierArray>("probe/frontiers", 2);
+  ros::Publisher wanted_pub = nh_.advertise<std_msgs::Bool>("probe/fuel_tour_wanted", 2);
+  ASSERT_TRUE(spinUntil([&] {
+    return frontiers_ && !frontiers_->frontiers.empty() && frontier_pub.getNumSubscribers() >= 1 &&
+           wanted_pub.getNumSubscribers() >= 1 && tours.getNumPublishers() >= 1;
+  }, 90.0)) << "no frontiers to feed the probe";
+  const go_feap::FrontierArray frontiers = *frontiers_;
+  // Frontier messages 0.15 s apart (global/rate 10 Hz lets one through per 0.1 s) until `done`.
+  auto feed = [&](const std::function<bool()>& done) {
+    ros::Time last;
+    return spinUntil([&] {
+      if (last.isZero() || (ros::Time::now() - last).toSec() >= 0.15) {
+        frontier_pub.publish(frontiers);
+        last = ros::Time::now();
+      }
+      return done();
+    }, 30.0);
+  };
+  auto pause = [&](double seconds) {
+    const ros::Time start = ros::Time::now();
+    spinUntil([&] { return (ros::Time::now() - start).toSec() >= seconds; }, 30.0);
+  };
+  ASSERT_TRUE(feed([&] { return planned >= 1; })) << "the probe planned no tour";
+  std_msgs::Bool wanted;
+  wanted.data = false;
+  wanted_pub.publish(wanted);
+  pause(0.3);
+  const int before = planned;
+  ASSERT_TRUE(feed([&] { return repeated >= 1; })) << "no repeated tour while no tour was wanted";
+  EXPECT_EQ(planned, before) << "a tour was planned while none was wanted";
+  pause(0.3);  // the last frontier message's tour, if any, is in
+  const int held = planned;
+  wanted.data = true;
+  wanted_pub.publish(wanted);
+  EXPECT_TRUE(spinUntil([&] { return planned > held; }, 10.0))
+      << "no tour planned when one was wanted again without a new frontier message";
 }
 
 }  // namespace
