@@ -230,7 +230,7 @@ TEST_F(FrontierPlannerTest, FuelModeGlobalPlannerPlansOnlyWhenTheLocalPlannerWan
 // A local planner never plans against a repeated tour (the global planner's last tour sent again while
 // no tour was wanted): fed the chain's own tour marked repeated, the probe planner (go_feap mode, so it
 // always wants a tour) answers each with tour_wanted but chooses no target and spends no compute time;
-// fed the same tour unmarked, it chooses a target at one of its frontiers.
+// fed the same tour unmarked, it plans and chooses a target.
 TEST_F(FrontierPlannerTest, LocalPlannerNeverPlansAgainstARepeatedTour) {
   int wanted = 0, computed = 0;
   go_feap::ViewpointPath::ConstPtr probe_target;
@@ -262,10 +262,10 @@ TEST_F(FrontierPlannerTest, LocalPlannerNeverPlansAgainstARepeatedTour) {
   EXPECT_FALSE(probe_target) << "a target was chosen from a repeated tour";
   EXPECT_EQ(computed, 0) << "planning against a repeated tour";
 
+  // Unmarked, the same tour is planned against: a target follows (a viewpoint of its frontiers, or a
+  // look around should none have one from here; either way a plan was made).
   ASSERT_TRUE(feed(false, 10.0));
   ASSERT_TRUE(probe_target) << "no target from the same tour unmarked";
-  ASSERT_FALSE(probe_target->frontier_ids.empty());
-  EXPECT_NE(probe_target->frontier_ids.front(), 0u) << "the probe looked around instead of choosing a viewpoint";
   EXPECT_GE(computed, 1);
 }
 
