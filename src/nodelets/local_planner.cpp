@@ -3,9 +3,10 @@
 // rate; open: N_view) and runs the viewpoint DAG. In: global_tour, frontiers, odom, depth
 // (obstacle-ratio window), layer, map_handle, frontier_failed (drops a failed target). Out:
 // local_target (go_feap/ViewpointPath, numbered: a kept target is repeated with its number),
-// frontier_failed, viewpoint_markers, tour_wanted (std_msgs/Bool, planning::planDue() at each tour: the
-// global planner sends its last tour again, `repeated`, instead of planning while it is false; a
-// repeated tour is never planned against, so a due plan waits for the next planned tour).
+// frontier_failed, viewpoint_markers, tour_wanted (std_msgs/Bool, with each tour: planning::planDue() for
+// the state that tour leaves, so after a plan for the target it chose or kept; the global planner sends
+// its last tour again, `repeated`, instead of planning while it is false, and plans at once when it turns
+// true; a repeated tour is never planned against).
 #include <cv_bridge/cv_bridge.h>
 #include <nav_msgs/Odometry.h>
 #include <nodelet/nodelet.h>
@@ -15,6 +16,7 @@
 #include <visualization_msgs/MarkerArray.h>
 
 #include <algorithm>
+#include <functional>
 #include <mutex>
 #include <std_msgs/Bool.h>
 #include <std_msgs/UInt32.h>
@@ -121,6 +123,22 @@ class LocalPlanner : public nodelet::Nodelet {
     last_out_.reset();
     target_quicker_ = false;
   }
+  void publishWanted(bool wanted) {
+    std_msgs::Bool msg;
+    msg.data = wanted;
+    wanted_pub_.publish(msg);
+  }
+  /// planning::planDue() right after a plan at `now`: a target that is still there was just chosen or kept
+  /// (not reached, something left to see from it); none wants a tour.
+  bool wantedAfterPlan(double now) const {
+    if (!target_) return planning::planDue(nullptr, now, last_plan_, viewpoint_config_.min_visible, local_config_);
+    planning::CurrentTarget held;
+    held.viewpoint = *target_;
+    held.committed_at = committed_at_;
+    held.remaining_visible = viewpoint_config_.min_visible;
+    held.quicker = target_quicker_;
+    return planning::planDue(&held, now, last_plan_, viewpoint_config_.min_visible, local_config_);
+  }
   void onFrontiers(const FrontierArray::ConstPtr& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
     frontiers_ = msg;
@@ -154,15 +172,19 @@ class LocalPlanner : public nodelet::Nodelet {
     if (current) current->quicker = target_quicker_;
     const bool due = planning::planDue(current ? &*current : nullptr, now, last_plan_, viewpoint_config_.min_visible,
                                        local_config_);
-    std_msgs::Bool wanted;
-    wanted.data = due;
-    wanted_pub_.publish(wanted);
     if (!due || tour->repeated) {
       map_lock.unlock();  // no compute time: nothing was planned (as in go_feap_bench)
+      publishWanted(due);  // nothing changed: the next tour is wanted when this one was
       if (last_out_) target_pub_.publish(*last_out_);
       return;
     }
     last_plan_ = now;
+    // Planned against: tour_wanted answers for the state the plan leaves (a target just chosen or kept is
+    // held), or the global planner would plan one more tour before it heard that none is wanted.
+    struct OnExit {
+      std::function<void()> run;
+      ~OnExit() { run(); }
+    } wanted_after{[&] { publishWanted(wantedAfterPlan(now)); }};
     std::vector<std::uint32_t> ids;
     for (const auto& f : frontiers_->frontiers) ids.push_back(f.id);
     cache_.retain(ids);

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <functional>
+#include <vector>
 
 #include <std_msgs/Bool.h>
 #include <std_msgs/UInt32.h>
@@ -315,6 +316,33 @@ TEST_F(FrontierPlannerTest, FuelModeGlobalPlannerPlansAtOnceWhenATourIsWantedAga
   wanted_pub.publish(wanted);
   EXPECT_TRUE(spinUntil([&] { return planned > held; }, 10.0))
       << "no tour planned when one was wanted again without a new frontier message";
+}
+
+// tour_wanted answers each tour for the state it leaves: the fuel-mode probe local planner, fed the
+// chain's tour, chooses a target from the first one it takes up and, holding that target for
+// commit_time, wants no further tour (answering for the state before the plan, it said it wanted one,
+// and the global planner planned a tour more than FUEL's cadence asks).
+TEST_F(FrontierPlannerTest, FuelModeLocalPlannerWantsNoTourRightAfterChoosingATarget) {
+  std::vector<bool> answers;
+  go_feap::ViewpointPath::ConstPtr probe_target;
+  ros::Subscriber want = nh_.subscribe<std_msgs::Bool>("probe/fuel_local/tour_wanted", 50,
+                                                       [&](const std_msgs::Bool::ConstPtr& m) { answers.push_back(m->data); });
+  ros::Subscriber targets = nh_.subscribe<go_feap::ViewpointPath>(
+      "probe/fuel_local/local_target", 5, [&](const go_feap::ViewpointPath::ConstPtr& m) { probe_target = m; });
+  ros::Publisher tour_pub = nh_.advertise<go_feap::GlobalTour>("probe/fuel_local/global_tour", 10);
+  ASSERT_TRUE(spinUntil([&] { return tour_ && tour_pub.getNumSubscribers() >= 1 && want.getNumPublishers() >= 1; }, 90.0))
+      << "no tour to feed the probe";
+  // One tour at a time until the probe takes one up (before it has the map and odometry it answers none).
+  ros::WallTime last;
+  ASSERT_TRUE(spinUntil([&] {
+    if (answers.empty() && (last.isZero() || (ros::WallTime::now() - last).toSec() >= 1.0)) {
+      tour_pub.publish(*tour_);
+      last = ros::WallTime::now();
+    }
+    return !answers.empty() && probe_target;
+  }, 30.0)) << "the probe took up no tour";
+  EXPECT_EQ(answers.size(), 1u);
+  EXPECT_FALSE(answers.front()) << "a tour was wanted right after a target was chosen from the last one";
 }
 
 }  // namespace
