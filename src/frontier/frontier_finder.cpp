@@ -12,6 +12,8 @@ common::Status FrontierConfig::validate() const {
   if (!(max_cluster_extent > 0.0)) return common::Status::Error("frontier: max_cluster_extent must be > 0");
   if (!(s_near > 0.0)) return common::Status::Error("frontier: s_near must be > 0");
   if (max_regrow_cells < 0) return common::Status::Error("frontier: max_regrow_cells must be >= 0");
+  if (!(revive_factor >= 1.0) || !std::isfinite(revive_factor))
+    return common::Status::Error("frontier: revive_factor must be >= 1 and finite");
   return common::Status::Ok();
 }
 
@@ -21,6 +23,7 @@ FrontierFinder::FrontierFinder(const FrontierConfig& config, const common::GridG
       box_(box),
       is_frontier_((geometry.size() + 63) / 64, 0),
       scratch_((geometry.size() + 63) / 64, 0),
+      retired_(config.revive_factor > 1.0 ? (geometry.size() + 63) / 64 : 0, 0),
       bricks_(((geometry.dims().array() + 3) / 4).matrix()),
       owner_(static_cast<std::size_t>(bricks_.x()) * bricks_.y() * bricks_.z() * 64, 0) {
   geo_.centreRange(box, box_lo_, box_hi_);
@@ -232,7 +235,7 @@ FrontierDelta FrontierFinder::regrow(std::unordered_set<std::uint32_t> affected,
   std::vector<Cell> cells, buffer;
   std::vector<std::pair<std::size_t, std::size_t>> pieces;
   for (auto& region : regions) {
-    if (static_cast<int>(region.size()) < config_.min_cluster_cells) continue;
+    if (!keepRegion(region)) continue;
     // Sorted cells make the split independent of the order the flood fill found them in; the split
     // keeps the order, so every piece is sorted too.
     std::sort(region.begin(), region.end());
@@ -286,6 +289,27 @@ FrontierDelta FrontierFinder::regrow(std::unordered_set<std::uint32_t> affected,
   for (Frontier& f : added) frontiers_.push_back(std::move(f));
   refreshNeighbourCounts();
   return delta;
+}
+
+bool FrontierFinder::keepRegion(const std::vector<std::size_t>& region) {
+  const auto n = static_cast<double>(region.size());
+  const double min_cells = config_.min_cluster_cells;
+  if (retired_.empty()) return n >= min_cells;
+  auto retired = [&](std::size_t l) { return ((retired_[l >> 6] >> (l & 63)) & 1u) != 0; };
+  auto retire = [&] {
+    for (std::size_t l : region) retired_[l >> 6] |= std::uint64_t{1} << (l & 63);
+  };
+  if (n < min_cells) {
+    // Retired only when it comes from a cluster: a region growing up from nothing is not held back.
+    if (std::any_of(region.begin(), region.end(), [&](std::size_t l) { return owner_[ownerSlot(geo_.unlinear(l))] != 0; }))
+      retire();
+    return false;
+  }
+  if (n >= config_.revive_factor * min_cells) return true;
+  const auto r = static_cast<double>(std::count_if(region.begin(), region.end(), retired));
+  if (2.0 * r < n) return true;
+  retire();
+  return false;
 }
 
 void FrontierFinder::splitRange(std::vector<Cell>& cells, std::size_t begin, std::size_t end,

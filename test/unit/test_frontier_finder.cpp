@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <functional>
+#include <limits>
 #include <random>
 #include <set>
 
@@ -313,4 +314,79 @@ TEST(FrontierFinder, NearCountsAndActiveBand) {
   for (const auto& fr : f.frontiers()) EXPECT_FALSE(fr.active);
   f.setActiveBand(0.0, 1.0);
   for (const auto& fr : f.frontiers()) EXPECT_TRUE(fr.active);
+}
+
+namespace {
+
+// Cells of the regions the finder holds, against a full recomputation by a finder without hysteresis
+// (revive_factor 1): the plain size limit's clusters.
+std::size_t heldCells(const frontier::FrontierFinder& f) {
+  std::size_t n = 0;
+  for (const auto& fr : f.frontiers()) n += fr.cells.size();
+  return n;
+}
+
+// A free strip one voxel high and wide at y = 0.95 (or 0.55), z = 0.45, over voxel centres x in [x0, x1]:
+// every cell of it is a frontier cell (unknown above and below).
+std::pair<Index3, Index3> strip(map::OccupancyMap& m, double x0, double x1, double y, VoxelState s) {
+  return paint(m, Vec3(x0, y - 0.01, 0.44), Vec3(x1, y + 0.01, 0.46), s);
+}
+
+}  // namespace
+
+// A cluster's region that shrinks below min_cluster_cells is retired: it counts again only from
+// revive_factor times that size while half of it or more is retired, and a region that was never a
+// cluster is not held back. With revive_factor 1 the finder is the plain size limit (the full
+// recomputation's result) at every step.
+TEST(FrontierFinder, RemnantBelowTheSizeLimitComesBackOnlyPastTheReviveSize) {
+  for (const double factor : {1.0, 1.5}) {
+    SCOPED_TRACE("revive_factor " + std::to_string(factor));
+    map::OccupancyMap m(mapConfig(), kBox);
+    frontier::FrontierConfig cfg;
+    cfg.min_cluster_cells = 10;
+    cfg.max_cluster_extent = 100.0;
+    cfg.revive_factor = factor;
+    ASSERT_TRUE(cfg.validate().ok());
+    frontier::FrontierFinder f(cfg, m.geometry(), kBox);
+    frontier::FrontierConfig plain = cfg;
+    plain.revive_factor = 1.0;
+    double t = 0.0;
+    auto step = [&](const std::pair<Index3, Index3>& changed) {
+      t += 1.0;
+      f.update(m, changed.first, changed.second, t);
+      frontier::FrontierFinder full(plain, m.geometry(), kBox);
+      full.recomputeAll(m, t);
+      return heldCells(full);
+    };
+    // 12 cells (x centres 0.05 .. 1.15): a cluster.
+    EXPECT_EQ(step(strip(m, 0.0, 1.2, 0.95, VoxelState::kFree)), 12u);
+    EXPECT_EQ(heldCells(f), 12u);
+    // Its first four cells are seen occupied: 8 left, below the limit.
+    EXPECT_EQ(step(strip(m, 0.0, 0.4, 0.95, VoxelState::kOccupied)), 0u);
+    EXPECT_EQ(heldCells(f), 0u);
+    // It grows back to 12 cells (8 retired, 4 new): over the plain limit, under 1.5 times it.
+    EXPECT_EQ(step(strip(m, 1.2, 1.6, 0.95, VoxelState::kFree)), 12u);
+    EXPECT_EQ(heldCells(f), factor > 1.0 ? 0u : 12u);
+    // 14 cells: still under 15 with hysteresis.
+    EXPECT_EQ(step(strip(m, 1.6, 1.8, 0.95, VoxelState::kFree)), 14u);
+    EXPECT_EQ(heldCells(f), factor > 1.0 ? 0u : 14u);
+    // 16 cells: past 1.5 times the limit, a cluster again.
+    EXPECT_EQ(step(strip(m, 1.8, 2.0, 0.95, VoxelState::kFree)), 16u);
+    EXPECT_EQ(heldCells(f), 16u);
+    // A new region growing from 8 to 12 cells was never a cluster: held at 12 either way.
+    EXPECT_EQ(step(strip(m, 0.0, 0.8, 0.55, VoxelState::kFree)), 16u);
+    EXPECT_EQ(heldCells(f), 16u);
+    EXPECT_EQ(step(strip(m, 0.8, 1.2, 0.55, VoxelState::kFree)), 28u);
+    EXPECT_EQ(heldCells(f), 28u);
+  }
+}
+
+TEST(FrontierFinder, ReviveFactorBelowOneIsRejected) {
+  frontier::FrontierConfig cfg;
+  cfg.revive_factor = 0.5;
+  const common::Status s = cfg.validate();
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("revive_factor"), std::string::npos);
+  cfg.revive_factor = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(cfg.validate().ok());
 }

@@ -45,7 +45,7 @@ void readMap(R& p, map::MapConfig& c) {
 template <class R>
 void readFrontier(R& p, frontier::FrontierConfig& c) {
   p.get("frontier/min_cluster_cells", c.min_cluster_cells).get("frontier/max_cluster_extent", c.max_cluster_extent);
-  p.get("frontier/max_regrow_cells", c.max_regrow_cells);
+  p.get("frontier/max_regrow_cells", c.max_regrow_cells).get("frontier/revive_factor", c.revive_factor);
   p.get("frontier/s_near", c.s_near);
 }
 

@@ -25,6 +25,11 @@ struct FrontierConfig {
   /// visited fewer cells than this (the result then equals recomputeAll()); beyond it, the clusters it
   /// did not touch are kept and the fill goes around them (bounded cost in large scenes; 0 = always)
   int max_regrow_cells = 20000;
+  /// Hysteresis on min_cluster_cells (1 = none): a region of a cluster that fell below
+  /// min_cluster_cells is retired, and a region that is mostly (half or more) retired cells counts
+  /// again only from revive_factor * min_cluster_cells cells, so that a remnant hovering at the size
+  /// limit is not dropped beside the UAV and brought back when it is far away.
+  double revive_factor = 1.0;
 
   common::Status validate() const;
 };
@@ -66,7 +71,9 @@ struct FrontierDelta {
 /// hold 10^5 cells) is regrown only that far: past it, the clusters the change did not touch are kept
 /// and the fill goes around them, as FUEL's does. Then clusters depend on the order the map was seen
 /// in, and a piece that the kept clusters cut off and that is smaller than min_cluster_cells is left
-/// out; every connected set of frontier cells that no cluster holds stays below that size.
+/// out; every connected set of frontier cells that no cluster holds stays below that size, or below
+/// revive_factor times it when half or more of its cells are retired (then the clusters depend on the
+/// map's history, and recomputeAll() on a fresh finder is the oracle only with revive_factor 1).
 class FrontierFinder {
  public:
   FrontierFinder(const FrontierConfig& config, const common::GridGeometry& geometry, const Aabb& box);
@@ -79,7 +86,8 @@ class FrontierFinder {
   /// box form when the changes are sparse in a large box. Only clusters with a cell in or
   /// 26-adjacent to a changed voxel or its face neighbours are rebuilt; same result.
   FrontierDelta update(const map::OccupancyMap& map, const std::vector<std::size_t>& changed, double now);
-  /// Rebuilds everything from the map (the oracle for update()).
+  /// Rebuilds everything from the map (the oracle for update() when revive_factor is 1; retired cells
+  /// are kept).
   FrontierDelta recomputeAll(const map::OccupancyMap& map, double now);
 
   /// Frontiers whose average lies in [z_min, z_max] are active; the others are kept.
@@ -95,6 +103,9 @@ class FrontierFinder {
   const FrontierConfig& config() const { return config_; }
 
  private:
+  /// Whether `region` (linear indices) becomes clusters; retires the cells of a cluster's region
+  /// that fell below the size limit (called while owner_ still names the removed clusters).
+  bool keepRegion(const std::vector<std::size_t>& region);
   bool computeFrontierCell(const map::OccupancyMap& map, const Index3& idx) const;
   FrontierDelta rebuild(const map::OccupancyMap& map, const Index3& lo, const Index3& hi, double now);
   FrontierDelta regrow(std::unordered_set<std::uint32_t> affected, std::vector<std::size_t> seeds, double now);
@@ -117,6 +128,7 @@ class FrontierFinder {
   Index3 box_lo_, box_hi_;  ///< voxel range of the box, [lo, hi)
   std::vector<std::uint64_t> is_frontier_;                   ///< one bit per voxel
   std::vector<std::uint64_t> scratch_;                       ///< per-update marks, cleared after use
+  std::vector<std::uint64_t> retired_;                       ///< cells of regions retired below the size limit
   /// Slot of voxel `idx` in owner_: the grid in bricks of 4 x 4 x 4 voxels, each brick's 64 slots
   /// together, so a cell's 26 neighbours lie in a few cache lines (in the x-fastest order they span
   /// nine rows in three planes: in a large box the flood fill's lookups were mostly cache misses).
