@@ -186,6 +186,7 @@ void ExplorationRun::layerStep() {
   triggered_ = true;
   in.failed.swap(failed_);
   in.map_progress = map_progress_;
+  in.yaw = yaw();
   for (const frontier::Frontier& f : finder_->frontiers()) {
     in.all_frontiers.push_back(f.id);
     if (f.average.z() >= layer_out_.band.z_min && f.average.z() <= layer_out_.band.z_max)
@@ -206,6 +207,20 @@ void ExplorationRun::planStep() {
       layer_out_.state != planning::ExplorationState::kFinalPass)
     return;
   const common::Vec3 position = vehicle_.state().position;
+  auto idle = [&] {
+    return !target_ || planning::targetReached(position, yaw(), vehicle_.state().velocity.norm(),
+                                               {target_->position, target_->yaw, 0}, config_.local);
+  };
+  if (layer_out_.look_around) {
+    // No frontier where the camera has looked, and it has not looked round yet: turn in place.
+    if (idle()) {
+      const frontier::Viewpoint scan = planning::scanTarget(position, yaw(), config_.local);
+      log("no frontier in view before a look round: turning in place");
+      target_ = Target{scan.position, scan.yaw, 0, t_};
+      target_changed_ = true;
+    }
+    return;
+  }
   std::optional<planning::CurrentTarget> current;
   if (target_)
     current = planning::assessTarget({target_->position, target_->yaw, 0}, target_->committed_at, position, yaw(),
@@ -240,9 +255,7 @@ void ExplorationRun::planStep() {
   recorder_.addTime("local", msSince(t0));
   if (!plan) {
     // Nothing to fly to: look around, unless already flying somewhere or turning.
-    const bool idle = !target_ || planning::targetReached(position, yaw(), vehicle_.state().velocity.norm(),
-                                                          {target_->position, target_->yaw, 0}, config_.local);
-    if (idle) {
+    if (idle()) {
       const frontier::Viewpoint scan = planning::scanTarget(position, yaw(), config_.local);
       log("no local plan (" + plan.message() + "): turning in place to look around");
       // Each look around is a failed attempt for the tour's frontiers (none had a viewpoint): a frontier

@@ -15,6 +15,7 @@
 #include <visualization_msgs/Marker.h>
 #include <std_srvs/Trigger.h>
 
+#include <cmath>
 #include <mutex>
 #include <optional>
 
@@ -24,6 +25,7 @@
 #include "go_feap/MapUpdate.h"
 #include "go_feap/planning/layer_manager.h"
 #include "go_feap/common/config_groups.h"
+#include "go_feap/ros/conversions.h"
 #include "go_feap/ros/params.h"
 
 namespace go_feap {
@@ -66,6 +68,8 @@ class LayerManager : public nodelet::Nodelet {
                                      manager_->state() == planning::ExplorationState::kFinalPass);
     if (flying && last_position_) distance_ += (p - *last_position_).norm();
     last_position_ = p;
+    const double yaw = ros_conv::yawOf(msg->pose.pose.orientation);
+    if (std::isfinite(yaw)) yaw_ = yaw;
     if (!manager_) {
       manager_ = std::make_unique<planning::LayerManager>(config_, box_, z);
       publish(ros::Time::now(), manager_->step({}, ros::Time::now().toSec()));
@@ -112,6 +116,7 @@ class LayerManager : public nodelet::Nodelet {
     pending_trigger_ = false;
     in.failed.swap(failed_);
     in.map_progress = progress_;
+    in.yaw = yaw_;
     const planning::Band band = current_band_;
     if (frontiers_) {
       for (const auto& f : frontiers_->frontiers) {
@@ -144,7 +149,15 @@ class LayerManager : public nodelet::Nodelet {
     layer.z_min = out.band.z_min;
     layer.z_max = out.band.z_max;
     layer.final_pass = out.band.final_pass;
+    layer.look_around = out.look_around;
+    if (out.look_around && !look_around_)
+      NODELET_INFO_STREAM(getName() << ": no frontier in view before a look round: the vehicle turns in place");
+    // While a look round is wanted, every step repeats it (the local planner turns again when idle).
+    const bool changed = out.look_around || out.look_around != look_around_;
+    look_around_ = out.look_around;
+    if (changed) layer_pub_.publish(layer);
     if (!out.transitions.empty() || !published_) {
+      if (!changed) layer_pub_.publish(layer);
       layer_pub_.publish(layer);
       visualization_msgs::Marker slab;
       slab.header = layer.header;
@@ -195,6 +208,8 @@ class LayerManager : public nodelet::Nodelet {
   bool pending_trigger_ = false, published_ = false;
   std::optional<ros::Time> t_start_;
   std::optional<common::Vec3> last_position_;
+  std::optional<double> yaw_;
+  bool look_around_ = false;
   double distance_ = 0.0;
   ros::Publisher layer_pub_, status_pub_, blacklist_pub_, marker_pub_;
   std::size_t blacklisted_ = 0;

@@ -112,6 +112,29 @@ class LocalPlanner : public nodelet::Nodelet {
   void onLayer(const LayerBounds::ConstPtr& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
     band_ = {msg->z_min, msg->z_max};
+    // No frontier in view and no look round yet (the layer manager repeats this while it holds): turn in
+    // place, unless already flying somewhere or turning.
+    if (msg->look_around && position_ && idle()) {
+      NODELET_INFO_STREAM_THROTTLE(2.0, getName() << ": no frontier in view before a look round: turning in place");
+      turnInPlace(msg->header.stamp);
+    }
+  }
+  bool idle() const { return !target_ || planning::targetReached(*position_, yaw_, speed_, *target_, local_config_); }
+  /// Targets a turn in place by scan_step (a frontier id of 0: no frontier).
+  void turnInPlace(const ros::Time& stamp) {
+    target_ = planning::scanTarget(*position_, yaw_, local_config_);
+    target_frontier_ = 0;
+    target_quicker_ = false;
+    committed_at_ = ros::Time::now().toSec();
+    ViewpointPath out;
+    out.header.stamp = stamp;
+    out.header.frame_id = world_frame_;
+    out.target_seq = ++target_seq_;
+    out.positions.push_back(ros_conv::toPoint(target_->position));
+    out.yaws.push_back(target_->yaw);
+    out.frontier_ids.push_back(0);
+    target_pub_.publish(out);
+    last_out_ = out;
   }
   // A failed attempt on the current target's frontier (the trajectory planner found no way there): drop
   // the target, as go_feap_bench does, so that the next tour chooses again. Kept, it was repeated for
@@ -195,12 +218,9 @@ class LocalPlanner : public nodelet::Nodelet {
       ros_conv::publishComputeTime(compute_pub_, "local", t_compute);
       map_lock.unlock();
       // Nothing to fly to: look around, unless already flying somewhere or turning.
-      if (!target_ || planning::targetReached(*position_, yaw_, speed_, *target_, local_config_)) {
+      if (idle()) {
         NODELET_INFO_STREAM_THROTTLE(2.0, getName() << ": no local plan (" << plan.message()
                                                     << "): turning in place to look around");
-        target_ = planning::scanTarget(*position_, yaw_, local_config_);
-        target_frontier_ = 0;
-        target_quicker_ = false;
         // Each look around is a failed attempt for the tour's frontiers (none had a viewpoint): a
         // frontier that stays unchanged through max_retries of them is blacklisted, not scanned for ever.
         for (unsigned id : tour->frontier_ids) {
@@ -208,16 +228,7 @@ class LocalPlanner : public nodelet::Nodelet {
           failed.data = id;
           failed_pub_.publish(failed);
         }
-        committed_at_ = ros::Time::now().toSec();
-        ViewpointPath out;
-        out.header.stamp = tour->header.stamp;
-        out.header.frame_id = world_frame_;
-        out.target_seq = ++target_seq_;
-        out.positions.push_back(ros_conv::toPoint(target_->position));
-        out.yaws.push_back(target_->yaw);
-        out.frontier_ids.push_back(0);
-        target_pub_.publish(out);
-        last_out_ = out;
+        turnInPlace(tour->header.stamp);
       }
       return;
     }

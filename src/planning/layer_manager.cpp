@@ -113,6 +113,11 @@ LayerOutputs LayerManager::step(const LayerInputs& in, double t) {
     ignored = true;
   }
 
+  if (in.yaw && std::isfinite(*in.yaw) && state_ != ExplorationState::kWaitTrigger) {
+    const double turns = *in.yaw / (2.0 * M_PI);
+    const int octant = static_cast<int>(std::floor(8.0 * (turns - std::floor(turns)))) & 7;
+    headings_seen_ |= 1u << octant;
+  }
   if (state_ == ExplorationState::kExplore || state_ == ExplorationState::kFinalPass) {
     if (in.map_progress != last_progress_) {
       last_progress_ = in.map_progress;
@@ -125,7 +130,10 @@ LayerOutputs LayerManager::step(const LayerInputs& in, double t) {
     }
   }
   // A band (or, in the final pass, the box) without usable frontiers for settle_time is
-  // done. The next band's frontiers arrive with the next inputs.
+  // done, once the camera has looked round (else the chain is asked to turn in place: a start facing a
+  // wall sees too little for a frontier and would end the run "complete" at once). The next band's
+  // frontiers arrive with the next inputs.
+  bool look_around = false;
   if (state_ == ExplorationState::kExplore || state_ == ExplorationState::kFinalPass) {
     const bool final_pass = state_ == ExplorationState::kFinalPass;
     if (countUsable(final_pass ? in.all_frontiers : in.band_frontiers) > 0) {
@@ -133,7 +141,9 @@ LayerOutputs LayerManager::step(const LayerInputs& in, double t) {
     } else if (empty_since_ < 0.0) {
       empty_since_ = t;
     }
-    if (empty_since_ >= 0.0 && t - empty_since_ >= config_.settle_time) {
+    if (empty_since_ >= 0.0 && t - empty_since_ >= config_.settle_time && !lookedAround()) {
+      look_around = true;
+    } else if (empty_since_ >= 0.0 && t - empty_since_ >= config_.settle_time) {
       if (final_pass) {
         // Blacklisted frontiers are left unexplored: say how many, so a "complete" that is not is visible.
         const std::size_t blacklisted = in.all_frontiers.size() - countUsable(in.all_frontiers);
@@ -152,6 +162,7 @@ LayerOutputs LayerManager::step(const LayerInputs& in, double t) {
   LayerOutputs out = output();
   out.transitions = std::move(transitions);
   out.trigger_ignored = ignored;
+  out.look_around = look_around;
   return out;
 }
 

@@ -151,4 +151,24 @@ TEST(Bench, ConfigErrorsNameTheModeOrKey) {
   std::filesystem::remove_all(dir);
 }
 
+// The full maze's start (seed 2) faces a wall: the first view's frontier has about 200 cells. With a
+// size limit of 220 nothing is a frontier there, and the run ended "complete" after 2.2 s at 0.1 %
+// coverage; the layer manager now has the vehicle turn in place first, and the run explores.
+TEST(Bench, AStartFacingAWallLooksRoundInsteadOfEndingComplete) {
+  auto config = bench::loadExplorationConfig(GO_FEAP_CONFIG_DIR, "go_feap");
+  ASSERT_TRUE(config) << config.message();
+  config->frontier.min_cluster_cells = 220;
+  auto scene = go_feap::world::makeScene("maze", 2);
+  ASSERT_TRUE(scene) << scene.message();
+  bench::ExplorationRun run(*scene, *config, "go_feap", 20.0);
+  run.run();
+  const auto& s = run.recorder().summary();
+  EXPECT_EQ(s.finish_reason, "time_limit");
+  EXPECT_GT(s.coverage, 0.05);
+  EXPECT_GT(s.flight_distance_m, 2.0);
+  bool turned = false;
+  for (const std::string& e : run.events()) turned = turned || e.find("before a look round") != std::string::npos;
+  EXPECT_TRUE(turned);
+}
+
 }  // namespace

@@ -29,6 +29,16 @@ LayerInputs frontiers(std::vector<std::uint32_t> band, std::vector<std::uint32_t
   return in;
 }
 
+// The vehicle turns round once at time t, seeing frontier 1 (nothing becomes explored on the way).
+void lookRound(LayerManager& m, double t) {
+  for (int k = 0; k < 8; ++k) {
+    LayerInputs in = frontiers({1}, {1}, 0);
+    in.yaw = -M_PI + (k + 0.5) * M_PI / 4.0;
+    m.step(in, t);
+  }
+  ASSERT_TRUE(m.lookedAround());
+}
+
 }  // namespace
 
 TEST(LayerManager, BandsGoUpFromTheStartBandThenDown) {
@@ -53,6 +63,7 @@ TEST(LayerManager, WalksEveryTransitionToComplete) {
   LayerInputs trig = frontiers({1}, {1}, progress);
   trig.trigger = true;
   out = m.step(trig, t += 0.1);
+  lookRound(m, t);
   ASSERT_EQ(out.state, ExplorationState::kExplore);
   ASSERT_EQ(out.transitions.size(), 1u);
   EXPECT_EQ(out.transitions[0].to, ExplorationState::kExplore);
@@ -101,6 +112,7 @@ TEST(LayerManager, FrontiersReappearingResetTheSettleTimer) {
   LayerInputs trig = frontiers({}, {}, 0);
   trig.trigger = true;
   m.step(trig, 0.0);
+  lookRound(m, 0.0);
   m.step(frontiers({}, {}, 1), 0.5);                      // empty since 0.5
   m.step(frontiers({4}, {4}, 2), 1.2);                    // a frontier appears: timer reset
   LayerOutputs out = m.step(frontiers({}, {}, 3), 1.6);   // empty since 1.6
@@ -116,6 +128,7 @@ TEST(LayerManager, UnreachableFrontiersAreBlacklistedAfterBoundedRetries) {
   LayerInputs trig = frontiers({9}, {9}, 0);
   trig.trigger = true;
   m.step(trig, 0.0);
+  lookRound(m, 0.0);
   LayerInputs fail = frontiers({9}, {9}, 1);
   fail.failed = {9};
   LayerOutputs out = m.step(fail, 1.0);
@@ -167,4 +180,54 @@ TEST(LayerManager, ValidateNamesKeys) {
   EXPECT_NE(c.validate().message().find("max_retries"), std::string::npos);
   EXPECT_STREQ(toString(FinishReason::kStuck), "stuck");
   EXPECT_STREQ(toString(ExplorationState::kFinalPass), "FINAL_PASS");
+}
+
+// A start facing a wall sees too little for a frontier: the band is not counted explored, and the chain
+// is asked to turn in place, until the heading has been in every octant; then it settles as usual.
+TEST(LayerManager, NothingIsExploredBeforeALookRound) {
+  LayerManagerConfig c = config();
+  c.layer_height = 10.0;  // one band
+  LayerManager m(c, kBox, 1.0);
+  LayerInputs in = frontiers({}, {}, 0);
+  in.trigger = true;
+  in.yaw = 3.0;  // octant 7 (and the wrap: 3.0 and -3.2 are one heading)
+  LayerOutputs out = m.step(in, 0.0);
+  ASSERT_EQ(out.state, ExplorationState::kExplore);
+  EXPECT_FALSE(out.look_around);
+  std::uint64_t p = 0;
+  double t = 0.0;
+  auto at = [&](double yaw, std::vector<std::uint32_t> ids = {}) {
+    LayerInputs i = frontiers(ids, ids, ++p);
+    i.yaw = yaw;
+    return m.step(i, t += 0.5);
+  };
+  out = at(-3.2);
+  EXPECT_FALSE(out.look_around);  // 0.5 s < settle_time
+  for (int k = 0; k < 6; ++k) {
+    out = at(3.0);
+    EXPECT_EQ(out.state, ExplorationState::kExplore) << k;
+    EXPECT_TRUE(out.transitions.empty()) << k;
+    EXPECT_TRUE(out.look_around) << k;
+  }
+  // Turning: six more octants, still nothing to explore.
+  for (double yaw : {-2.8, -2.0, -1.2, -0.4, 0.4, 1.2}) {
+    out = at(yaw);
+    EXPECT_TRUE(out.look_around) << yaw;
+    EXPECT_EQ(out.state, ExplorationState::kExplore) << yaw;
+  }
+  EXPECT_FALSE(m.lookedAround());
+  // A frontier comes into view: no look round is asked while there is one.
+  out = at(1.2, {5});
+  EXPECT_FALSE(out.look_around);
+  // The last octant (2.0 rad): looked round. Empty again, the band settles after settle_time.
+  out = at(2.0);
+  EXPECT_TRUE(m.lookedAround());
+  EXPECT_FALSE(out.look_around);
+  EXPECT_EQ(out.state, ExplorationState::kExplore);
+  for (int k = 0; k < 4 && out.state == ExplorationState::kExplore; ++k) out = at(2.0);
+  EXPECT_EQ(out.state, ExplorationState::kFinalPass);
+  for (int k = 0; k < 4 && out.state == ExplorationState::kFinalPass; ++k) out = at(2.0);
+  EXPECT_EQ(out.state, ExplorationState::kFinished);
+  EXPECT_EQ(out.reason, FinishReason::kComplete);
+  EXPECT_FALSE(out.look_around);
 }

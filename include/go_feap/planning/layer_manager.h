@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -43,6 +44,7 @@ struct LayerInputs {
   std::vector<std::uint32_t> all_frontiers;   ///< ids of every frontier in the box
   std::vector<std::uint32_t> failed;       ///< frontiers the planners failed to reach since the last step
   std::uint64_t map_progress = 0;          ///< any counter that grows while the map grows (e.g. frames that changed it)
+  std::optional<double> yaw;               ///< rad, the vehicle's heading now (none while unknown)
 };
 
 struct Transition {
@@ -57,6 +59,9 @@ struct LayerOutputs {
   Band band;
   std::vector<Transition> transitions;  ///< what changed in this step, in order
   bool trigger_ignored = false;         ///< a trigger arrived while already exploring
+  /// Nothing is left to explore where the camera has looked, but its heading has not yet been round
+  /// every octant: the chain turns in place (nothing counts as explored before that).
+  bool look_around = false;
 };
 
 class LayerManager {
@@ -72,6 +77,8 @@ class LayerManager {
   const std::set<std::uint32_t>& blacklist() const { return blacklist_; }
   bool isBlacklisted(std::uint32_t id) const { return blacklist_.count(id) > 0; }
   ExplorationState state() const { return state_; }
+  /// The heading has been in every octant since the trigger (a start facing a wall has not).
+  bool lookedAround() const { return headings_seen_ == 0xFFu; }
 
  private:
   std::size_t countUsable(const std::vector<std::uint32_t>& ids) const;
@@ -90,6 +97,7 @@ class LayerManager {
   double progress_time_ = 0.0;
   std::map<std::uint32_t, int> failures_;
   std::set<std::uint32_t> blacklist_;
+  std::uint32_t headings_seen_ = 0;  ///< bit k: the heading has been in octant k since the trigger
 };
 
 }  // namespace go_feap::planning
