@@ -211,14 +211,15 @@ void ExplorationRun::planStep() {
     return !target_ || planning::targetReached(position, yaw(), vehicle_.state().velocity.norm(),
                                                {target_->position, target_->yaw, 0}, config_.local);
   };
+  auto turnInPlace = [&](const std::string& why) {
+    const frontier::Viewpoint scan = planning::scanTarget(position, yaw(), config_.local);
+    log(why);
+    target_ = Target{scan.position, scan.yaw, 0, t_};
+    target_changed_ = true;
+  };
   if (layer_out_.look_around) {
-    // No frontier where the camera has looked, and it has not looked round yet: turn in place.
-    if (idle()) {
-      const frontier::Viewpoint scan = planning::scanTarget(position, yaw(), config_.local);
-      log("no frontier in view before a look round: turning in place");
-      target_ = Target{scan.position, scan.yaw, 0, t_};
-      target_changed_ = true;
-    }
+    // No frontier where the camera has looked, and it has not looked round yet.
+    if (idle()) turnInPlace("no frontier in view before a look round: turning in place");
     return;
   }
   std::optional<planning::CurrentTarget> current;
@@ -256,13 +257,10 @@ void ExplorationRun::planStep() {
   if (!plan) {
     // Nothing to fly to: look around, unless already flying somewhere or turning.
     if (idle()) {
-      const frontier::Viewpoint scan = planning::scanTarget(position, yaw(), config_.local);
-      log("no local plan (" + plan.message() + "): turning in place to look around");
       // Each look around is a failed attempt for the tour's frontiers (none had a viewpoint): a frontier
       // that stays unchanged through max_retries of them is blacklisted instead of scanned for ever.
       failed_.insert(failed_.end(), tour->frontier_ids.begin(), tour->frontier_ids.end());
-      target_ = Target{scan.position, scan.yaw, 0, t_};
-      target_changed_ = true;
+      turnInPlace("no local plan (" + plan.message() + "): turning in place to look around");
     }
     return;
   }

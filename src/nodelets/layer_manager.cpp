@@ -152,13 +152,12 @@ class LayerManager : public nodelet::Nodelet {
     layer.look_around = out.look_around;
     if (out.look_around && !look_around_)
       NODELET_INFO_STREAM(getName() << ": no frontier in view before a look round: the vehicle turns in place");
-    // While a look round is wanted, every step repeats it (the local planner turns again when idle).
-    const bool changed = out.look_around || out.look_around != look_around_;
+    // Published on a transition, and at every step while a look round is wanted or when it stops (the
+    // local planner turns again whenever it is idle).
+    const bool transition = !out.transitions.empty() || !published_;
+    if (transition || out.look_around || look_around_) layer_pub_.publish(layer);
     look_around_ = out.look_around;
-    if (changed) layer_pub_.publish(layer);
-    if (!out.transitions.empty() || !published_) {
-      if (!changed) layer_pub_.publish(layer);
-      layer_pub_.publish(layer);
+    if (transition) {
       visualization_msgs::Marker slab;
       slab.header = layer.header;
       slab.ns = "altitude_band";

@@ -141,10 +141,10 @@ LayerOutputs LayerManager::step(const LayerInputs& in, double t) {
     } else if (empty_since_ < 0.0) {
       empty_since_ = t;
     }
-    if (empty_since_ >= 0.0 && t - empty_since_ >= config_.settle_time && !lookedAround()) {
-      look_around = true;
-    } else if (empty_since_ >= 0.0 && t - empty_since_ >= config_.settle_time) {
-      if (final_pass) {
+    if (empty_since_ >= 0.0 && t - empty_since_ >= config_.settle_time) {
+      if (!lookedAround()) {
+        look_around = true;
+      } else if (final_pass) {
         // Blacklisted frontiers are left unexplored: say how many, so a "complete" that is not is visible.
         const std::size_t blacklisted = in.all_frontiers.size() - countUsable(in.all_frontiers);
         finish(FinishReason::kComplete, blacklisted == 0 ? std::string("no frontier left in the box")
