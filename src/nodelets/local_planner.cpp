@@ -113,10 +113,15 @@ class LocalPlanner : public nodelet::Nodelet {
     std::lock_guard<std::mutex> lock(mutex_);
     band_ = {msg->z_min, msg->z_max};
     // No frontier in view and no look round yet (the layer manager repeats this while it holds): turn in
-    // place, unless already flying somewhere or turning.
-    if (msg->look_around && position_ && idle()) {
+    // place, unless already flying somewhere or turning. The target in hand is repeated, with its number:
+    // no tour comes while nothing is a frontier, and a target published before the trajectory planner
+    // had subscribed (a start under load) was otherwise lost, and the vehicle never turned.
+    if (!msg->look_around || !position_) return;
+    if (idle()) {
       NODELET_INFO_STREAM_THROTTLE(2.0, getName() << ": no frontier in view before a look round: turning in place");
       turnInPlace(msg->header.stamp);
+    } else if (last_out_) {
+      target_pub_.publish(*last_out_);
     }
   }
   bool idle() const { return !target_ || planning::targetReached(*position_, yaw_, speed_, *target_, local_config_); }
@@ -229,6 +234,8 @@ class LocalPlanner : public nodelet::Nodelet {
           failed_pub_.publish(failed);
         }
         turnInPlace(tour->header.stamp);
+      } else if (last_out_) {
+        target_pub_.publish(*last_out_);  // the target in hand, repeated: a subscriber that missed it gets it
       }
       return;
     }

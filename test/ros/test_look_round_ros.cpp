@@ -2,15 +2,19 @@
 // out of reach). Through the ROS chain, the layer manager asks for a look round (LayerBounds
 // look_around) and the local planner turns the vehicle in place, round every heading, before the run
 // ends FINISHED(complete). Without the look round it ended after about 2 s without turning.
+// A second local planner, fed only by this test, checks that its turn-in-place target is repeated while
+// the look round is asked for (a first publication the trajectory planner missed left the vehicle still).
 #include <gtest/gtest.h>
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
 
 #include <cmath>
 #include <optional>
+#include <vector>
 
 #include "go_feap/ExplorationStatus.h"
 #include "go_feap/LayerBounds.h"
+#include "go_feap/ViewpointPath.h"
 #include "go_feap/ros/conversions.h"
 #include "ros_test_util.h"
 
@@ -42,6 +46,72 @@ TEST(LookRound, NoFrontierInViewTurnsRoundBeforeEndingComplete) {
   // Every octant of heading: at least six whole octants turned (3/4 of a turn), in place.
   EXPECT_GT(turned, 1.5 * M_PI);
   EXPECT_LT(status->distance, 1.0);
+}
+
+// The probe sees a vehicle hovering at (0, 0, 1) facing yaw 0 and is asked for a look round at 5 Hz. Its
+// target, a turn in place by scan_step, is never reached: it must come again, with the same number, at
+// each request (once only before the repeat: a trajectory planner that subscribed late never turned).
+// Reached, it is followed by the next turn, with a new number.
+TEST(LookRound, AnUnreachedTurnInPlaceIsRepeatedWhileALookRoundIsAsked) {
+  ros::NodeHandle nh;
+  double scan_step = 0.0;
+  ASSERT_TRUE(ros::param::get("/probe_local_planner/local/scan_step", scan_step));
+  std::vector<go_feap::ViewpointPath::ConstPtr> targets;
+  auto target_sub = nh.subscribe<go_feap::ViewpointPath>(
+      "probe/local_target", 20, [&](const go_feap::ViewpointPath::ConstPtr& m) { targets.push_back(m); });
+  auto odom_pub = nh.advertise<nav_msgs::Odometry>("probe/odom", 5);
+  auto layer_pub = nh.advertise<go_feap::LayerBounds>("probe/layer", 1);
+  double yaw = 0.0;
+  ros::WallTime last_odom, last_layer;
+  // Spins, publishing the hover odometry at 20 Hz and the look round request at 5 Hz, until pred().
+  auto spinPublishing = [&](auto pred, double wall_timeout) {
+    return spinUntil(
+        [&] {
+          const ros::WallTime now = ros::WallTime::now();
+          if ((now - last_odom).toSec() >= 0.05) {
+            nav_msgs::Odometry odom;
+            odom.header.stamp = ros::Time::now();
+            odom.header.frame_id = "world";
+            odom.pose.pose.position.z = 1.0;
+            odom.pose.pose.orientation.z = std::sin(0.5 * yaw);
+            odom.pose.pose.orientation.w = std::cos(0.5 * yaw);
+            odom_pub.publish(odom);
+            last_odom = now;
+          }
+          if ((now - last_layer).toSec() >= 0.2 && odom_pub.getNumSubscribers() > 0) {
+            go_feap::LayerBounds layer;
+            layer.header.stamp = ros::Time::now();
+            layer.count = 1;
+            layer.z_max = 3.0;
+            layer.look_around = true;
+            layer_pub.publish(layer);
+            last_layer = now;
+          }
+          return pred();
+        },
+        wall_timeout);
+  };
+  ASSERT_TRUE(spinPublishing([&] { return !targets.empty(); }, 60.0)) << "no probe/local_target";
+  const go_feap::ViewpointPath first = *targets.front();
+  ASSERT_EQ(first.positions.size(), 1u);
+  EXPECT_NEAR(first.positions[0].x, 0.0, 1e-9);
+  EXPECT_NEAR(first.positions[0].y, 0.0, 1e-9);
+  EXPECT_NEAR(first.positions[0].z, 1.0, 1e-9);
+  EXPECT_NEAR(first.yaws[0], scan_step, 1e-6);
+  EXPECT_EQ(first.frontier_ids, std::vector<std::uint32_t>{0});
+  // Unreached: repeated at each request, with its number.
+  ASSERT_TRUE(spinPublishing([&] { return targets.size() >= 5; }, 10.0))
+      << "the unreached turn was published " << targets.size() << " time(s) in 10 s of look round requests";
+  for (const auto& t : targets) {
+    EXPECT_EQ(t->target_seq, first.target_seq);
+    EXPECT_DOUBLE_EQ(t->yaws.at(0), first.yaws[0]);
+  }
+  // Reached: the next turn, numbered anew.
+  yaw = first.yaws[0];
+  ASSERT_TRUE(spinPublishing([&] { return targets.back()->target_seq != first.target_seq; }, 10.0))
+      << "no next turn once the first was reached";
+  EXPECT_EQ(targets.back()->target_seq, first.target_seq + 1);
+  EXPECT_NEAR(std::remainder(targets.back()->yaws.at(0) - 2.0 * scan_step, 2.0 * M_PI), 0.0, 1e-6);
 }
 
 }  // namespace
