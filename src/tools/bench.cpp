@@ -249,7 +249,11 @@ int main(int argc, char** argv) {
   std::ofstream(out_dir + "/table.json") << metrics::tableJson(rows) << "\n";
   const auto comparisons = metrics::compare(summaries);
   if (!comparisons.empty()) std::ofstream(out_dir + "/comparison.json") << metrics::comparisonJson(comparisons) << "\n";
-  const std::string md = metrics::tableMarkdown(rows, comparisons);
+  // Compute times depend on how many runs shared the cores (a powerplant seed 0 replan: 26.0 ms
+  // alone on a core, 33.3 ms two at a time on two): say so beside them.
+  const std::string md = metrics::tableMarkdown(rows, comparisons) + "\nCompute times measured with " +
+                         std::to_string(jobs) + " run(s) at a time on " +
+                         std::to_string(std::thread::hardware_concurrency()) + " hardware thread(s).\n";
   std::ofstream(out_dir + "/table.md") << md;
   // Side-by-side coverage curves per scene (first seed of each planner).
   for (const std::string& s : scenes) {
