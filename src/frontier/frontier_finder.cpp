@@ -65,8 +65,8 @@ FrontierDelta FrontierFinder::update(const map::OccupancyMap& map, const std::ve
   auto mark = [&](const Index3& idx) {
     if (!inBox(idx)) return;
     const std::size_t l = geo_.linear(idx);
-    if ((scratch_[l >> 6] >> (l & 63)) & 1u) return;
-    scratch_[l >> 6] |= std::uint64_t{1} << (l & 63);
+    if (common::testBit(scratch_, l)) return;
+    common::setBit(scratch_, l);
     marked.push_back(l);
     s_lo = s_lo.cwiseMin(idx);
     s_hi = s_hi.cwiseMax(idx);
@@ -79,7 +79,7 @@ FrontierDelta FrontierFinder::update(const map::OccupancyMap& map, const std::ve
   auto inS = [&](const Index3& idx) {
     if (!geo_.inside(idx)) return false;
     const std::size_t l = geo_.linear(idx);
-    return ((scratch_[l >> 6] >> (l & 63)) & 1u) != 0;
+    return common::testBit(scratch_, l);
   };
   // Clusters with a cell in S or 26-adjacent to it (a box test first).
   std::unordered_set<std::uint32_t> affected;
@@ -103,12 +103,12 @@ FrontierDelta FrontierFinder::update(const map::OccupancyMap& map, const std::ve
   for (std::size_t l : marked) {
     const Index3 idx = geo_.unlinear(l);
     if (computeFrontierCell(map, idx)) {
-      is_frontier_[l >> 6] |= std::uint64_t{1} << (l & 63);
+      common::setBit(is_frontier_, l);
       seeds.push_back(l);
     } else {
-      is_frontier_[l >> 6] &= ~(std::uint64_t{1} << (l & 63));
+      common::clearBit(is_frontier_, l);
     }
-    scratch_[l >> 6] &= ~(std::uint64_t{1} << (l & 63));
+    common::clearBit(scratch_, l);
   }
   for (std::uint32_t id : affected)
     if (const Frontier* f = find(id))
@@ -151,9 +151,9 @@ FrontierDelta FrontierFinder::rebuild(const map::OccupancyMap& map, const Index3
         const Index3 idx(x, y, z);
         const std::size_t l = geo_.linear(idx);
         if (computeFrontierCell(map, idx))
-          is_frontier_[l >> 6] |= std::uint64_t{1} << (l & 63);
+          common::setBit(is_frontier_, l);
         else
-          is_frontier_[l >> 6] &= ~(std::uint64_t{1} << (l & 63));
+          common::clearBit(is_frontier_, l);
       }
   // 3. Seeds: frontier cells near the change and the cells of affected clusters.
   std::vector<std::size_t> seeds;
@@ -183,9 +183,9 @@ FrontierDelta FrontierFinder::regrow(std::unordered_set<std::uint32_t> affected,
   // 4. Flood fill (26-connected) over frontier cells from the seeds: whole regions. Visited cells are
   // marked in scratch_ (all clear between updates) and cleared again afterwards.
   std::vector<std::size_t> visited;
-  auto marked = [&](std::size_t l) { return ((scratch_[l >> 6] >> (l & 63)) & 1u) != 0; };
+  auto marked = [&](std::size_t l) { return common::testBit(scratch_, l); };
   auto visit = [&](std::size_t l) {
-    scratch_[l >> 6] |= std::uint64_t{1} << (l & 63);
+    common::setBit(scratch_, l);
     visited.push_back(l);
   };
   std::vector<std::vector<std::size_t>> regions;  // linear indices
@@ -226,7 +226,7 @@ FrontierDelta FrontierFinder::regrow(std::unordered_set<std::uint32_t> affected,
     }
     regions.push_back(std::move(region));
   }
-  for (std::size_t l : visited) scratch_[l >> 6] &= ~(std::uint64_t{1} << (l & 63));
+  for (std::size_t l : visited) common::clearBit(scratch_, l);
 
   // 5. Regions -> clusters: drop small ones, split wide ones, inherit the oldest age (of the removed
   // clusters that held their cells: owner_ still names them here).
@@ -295,9 +295,9 @@ bool FrontierFinder::keepRegion(const std::vector<std::size_t>& region) {
   const auto n = static_cast<double>(region.size());
   const double min_cells = config_.min_cluster_cells;
   if (retired_.empty()) return n >= min_cells;
-  auto retired = [&](std::size_t l) { return ((retired_[l >> 6] >> (l & 63)) & 1u) != 0; };
+  auto retired = [&](std::size_t l) { return common::testBit(retired_, l); };
   auto retire = [&] {
-    for (std::size_t l : region) retired_[l >> 6] |= std::uint64_t{1} << (l & 63);
+    for (std::size_t l : region) common::setBit(retired_, l);
   };
   if (n < min_cells) {
     // Retired only when it comes from a cluster: a region growing up from nothing is not held back.

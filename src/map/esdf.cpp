@@ -128,7 +128,7 @@ std::size_t Esdf::update(const std::vector<std::size_t>& inserted, const std::ve
 
   std::size_t changed = 0;
   for (const Change& c : changes_) {
-    touched_[c.voxel >> 6] &= ~(std::uint64_t{1} << (c.voxel & 63));
+    common::clearBit(touched_, c.voxel);
     if (key(c.voxel) == c.old_key) continue;
     ++changed;
     const Index3 idx = geometry_.unlinear(c.voxel);

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "go_feap/common/bits.h"
 #include "go_feap/common/raycast.h"
 
 namespace go_feap::map {
@@ -12,9 +13,9 @@ namespace {
 
 double logit(double p) { return std::log(p / (1.0 - p)); }
 
-bool testBit(const std::vector<std::uint64_t>& bits, std::size_t l) { return (bits[l >> 6] >> (l & 63)) & 1u; }
-void setBit(std::vector<std::uint64_t>& bits, std::size_t l) { bits[l >> 6] |= std::uint64_t{1} << (l & 63); }
-void clearBit(std::vector<std::uint64_t>& bits, std::size_t l) { bits[l >> 6] &= ~(std::uint64_t{1} << (l & 63)); }
+using common::clearBit;
+using common::setBit;
+using common::testBit;
 
 // Two mark bits per voxel in one word array: voxel l's marks are bits 2(l mod 32) and
 // 2(l mod 32) + 1 of word l / 32.

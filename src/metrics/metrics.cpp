@@ -52,10 +52,10 @@ CoverageTracker::CoverageTracker(const world::Scene& scene, const common::GridGe
     const common::Index3 idx = map_geometry.coordToIndex(geo.indexToCoord(geo.unlinear(l)));
     if (!map_geometry.inside(idx)) continue;
     const std::size_t m = map_geometry.linear(idx);
-    if (bit(observable_, m))
+    if (common::testBit(observable_, m))
       ++extra_weight_[m];
     else
-      observable_[m >> 6] |= std::uint64_t{1} << (m & 63);
+      common::setBit(observable_, m);
   }
   pending_ = observable_;
 }
@@ -86,15 +86,15 @@ void CoverageTracker::reset(const map::OccupancyMap& map) {
   pending_ = observable_;
   known_ = 0;
   forEachKnownObservable(map, [&](std::size_t l) {
-    pending_[l >> 6] &= ~(std::uint64_t{1} << (l & 63));
+    common::clearBit(pending_, l);
     known_ += weight(l);
   });
 }
 
 void CoverageTracker::update(const map::OccupancyMap& map, const std::vector<std::size_t>& changed) {
   for (std::size_t l : changed) {
-    if ((l >> 6) >= pending_.size() || !bit(pending_, l) || map.stateAt(l) == map::VoxelState::kUnknown) continue;
-    pending_[l >> 6] &= ~(std::uint64_t{1} << (l & 63));
+    if ((l >> 6) >= pending_.size() || !common::testBit(pending_, l) || map.stateAt(l) == map::VoxelState::kUnknown) continue;
+    common::clearBit(pending_, l);
     known_ += weight(l);
   }
 }

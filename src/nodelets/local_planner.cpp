@@ -120,9 +120,14 @@ class LocalPlanner : public nodelet::Nodelet {
     if (idle()) {
       NODELET_INFO_STREAM_THROTTLE(2.0, getName() << ": no frontier in view before a look round: turning in place");
       turnInPlace(msg->header.stamp);
-    } else if (last_out_) {
-      target_pub_.publish(*last_out_);
+    } else {
+      repeatTarget();
     }
+  }
+  /// The target in hand again, with its number (the trajectory planner keeps it as the same target): a
+  /// subscriber that started late or missed it still gets it.
+  void repeatTarget() {
+    if (last_out_) target_pub_.publish(*last_out_);
   }
   bool idle() const { return !target_ || planning::targetReached(*position_, yaw_, speed_, *target_, local_config_); }
   /// Targets a turn in place by scan_step (a frontier id of 0: no frontier).
@@ -203,7 +208,7 @@ class LocalPlanner : public nodelet::Nodelet {
     if (!due || tour->repeated) {
       map_lock.unlock();  // no compute time: nothing was planned (as in go_feap_bench)
       publishWanted(due);  // nothing changed: the next tour is wanted when this one was
-      if (last_out_) target_pub_.publish(*last_out_);
+      repeatTarget();
       return;
     }
     last_plan_ = now;
@@ -234,8 +239,8 @@ class LocalPlanner : public nodelet::Nodelet {
           failed_pub_.publish(failed);
         }
         turnInPlace(tour->header.stamp);
-      } else if (last_out_) {
-        target_pub_.publish(*last_out_);  // the target in hand, repeated: a subscriber that missed it gets it
+      } else {
+        repeatTarget();
       }
       return;
     }
@@ -250,8 +255,7 @@ class LocalPlanner : public nodelet::Nodelet {
     ros_conv::publishComputeTime(compute_pub_, "local", t_compute);
     map_lock.unlock();
     if (decision == planning::TargetDecision::kKeep) {
-      // Repeat the kept target: a subscriber that started late (or missed it) still gets it.
-      if (last_out_) target_pub_.publish(*last_out_);
+      repeatTarget();  // the kept target
       return;
     }
     if (current && current->reached) visited_.add(current->viewpoint, local_config_);

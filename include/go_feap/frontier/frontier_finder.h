@@ -7,6 +7,7 @@
 #include <utility>
 #include <vector>
 
+#include "go_feap/common/bits.h"
 #include "go_feap/common/grid.h"
 #include "go_feap/common/result.h"
 #include "go_feap/map/occupancy_map.h"
@@ -98,7 +99,7 @@ class FrontierFinder {
   bool isFrontierCell(const Index3& idx) const {
     if (!geo_.inside(idx)) return false;
     const std::size_t l = geo_.linear(idx);
-    return (is_frontier_[l >> 6] >> (l & 63)) & 1u;
+    return common::testBit(is_frontier_, l);
   }
   const FrontierConfig& config() const { return config_; }
 

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "go_feap/common/bits.h"
 #include "go_feap/common/grid.h"
 #include "go_feap/common/result.h"
 
@@ -94,7 +95,7 @@ class Esdf {
   bool siteValid(std::size_t v, const Offset& o) const {
     return isZero(offsets_[static_cast<std::int64_t>(v) + o.x + o.y * stride_y_ + o.z * stride_z_]);
   }
-  bool touched(std::size_t v) const { return (touched_[v >> 6] >> (v & 63)) & 1; }
+  bool touched(std::size_t v) const { return common::testBit(touched_, v); }
   double distanceOfKey(int key) const;
   /// Distances at the 8 voxel centres around p, and p's fractional position among them.
   void corners(const common::Vec3& p, double c[8], common::Vec3& t) const;

@@ -9,6 +9,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "go_feap/common/bits.h"
 #include "go_feap/common/grid.h"
 #include "go_feap/common/result.h"
 #include "go_feap/map/occupancy_map.h"
@@ -63,7 +64,6 @@ class CoverageTracker {
   std::size_t observableCount() const { return observable_total_; }
 
  private:
-  bool bit(const std::vector<std::uint64_t>& bits, std::size_t l) const { return (bits[l >> 6] >> (l & 63)) & 1u; }
   /// Observable voxels in map voxel l (1 unless the scene's grid is finer than the map's).
   std::size_t weight(std::size_t l) const;
   /// Calls visit(l) for every map voxel l that holds an observable voxel and is known in `map`.
