@@ -392,6 +392,7 @@ void ExplorationRun::finish(const std::string& reason) {
   sample();
   metrics::Summary& s = recorder_.summary();
   s.finish_reason = reason;
+  s.blacklisted_frontiers = static_cast<int>(layer_out_.blacklisted_left);
   s.exploration_time_s = t_;
   s.flight_distance_m = distance_;
   s.coverage = coverage_now_;

@@ -115,6 +115,7 @@ nlohmann::json toJson(const Summary& s) {
   j["flight_distance_m"] = s.flight_distance_m;
   j["coverage"] = s.coverage;
   j["collisions"] = s.collisions;
+  j["blacklisted_frontiers"] = s.blacklisted_frontiers;
   j["min_obstacle_distance_m"] = s.min_obstacle_distance_m;
   j["wall_time_s"] = s.wall_time_s;
   nlohmann::json compute = nlohmann::json::object();

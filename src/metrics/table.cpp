@@ -44,6 +44,7 @@ std::vector<TableRow> aggregate(const std::vector<Summary>& runs) {
       if (s.scene != scene || s.planner != planner) continue;
       ++row.runs;
       row.finished += s.finish_reason == "complete";
+      row.finished_with_blacklisted += s.finish_reason == "complete" && s.blacklisted_frontiers > 0;
       time.push_back(s.exploration_time_s);
       distance.push_back(s.flight_distance_m);
       coverage.push_back(s.coverage);
@@ -141,6 +142,7 @@ std::string tableJson(const std::vector<TableRow>& rows) {
     j["planner"] = r.planner;
     j["runs"] = r.runs;
     j["finished"] = r.finished;
+    j["finished_with_blacklisted"] = r.finished_with_blacklisted;
     j["exploration_time_s"] = st(r.exploration_time_s);
     j["flight_distance_m"] = st(r.flight_distance_m);
     j["coverage"] = {{"avg", r.coverage_avg}, {"min", r.coverage_min}};
@@ -159,7 +161,9 @@ std::string tableMarkdown(const std::vector<TableRow>& rows, const std::vector<C
         "| distance max | distance min | coverage avg (%) | coverage min (%) | collisions |\n"
      << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const TableRow& r : rows) {
-    md << "| " << r.scene << " | " << r.planner << " | " << r.runs << " | " << r.finished << std::setprecision(1);
+    md << "| " << r.scene << " | " << r.planner << " | " << r.runs << " | " << r.finished;
+    if (r.finished_with_blacklisted > 0) md << " (" << r.finished_with_blacklisted << " left blacklisted frontiers)";
+    md << std::setprecision(1);
     for (const Stats* s : {&r.exploration_time_s, &r.flight_distance_m})
       md << " | " << s->avg << " | " << s->std << " | " << s->max << " | " << s->min;
     md << " | " << 100.0 * r.coverage_avg << " | " << 100.0 * r.coverage_min << " | " << r.collisions << " |\n";

@@ -190,6 +190,7 @@ class LayerManager : public nodelet::Nodelet {
     status.coverage = -1.0;  // unknown here: the metrics recorder compares with ground truth
     status.frontier_count = frontiers_ ? static_cast<std::uint32_t>(frontiers_->frontiers.size()) : 0;
     status.finish_reason = planning::toString(out.reason);
+    status.blacklisted_frontiers = static_cast<std::uint32_t>(out.blacklisted_left);
     status_pub_.publish(status);
   }
 

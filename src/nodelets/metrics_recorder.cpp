@@ -203,6 +203,7 @@ class MetricsRecorder : public nodelet::Nodelet {
     addSample();
     metrics::Summary& s = recorder_.summary();
     s.finish_reason = msg->finish_reason;
+    s.blacklisted_frontiers = static_cast<int>(msg->blacklisted_frontiers);
     s.exploration_time_s = msg->elapsed;
     s.flight_distance_m = distance_;
     s.coverage = last_sample_.coverage;

@@ -136,30 +136,45 @@ LayerOutputs LayerManager::step(const LayerInputs& in, double t) {
   bool look_around = false;
   if (state_ == ExplorationState::kExplore || state_ == ExplorationState::kFinalPass) {
     const bool final_pass = state_ == ExplorationState::kFinalPass;
-    if (countUsable(final_pass ? in.all_frontiers : in.band_frontiers) > 0) {
+    if (countUsable(in.band_frontiers) > 0) {
       empty_since_ = -1.0;
     } else if (empty_since_ < 0.0) {
       empty_since_ = t;
     }
-    if (empty_since_ >= 0.0 && t - empty_since_ >= config_.settle_time) {
+    if (countUsable(in.all_frontiers) > 0) {
+      box_empty_since_ = -1.0;
+    } else if (box_empty_since_ < 0.0) {
+      box_empty_since_ = t;
+    }
+    // Blacklisted frontiers are left unexplored: say how many, so a "complete" that is not is visible.
+    auto finish_complete = [&] {
+      const std::size_t blacklisted = in.all_frontiers.size() - countUsable(in.all_frontiers);
+      finish(FinishReason::kComplete, blacklisted == 0 ? std::string("no frontier left in the box")
+                                                       : "no reachable frontier left in the box (" +
+                                                             std::to_string(blacklisted) +
+                                                             " blacklisted after failed attempts)");
+    };
+    // The final pass's wait counts from when the box became empty, which may be before the pass began.
+    const double empty_since = final_pass ? box_empty_since_ : empty_since_;
+    if (empty_since >= 0.0 && t - empty_since >= config_.settle_time) {
       if (!lookedAround()) {
         look_around = true;
       } else if (final_pass) {
-        // Blacklisted frontiers are left unexplored: say how many, so a "complete" that is not is visible.
-        const std::size_t blacklisted = in.all_frontiers.size() - countUsable(in.all_frontiers);
-        finish(FinishReason::kComplete, blacklisted == 0 ? std::string("no frontier left in the box")
-                                                         : "no reachable frontier left in the box (" +
-                                                               std::to_string(blacklisted) +
-                                                               " blacklisted after failed attempts)");
+        finish_complete();
       } else if (position_ + 1 < order_.size()) {
         go(ExplorationState::kExplore, "band explored", position_ + 1);
       } else {
         go(ExplorationState::kFinalPass, "every band explored");
+        // The whole box has already been without usable frontiers for settle_time (with one band
+        // covering the box, always): the final pass has nothing to find, and waiting out its own
+        // settle_time would only add that much to every run.
+        if (box_empty_since_ >= 0.0 && t - box_empty_since_ >= config_.settle_time) finish_complete();
       }
     }
   }
 
   LayerOutputs out = output();
+  out.blacklisted_left = in.all_frontiers.size() - countUsable(in.all_frontiers);
   out.transitions = std::move(transitions);
   out.trigger_ignored = ignored;
   out.look_around = look_around;

@@ -240,7 +240,10 @@ int main(int argc, char** argv) {
     summaries.push_back(o.summary);
     const metrics::Summary& s = o.summary;
     std::cout << std::fixed << std::setprecision(1) << s.scene << " " << s.planner << " seed " << s.seed << ": "
-              << s.finish_reason << ", " << s.exploration_time_s << " s, " << s.flight_distance_m << " m, coverage "
+              << s.finish_reason
+              << (s.blacklisted_frontiers > 0 ? " (" + std::to_string(s.blacklisted_frontiers) + " blacklisted frontiers left)"
+                                              : std::string())
+              << ", " << s.exploration_time_s << " s, " << s.flight_distance_m << " m, coverage "
               << 100.0 * s.coverage << " %, collisions " << s.collisions << ", wall " << s.wall_time_s << " s ("
               << s.exploration_time_s / std::max(1e-9, s.wall_time_s) << "x real time)\n";
   }

@@ -142,8 +142,13 @@ TEST(LayerManager, UnreachableFrontiersAreBlacklistedAfterBoundedRetries) {
   for (int i = 0; i < 20 && out.state != ExplorationState::kFinished; ++i) out = m.step(frontiers({9}, {9}, ++p), t += 0.6);
   EXPECT_EQ(out.state, ExplorationState::kFinished);
   EXPECT_EQ(out.reason, FinishReason::kComplete);
-  // The finish says that a frontier was left unexplored.
+  // The finish says that a frontier was left unexplored, and so do the outputs.
   EXPECT_NE(out.transitions.back().why.find("1 blacklisted"), std::string::npos) << out.transitions.back().why;
+  EXPECT_EQ(out.blacklisted_left, 1u);
+  out = m.step(frontiers({9}, {9, 10}, ++p), t += 0.6);
+  EXPECT_EQ(out.blacklisted_left, 1u);  // 10 is not blacklisted
+  out = m.step(frontiers({}, {10}, ++p), t += 0.6);
+  EXPECT_EQ(out.blacklisted_left, 0u);  // 9 was cleared after all
 }
 
 TEST(LayerManager, TimeLimitAndStuckTerminate) {
@@ -225,9 +230,54 @@ TEST(LayerManager, NothingIsExploredBeforeALookRound) {
   EXPECT_FALSE(out.look_around);
   EXPECT_EQ(out.state, ExplorationState::kExplore);
   for (int k = 0; k < 4 && out.state == ExplorationState::kExplore; ++k) out = at(2.0);
-  EXPECT_EQ(out.state, ExplorationState::kFinalPass);
-  for (int k = 0; k < 4 && out.state == ExplorationState::kFinalPass; ++k) out = at(2.0);
+  // One band covers the box, so the box has settled with it: the final pass has nothing to find.
   EXPECT_EQ(out.state, ExplorationState::kFinished);
   EXPECT_EQ(out.reason, FinishReason::kComplete);
   EXPECT_FALSE(out.look_around);
+}
+
+// The final pass waits out settle_time only when the box was not already settled as the last band was:
+// with one band covering the box it would repeat the band's wait (about 1.2 s of every maze run).
+TEST(LayerManager, FinalPassEndsAtOnceWhenTheBoxHasAlreadySettled) {
+  LayerManagerConfig c = config();
+  c.layer_height = 10.0;  // one band: the whole box
+  LayerManager one(c, kBox, 1.0);
+  LayerInputs trig = frontiers({}, {}, 0);
+  trig.trigger = true;
+  one.step(trig, 0.0);
+  lookRound(one, 0.0);
+  LayerOutputs out = one.step(frontiers({}, {}, 1), 0.5);  // empty since 0.5
+  EXPECT_EQ(out.state, ExplorationState::kExplore);
+  out = one.step(frontiers({}, {}, 2), 1.0);
+  EXPECT_EQ(out.state, ExplorationState::kExplore);
+  out = one.step(frontiers({}, {}, 3), 1.5);  // settled: band explored, and so the box
+  ASSERT_EQ(out.state, ExplorationState::kFinished);
+  EXPECT_EQ(out.reason, FinishReason::kComplete);
+  ASSERT_EQ(out.transitions.size(), 2u);
+  EXPECT_EQ(out.transitions[0].to, ExplorationState::kFinalPass);
+  EXPECT_EQ(out.transitions[0].why, "every band explored");
+  EXPECT_EQ(out.transitions[1].from, ExplorationState::kFinalPass);
+  EXPECT_EQ(out.transitions[1].to, ExplorationState::kFinished);
+  EXPECT_EQ(out.transitions[1].why, "no frontier left in the box");
+
+  // Six bands, the last one (band 0) settling while a frontier elsewhere went only 0.5 s ago: the
+  // final pass starts and waits out its own settle_time.
+  LayerManager six(config(), kBox, 0.5);
+  six.step(trig, 0.0);
+  lookRound(six, 0.0);
+  double t = 0.0;
+  std::uint64_t p = 0;
+  out = LayerOutputs();
+  for (int guard = 0; guard < 100 && out.band.index != six.bandOrder().back(); ++guard)
+    out = six.step(frontiers({}, {7}, ++p), t += 0.5);
+  ASSERT_EQ(out.band.index, 5);  // the last band of the order 0..5
+  ASSERT_EQ(out.state, ExplorationState::kExplore);
+  out = six.step(frontiers({}, {7}, ++p), t += 0.5);  // band 5 empty since now
+  out = six.step(frontiers({}, {}, ++p), t += 0.5);   // frontier 7 gone: the box empty since now
+  EXPECT_EQ(out.state, ExplorationState::kExplore);
+  out = six.step(frontiers({}, {}, ++p), t += 0.5);  // band 5 settled, the box only 0.5 s
+  ASSERT_EQ(out.state, ExplorationState::kFinalPass);
+  out = six.step(frontiers({}, {}, ++p), t += 0.5);  // the box 1.0 s
+  EXPECT_EQ(out.state, ExplorationState::kFinished);
+  EXPECT_EQ(out.reason, FinishReason::kComplete);
 }

@@ -88,6 +88,28 @@ TEST(Table, AggregatesPerSceneAndPlannerWithPopulationStd) {
   EXPECT_NE(md.find("| maze | go_feap | 3 | 2 | 110.0 |"), std::string::npos) << md;
 }
 
+// A run can end "complete" with frontiers it gave up on (blacklisted after failed attempts): the tables say how
+// many of the finished runs did.
+TEST(Table, CountsFinishedRunsThatLeftBlacklistedFrontiers) {
+  std::vector<metrics::Summary> runs = {
+      summary("maze", "go_feap", 100, 200, 0.99, 0, "complete", 1.0),
+      summary("maze", "go_feap", 110, 200, 0.98, 0, "complete", 1.0),
+      summary("maze", "go_feap", 120, 200, 0.90, 0, "time_limit", 1.0),
+  };
+  runs[1].blacklisted_frontiers = 2;
+  runs[2].blacklisted_frontiers = 1;  // not finished: counted there already
+  const auto rows = metrics::aggregate(runs);
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(rows[0].finished, 2);
+  EXPECT_EQ(rows[0].finished_with_blacklisted, 1);
+  const nlohmann::json j = nlohmann::json::parse(metrics::tableJson(rows));
+  EXPECT_EQ(j[0]["finished_with_blacklisted"], 1);
+  const std::string md = metrics::tableMarkdown(rows);
+  EXPECT_NE(md.find("| maze | go_feap | 3 | 2 (1 left blacklisted frontiers) | 110.0 |"), std::string::npos) << md;
+  runs[1].blacklisted_frontiers = 0;
+  EXPECT_EQ(metrics::aggregate(runs)[0].finished_with_blacklisted, 0);
+}
+
 TEST(Table, ComparesTheFirstPlannerWithEachOtherPairedBySeed) {
   auto run = [](const std::string& scene, const std::string& planner, std::uint64_t seed, double time,
                 double distance, const std::string& reason) {
@@ -239,6 +261,7 @@ TEST(Metrics, IncrementalCoverageEqualsTheFullCountFrameByFrame) {
 TEST(Metrics, RecorderWritesSummaryCsvAndPlot) {
   metrics::Recorder r;
   r.summary() = summary("maze", "go_feap", 10.0, 12.5, 0.5, 1, "complete", 2.0);
+  r.summary().blacklisted_frontiers = 3;
   for (int i = 0; i <= 10; ++i) {
     metrics::Sample s;
     s.t = i;
@@ -252,8 +275,9 @@ TEST(Metrics, RecorderWritesSummaryCsvAndPlot) {
   ASSERT_TRUE(r.writeAll(dir.string()).ok());
   const nlohmann::json j = nlohmann::json::parse(std::ifstream(dir / "summary.json"));
   for (const char* key : {"scene", "seed", "planner", "finish_reason", "exploration_time_s", "flight_distance_m",
-                          "coverage", "collisions", "compute_ms"})
+                          "coverage", "collisions", "blacklisted_frontiers", "compute_ms"})
     EXPECT_TRUE(j.contains(key)) << key;
+  EXPECT_EQ(j["blacklisted_frontiers"], 3);
   EXPECT_DOUBLE_EQ(j["compute_ms"]["global"]["mean"].get<double>(), 4.0);
   EXPECT_DOUBLE_EQ(j["compute_ms"]["global"]["max"].get<double>(), 6.0);
   std::ifstream csv(dir / "metrics.csv");

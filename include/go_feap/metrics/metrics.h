@@ -108,6 +108,7 @@ struct Summary {
   double flight_distance_m = 0.0;
   double coverage = 0.0;
   int collisions = 0;
+  int blacklisted_frontiers = 0;  ///< frontiers left blacklisted (after failed attempts) at the finish
   double min_obstacle_distance_m = 0.0;  ///< closest approach of the UAV centre to ground truth
   double wall_time_s = 0.0;
   std::map<std::string, BlockTime> compute;  ///< per block: mapping, frontier, global, local, trajectory
@@ -124,7 +125,7 @@ class Recorder {
   const std::vector<Sample>& samples() const { return samples_; }
 
   /// summary.json: scene, seed, planner, finish_reason, exploration_time_s, flight_distance_m,
-  /// coverage, collisions, min_obstacle_distance_m, wall_time_s, compute_ms {block: {mean, max, count}}
+  /// coverage, collisions, blacklisted_frontiers, min_obstacle_distance_m, wall_time_s, compute_ms {block: {mean, max, count}}
   /// with "total" = the sum of the planning blocks' means (frontier, global, local, trajectory), and
   /// the extra figures.
   common::Status writeSummary(const std::string& path) const;

@@ -21,6 +21,7 @@ struct TableRow {
   std::string scene, planner;
   int runs = 0;
   int finished = 0;  ///< runs that reached FINISHED(complete)
+  int finished_with_blacklisted = 0;  ///< of those, runs that left blacklisted frontiers unexplored
   Stats exploration_time_s, flight_distance_m;
   double coverage_avg = 0.0, coverage_min = 0.0;
   int collisions = 0;                      ///< total over the runs

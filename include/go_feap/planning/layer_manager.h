@@ -62,6 +62,9 @@ struct LayerOutputs {
   /// Nothing is left to explore where the camera has looked, but its heading has not yet been round
   /// every octant: the chain turns in place (nothing counts as explored before that).
   bool look_around = false;
+  /// Blacklisted frontiers among the box's frontiers at this step: once FINISHED(complete), those left
+  /// unexplored (a "complete" run that leaves some did not explore everything it could see).
+  std::size_t blacklisted_left = 0;
 };
 
 class LayerManager {
@@ -93,6 +96,7 @@ class LayerManager {
   FinishReason reason_ = FinishReason::kNone;
   double t_trigger_ = 0.0;
   double empty_since_ = -1.0;  ///< when the current band (or box) last became free of usable frontiers
+  double box_empty_since_ = -1.0;  ///< when the whole box last became free of usable frontiers
   std::uint64_t last_progress_ = 0;
   double progress_time_ = 0.0;
   std::map<std::uint32_t, int> failures_;
