@@ -134,7 +134,7 @@ class LayerManager : public nodelet::Nodelet {
                                     << " -> " << planning::toString(tr.to)
                                     << (tr.band_to >= 0 ? "(band " + std::to_string(tr.band_to) + ")" : "") << ": "
                                     << tr.why
-                                    << (out.state == planning::ExplorationState::kFinished
+                                    << (tr.to == planning::ExplorationState::kFinished
                                             ? std::string(" [") + planning::toString(out.reason) + "]"
                                             : ""));
     }
