@@ -11,6 +11,8 @@
 #include <iomanip>
 #include <sstream>
 
+#include "go_feap/common/bits.h"
+
 namespace go_feap::metrics {
 
 double obstacleDistance(const world::Scene& scene, const common::Vec3& p, double radius) {

@@ -134,6 +134,8 @@ LayerOutputs LayerManager::step(const LayerInputs& in, double t) {
   // wall sees too little for a frontier and would end the run "complete" at once). The next band's
   // frontiers arrive with the next inputs.
   bool look_around = false;
+  const std::size_t usable_in_box = countUsable(in.all_frontiers);
+  const std::size_t blacklisted_left = in.all_frontiers.size() - usable_in_box;
   if (state_ == ExplorationState::kExplore || state_ == ExplorationState::kFinalPass) {
     const bool final_pass = state_ == ExplorationState::kFinalPass;
     if (countUsable(in.band_frontiers) > 0) {
@@ -141,22 +143,21 @@ LayerOutputs LayerManager::step(const LayerInputs& in, double t) {
     } else if (empty_since_ < 0.0) {
       empty_since_ = t;
     }
-    if (countUsable(in.all_frontiers) > 0) {
+    if (usable_in_box > 0) {
       box_empty_since_ = -1.0;
     } else if (box_empty_since_ < 0.0) {
       box_empty_since_ = t;
     }
     // Blacklisted frontiers are left unexplored: say how many, so a "complete" that is not is visible.
     auto finish_complete = [&] {
-      const std::size_t blacklisted = in.all_frontiers.size() - countUsable(in.all_frontiers);
-      finish(FinishReason::kComplete, blacklisted == 0 ? std::string("no frontier left in the box")
-                                                       : "no reachable frontier left in the box (" +
-                                                             std::to_string(blacklisted) +
-                                                             " blacklisted after failed attempts)");
+      finish(FinishReason::kComplete, blacklisted_left == 0 ? std::string("no frontier left in the box")
+                                                            : "no reachable frontier left in the box (" +
+                                                                  std::to_string(blacklisted_left) +
+                                                                  " blacklisted after failed attempts)");
     };
+    auto settled = [&](double empty_since) { return empty_since >= 0.0 && t - empty_since >= config_.settle_time; };
     // The final pass's wait counts from when the box became empty, which may be before the pass began.
-    const double empty_since = final_pass ? box_empty_since_ : empty_since_;
-    if (empty_since >= 0.0 && t - empty_since >= config_.settle_time) {
+    if (settled(final_pass ? box_empty_since_ : empty_since_)) {
       if (!lookedAround()) {
         look_around = true;
       } else if (final_pass) {
@@ -168,13 +169,13 @@ LayerOutputs LayerManager::step(const LayerInputs& in, double t) {
         // The whole box has already been without usable frontiers for settle_time (with one band
         // covering the box, always): the final pass has nothing to find, and waiting out its own
         // settle_time would only add that much to every run.
-        if (box_empty_since_ >= 0.0 && t - box_empty_since_ >= config_.settle_time) finish_complete();
+        if (settled(box_empty_since_)) finish_complete();
       }
     }
   }
 
   LayerOutputs out = output();
-  out.blacklisted_left = in.all_frontiers.size() - countUsable(in.all_frontiers);
+  out.blacklisted_left = blacklisted_left;
   out.transitions = std::move(transitions);
   out.trigger_ignored = ignored;
   out.look_around = look_around;

@@ -9,7 +9,6 @@
 #include <unordered_map>
 #include <vector>
 
-#include "go_feap/common/bits.h"
 #include "go_feap/common/grid.h"
 #include "go_feap/common/result.h"
 #include "go_feap/map/occupancy_map.h"
