@@ -89,6 +89,8 @@ class LocalPlanner : public nodelet::Nodelet {
     if (!pos.allFinite() || !std::isfinite(yaw)) return;
     position_ = pos;
     yaw_ = yaw;
+    const double tilt = planning::tiltOf(Eigen::Quaterniond(q.w, q.x, q.y, q.z));
+    tilt_ = std::isfinite(tilt) ? tilt : 0.0;
     const common::Vec3 v_world = ros_conv::worldVelocity(q, msg->twist.twist.linear);
     velocity_ = v_world.allFinite() ? v_world : common::Vec3::Zero();
     speed_ = velocity_.norm();
@@ -200,7 +202,7 @@ class LocalPlanner : public nodelet::Nodelet {
     const double now = ros::Time::now().toSec();
     std::optional<planning::CurrentTarget> current;
     if (target_)
-      current = planning::assessTarget(*target_, committed_at_, *position_, yaw_, speed_, all, m.occupancy(),
+      current = planning::assessTarget(*target_, committed_at_, *position_, yaw_, speed_, tilt_, all, m.occupancy(),
                                        viewpoint_config_, frontier_extent_, local_config_);
     if (current) current->quicker = target_quicker_;
     const bool due = planning::planDue(current ? &*current : nullptr, now, last_plan_, viewpoint_config_.min_visible,
@@ -321,6 +323,7 @@ class LocalPlanner : public nodelet::Nodelet {
   std::unique_ptr<planning::ObstacleWindow> window_;
   std::optional<common::Vec3> position_;
   double yaw_ = 0.0;
+  double tilt_ = 0.0;  ///< rad from level, of the last odometry
   common::Vec3 velocity_ = common::Vec3::Zero();  ///< world frame
   std::pair<double, double> band_{-1e18, 1e18};
   FrontierArray::ConstPtr frontiers_;

@@ -67,6 +67,10 @@ TEST(LocalPlannerConfig, ValidateNamesTheBadKey) {
   expectBad("max_choices", [](LocalPlannerConfig& c) { c.max_choices = -1; });
   expectBad("choice_window", [](LocalPlannerConfig& c) { c.choice_window = 0; });
   expectBad("choice_radius", [](LocalPlannerConfig& c) { c.choice_radius = std::nan(""); });
+  expectBad("settled_tilt", [](LocalPlannerConfig& c) { c.settled_tilt = 0; });
+  expectBad("settled_tilt", [](LocalPlannerConfig& c) { c.settled_tilt = 2.0; });
+  expectBad("settled_speed", [](LocalPlannerConfig& c) { c.settled_speed = -0.1; });
+  expectBad("settled_speed", [](LocalPlannerConfig& c) { c.settled_speed = kInf; });
 }
 
 TEST(ObstacleRatio, SyntheticImages) {

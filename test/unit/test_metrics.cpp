@@ -375,6 +375,14 @@ TEST(TargetHysteresis, KeepsSwitchesAndReportsTargetsReachedInVain) {
   EXPECT_EQ(go_feap::planning::decideTarget(&cur, same, cost, 5.0, 10, c), TargetDecision::kReachedInVain);
   cost_b = 3.0;
   EXPECT_EQ(go_feap::planning::decideTarget(&cur, b, cost, 1.0, 10, c), TargetDecision::kSwitch);
+  // Reached while still braking, the camera tilted (not settled): the view the viewpoint was chosen for
+  // has not been had yet, so the same target is kept, not reported; another proposal still replaces it.
+  cur.settled = false;
+  EXPECT_EQ(go_feap::planning::decideTarget(&cur, same, cost, 5.0, 10, c), TargetDecision::kKeep);
+  EXPECT_EQ(go_feap::planning::decideTarget(&cur, b, cost, 1.0, 10, c), TargetDecision::kSwitch);
+  cur.reached = false;
+  EXPECT_EQ(go_feap::planning::decideTarget(&cur, same, cost, 5.0, 10, c), TargetDecision::kKeep);
+  cur.settled = true;
   // Reached means close, facing it and slow.
   EXPECT_TRUE(go_feap::planning::targetReached(Vec3(0.1, 0, 1), 0.1, 0.05, a, c));
   EXPECT_TRUE(go_feap::planning::targetReached(Vec3(0.1, 0, 1), 0.1, 0.9 * c.reached_speed, a, c));  // braking the last centimetres

@@ -502,7 +502,7 @@ TEST(Viewpoints, TargetSeenOutIsDroppedAfterTheCommitment) {
   const Vec3 vehicle = target.position + Vec3(0.6, 0.0, 0.0);  // on the way, moving
   const double extent = 2.0;
   // Long after the commitment, with the frontier still there: its cells are counted (up to min_visible).
-  auto current = go_feap::planning::assessTarget(target, 0.0, vehicle, target.yaw, 1.0, {f}, w.map(), cfg, extent,
+  auto current = go_feap::planning::assessTarget(target, 0.0, vehicle, target.yaw, 1.0, 0.0, {f}, w.map(), cfg, extent,
                                                  local);
   EXPECT_FALSE(current.reached);
   EXPECT_EQ(current.remaining_visible, cfg.min_visible);
@@ -515,15 +515,60 @@ TEST(Viewpoints, TargetSeenOutIsDroppedAfterTheCommitment) {
   EXPECT_EQ(go_feap::planning::decideTarget(&current, other, costlier, 100.0, cfg.min_visible, local),
             TargetDecision::kKeep);
   // The frontier is gone (seen on the way): nothing is left to see there, so the target goes.
-  current = go_feap::planning::assessTarget(target, 0.0, vehicle, target.yaw, 1.0, {}, w.map(), cfg, extent, local);
+  current = go_feap::planning::assessTarget(target, 0.0, vehicle, target.yaw, 1.0, 0.0, {}, w.map(), cfg, extent, local);
   EXPECT_EQ(current.remaining_visible, 0);
   EXPECT_EQ(go_feap::planning::decideTarget(&current, other, costlier, 100.0, cfg.min_visible, local),
             TargetDecision::kSwitch);
   // Reached (close, facing it, slow): the count decides nothing and is not made.
-  current = go_feap::planning::assessTarget(target, 0.0, target.position, target.yaw, 0.0, {}, w.map(), cfg, extent,
+  current = go_feap::planning::assessTarget(target, 0.0, target.position, target.yaw, 0.0, 0.0, {}, w.map(), cfg, extent,
                                             local);
   EXPECT_TRUE(current.reached);
+  EXPECT_TRUE(current.settled);
   EXPECT_EQ(current.remaining_visible, cfg.min_visible);
+}
+
+// The camera is settled when it is level or the vehicle at rest: tilted while braking into the
+// viewpoint it is not (decideTarget() then keeps the target instead of booking a failed attempt), and
+// tilted while hovering (in wind) it is, or no verdict would ever come.
+TEST(Viewpoints, ReachedTargetIsJudgedOnlyWithTheCameraSettled) {
+  using go_feap::planning::tiltOf;
+  EXPECT_NEAR(tiltOf(Eigen::Quaterniond::Identity()), 0.0, 1e-12);
+  EXPECT_NEAR(tiltOf(Eigen::Quaterniond(Eigen::AngleAxisd(1.2, Vec3::UnitZ()))), 0.0, 1e-12);  // heading only
+  const Eigen::Quaterniond pitched(Eigen::AngleAxisd(0.19, Vec3::UnitY()));
+  EXPECT_NEAR(tiltOf(pitched), 0.19, 1e-12);
+  // Roll and pitch combine: the body's z axis is (sin p cos r, -sin r, cos p cos r).
+  const double roll = 0.1, pitch = -0.15;
+  const Eigen::Quaterniond tilted = Eigen::AngleAxisd(0.7, Vec3::UnitZ()) * Eigen::AngleAxisd(pitch, Vec3::UnitY()) *
+                                    Eigen::AngleAxisd(roll, Vec3::UnitX());
+  EXPECT_NEAR(tiltOf(tilted), std::acos(std::cos(pitch) * std::cos(roll)), 1e-12);
+  EXPECT_NEAR(tiltOf(Eigen::Quaterniond(2.0 * pitched.coeffs())), 0.19, 1e-12);  // not unit: normalised
+  EXPECT_TRUE(std::isnan(tiltOf(Eigen::Quaterniond(0.0, 0.0, 0.0, 0.0))));
+
+  const ViewpointConfig cfg = testConfig();
+  World w(Index3(20, 20, 10));
+  go_feap::planning::LocalPlannerConfig local;
+  local.settled_tilt = 0.05;
+  local.settled_speed = 0.1;
+  Viewpoint target;
+  target.position = Vec3(1.0, 1.0, 0.5);
+  target.yaw = 0.3;
+  auto assess = [&](double speed, double tilt) {
+    return go_feap::planning::assessTarget(target, 0.0, target.position, target.yaw, speed, tilt, {}, w.map(), cfg,
+                                           2.0, local);
+  };
+  const auto braking = assess(0.5, 0.19);
+  EXPECT_TRUE(braking.reached);
+  EXPECT_FALSE(braking.settled);
+  EXPECT_TRUE(assess(0.5, 0.04).settled);   // level enough, still moving
+  EXPECT_TRUE(assess(0.05, 0.19).settled);  // at rest, tilted (holding against wind)
+  EXPECT_FALSE(assess(0.1, 0.05).settled);  // both limits are strict
+  using go_feap::planning::TargetDecision;
+  auto cost = [](const Viewpoint&) { return 1.0; };
+  EXPECT_EQ(go_feap::planning::decideTarget(&braking, target, cost, 10.0, cfg.min_visible, local),
+            TargetDecision::kKeep);
+  const auto at_rest = assess(0.05, 0.19);
+  EXPECT_EQ(go_feap::planning::decideTarget(&at_rest, target, cost, 10.0, cfg.min_visible, local),
+            TargetDecision::kReachedInVain);
 }
 
 // Targets are compared by the time to reach them along a path: behind a wall, a target as near as

@@ -99,6 +99,7 @@ void readLocal(R& p, planning::LocalPlannerConfig& l) {
   p.get("local/min_view_fraction", l.min_view_fraction).get("local/scan_step", l.scan_step);
   p.get("local/same_target_distance", l.same_target_distance).get("local/same_target_yaw", l.same_target_yaw);
   p.get("local/reached_speed", l.reached_speed).get("local/max_visits", l.max_visits);
+  p.get("local/settled_tilt", l.settled_tilt).get("local/settled_speed", l.settled_speed);
   p.get("local/max_choices", l.max_choices).get("local/choice_window", l.choice_window);
   p.get("local/choice_radius", l.choice_radius).get("local/a_max", l.a_max);
 }

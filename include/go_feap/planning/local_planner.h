@@ -7,6 +7,7 @@
 #include <deque>
 #include <functional>
 #include <unordered_map>
+#include <Eigen/Geometry>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -47,6 +48,13 @@ struct LocalPlannerConfig {
   /// m/s: a vehicle this slow within same_target_distance and same_target_yaw of its target has reached
   /// it (it is braking the last centimetres: the view from there is the view from the target)
   double reached_speed = 0.8;
+  /// rad and m/s: a reached viewpoint is judged in vain (decideTarget()) only with the camera settled,
+  /// tilted less than settled_tilt from level or slower than settled_speed. Braking into a viewpoint
+  /// tilts the camera up to 0.2 rad, away from the level view the viewpoint model counts, and a frontier
+  /// that a level camera would clear from there was booked as a failed attempt; a vehicle hovering
+  /// tilted (in wind) is settled by its speed.
+  double settled_tilt = 0.05;
+  double settled_speed = 0.1;
   /// a viewpoint pose reached this many times (VisitedViewpoints) is no longer proposed: its frontier
   /// is not being cleared from there
   int max_visits = 3;
@@ -157,18 +165,25 @@ struct CurrentTarget {
   double committed_at = 0.0;  ///< s, when it was chosen
   int remaining_visible = 0;  ///< frontier cells still visible from it now (remainingVisible(): counted up to min_visible)
   bool reached = false;       ///< the vehicle got there (targetReached())
+  bool settled = true;        ///< the camera is level or the vehicle at rest (settled_tilt, settled_speed)
   /// it replaced a target for being quicker to reach (kSwitchQuicker): it is not replaced that way in
   /// turn, so that two targets whose estimated costs cross as the vehicle moves cannot take turns
   bool quicker = false;
 };
 
-/// The current target as decideTarget() needs it, assessed from the vehicle's pose and speed:
-/// reached (targetReached()) and the frontier cells still visible
+/// rad, the angle between the body's z axis under `attitude` (body -> world, normalised first) and the
+/// world's: the camera's tilt from level (0 hovering, 0.19 rad braking at 2 m/s^2); NaN for a zero or
+/// non-finite quaternion.
+double tiltOf(const Eigen::Quaterniond& attitude);
+
+/// The current target as decideTarget() needs it, assessed from the vehicle's pose, speed and tilt
+/// (rad, the body's z axis from the world's): reached (targetReached()), settled (tilt < settled_tilt or
+/// speed < settled_speed) and the frontier cells still visible
 /// from it (remainingVisible() over `frontiers`), counted while it is not reached (min_visible once it is,
 /// as the count decides nothing then). It is counted after commit_time too: a target whose frontier has
 /// been seen on the way is dropped at once, instead of being flown to and stopped at.
 CurrentTarget assessTarget(const frontier::Viewpoint& target, double committed_at, const common::Vec3& position,
-                           double yaw, double speed, const std::vector<frontier::Frontier>& frontiers,
+                           double yaw, double speed, double tilt, const std::vector<frontier::Frontier>& frontiers,
                            const map::OccupancyMap& map, const ViewpointConfig& viewpoint_config,
                            double cluster_extent, const LocalPlannerConfig& config);
 
@@ -195,7 +210,8 @@ double pathCost(const Astar& astar, const common::Vec3& position, const common::
 
 /// Whether `proposal` (the planner's newest first viewpoint) replaces `current` at time t: always when
 /// there is no current target; when the proposal is the same target (within same_target_distance and
-/// same_target_yaw), keep it unless it was reached (kReachedInVain); otherwise switch when nothing is left
+/// same_target_yaw), keep it unless it was reached with the camera settled (kReachedInVain: still
+/// braking, the tilted camera has not had the view the viewpoint was chosen for); otherwise switch when nothing is left
 /// to see from the current one (remaining_visible < min_visible), when it was reached, or
 /// (kSwitchQuicker) when it has been kept for commit_time, did not itself win that way
 /// (CurrentTarget::quicker) and the proposal is quicker to reach (cost(proposal) < cost(current
