@@ -224,9 +224,10 @@ void ExplorationRun::planStep() {
   }
   std::optional<planning::CurrentTarget> current;
   if (target_)
-    current = planning::assessTarget({target_->position, target_->yaw, 0}, target_->committed_at, position, yaw(),
-                                     vehicle_.state().velocity.norm(), planning::tiltOf(vehicle_.state().attitude), finder_->frontiers(), map_->occupancy(),
-                                     config_.viewpoints, config_.frontier.max_cluster_extent, config_.local);
+    current = planning::assessTarget(
+        {target_->position, target_->yaw, 0}, target_->committed_at, position, yaw(),
+        vehicle_.state().velocity.norm(), planning::tiltOf(vehicle_.state().attitude), finder_->frontiers(),
+        map_->occupancy(), config_.viewpoints, config_.frontier.max_cluster_extent, config_.local);
   if (current) current->quicker = target_->quicker;
   if (!planning::planDue(current ? &*current : nullptr, t_, last_tour_time_, config_.viewpoints.min_visible,
                          config_.local))

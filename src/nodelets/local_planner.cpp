@@ -202,8 +202,8 @@ class LocalPlanner : public nodelet::Nodelet {
     const double now = ros::Time::now().toSec();
     std::optional<planning::CurrentTarget> current;
     if (target_)
-      current = planning::assessTarget(*target_, committed_at_, *position_, yaw_, speed_, tilt_, all, m.occupancy(),
-                                       viewpoint_config_, frontier_extent_, local_config_);
+      current = planning::assessTarget(*target_, committed_at_, *position_, yaw_, speed_, tilt_, all,
+                                       m.occupancy(), viewpoint_config_, frontier_extent_, local_config_);
     if (current) current->quicker = target_quicker_;
     const bool due = planning::planDue(current ? &*current : nullptr, now, last_plan_, viewpoint_config_.min_visible,
                                        local_config_);
@@ -323,7 +323,7 @@ class LocalPlanner : public nodelet::Nodelet {
   std::unique_ptr<planning::ObstacleWindow> window_;
   std::optional<common::Vec3> position_;
   double yaw_ = 0.0;
-  double tilt_ = 0.0;  ///< rad from level, of the last odometry
+  double tilt_ = 0.0;                             ///< rad from level, of the last odometry
   common::Vec3 velocity_ = common::Vec3::Zero();  ///< world frame
   std::pair<double, double> band_{-1e18, 1e18};
   FrontierArray::ConstPtr frontiers_;

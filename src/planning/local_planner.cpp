@@ -50,8 +50,10 @@ Status LocalPlannerConfig::validate() const {
   if (!(same_target_yaw >= 0.0 && std::isfinite(same_target_yaw))) return err("same_target_yaw", "must be finite and >= 0");
   if (!(a_max >= 0.0 && std::isfinite(a_max))) return err("a_max", "must be finite and >= 0");
   if (!(reached_speed > 0.0 && std::isfinite(reached_speed))) return err("reached_speed", "must be finite and > 0");
-  if (!(settled_tilt > 0.0 && settled_tilt <= 1.5707963267948966)) return err("settled_tilt", "must be in (0, pi/2]");
-  if (!(settled_speed >= 0.0 && std::isfinite(settled_speed))) return err("settled_speed", "must be finite and >= 0");
+  if (!(settled_tilt > 0.0 && settled_tilt <= 1.5707963267948966))
+    return err("settled_tilt", "must be in (0, pi/2]");
+  if (!(settled_speed >= 0.0 && std::isfinite(settled_speed)))
+    return err("settled_speed", "must be finite and >= 0");
   if (max_visits < 1) return err("max_visits", "must be >= 1");
   if (max_choices < 0) return err("max_choices", "must be >= 0");
   if (!positiveFinite(choice_window)) return err("choice_window", "must be finite and > 0");
@@ -222,10 +224,11 @@ Result<LocalPlan> planLocal(const Vec3& position, const Vec3& velocity, double y
   return plan;
 }
 
-CurrentTarget assessTarget(const frontier::Viewpoint& target, double committed_at, const common::Vec3& position,
-                           double yaw, double speed, double tilt, const std::vector<frontier::Frontier>& frontiers,
-                           const map::OccupancyMap& map, const ViewpointConfig& viewpoint_config,
-                           double cluster_extent, const LocalPlannerConfig& config) {
+CurrentTarget assessTarget(const frontier::Viewpoint& target, double committed_at,
+                           const common::Vec3& position, double yaw, double speed, double tilt,
+                           const std::vector<frontier::Frontier>& frontiers, const map::OccupancyMap& map,
+                           const ViewpointConfig& viewpoint_config, double cluster_extent,
+                           const LocalPlannerConfig& config) {
   CurrentTarget c;
   c.viewpoint = target;
   c.committed_at = committed_at;
@@ -303,7 +306,8 @@ TargetDecision decideTarget(const CurrentTarget* current, const frontier::Viewpo
                             int min_visible, const LocalPlannerConfig& config) {
   if (!current) return TargetDecision::kSwitch;
   const bool same = samePose(proposal.position, proposal.yaw, current->viewpoint, config);
-  if (same) return current->reached && current->settled ? TargetDecision::kReachedInVain : TargetDecision::kKeep;
+  if (same)
+    return current->reached && current->settled ? TargetDecision::kReachedInVain : TargetDecision::kKeep;
   if (current->remaining_visible < min_visible || current->reached) return TargetDecision::kSwitch;
   if (!current->quicker && t - current->committed_at >= config.commit_time &&
       cost(proposal) < cost(current->viewpoint))

@@ -502,8 +502,8 @@ TEST(Viewpoints, TargetSeenOutIsDroppedAfterTheCommitment) {
   const Vec3 vehicle = target.position + Vec3(0.6, 0.0, 0.0);  // on the way, moving
   const double extent = 2.0;
   // Long after the commitment, with the frontier still there: its cells are counted (up to min_visible).
-  auto current = go_feap::planning::assessTarget(target, 0.0, vehicle, target.yaw, 1.0, 0.0, {f}, w.map(), cfg, extent,
-                                                 local);
+  auto current = go_feap::planning::assessTarget(target, 0.0, vehicle, target.yaw, 1.0, 0.0, {f}, w.map(),
+                                                 cfg, extent, local);
   EXPECT_FALSE(current.reached);
   EXPECT_EQ(current.remaining_visible, cfg.min_visible);
   Viewpoint other;
@@ -515,13 +515,14 @@ TEST(Viewpoints, TargetSeenOutIsDroppedAfterTheCommitment) {
   EXPECT_EQ(go_feap::planning::decideTarget(&current, other, costlier, 100.0, cfg.min_visible, local),
             TargetDecision::kKeep);
   // The frontier is gone (seen on the way): nothing is left to see there, so the target goes.
-  current = go_feap::planning::assessTarget(target, 0.0, vehicle, target.yaw, 1.0, 0.0, {}, w.map(), cfg, extent, local);
+  current = go_feap::planning::assessTarget(target, 0.0, vehicle, target.yaw, 1.0, 0.0, {}, w.map(), cfg,
+                                            extent, local);
   EXPECT_EQ(current.remaining_visible, 0);
   EXPECT_EQ(go_feap::planning::decideTarget(&current, other, costlier, 100.0, cfg.min_visible, local),
             TargetDecision::kSwitch);
   // Reached (close, facing it, slow): the count decides nothing and is not made.
-  current = go_feap::planning::assessTarget(target, 0.0, target.position, target.yaw, 0.0, 0.0, {}, w.map(), cfg, extent,
-                                            local);
+  current = go_feap::planning::assessTarget(target, 0.0, target.position, target.yaw, 0.0, 0.0, {}, w.map(),
+                                            cfg, extent, local);
   EXPECT_TRUE(current.reached);
   EXPECT_TRUE(current.settled);
   EXPECT_EQ(current.remaining_visible, cfg.min_visible);
@@ -538,7 +539,8 @@ TEST(Viewpoints, ReachedTargetIsJudgedOnlyWithTheCameraSettled) {
   EXPECT_NEAR(tiltOf(pitched), 0.19, 1e-12);
   // Roll and pitch combine: the body's z axis is (sin p cos r, -sin r, cos p cos r).
   const double roll = 0.1, pitch = -0.15;
-  const Eigen::Quaterniond tilted = Eigen::AngleAxisd(0.7, Vec3::UnitZ()) * Eigen::AngleAxisd(pitch, Vec3::UnitY()) *
+  const Eigen::Quaterniond tilted = Eigen::AngleAxisd(0.7, Vec3::UnitZ()) *
+                                    Eigen::AngleAxisd(pitch, Vec3::UnitY()) *
                                     Eigen::AngleAxisd(roll, Vec3::UnitX());
   EXPECT_NEAR(tiltOf(tilted), std::acos(std::cos(pitch) * std::cos(roll)), 1e-12);
   EXPECT_NEAR(tiltOf(Eigen::Quaterniond(2.0 * pitched.coeffs())), 0.19, 1e-12);  // not unit: normalised
@@ -553,8 +555,8 @@ TEST(Viewpoints, ReachedTargetIsJudgedOnlyWithTheCameraSettled) {
   target.position = Vec3(1.0, 1.0, 0.5);
   target.yaw = 0.3;
   auto assess = [&](double speed, double tilt) {
-    return go_feap::planning::assessTarget(target, 0.0, target.position, target.yaw, speed, tilt, {}, w.map(), cfg,
-                                           2.0, local);
+    return go_feap::planning::assessTarget(target, 0.0, target.position, target.yaw, speed, tilt, {}, w.map(),
+                                           cfg, 2.0, local);
   };
   const auto braking = assess(0.5, 0.19);
   EXPECT_TRUE(braking.reached);

@@ -3,12 +3,12 @@
 // the first K frontiers of the global tour by a shortest path through a layered DAG.
 #pragma once
 
+#include <Eigen/Geometry>
 #include <cstddef>
 #include <deque>
 #include <functional>
-#include <unordered_map>
-#include <Eigen/Geometry>
 #include <opencv2/core.hpp>
+#include <unordered_map>
 #include <vector>
 
 #include "go_feap/common/grid.h"
@@ -182,10 +182,11 @@ double tiltOf(const Eigen::Quaterniond& attitude);
 /// from it (remainingVisible() over `frontiers`), counted while it is not reached (min_visible once it is,
 /// as the count decides nothing then). It is counted after commit_time too: a target whose frontier has
 /// been seen on the way is dropped at once, instead of being flown to and stopped at.
-CurrentTarget assessTarget(const frontier::Viewpoint& target, double committed_at, const common::Vec3& position,
-                           double yaw, double speed, double tilt, const std::vector<frontier::Frontier>& frontiers,
-                           const map::OccupancyMap& map, const ViewpointConfig& viewpoint_config,
-                           double cluster_extent, const LocalPlannerConfig& config);
+CurrentTarget assessTarget(const frontier::Viewpoint& target, double committed_at,
+                           const common::Vec3& position, double yaw, double speed, double tilt,
+                           const std::vector<frontier::Frontier>& frontiers, const map::OccupancyMap& map,
+                           const ViewpointConfig& viewpoint_config, double cluster_extent,
+                           const LocalPlannerConfig& config);
 
 /// Where to look when no viewpoint can be planned: here, turned by scan_step.
 frontier::Viewpoint scanTarget(const common::Vec3& position, double yaw, const LocalPlannerConfig& config);
@@ -211,8 +212,8 @@ double pathCost(const Astar& astar, const common::Vec3& position, const common::
 /// Whether `proposal` (the planner's newest first viewpoint) replaces `current` at time t: always when
 /// there is no current target; when the proposal is the same target (within same_target_distance and
 /// same_target_yaw), keep it unless it was reached with the camera settled (kReachedInVain: still
-/// braking, the tilted camera has not had the view the viewpoint was chosen for); otherwise switch when nothing is left
-/// to see from the current one (remaining_visible < min_visible), when it was reached, or
+/// braking, the tilted camera has not had the view the viewpoint was chosen for); otherwise switch when
+/// nothing is left to see from the current one (remaining_visible < min_visible), when it was reached, or
 /// (kSwitchQuicker) when it has been kept for commit_time, did not itself win that way
 /// (CurrentTarget::quicker) and the proposal is quicker to reach (cost(proposal) < cost(current
 /// viewpoint); `cost` is called only then: the callers pass pathCost()). Path estimates through unknown
