@@ -319,6 +319,7 @@ void ExplorationRun::trajectoryStep() {
   request.target = target_->position;
   request.target_yaw = target_->yaw;
   request.time = t_;
+  request.widen = target_->widened;
   const auto t0 = Clock::now();
   trajectory::PlanReport report;
   auto planned = trajectory::planTrajectory(request, *flight_astar_, map_->esdf(), config_.optimizer, config_.planner,
@@ -334,6 +335,10 @@ void ExplorationRun::trajectoryStep() {
     return;
   }
   if (planned) {
+    if (report.widened && !target_->widened)
+      log("every trajectory along the way to frontier " + std::to_string(target_->frontier) +
+          " came too near unseen space: flying a way that keeps it away all round");
+    target_->widened = target_->widened || report.widened;
     if (report.braked)
       log("no flyable trajectory to frontier " + std::to_string(target_->frontier) + " from " +
           std::to_string(request.velocity.norm()) + " m/s: braking to plan again from rest");

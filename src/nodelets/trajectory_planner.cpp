@@ -109,6 +109,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
         !target_ || renumbered || trajectory::targetMoved(*target_, target_yaw_, target, msg->yaws.front(), replan_);
     if (new_target) {
       looked_at_unseen_ = false;
+      widened_ = false;
       scouts_ = 0;
     }
     target_changed_ = target_changed_ || new_target;
@@ -187,6 +188,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     request.target = *target_;
     request.target_yaw = target_yaw_;
     request.time = now.toSec();
+    request.widen = widened_;
     const auto t_compute = ros_conv::WallClock::now();
     common::Result<trajectory::Trajectory> planned = common::Result<trajectory::Trajectory>::Error("");
     trajectory::PlanReport report;
@@ -206,6 +208,10 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     if (planned && report.coarse)
       NODELET_DEBUG_STREAM(getName() << ": flight search to frontier " << target_frontier_
                                      << " over budget: flying the coarse search's path (" << report.path_length << " m)");
+    if (planned && report.widened && !widened_)
+      NODELET_INFO_STREAM(getName() << ": every trajectory along the way to frontier " << target_frontier_
+                                    << " came too near unseen space: flying a way that keeps it away all round");
+    widened_ = widened_ || (planned && report.widened);
     if (planned && report.braked)
       NODELET_INFO_STREAM(getName() << ": no flyable trajectory to frontier " << target_frontier_ << " from "
                                     << request.velocity.norm() << " m/s: braking to plan again from rest");
@@ -285,6 +291,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
   std::uint32_t target_seq_ = 0;  ///< ViewpointPath::target_seq of the target
   bool target_changed_ = false;
   bool looked_at_unseen_ = false;  ///< lookAtUnseen() was flown for this target
+  bool widened_ = false;           ///< a plan to this target kept unseen space away all round (PlanRequest::widen)
   int scouts_ = 0;                 ///< scouting flights towards this target (scoutedTooOften())
   PositionCommand::ConstPtr command_;
   std::optional<ros_traj::Trajectory> current_;

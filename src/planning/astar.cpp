@@ -105,6 +105,8 @@ Status AstarConfig::validate() const {
     return err("max_expansions", ("must be in [1, " + std::to_string(kMaxExpansions) + "]").c_str());
   if (probe_expansions < 0 || probe_expansions > kMaxExpansions)
     return err("probe_expansions", ("must be in [0, " + std::to_string(kMaxExpansions) + "]").c_str());
+  if (!(known_radius >= 0.0 && known_radius <= clearance))
+    return err("known_radius", "must be in [0, clearance]");
   if (!(tie_breaker >= 1.0 && std::isfinite(tie_breaker)))
     return err("tie_breaker", "must be finite and >= 1");
   if (stride < 1 || stride > kMaxStride)
@@ -146,7 +148,22 @@ Astar::Astar(const map::OccupancyMap& occupancy, const map::Esdf& esdf, const As
     throw std::invalid_argument("astar: grids of 2^32 voxels or more are not supported");
   blocked_below_ = config.clearance - kClearanceRounding * geo_.resolution();
   brick_dims_ = (geo_.dims().array() + (kBrickEdge - 1)) / kBrickEdge;
-  clearance_voxels_ = std::max(1, static_cast<int>(std::ceil(config.clearance / geo_.resolution() - 1e-9)));
+  // known_clearance: the six voxels ceil(clearance) away along the axes and every voxel whose centre lies
+  // within known_radius (the ball traversableWith() checks: a path the search vouches for passes that test
+  // with any min_distance up to known_radius); the farthest first, where unseen space mostly begins.
+  if (config.known_clearance) {
+    const int n = std::max(1, static_cast<int>(std::ceil(config.clearance / geo_.resolution() - 1e-9)));
+    const double r = config.known_radius / geo_.resolution();
+    for (int dz = -n; dz <= n; ++dz)
+      for (int dy = -n; dy <= n; ++dy)
+        for (int dx = -n; dx <= n; ++dx) {
+          const int d2 = dx * dx + dy * dy + dz * dz;
+          const bool axis = d2 == n * n && (dx == 0) + (dy == 0) + (dz == 0) == 2;
+          if (d2 > 0 && (d2 <= r * r || axis)) known_offsets_.emplace_back(dx, dy, dz);
+        }
+    std::stable_sort(known_offsets_.begin(), known_offsets_.end(),
+                     [](const Index3& a, const Index3& b) { return a.squaredNorm() > b.squaredNorm(); });
+  }
   const common::Aabb& box = occupancy.box();
   for (int a = 0; a < 3; ++a) {
     const double lo = box.min[a] + config.clearance, hi = box.max[a] - config.clearance;
@@ -202,14 +219,9 @@ bool Astar::freeAndKnown(const Index3& idx, std::size_t linear, bool surrounding
   const VoxelState state = occupancy_.stateAt(linear);
   if (state == VoxelState::kOccupied) return false;
   if (state == VoxelState::kUnknown && !config_.unknown_is_free) return false;
-  if (surroundings && config_.known_clearance) {
-    for (int a = 0; a < 3; ++a)
-      for (int s : {-clearance_voxels_, clearance_voxels_}) {
-        Index3 n = idx;
-        n[a] += s;
-        if (occupancy_.state(n) == VoxelState::kUnknown) return false;
-      }
-  }
+  if (surroundings)
+    for (const Index3& offset : known_offsets_)
+      if (occupancy_.state(Index3(idx + offset)) == VoxelState::kUnknown) return false;
   return true;
 }
 

@@ -69,6 +69,10 @@ common::Status TrajectoryPlannerConfig::validate() const {
   return common::Status::Ok();
 }
 
+double flyableClearance(const OptimizerConfig& optimizer, double resolution) {
+  return optimizer.min_clearance - 0.5 * std::sqrt(3.0) * resolution;
+}
+
 bool staysFlyable(const UniformBspline& spline, const planning::Astar& astar, double min_distance,
                   double exempt_radius, std::optional<Vec3>* unseen_at) {
   if (unseen_at) unseen_at->reset();
@@ -239,6 +243,25 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
     return out;
   };
   if ((request.target - request.start).norm() < 0.5 * astar.geometry().resolution()) return turnInPlace();
+  // The flight search keeping unseen space as far away all round as staysFlyable() below looks
+  // (config.unseen_retry, when the given search keeps it nearer).
+  const double voxel_clearance = flyableClearance(optimizer, astar.geometry().resolution());
+  const bool widenable = config.unseen_retry && astar.config().known_clearance && !astar.config().unknown_is_free &&
+                         astar.config().known_radius < voxel_clearance;
+  std::optional<planning::Astar> wide_search;
+  auto wide = [&]() -> const planning::Astar& {
+    planning::AstarConfig wider = astar.config();
+    wider.known_radius = std::min(voxel_clearance, wider.clearance);
+    if (!wide_search) wide_search.emplace(astar.occupancy(), astar.esdf(), wider);
+    return *wide_search;
+  };
+  if (request.widen && widenable) {
+    PlanRequest plain = request;
+    plain.widen = false;
+    auto planned = planTrajectory(plain, wide(), esdf, optimizer, config, &rep, memory, scout, coarse);
+    rep.widened = true;
+    return planned;
+  }
   if (memory) {
     if (const auto failure = memory->recall(request.start, request.target, request.time, config)) {
       rep.path_status = failure->status;
@@ -356,7 +379,6 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
   if (start_acc.norm() > a_limit) start_acc *= a_limit / start_acc.norm();
   common::Result<UniformBspline> spline = common::Result<UniformBspline>::Error("not planned");
   // The optimiser checks min_clearance along the curve; a voxel's centre may be half a diagonal farther.
-  const double voxel_clearance = optimizer.min_clearance - 0.5 * std::sqrt(3.0) * astar.geometry().resolution();
   auto flyable = [&](const UniformBspline& candidate) {
     return checkTrajectory(candidate, esdf, optimizer).ok() &&
            staysFlyable(candidate, astar, voxel_clearance, config.snap_radius);
@@ -446,6 +468,20 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
     rep.fine = true;
     rep.refits = 0;
     rep.used_fit = false;
+  }
+  if (!spline && rep.unseen_at && widenable) {
+    // Refused for unseen space beside the path: the search vouched for voxels one voxel from an unseen
+    // pocket (it looks along the axes), which the check refuses (it looks all round). Search again keeping
+    // unseen space as far away all round as the check does; without a coarse or scouting search (a path
+    // through known space is what this mends), nor the memory (the first search did find a path).
+    PlanReport again;
+    auto retried = planTrajectory(request, wide(), esdf, optimizer, config, &again);
+    if (retried) {
+      again.widened = true;
+      again.left_flyable += rep.left_flyable;
+      rep = again;
+      return retried;
+    }
   }
   if (!spline) {
     // From a start moving faster than brake_speed (most often a turn-around: a new target behind or beside

@@ -127,6 +127,9 @@ std::vector<std::uint8_t> bruteForceTraversable(const World& world, const AstarC
   std::vector<Index3> obstacles;
   for (std::size_t l = 0; l < g.size(); ++l)
     if (world.occupied(l)) obstacles.push_back(g.unlinear(l));
+  std::vector<Index3> unknown;
+  for (std::size_t l = 0; l < g.size(); ++l)
+    if (world.occupancy().stateAt(l) == VoxelState::kUnknown) unknown.push_back(g.unlinear(l));
   std::vector<std::uint8_t> ok(g.size(), 0);
   for (std::size_t l = 0; l < g.size(); ++l) {
     const VoxelState s = world.occupancy().stateAt(l);
@@ -149,6 +152,12 @@ std::vector<std::uint8_t> bruteForceTraversable(const World& world, const AstarC
           n[a] += sgn * k;
           if (world.occupancy().state(n) == VoxelState::kUnknown) ok[l] = 0;
         }
+      // and nothing unseen within known_radius: the nearest unknown voxel, or the nearest one outside the
+      // grid (unknown too, straight out through the nearest face), is farther.
+      double unseen = kInf;
+      for (int a = 0; a < 3; ++a) unseen = std::min(unseen, kRes * std::min(v[a] + 1, g.dims()[a] - v[a]));
+      for (const Index3& u : unknown) unseen = std::min(unseen, kRes * (u - v).cast<double>().norm());
+      if (unseen <= config.known_radius + 1e-9) ok[l] = 0;
     }
   }
   return ok;
@@ -324,6 +333,12 @@ TEST(AstarConfig, ValidateNamesTheBadKey) {
     c.name = "distance_astar";
     EXPECT_EQ(c.validate().message().rfind("distance_astar: stride", 0), 0u) << c.validate().message();
   }
+  for (double r : {-0.1, std::nan(""), 0.25}) {
+    c = AstarConfig();
+    c.clearance = 0.2;
+    c.known_radius = r;
+    EXPECT_NE(c.validate().message().find("known_radius"), std::string::npos) << r;
+  }
   c = AstarConfig();
   c.stride = 8;
   EXPECT_TRUE(c.validate().ok());
@@ -358,10 +373,12 @@ TEST(Astar, TraversableFollowsTheBlockingRule) {
     addRandomBoxes(world, rng, 8, VoxelState::kUnknown);
     addRandomBoxes(world, rng, 10, VoxelState::kOccupied);
     for (double clearance : {0.0, 0.1, 0.2, 0.25})
-      for (int mode = 0; mode < 3; ++mode) {
-        // unknown free; unknown blocked; unknown blocked and kept `clearance` away (flight paths)
+      for (int mode = 0; mode < 5; ++mode) {
+        // unknown free; unknown blocked; unknown blocked and kept `clearance` away along the axes (flight
+        // paths), and also known_radius all round (half the clearance, and all of it)
         AstarConfig config = astarConfig(clearance, mode == 0);
-        config.known_clearance = mode == 2;
+        config.known_clearance = mode >= 2;
+        config.known_radius = mode == 3 ? 0.5 * clearance : mode == 4 ? clearance : 0.0;
         const Astar astar(world.occupancy(), world.esdf(), config);
         const std::vector<std::uint8_t> want = bruteForceTraversable(world, config);
         std::size_t mismatches = 0, traversable = 0;
@@ -370,7 +387,7 @@ TEST(Astar, TraversableFollowsTheBlockingRule) {
           mismatches += got != static_cast<bool>(want[l]);
           traversable += got;
         }
-        EXPECT_EQ(mismatches, 0u) << "seed " << seed << " clearance " << clearance;
+        EXPECT_EQ(mismatches, 0u) << "seed " << seed << " clearance " << clearance << " mode " << mode;
         EXPECT_GT(traversable, 0u);
         EXPECT_LT(traversable, want.size());
       }
@@ -378,6 +395,43 @@ TEST(Astar, TraversableFollowsTheBlockingRule) {
     EXPECT_FALSE(astar.traversable(Index3(-1, 0, 0)));
     EXPECT_FALSE(astar.traversable(kRandomDims));
   }
+}
+
+// What a trajectory on a path is checked with (traversableWith, up to known_radius) passes every voxel the
+// search may use. The six axis voxels alone (known_radius 0) let a path pass one voxel from an unseen
+// pocket, which that check refuses when it looks at the ball round the voxel.
+TEST(Astar, EveryTraversableVoxelPassesTheTrajectoryCheck) {
+  std::size_t refused_by_axes = 0;  // the disagreement the ball removes
+  for (unsigned seed : {21u, 22u}) {
+    World world(kRandomDims);
+    Rng rng(seed);
+    world.fill(VoxelState::kFree);
+    addRandomBoxes(world, rng, 8, VoxelState::kOccupied);
+    for (int k = 0; k < 60; ++k) {  // one-voxel pockets nobody has seen
+      const Index3 v = randomVoxel(rng, kRandomDims);
+      world.set(v, v, VoxelState::kUnknown);
+    }
+    AstarConfig config = astarConfig(0.3, false);
+    config.known_clearance = true;
+    const Astar axes(world.occupancy(), world.esdf(), config);
+    for (double known_radius : {0.2, 0.3}) {
+      config.known_radius = known_radius;
+      const Astar astar(world.occupancy(), world.esdf(), config);
+      std::size_t traversable = 0, refused = 0, beside_pockets = 0;
+      for (std::size_t l = 0; l < world.geo().size(); ++l) {
+        const Index3 v = world.geo().unlinear(l);
+        if (axes.traversable(v) && !astar.traversable(v)) ++beside_pockets;
+        refused_by_axes += axes.traversable(v) && !axes.traversableWith(v, 0.163);
+        if (!astar.traversable(v)) continue;
+        ++traversable;
+        for (double d : {0.1, 0.163, known_radius}) refused += !astar.traversableWith(v, d);
+      }
+      EXPECT_GT(traversable, 20u) << "seed " << seed;
+      EXPECT_EQ(refused, 0u) << "seed " << seed << " known_radius " << known_radius;
+      EXPECT_GT(beside_pockets, 0u) << "seed " << seed << " known_radius " << known_radius;
+    }
+  }
+  EXPECT_GT(refused_by_axes, 0u);
 }
 
 TEST(Astar, CostEqualsExhaustiveShortestPathOnRandomGrids) {

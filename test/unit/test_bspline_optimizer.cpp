@@ -1344,8 +1344,9 @@ void mapFreeBut(World& world, const std::optional<Vec3>& unseen) {
 
 // The flight search checks the known surroundings of a voxel 0.3 m out along each axis, the flight check
 // every voxel within min_clearance: one unseen voxel right beside a straight way (the vehicle stopped
-// mid-turn and never looked there) lets the search through and refuses every spline along it. The plan
-// fails and says where; the vehicle turns to look there (once the heading is more than look_tolerance
+// mid-turn and never looked there) lets the search through and refuses every spline along it. Without
+// the search again that keeps it away (planner unseen_retry, next test), the plan fails and says where;
+// the vehicle turns to look there (once the heading is more than look_tolerance
 // off it) instead of failing the frontier, and with that voxel seen the same plan succeeds.
 TEST(TrajectoryPlanner, AWayRefusedForUnseenSpaceBesideItLooksThere) {
   const Vec3 unseen(3.05, 2.15, 1.05);  // beside the way's voxels at y 2.05
@@ -1355,6 +1356,7 @@ TEST(TrajectoryPlanner, AWayRefusedForUnseenSpaceBesideItLooksThere) {
   const Astar astar(world.occupancy(), world.esdf(), flightAstarConfig());
   const OptimizerConfig optimizer = optimizerConfig();
   traj::TrajectoryPlannerConfig planner;
+  planner.unseen_retry = false;  // no search again keeping it away (see the next test)
   traj::PlanRequest request;
   request.start = Vec3(1.05, 2.05, 1.05);
   request.target = Vec3(5.05, 2.05, 1.05);
@@ -1409,6 +1411,66 @@ TEST(TrajectoryPlanner, AWayRefusedForUnseenSpaceBesideItLooksThere) {
   EXPECT_FALSE(report.unseen_at.has_value());
 }
 
+// The same way, with the retry on (planner unseen_retry, the default): every spline along the first path
+// is refused for the pocket beside it, so the way is searched again keeping unseen space as far away all
+// round as the check looks (flyableClearance()); that path passes the pocket at a distance and is flown,
+// with nothing to look at. A dead end whose only way out passed such a pocket, never seen from inside,
+// failed every plan out of it and blacklisted frontier after frontier (maze seed 26).
+TEST(TrajectoryPlanner, AWayRefusedForUnseenSpaceBesideItIsSearchedAgainKeepingItAway) {
+  const Vec3 pocket(3.05, 2.15, 1.05);
+  World world(Vec3(6, 4, 2));
+  mapFreeBut(world, pocket);
+  const OptimizerConfig optimizer = optimizerConfig();
+  const double res = world.geo().resolution();
+  const double check = traj::flyableClearance(optimizer, res);
+  EXPECT_NEAR(check, optimizer.min_clearance - 0.5 * std::sqrt(3.0) * res, 1e-12);
+  const Astar astar(world.occupancy(), world.esdf(), flightAstarConfig());
+  traj::TrajectoryPlannerConfig planner;
+  ASSERT_TRUE(planner.unseen_retry);
+  traj::PlanRequest request;
+  request.start = Vec3(1.05, 2.05, 1.05);
+  request.target = Vec3(5.05, 2.05, 1.05);
+  request.yaw = kPi / 2;
+  traj::PlanReport report;
+  const auto planned = traj::planTrajectory(request, astar, world.esdf(), optimizer, planner, &report);
+  ASSERT_TRUE(planned) << planned.message();
+  EXPECT_TRUE(report.widened);
+  EXPECT_GT(report.left_flyable, 0);  // the first path's splines were refused
+  EXPECT_FALSE(report.unseen_at.has_value());
+  EXPECT_FALSE(planned->partial);
+  EXPECT_LT((planned->goal - request.target).norm(), 1e-12);
+  // The curve keeps the pocket farther than the check's radius, and passes the check (from the start).
+  for (int i = 0; i <= 400; ++i)
+    EXPECT_GT((planned->position.position(planned->duration() * i / 400) - pocket).norm(), check);
+  EXPECT_TRUE(traj::staysFlyable(planned->position, astar, check, 0.0));
+  // The search that looks all round finds that path at once.
+  AstarConfig wide = flightAstarConfig();
+  wide.known_radius = check;
+  const Astar wide_astar(world.occupancy(), world.esdf(), wide);
+  traj::PlanReport direct;
+  ASSERT_TRUE(traj::planTrajectory(request, wide_astar, world.esdf(), optimizer, planner, &direct));
+  EXPECT_FALSE(direct.widened);
+  EXPECT_EQ(direct.left_flyable, 0);
+  // A replan to a target whose plan was widened asks for the wide search from the start
+  // (PlanRequest::widen): no refused first path, and the same clearance from the pocket.
+  traj::PlanRequest replan = request;
+  replan.widen = true;
+  const auto again = traj::planTrajectory(replan, astar, world.esdf(), optimizer, planner, &report);
+  ASSERT_TRUE(again) << again.message();
+  EXPECT_TRUE(report.widened);
+  EXPECT_EQ(report.left_flyable, 0);
+  for (int i = 0; i <= 400; ++i)
+    EXPECT_GT((again->position.position(again->duration() * i / 400) - pocket).norm(), check);
+  // With the retry off the failure stands (and says where, for a look there), asked to widen or not.
+  planner.unseen_retry = false;
+  EXPECT_FALSE(traj::planTrajectory(replan, astar, world.esdf(), optimizer, planner, &report));
+  EXPECT_FALSE(report.widened);
+  const auto refused = traj::planTrajectory(request, astar, world.esdf(), optimizer, planner, &report);
+  ASSERT_FALSE(refused);
+  EXPECT_FALSE(report.widened);
+  EXPECT_TRUE(report.unseen_at.has_value());
+}
+
 TEST(TrajectoryPlanner, NoFlyableSplineFromAMovingStartBrakesToPlanAgainFromRest) {
   // The way from (1, 2) to (5, 2) passes an unseen voxel: no spline along it stays in known flyable space.
   World world(Vec3(6, 4, 2));
@@ -1417,6 +1479,7 @@ TEST(TrajectoryPlanner, NoFlyableSplineFromAMovingStartBrakesToPlanAgainFromRest
   const OptimizerConfig optimizer = optimizerConfig();
   traj::TrajectoryPlannerConfig planner;
   planner.brake_speed = 0.3;
+  planner.unseen_retry = false;  // the way is not searched again keeping the voxel away
   traj::PlanRequest request;
   request.start = Vec3(1.05, 2.05, 1.05);
   request.velocity = Vec3(-0.6, 0.8, 0.0);  // 1 m/s, away from the target and across the way

@@ -148,6 +148,7 @@ class ExplorationRun {
     double committed_at;
     bool quicker = false;  ///< won on cost (planning::CurrentTarget::quicker)
     bool looked_at_unseen = false;  ///< trajectory::lookAtUnseen() was flown for it
+    bool widened = false;           ///< a plan to it kept unseen space away all round (PlanRequest::widen)
     int scouts = 0;                 ///< scouting flights towards it (trajectory::scoutedTooOften())
   };
   std::optional<Target> target_;

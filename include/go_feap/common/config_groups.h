@@ -67,7 +67,7 @@ void readGlobalPlanner(R& p, planning::GlobalPlannerConfig& c) {
 template <class R>
 void readAstar(R& p, planning::AstarConfig& c, const std::string& ns = "astar") {
   p.get(ns + "/clearance", c.clearance).get(ns + "/unknown_is_free", c.unknown_is_free);
-  p.get(ns + "/known_clearance", c.known_clearance);
+  p.get(ns + "/known_clearance", c.known_clearance).get(ns + "/known_radius", c.known_radius);
   p.get(ns + "/max_expansions", c.max_expansions).get(ns + "/probe_expansions", c.probe_expansions);
   p.get(ns + "/tie_breaker", c.tie_breaker).get(ns + "/stride", c.stride);
   c.name = ns;
@@ -133,6 +133,7 @@ void readTrajectoryPlanner(R& p, trajectory::TrajectoryPlannerConfig& c) {
   p.get("planner/failed_search_memory", c.failed_search_memory).get("planner/scout_min_length", c.scout_min_length);
   p.get("planner/look_tolerance", c.look_tolerance).get("planner/max_scouts", c.max_scouts);
   p.get("planner/fine_spans", c.fine_spans).get("planner/profile_acceleration", c.profile_acceleration);
+  p.get("planner/unseen_retry", c.unseen_retry);
   p.get("planner/coarse_retry", c.coarse_retry).get("planner/brake_speed", c.brake_speed);
   p.get("planner/profile_knot_span", c.profile_knot_span).get("planner/profile_ramp", c.profile_ramp);
   p.get("planner/profile_corner_cut", c.profile_corner_cut);

@@ -28,6 +28,10 @@ struct AstarConfig {
   /// a flight path never hugs space it has not seen (a wall seen edge-on is not in the ESDF yet). Only
   /// meaningful with unknown_is_free false.
   bool known_clearance = false;
+  /// m, with known_clearance: every voxel whose centre lies this close to the voxel's centre must be known
+  /// as well. The six along the axes alone let a path pass one voxel from an unseen pocket, which a
+  /// trajectory along it then fails (traversableWith() checks the ball round each voxel). 0 to clearance.
+  double known_radius = 0.0;
   /// Search budget: voxels expanded before giving up, at most 5e7.
   int max_expansions = 200000;
   /// Expansions after which a search that has not finished looks from the goal's side: a search from the
@@ -91,6 +95,8 @@ class Astar {
   Astar(const map::OccupancyMap& occupancy, const map::Esdf& esdf, const AstarConfig& config);
 
   const AstarConfig& config() const { return config_; }
+  const map::OccupancyMap& occupancy() const { return occupancy_; }
+  const map::Esdf& esdf() const { return esdf_; }
   const common::GridGeometry& geometry() const { return geo_; }
 
   /// Shortest 26-connected path between the voxels of `start` and `goal` (move costs 1, sqrt 2, sqrt 3
@@ -125,7 +131,8 @@ class Astar {
   /// unknown when config.unknown_is_free), and with config.known_clearance every voxel whose centre lies
   /// within min_distance of its centre must be known, since an unseen obstacle there would be that close.
   /// The test for a trajectory that the optimiser bent away from the path: it may graze the edge of the
-  /// known region the path hugs (config.clearance away), never cross or touch unseen space.
+  /// known region the path hugs (config.clearance away), never cross or touch unseen space. A voxel
+  /// traversable() passes it for every min_distance up to min(config.clearance, config.known_radius).
   /// `unseen`, when given, is set when the voxel fails for unseen space alone (it is inside the box,
   /// min_distance from mapped obstacles and the box's faces): a look there may clear it.
   bool traversableWith(const Index3& idx, double min_distance, bool* unseen = nullptr) const;
@@ -166,7 +173,8 @@ class Astar {
   /// exempt2), traversable() beyond: what a search from `start` needs of a voxel.
   bool traversableFrom(const Index3& idx, std::size_t linear, const Index3& start, int exempt2) const;
   /// Not occupied, unknown only when config.unknown_is_free, and (with `surroundings` and
-  /// config.known_clearance) the voxels config.clearance away along each axis known.
+  /// config.known_clearance) the voxels config.clearance away along each axis and those within
+  /// config.known_radius known (known_offsets_).
   bool freeAndKnown(const Index3& idx, std::size_t linear, bool surroundings) const;
   /// Nearest traversable voxel to p whose centre is within `radius` of it; false when none. With
   /// `lattice` only voxels whose index differs from it by multiples of config.stride count.
@@ -206,8 +214,9 @@ class Astar {
   common::GridGeometry geo_;
   double blocked_below_ = 0.0;  // clearance less a rounding margin
   Index3 brick_dims_ = Index3::Zero();
-  Index3 box_lo_ = Index3::Zero(), box_hi_ = Index3::Zero();
-  int clearance_voxels_ = 0;  ///< known_clearance: offset (voxels) of the neighbours that must be known  ///< voxels whose centres lie in the box, [lo, hi]
+  Index3 box_lo_ = Index3::Zero(), box_hi_ = Index3::Zero();  ///< voxels whose centres lie in the box, [lo, hi]
+  /// known_clearance: offsets (voxels) of the neighbours that must be known, farthest first.
+  std::vector<Index3> known_offsets_;
 
   // Search scratch: the voxels a search touches, in bricks of 8^3 cells (locality: a voxel's neighbours
   // mostly share its brick) found through an open-addressing table; each cell holds kCellUnseen,

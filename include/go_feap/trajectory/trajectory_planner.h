@@ -81,6 +81,11 @@ struct TrajectoryPlannerConfig {
   /// A flight search over its budget is asked again with the coarse search given to planTrajectory()
   /// (false: the coarse search is never used)
   bool coarse_retry = true;
+  /// Every spline along the path was refused for unseen space beside it (the flight search keeps unseen
+  /// space away along the axes, and known_radius all round; the check looks all round, flyableClearance()):
+  /// search again, once, keeping it flyableClearance() away all round, and fly that path when it has a
+  /// flyable spline (false: the failure stands, and the vehicle may look there)
+  bool unseen_retry = true;
   /// Timed fit (profileSamples()): before optimising, the path is timed with a speed profile that
   /// accelerates and brakes at this share of a_max (cruising at feasibility_margin * v_max, slower
   /// round corners), and the spline whose control points are its samples, profile_knot_span apart
@@ -111,6 +116,10 @@ struct PlanRequest {
   Vec3 target = Vec3::Zero();    ///< m, viewpoint position
   double target_yaw = 0.0;       ///< rad, viewpoint heading
   double time = 0.0;             ///< s, when it is planned (for a SearchMemory)
+  /// An earlier plan to this target was widened (PlanReport::widened): search keeping unseen space
+  /// flyableClearance() away all round from the start (with config.unseen_retry), so that a replan on the
+  /// way does not turn back to the refused way, whose pocket lies beyond the horizon it checks
+  bool widen = false;
 };
 
 /// What plan() did, for logs and benchmarks.
@@ -120,6 +129,10 @@ struct PlanReport {
   bool profiled = false;       ///< the timed fit (profileSamples()) was flown
   /// No flyable spline from a start faster than brake_speed: braking to rest (partial) is flown instead
   bool braked = false;
+  /// The path flown was searched keeping unseen space flyableClearance() away all round
+  /// (config.unseen_retry): the first path's splines were refused for unseen space beside it, or the
+  /// request asked for it (PlanRequest::widen)
+  bool widened = false;
   bool fine = false;           ///< the optimisation with fine_spans spans was the quicker
   planning::PathStatus path_status = planning::PathStatus::kNoPath;
   double path_length = 0.0;    ///< m
@@ -168,6 +181,11 @@ class SearchMemory {
   };
   std::vector<Entry> entries_;
 };
+
+/// m: how near unseen space and mapped obstacles planTrajectory() lets a spline's voxels come (the
+/// min_distance of its staysFlyable() checks): optimizer.min_clearance less half a voxel diagonal, since
+/// a voxel's centre may lie that far from the curve.
+double flyableClearance(const OptimizerConfig& optimizer, double resolution);
 
 /// True when `spline`, sampled at most a quarter voxel apart, stays in voxels astar.traversableWith(.,
 /// min_distance) accepts (known free, at least min_distance from mapped obstacles and from the box's
