@@ -243,22 +243,18 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
     return out;
   };
   if ((request.target - request.start).norm() < 0.5 * astar.geometry().resolution()) return turnInPlace();
-  // The flight search keeping unseen space as far away all round as staysFlyable() below looks
-  // (config.unseen_retry, when the given search keeps it nearer).
+  // How near unseen space and obstacles the spline's voxels may come (staysFlyable() below). A search
+  // keeping unseen space nearer than that all round may be widened to it (config.unseen_retry).
   const double voxel_clearance = flyableClearance(optimizer, astar.geometry().resolution());
-  const bool widenable = config.unseen_retry && astar.config().known_clearance && !astar.config().unknown_is_free &&
+  planning::AstarConfig wide = astar.config();
+  wide.known_radius = std::min(voxel_clearance, wide.clearance);
+  const bool widenable = config.unseen_retry && wide.known_clearance && !wide.unknown_is_free &&
                          astar.config().known_radius < voxel_clearance;
-  std::optional<planning::Astar> wide_search;
-  auto wide = [&]() -> const planning::Astar& {
-    planning::AstarConfig wider = astar.config();
-    wider.known_radius = std::min(voxel_clearance, wider.clearance);
-    if (!wide_search) wide_search.emplace(astar.occupancy(), astar.esdf(), wider);
-    return *wide_search;
-  };
   if (request.widen && widenable) {
     PlanRequest plain = request;
     plain.widen = false;
-    auto planned = planTrajectory(plain, wide(), esdf, optimizer, config, &rep, memory, scout, coarse);
+    const planning::Astar wide_search(astar.occupancy(), astar.esdf(), wide);
+    auto planned = planTrajectory(plain, wide_search, esdf, optimizer, config, &rep, memory, scout, coarse);
     rep.widened = true;
     return planned;
   }
@@ -378,7 +374,6 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
   Vec3 start_acc = request.acceleration.allFinite() ? request.acceleration : Vec3::Zero();
   if (start_acc.norm() > a_limit) start_acc *= a_limit / start_acc.norm();
   common::Result<UniformBspline> spline = common::Result<UniformBspline>::Error("not planned");
-  // The optimiser checks min_clearance along the curve; a voxel's centre may be half a diagonal farther.
   auto flyable = [&](const UniformBspline& candidate) {
     return checkTrajectory(candidate, esdf, optimizer).ok() &&
            staysFlyable(candidate, astar, voxel_clearance, config.snap_radius);
@@ -475,7 +470,8 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
     // unseen space as far away all round as the check does; without a coarse or scouting search (a path
     // through known space is what this mends), nor the memory (the first search did find a path).
     PlanReport again;
-    auto retried = planTrajectory(request, wide(), esdf, optimizer, config, &again);
+    const planning::Astar wide_search(astar.occupancy(), astar.esdf(), wide);
+    auto retried = planTrajectory(request, wide_search, esdf, optimizer, config, &again);
     if (retried) {
       again.widened = true;
       again.left_flyable += rep.left_flyable;
