@@ -319,63 +319,55 @@ void ExplorationRun::trajectoryStep() {
   request.target = target_->position;
   request.target_yaw = target_->yaw;
   request.time = t_;
-  request.widen = target_->widened;
   const auto t0 = Clock::now();
-  trajectory::PlanReport report;
-  auto planned = trajectory::planTrajectory(request, *flight_astar_, map_->esdf(), config_.optimizer, config_.planner,
-                                            &report, &search_memory_, scout_astar_.get(), coarse_astar_.get());
+  trajectory::FlightStep step =
+      trajectory::planForTarget(request, &target_->attempts, *flight_astar_, map_->esdf(), config_.optimizer,
+                                config_.planner, &search_memory_, scout_astar_.get(), coarse_astar_.get());
   recorder_.addTime("trajectory", msSince(t0));
   trajectory_start_ = t_;
-  if (planned && trajectory::scoutedTooOften(report, config_.planner, &target_->scouts)) {
-    log("frontier " + std::to_string(target_->frontier) + " scouted " + std::to_string(target_->scouts) +
-        " times without a known path: stopping, a failed attempt");
+  const trajectory::PlanReport& report = step.report;
+  const std::string frontier = std::to_string(target_->frontier);
+  switch (step.outcome) {
+    case trajectory::FlightOutcome::kFly:
+      if (step.newly_widened)
+        log("every trajectory along the way to frontier " + frontier +
+            " came too near unseen space: flying a way that keeps it away all round");
+      if (report.braked)
+        log("no flyable trajectory to frontier " + frontier + " from " + std::to_string(request.velocity.norm()) +
+            " m/s: braking to plan again from rest");
+      if (report.coarse)
+        log("flight search to frontier " + frontier + " over budget: coarse path of " +
+            std::to_string(report.path_length) + " m");
+      if (report.scouted)
+        log("no known path to frontier " + frontier + ": scouting " +
+            std::to_string((step.trajectory.position.position(step.trajectory.duration()) - request.start).norm()) +
+            " m along a way through unseen space");
+      break;
+    case trajectory::FlightOutcome::kScoutedTooOften:
+      log("frontier " + frontier + " scouted " + std::to_string(target_->attempts.scouts) +
+          " times without a known path: stopping, a failed attempt");
+      break;
+    case trajectory::FlightOutcome::kLookAround:
+    case trajectory::FlightOutcome::kLookAtUnseen:
+    case trajectory::FlightOutcome::kFail:
+      log(std::string("plan to frontier ") + frontier + " failed (" + trajectory::toString(reason) +
+          "): " + step.failure);
+      if (step.outcome == trajectory::FlightOutcome::kLookAround) {
+        log("the start region cannot be left (" + std::to_string(report.path_expansions) +
+            " voxels reachable): looking around");
+      } else if (step.outcome == trajectory::FlightOutcome::kLookAtUnseen) {
+        std::ostringstream what;
+        what << "the way to frontier " << frontier << " leads through unseen space at ("
+             << report.unseen_at->transpose() << "): looking there";
+        log(what.str());
+      }
+      break;
+  }
+  if (step.failsTarget()) {
     failed_.push_back(target_->frontier);
     target_.reset();
-    trajectory_ = trajectory::stopTrajectory(request.start, request.velocity, request.yaw, config_.optimizer);
-    return;
   }
-  if (planned) {
-    if (report.widened && !target_->widened)
-      log("every trajectory along the way to frontier " + std::to_string(target_->frontier) +
-          " came too near unseen space: flying a way that keeps it away all round");
-    target_->widened = target_->widened || report.widened;
-    if (report.braked)
-      log("no flyable trajectory to frontier " + std::to_string(target_->frontier) + " from " +
-          std::to_string(request.velocity.norm()) + " m/s: braking to plan again from rest");
-    if (report.coarse)
-      log("flight search to frontier " + std::to_string(target_->frontier) + " over budget: coarse path of " +
-          std::to_string(report.path_length) + " m");
-    if (report.scouted)
-      log("no known path to frontier " + std::to_string(target_->frontier) + ": scouting " +
-          std::to_string((planned->position.position(planned->duration()) - request.start).norm()) +
-          " m along a way through unseen space");
-    trajectory_ = std::move(planned).value();
-    return;
-  }
-  log(std::string("plan to frontier ") + std::to_string(target_->frontier) + " failed (" + trajectory::toString(reason) +
-      "): " + planned.message());
-  // Enclosed start: look around; a way refused for unseen space: look there once; else the failure counts.
-  trajectory::RecoveryPlan recovery = trajectory::recoverFromFailedPlan(
-      request, report, config_.planner, config_.optimizer, map_->geometry().resolution(), &target_->looked_at_unseen,
-      &search_memory_);
-  switch (recovery.kind) {
-    case trajectory::Recovery::kLookAround:
-      log("the start region cannot be left (" + std::to_string(report.path_expansions) +
-          " voxels reachable): looking around");
-      break;
-    case trajectory::Recovery::kLookAtUnseen: {
-      std::ostringstream what;
-      what << "the way to frontier " << target_->frontier << " leads through unseen space at ("
-           << report.unseen_at->transpose() << "): looking there";
-      log(what.str());
-      break;
-    }
-    case trajectory::Recovery::kFail:
-      failed_.push_back(target_->frontier);
-      target_.reset();
-      break;
-  }
-  trajectory_ = std::move(recovery.trajectory);
+  trajectory_ = std::move(step.trajectory);
 }
 
 void ExplorationRun::sample() {

@@ -107,11 +107,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     const bool renumbered = msg->target_seq != 0 && msg->target_seq != target_seq_;
     const bool new_target =
         !target_ || renumbered || trajectory::targetMoved(*target_, target_yaw_, target, msg->yaws.front(), replan_);
-    if (new_target) {
-      looked_at_unseen_ = false;
-      widened_ = false;
-      scouts_ = 0;
-    }
+    if (new_target) attempts_ = trajectory::TargetAttempts();
     target_changed_ = target_changed_ || new_target;
     target_seq_ = msg->target_seq;
     target_ = target;
@@ -188,60 +184,53 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     request.target = *target_;
     request.target_yaw = target_yaw_;
     request.time = now.toSec();
-    request.widen = widened_;
     const auto t_compute = ros_conv::WallClock::now();
-    common::Result<trajectory::Trajectory> planned = common::Result<trajectory::Trajectory>::Error("");
-    trajectory::PlanReport report;
+    trajectory::FlightStep step;
     {
       std::shared_lock<std::shared_mutex> map_lock(shared_->mutex);
-      planned = trajectory::planTrajectory(request, *astar_, shared_->map->esdf(), optimizer_, planner_, &report,
-                                           &search_memory_, scout_.get(), coarse_.get());
+      step = trajectory::planForTarget(request, &attempts_, *astar_, shared_->map->esdf(), optimizer_, planner_,
+                                       &search_memory_, scout_.get(), coarse_.get());
     }
     ros_conv::publishComputeTime(compute_pub_, "trajectory", t_compute);
-    if (planned && trajectory::scoutedTooOften(report, planner_, &scouts_)) {
-      NODELET_WARN_STREAM(getName() << ": frontier " << target_frontier_ << " scouted " << scouts_
-                                    << " times without a known path: stopping; it counts a failed attempt");
-      failFrontier();
-      publish(now, trajectory::stopTrajectory(request.start, request.velocity, request.yaw, optimizer_));
-      return;
-    }
-    if (planned && report.coarse)
-      NODELET_DEBUG_STREAM(getName() << ": flight search to frontier " << target_frontier_
-                                     << " over budget: flying the coarse search's path (" << report.path_length << " m)");
-    if (planned && report.widened && !widened_)
-      NODELET_INFO_STREAM(getName() << ": every trajectory along the way to frontier " << target_frontier_
-                                    << " came too near unseen space: flying a way that keeps it away all round");
-    widened_ = widened_ || (planned && report.widened);
-    if (planned && report.braked)
-      NODELET_INFO_STREAM(getName() << ": no flyable trajectory to frontier " << target_frontier_ << " from "
-                                    << request.velocity.norm() << " m/s: braking to plan again from rest");
-    if (planned && report.scouted)
-      NODELET_INFO_STREAM(getName() << ": no known path to frontier " << target_frontier_
-                                    << ": scouting along a way through unseen space");
-    if (!planned) {
-      NODELET_WARN_STREAM(getName() << ": planning to frontier " << target_frontier_ << " failed ("
-                                    << trajectory::toString(reason) << "): " << planned.message());
-      // Enclosed start: look around; a way refused for unseen space: look there once; else the failure counts.
-      trajectory::RecoveryPlan recovery = trajectory::recoverFromFailedPlan(
-          request, report, planner_, optimizer_, astar_->geometry().resolution(), &looked_at_unseen_, &search_memory_);
-      switch (recovery.kind) {
-        case trajectory::Recovery::kLookAround:
+    const trajectory::PlanReport& report = step.report;
+    switch (step.outcome) {
+      case trajectory::FlightOutcome::kFly:
+        if (report.coarse)
+          NODELET_DEBUG_STREAM(getName() << ": flight search to frontier " << target_frontier_
+                                         << " over budget: flying the coarse search's path (" << report.path_length
+                                         << " m)");
+        if (step.newly_widened)
+          NODELET_INFO_STREAM(getName() << ": every trajectory along the way to frontier " << target_frontier_
+                                        << " came too near unseen space: flying a way that keeps it away all round");
+        if (report.braked)
+          NODELET_INFO_STREAM(getName() << ": no flyable trajectory to frontier " << target_frontier_ << " from "
+                                        << request.velocity.norm() << " m/s: braking to plan again from rest");
+        if (report.scouted)
+          NODELET_INFO_STREAM(getName() << ": no known path to frontier " << target_frontier_
+                                        << ": scouting along a way through unseen space");
+        break;
+      case trajectory::FlightOutcome::kScoutedTooOften:
+        NODELET_WARN_STREAM(getName() << ": frontier " << target_frontier_ << " scouted " << attempts_.scouts
+                                      << " times without a known path: stopping; it counts a failed attempt");
+        break;
+      case trajectory::FlightOutcome::kLookAround:
+      case trajectory::FlightOutcome::kLookAtUnseen:
+      case trajectory::FlightOutcome::kFail:
+        NODELET_WARN_STREAM(getName() << ": planning to frontier " << target_frontier_ << " failed ("
+                                      << trajectory::toString(reason) << "): " << step.failure);
+        if (step.outcome == trajectory::FlightOutcome::kLookAround)
           NODELET_WARN_STREAM(getName() << ": the start region cannot be left (" << report.path_expansions
                                         << " voxels reachable): looking around");
-          break;
-        case trajectory::Recovery::kLookAtUnseen:
-          NODELET_WARN_STREAM(getName() << ": the way to frontier " << target_frontier_ << " leads through unseen space at ("
-                                        << report.unseen_at->transpose() << "): looking there");
-          break;
-        case trajectory::Recovery::kFail:
+        else if (step.outcome == trajectory::FlightOutcome::kLookAtUnseen)
+          NODELET_WARN_STREAM(getName() << ": the way to frontier " << target_frontier_
+                                        << " leads through unseen space at (" << report.unseen_at->transpose()
+                                        << "): looking there");
+        else
           NODELET_WARN_STREAM(getName() << ": stopping; frontier " << target_frontier_ << " counts a failed attempt");
-          failFrontier();
-          break;
-      }
-      publish(now, std::move(recovery.trajectory));
-      return;
+        break;
     }
-    publish(now, std::move(planned).value());
+    if (step.failsTarget()) failFrontier();
+    publish(now, std::move(step.trajectory));
   }
 
   // The target's frontier counts a failed attempt (frontier_failed); wait for a new target.
@@ -290,9 +279,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
   unsigned target_frontier_ = 0;
   std::uint32_t target_seq_ = 0;  ///< ViewpointPath::target_seq of the target
   bool target_changed_ = false;
-  bool looked_at_unseen_ = false;  ///< lookAtUnseen() was flown for this target
-  bool widened_ = false;           ///< a plan to this target kept unseen space away all round (PlanRequest::widen)
-  int scouts_ = 0;                 ///< scouting flights towards this target (scoutedTooOften())
+  trajectory::TargetAttempts attempts_;  ///< looks, widened plans and scouts for this target (planForTarget())
   PositionCommand::ConstPtr command_;
   std::optional<ros_traj::Trajectory> current_;
   trajectory::SearchMemory search_memory_;  // flight searches that found no path lately

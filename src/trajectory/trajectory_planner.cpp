@@ -598,6 +598,44 @@ RecoveryPlan recoverFromFailedPlan(const PlanRequest& request, const PlanReport&
   return out;
 }
 
+FlightStep planForTarget(const PlanRequest& request, TargetAttempts* attempts, const planning::Astar& astar,
+                         const map::Esdf& esdf, const OptimizerConfig& optimizer,
+                         const TrajectoryPlannerConfig& config, SearchMemory* memory, const planning::Astar* scout,
+                         const planning::Astar* coarse) {
+  FlightStep out;
+  PlanRequest asked = request;
+  asked.widen = attempts->widened;
+  auto planned = planTrajectory(asked, astar, esdf, optimizer, config, &out.report, memory, scout, coarse);
+  if (planned && scoutedTooOften(out.report, config, &attempts->scouts)) {
+    out.outcome = FlightOutcome::kScoutedTooOften;
+    out.trajectory = stopTrajectory(asked.start, asked.velocity, asked.yaw, optimizer);
+    return out;
+  }
+  if (planned) {
+    out.outcome = FlightOutcome::kFly;
+    out.newly_widened = out.report.widened && !attempts->widened;
+    attempts->widened = attempts->widened || out.report.widened;
+    out.trajectory = std::move(planned).value();
+    return out;
+  }
+  out.failure = planned.message();
+  RecoveryPlan recovery = recoverFromFailedPlan(asked, out.report, config, optimizer, astar.geometry().resolution(),
+                                                &attempts->looked_at_unseen, memory);
+  switch (recovery.kind) {
+    case Recovery::kLookAround:
+      out.outcome = FlightOutcome::kLookAround;
+      break;
+    case Recovery::kLookAtUnseen:
+      out.outcome = FlightOutcome::kLookAtUnseen;
+      break;
+    case Recovery::kFail:
+      out.outcome = FlightOutcome::kFail;
+      break;
+  }
+  out.trajectory = std::move(recovery.trajectory);
+  return out;
+}
+
 ReplanReason replanReason(const Trajectory* current, double t, const Vec3& target, bool target_changed,
                           const map::Esdf& esdf, const ReplanConfig& replan, const OptimizerConfig& optimizer,
                           const TrajectoryPlannerConfig& config) {

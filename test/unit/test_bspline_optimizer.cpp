@@ -1128,17 +1128,33 @@ TEST(TrajectoryPlanner, AFlightSearchOverBudgetIsSearchedAgainOnTheCoarseLattice
 // changes, as when the camera cannot see the gap from where the scouts end): the target is scouted
 // max_scouts times, and the next scout counts a failed attempt instead of being flown. Plans that are not
 // scouts do not count; 0 means no limit. (Resetting the count with each new target is the callers' part.)
+// Two rooms mapped free, a wall between with a gap at y 2.5-4 m that stays unseen, and a scout search
+// (unknown space free) beside the flight search.
+struct UnseenGap {
+  UnseenGap() : world(Vec3(8, 4, 2)), astar(mapped(world).occupancy(), world.esdf(), flightAstarConfig()),
+                scout(world.occupancy(), world.esdf(), scoutConfig()) {}
+  static World& mapped(World& w) {
+    w.setFree(Index3(0, 0, 0), Index3(29, 39, 19));
+    w.setFree(Index3(40, 0, 0), Index3(79, 39, 19));
+    w.addBox(Index3(30, 0, 0), Index3(39, 24, 19));
+    w.sync();
+    return w;
+  }
+  static AstarConfig scoutConfig() {
+    AstarConfig c;
+    c.unknown_is_free = true;
+    c.clearance = 0.3;
+    return c;
+  }
+  World world;
+  Astar astar, scout;
+};
+
 TEST(TrajectoryPlanner, ATargetScoutedTooOftenCountsAFailedAttempt) {
-  World world(Vec3(8, 4, 2));
-  world.setFree(Index3(0, 0, 0), Index3(29, 39, 19));
-  world.setFree(Index3(40, 0, 0), Index3(79, 39, 19));
-  world.addBox(Index3(30, 0, 0), Index3(39, 24, 19));  // the gap at y 2.5-4 m stays unseen
-  world.sync();
-  const Astar astar(world.occupancy(), world.esdf(), flightAstarConfig());
-  AstarConfig scout_config;
-  scout_config.unknown_is_free = true;
-  scout_config.clearance = 0.3;
-  const Astar scout(world.occupancy(), world.esdf(), scout_config);
+  UnseenGap gap;
+  const World& world = gap.world;
+  const Astar& astar = gap.astar;
+  const Astar& scout = gap.scout;
   const OptimizerConfig optimizer = optimizerConfig();
   traj::TrajectoryPlannerConfig planner;
   planner.min_progress = 0.0;
@@ -1469,6 +1485,105 @@ TEST(TrajectoryPlanner, AWayRefusedForUnseenSpaceBesideItIsSearchedAgainKeepingI
   ASSERT_FALSE(refused);
   EXPECT_FALSE(report.widened);
   EXPECT_TRUE(report.unseen_at.has_value());
+}
+
+// planForTarget(), the one order the bench and the nodelet follow, carries what it learnt about a target
+// from plan to plan in the caller's TargetAttempts: a widened plan makes the next one wide from the start,
+// a look at unseen space is flown once, and one scout too many brakes and fails the target. A fresh record
+// (a new target) starts over.
+TEST(TrajectoryPlanner, PlansForATargetCarryItsWideningLookAndScoutsFromPlanToPlan) {
+  const OptimizerConfig optimizer = optimizerConfig();
+  auto atRest = [](const traj::Trajectory& t) {
+    return traj::sampleTrajectory(t, t.duration()).velocity.norm() < 1e-6;
+  };
+  {
+    // The pocket beside the straight way (as above): the first plan is widened after its splines were refused.
+    World world(Vec3(6, 4, 2));
+    mapFreeBut(world, Vec3(3.05, 2.15, 1.05));
+    const Astar astar(world.occupancy(), world.esdf(), flightAstarConfig());
+    const traj::TrajectoryPlannerConfig planner;
+    traj::PlanRequest request;
+    request.start = Vec3(1.05, 2.05, 1.05);
+    request.target = Vec3(5.05, 2.05, 1.05);
+    request.yaw = kPi / 2;
+    traj::TargetAttempts attempts;
+    traj::FlightStep first = traj::planForTarget(request, &attempts, astar, world.esdf(), optimizer, planner);
+    ASSERT_EQ(first.outcome, traj::FlightOutcome::kFly) << first.failure;
+    EXPECT_FALSE(first.failsTarget());
+    EXPECT_TRUE(first.newly_widened);
+    EXPECT_TRUE(first.report.widened);
+    EXPECT_GT(first.report.left_flyable, 0);
+    EXPECT_TRUE(attempts.widened);
+    EXPECT_LT((first.trajectory.goal - request.target).norm(), 1e-12);
+    // The next plan to it searches wide from the start: nothing refused, and not newly widened.
+    traj::FlightStep next = traj::planForTarget(request, &attempts, astar, world.esdf(), optimizer, planner);
+    ASSERT_EQ(next.outcome, traj::FlightOutcome::kFly) << next.failure;
+    EXPECT_TRUE(next.report.widened);
+    EXPECT_EQ(next.report.left_flyable, 0);
+    EXPECT_FALSE(next.newly_widened);
+    // A new target's record starts narrow again, whatever the request says.
+    traj::TargetAttempts fresh;
+    traj::PlanRequest asks = request;
+    asks.widen = true;
+    traj::FlightStep again = traj::planForTarget(asks, &fresh, astar, world.esdf(), optimizer, planner);
+    ASSERT_EQ(again.outcome, traj::FlightOutcome::kFly) << again.failure;
+    EXPECT_GT(again.report.left_flyable, 0);
+    EXPECT_TRUE(again.newly_widened);
+  }
+  {
+    // No way between two rooms (no scouting, no flying towards): the first failure looks towards the
+    // target, the second fails the target and brakes where the vehicle is.
+    NoWayBetweenRooms rooms;
+    traj::PlanRequest request = rooms.request;
+    request.yaw = kPi / 2;
+    request.velocity = Vec3(0.5, 0.0, 0.0);
+    traj::TargetAttempts attempts;
+    traj::FlightStep look = traj::planForTarget(request, &attempts, rooms.astar, rooms.world.esdf(), rooms.optimizer,
+                                                rooms.planner, &rooms.memory);
+    EXPECT_EQ(look.outcome, traj::FlightOutcome::kLookAtUnseen);
+    EXPECT_FALSE(look.failsTarget());
+    EXPECT_TRUE(attempts.looked_at_unseen);
+    EXPECT_NE(look.failure.find("no path"), std::string::npos) << look.failure;
+    EXPECT_TRUE(look.trajectory.partial);
+    EXPECT_TRUE(atRest(look.trajectory));
+    traj::FlightStep fail = traj::planForTarget(request, &attempts, rooms.astar, rooms.world.esdf(), rooms.optimizer,
+                                                rooms.planner, &rooms.memory);
+    EXPECT_EQ(fail.outcome, traj::FlightOutcome::kFail);
+    EXPECT_TRUE(fail.failsTarget());
+    EXPECT_FALSE(fail.trajectory.partial);
+    EXPECT_TRUE(atRest(fail.trajectory));
+    // A new target may look again (once the failed search is forgotten: the memory answers without a point
+    // to look at).
+    traj::TargetAttempts fresh;
+    traj::SearchMemory forgotten;
+    EXPECT_EQ(traj::planForTarget(request, &fresh, rooms.astar, rooms.world.esdf(), rooms.optimizer, rooms.planner,
+                                  &forgotten)
+                  .outcome,
+              traj::FlightOutcome::kLookAtUnseen);
+  }
+  {
+    // A way through an unseen gap, scouted: flown max_scouts times, then one scout too many brakes instead.
+    UnseenGap gap;
+    traj::TrajectoryPlannerConfig planner;
+    planner.min_progress = 0.0;
+    traj::PlanRequest request;
+    request.start = Vec3(1.0, 1.0, 1.0);
+    request.target = Vec3(6.0, 1.0, 1.0);
+    traj::TargetAttempts attempts;
+    for (int i = 1; i <= planner.max_scouts; ++i) {
+      traj::FlightStep step =
+          traj::planForTarget(request, &attempts, gap.astar, gap.world.esdf(), optimizer, planner, nullptr, &gap.scout);
+      ASSERT_EQ(step.outcome, traj::FlightOutcome::kFly) << "scout " << i << ": " << step.failure;
+      EXPECT_TRUE(step.report.scouted);
+      EXPECT_EQ(attempts.scouts, i);
+    }
+    traj::FlightStep too_many =
+        traj::planForTarget(request, &attempts, gap.astar, gap.world.esdf(), optimizer, planner, nullptr, &gap.scout);
+    EXPECT_EQ(too_many.outcome, traj::FlightOutcome::kScoutedTooOften);
+    EXPECT_TRUE(too_many.failsTarget());
+    EXPECT_TRUE(atRest(too_many.trajectory));
+    EXPECT_LT((too_many.trajectory.goal - request.start).norm(), 1e-9);  // from rest: it stops where it is
+  }
 }
 
 TEST(TrajectoryPlanner, NoFlyableSplineFromAMovingStartBrakesToPlanAgainFromRest) {

@@ -147,9 +147,7 @@ class ExplorationRun {
     std::uint32_t frontier;
     double committed_at;
     bool quicker = false;  ///< won on cost (planning::CurrentTarget::quicker)
-    bool looked_at_unseen = false;  ///< trajectory::lookAtUnseen() was flown for it
-    bool widened = false;           ///< a plan to it kept unseen space away all round (PlanRequest::widen)
-    int scouts = 0;                 ///< scouting flights towards it (trajectory::scoutedTooOften())
+    trajectory::TargetAttempts attempts{};  ///< looks, widened plans and scouts for it (planForTarget())
   };
   std::optional<Target> target_;
   planning::VisitedViewpoints visited_;

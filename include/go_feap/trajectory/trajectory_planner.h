@@ -325,6 +325,42 @@ RecoveryPlan recoverFromFailedPlan(const PlanRequest& request, const PlanReport&
                                    const TrajectoryPlannerConfig& config, const OptimizerConfig& optimizer,
                                    double resolution, bool* looked_at_unseen, SearchMemory* memory = nullptr);
 
+/// What a caller keeps about its current target across the plans to it: a fresh one with each new target.
+struct TargetAttempts {
+  bool looked_at_unseen = false;  ///< lookAtUnseen() was flown for it (recoverFromFailedPlan())
+  bool widened = false;           ///< a plan to it was widened (PlanReport::widened): later ones ask for it
+  int scouts = 0;                 ///< scouting flights towards it (scoutedTooOften())
+};
+
+/// What planForTarget() decided.
+enum class FlightOutcome {
+  kFly,              ///< the plan is flown
+  kScoutedTooOften,  ///< the plan was one scout too many (scoutedTooOften()): brake; a failed attempt
+  kLookAround,       ///< the plan failed, the start region cannot be left (Recovery::kLookAround)
+  kLookAtUnseen,     ///< the plan failed for unseen space off the heading (Recovery::kLookAtUnseen)
+  kFail,             ///< the plan failed otherwise: brake; a failed attempt (Recovery::kFail)
+};
+
+struct FlightStep {
+  FlightOutcome outcome = FlightOutcome::kFail;
+  Trajectory trajectory;  ///< what to fly now, whatever the outcome
+  PlanReport report;      ///< planTrajectory()'s report
+  std::string failure;    ///< planTrajectory()'s message when the plan failed
+  bool newly_widened = false;  ///< the first plan to this target that was widened
+  /// The target's frontier counts a failed attempt and the caller drops the target.
+  bool failsTarget() const { return outcome == FlightOutcome::kScoutedTooOften || outcome == FlightOutcome::kFail; }
+};
+
+/// One plan towards the caller's current target, in the one order the bench and the trajectory_planner
+/// nodelet both follow: planTrajectory() (asked to widen once a plan to this target was widened, so that a
+/// replan on the way does not turn back to the refused way); a scout beyond max_scouts brakes instead of
+/// flying (scoutedTooOften()); a failed plan recovers (recoverFromFailedPlan()). `attempts` is the caller's
+/// record for this target, read and updated; request.widen is taken from it.
+FlightStep planForTarget(const PlanRequest& request, TargetAttempts* attempts, const planning::Astar& astar,
+                         const map::Esdf& esdf, const OptimizerConfig& optimizer,
+                         const TrajectoryPlannerConfig& config, SearchMemory* memory = nullptr,
+                         const planning::Astar* scout = nullptr, const planning::Astar* coarse = nullptr);
+
 /// The replanning decision for a trajectory being flown (DESIGN §3.7). `current` is null when none is
 /// flown; t is the time since its start; target_changed is the caller's own notion of a new target.
 /// A new target is one farther than target_tolerance from the trajectory's goal. A trajectory that ends
