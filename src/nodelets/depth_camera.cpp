@@ -15,6 +15,7 @@
 #include <random>
 
 #include "go_feap/common/config_groups.h"
+#include "go_feap/ros/conversions.h"
 #include "go_feap/ros/params.h"
 #include "go_feap/sim/depth_camera.h"
 #include "go_feap/world/scene.h"
@@ -77,12 +78,13 @@ class DepthCamera : public nodelet::Nodelet {
     const double period = 1.0 / rate_;
     next_frame_ = (next_frame_.isZero() || stamp - next_frame_ > ros::Duration(period)) ? stamp + ros::Duration(period)
                                                                                         : next_frame_ + ros::Duration(period);
-    Eigen::Isometry3d T_W_B;
-    tf2::fromMsg(odom->pose.pose, T_W_B);
-    if (!T_W_B.matrix().allFinite()) {
-      NODELET_WARN_THROTTLE(1.0, "%s: odometry pose is not finite; frame skipped", getName().c_str());
+    const std::string bad = ros_conv::odometryPoseProblem(odom->pose.pose);
+    if (!bad.empty()) {
+      NODELET_WARN_STREAM_THROTTLE(1.0, getName() << ": odometry refused: " << bad << "; frame skipped");
       return;
     }
+    Eigen::Isometry3d T_W_B;
+    tf2::fromMsg(odom->pose.pose, T_W_B);
     const Eigen::Isometry3d T_W_C = T_W_B * T_B_C_;
 
     cv_bridge::CvImage image;

@@ -82,12 +82,13 @@ class GlobalPlanner : public nodelet::Nodelet {
   }
 
   void onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
-    const auto& p = msg->pose.pose.position;
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
-      NODELET_WARN_THROTTLE(2.0, "%s: odometry position is not finite; ignored", getName().c_str());
+    const std::string bad = ros_conv::odometryPoseProblem(msg->pose.pose);
+    if (!bad.empty()) {
+      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": odometry refused: " << bad);
       return;
     }
+    const auto& p = msg->pose.pose.position;
+    std::lock_guard<std::mutex> lock(mutex_);
     uav_ = common::Vec3(p.x, p.y, p.z);
   }
 

@@ -59,17 +59,20 @@ class LayerManager : public nodelet::Nodelet {
   }
 
   void onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
+    const std::string bad = ros_conv::odometryPoseProblem(msg->pose.pose);
+    if (!bad.empty()) {
+      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": odometry refused: " << bad);
+      return;
+    }
     std::lock_guard<std::mutex> lock(mutex_);
     const auto& q = msg->pose.pose.position;
     const common::Vec3 p(q.x, q.y, q.z);
-    if (!p.allFinite()) return;
     const double z = p.z();
     const bool flying = manager_ && (manager_->state() == planning::ExplorationState::kExplore ||
                                      manager_->state() == planning::ExplorationState::kFinalPass);
     if (flying && last_position_) distance_ += (p - *last_position_).norm();
     last_position_ = p;
-    const double yaw = ros_conv::yawOf(msg->pose.pose.orientation);
-    if (std::isfinite(yaw)) yaw_ = yaw;
+    yaw_ = ros_conv::yawOf(msg->pose.pose.orientation);
     if (!manager_) {
       manager_ = std::make_unique<planning::LayerManager>(config_, box_, z);
       publish(ros::Time::now(), manager_->step({}, ros::Time::now().toSec()));

@@ -81,14 +81,16 @@ class LocalPlanner : public nodelet::Nodelet {
     astar_ = std::make_unique<planning::Astar>(shared_->map->occupancy(), shared_->map->esdf(), astar_config_);
   }
   void onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
+    const std::string bad = ros_conv::odometryPoseProblem(msg->pose.pose);
+    if (!bad.empty()) {
+      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": odometry refused: " << bad);
+      return;
+    }
     const auto& p = msg->pose.pose.position;
     const auto& q = msg->pose.pose.orientation;
-    const common::Vec3 pos(p.x, p.y, p.z);
-    const double yaw = ros_conv::yawOf(q);
     std::lock_guard<std::mutex> lock(mutex_);
-    if (!pos.allFinite() || !std::isfinite(yaw)) return;
-    position_ = pos;
-    yaw_ = yaw;
+    position_ = common::Vec3(p.x, p.y, p.z);
+    yaw_ = ros_conv::yawOf(q);
     const double tilt = planning::tiltOf(Eigen::Quaterniond(q.w, q.x, q.y, q.z));
     tilt_ = std::isfinite(tilt) ? tilt : 0.0;
     const common::Vec3 v_world = ros_conv::worldVelocity(q, msg->twist.twist.linear);

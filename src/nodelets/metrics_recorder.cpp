@@ -23,6 +23,7 @@
 #include "go_feap/ComputeTime.h"
 #include "go_feap/ExplorationStatus.h"
 #include "go_feap/metrics/metrics.h"
+#include "go_feap/ros/conversions.h"
 #include "go_feap/ros/params.h"
 #include "go_feap/ros/shared_map.h"
 #include "go_feap/world/scene.h"
@@ -83,9 +84,13 @@ class MetricsRecorder : public nodelet::Nodelet {
   }
 
   void onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
+    const std::string bad = ros_conv::odometryPoseProblem(msg->pose.pose);
+    if (!bad.empty()) {
+      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": odometry refused: " << bad);
+      return;
+    }
     const auto& q = msg->pose.pose.position;
     const common::Vec3 p(q.x, q.y, q.z);
-    if (!p.allFinite()) return;
     std::lock_guard<std::mutex> lock(mutex_);
     position_ = p;
     if (!started() || finished_) return;

@@ -16,6 +16,7 @@
 
 #include <cmath>
 
+#include "go_feap/ros/conversions.h"
 #include "go_feap/ros/params.h"
 
 namespace go_feap {
@@ -52,16 +53,15 @@ class OdometryTf : public nodelet::Nodelet {
   }
 
   void onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
-    const auto& p = msg->pose.pose.position;
-    const auto& q = msg->pose.pose.orientation;
-    const double norm = std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w);
-    if (!std::isfinite(p.x + p.y + p.z) || !std::isfinite(norm) || std::abs(norm - 1.0) > 1e-3) {
+    const std::string bad = ros_conv::odometryPoseProblem(msg->pose.pose);
+    if (!bad.empty()) {
       ++refused_;
-      NODELET_WARN_STREAM_THROTTLE(warn_period_, getName() << ": odometry with a non-finite position or a non-unit "
-                                                              "orientation refused ("
-                                                           << refused_ << " so far)");
+      NODELET_WARN_STREAM_THROTTLE(warn_period_, getName() << ": odometry refused: " << bad << " (" << refused_
+                                                           << " refused so far)");
       return;
     }
+    const auto& p = msg->pose.pose.position;
+    const auto& q = msg->pose.pose.orientation;
     if (msg->header.stamp == last_stamp_) return;  // TF refuses repeated stamps
     last_stamp_ = msg->header.stamp;
     geometry_msgs::TransformStamped t;

@@ -82,12 +82,15 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     coarse_ = std::make_unique<planning::Astar>(shared_->map->occupancy(), shared_->map->esdf(), coarse_config_);
   }
   void onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
+    const std::string bad = ros_conv::odometryPoseProblem(msg->pose.pose);
+    if (!bad.empty()) {
+      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": odometry refused: " << bad);
+      return;
+    }
     const auto& p = msg->pose.pose.position;
     const auto& q = msg->pose.pose.orientation;
     std::lock_guard<std::mutex> lock(mutex_);
-    const common::Vec3 pos(p.x, p.y, p.z);
-    if (!pos.allFinite()) return;
-    odom_position_ = pos;
+    odom_position_ = common::Vec3(p.x, p.y, p.z);
     odom_time_ = ros::Time::now();
     odom_yaw_ = ros_conv::yawOf(q);
   }

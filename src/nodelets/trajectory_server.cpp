@@ -47,10 +47,14 @@ class TrajectoryServer : public nodelet::Nodelet {
   }
 
   void onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
+    const std::string bad = ros_conv::odometryPoseProblem(msg->pose.pose);
+    if (!bad.empty()) {
+      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": odometry refused: " << bad);
+      return;
+    }
     const auto& p = msg->pose.pose.position;
     const auto& q = msg->pose.pose.orientation;
     std::lock_guard<std::mutex> lock(mutex_);
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return;
     last_odom_ = ros::Time::now();
     if (odom_gap_) {
       odom_gap_ = false;

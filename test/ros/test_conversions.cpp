@@ -4,12 +4,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 #include "go_feap/ros/conversions.h"
 
 namespace {
 
 using go_feap::common::Vec3;
+using go_feap::ros_conv::odometryPoseProblem;
 using go_feap::ros_conv::worldVelocity;
 using go_feap::ros_conv::yawOf;
 
@@ -45,6 +47,45 @@ TEST(Conversions, WorldVelocityTurnsTheBodyTwistIntoTheWorld) {
   const Vec3 body = q.inverse() * world;
   EXPECT_TRUE(worldVelocity(quat(q.w(), q.x(), q.y(), q.z()), vec(body.x(), body.y(), body.z()))
                   .isApprox(world, 1e-12));
+}
+
+TEST(Conversions, YawOfAnyScaledQuaternionIsItsRotationsHeading) {
+  // Against the heading of the rotation matrix's x axis, for rotations about every axis and scales.
+  const Eigen::Quaterniond rotations[] = {
+      Eigen::Quaterniond(Eigen::AngleAxisd(2.5, Vec3::UnitZ())),
+      Eigen::Quaterniond(Eigen::AngleAxisd(-1.2, Vec3::UnitZ()) * Eigen::AngleAxisd(0.3, Vec3::UnitY())),
+      Eigen::Quaterniond(0.9, 0.1, -0.3, 0.2).normalized()};
+  for (const Eigen::Quaterniond& r : rotations) {
+    const Vec3 x = r.toRotationMatrix().col(0);
+    for (double scale : {1.0, 0.5, 3.0})
+      EXPECT_NEAR(yawOf(quat(scale * r.w(), scale * r.x(), scale * r.y(), scale * r.z())), std::atan2(x.y(), x.x()),
+                  1e-12)
+          << "scale " << scale;
+  }
+}
+
+TEST(Conversions, OdometryPosesThatAreNotFiniteOrNotARotationAreNamed) {
+  geometry_msgs::Pose pose;
+  pose.position.x = 1.0, pose.position.y = -2.0, pose.position.z = 1.5;
+  pose.orientation = quat(std::sqrt(0.5), 0, 0, std::sqrt(0.5));
+  EXPECT_EQ(odometryPoseProblem(pose), "");
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  geometry_msgs::Pose bad = pose;
+  bad.position.y = nan;
+  EXPECT_NE(odometryPoseProblem(bad).find("position"), std::string::npos) << odometryPoseProblem(bad);
+  bad = pose;
+  bad.position.z = std::numeric_limits<double>::infinity();
+  EXPECT_NE(odometryPoseProblem(bad).find("position"), std::string::npos);
+  bad = pose;
+  bad.orientation.z = nan;  // a finite position with an unusable heading: what the planners once took
+  EXPECT_NE(odometryPoseProblem(bad).find("orientation"), std::string::npos) << odometryPoseProblem(bad);
+  bad.orientation = quat(0, 0, 0, 0);  // left unset
+  EXPECT_NE(odometryPoseProblem(bad).find("not a unit quaternion"), std::string::npos) << odometryPoseProblem(bad);
+  bad.orientation = quat(2.0, 0, 0, 0);
+  EXPECT_NE(odometryPoseProblem(bad).find("orientation"), std::string::npos);
+  // Within 1e-3 of unit length (as tf2 accepts): used.
+  bad.orientation = quat(1.0005, 0, 0, 0);
+  EXPECT_EQ(odometryPoseProblem(bad), "");
 }
 
 }  // namespace

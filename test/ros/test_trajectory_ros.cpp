@@ -8,8 +8,11 @@
 #include <ros/ros.h>
 
 #include <cmath>
+#include <limits>
+#include <vector>
 
 #include "go_feap/Bspline.h"
+#include "go_feap/PositionCommand.h"
 #include "go_feap/ViewpointPath.h"
 #include "go_feap/ros/bspline_conversion.h"
 #include "go_feap/world/scene_files.h"
@@ -165,6 +168,72 @@ TEST_F(TrajectoryTargetTest, ATrajectoryTheServerDroppedIsPlannedAgain) {
       << "not at the target; vehicle at " << position_.transpose() << " at " << speed_ << " m/s (held at " << held.transpose() << "), "
       << trajectories_ - before << " trajectories planned, the last ending at " << end_.transpose() << "; target " << goal.transpose();
   EXPECT_GE(trajectories_ - before, 2);
+}
+
+// A second trajectory server (probe/...) fed only by this test. It holds the first usable odometry pose
+// until a trajectory comes. Odometry it cannot use is refused whole: a finite position with a NaN or
+// unset orientation once became a hold with a NaN heading, sent on to the controller.
+TEST(TrajectoryServerOdometry, UnusableOdometryIsRefusedAndTheFirstGoodPoseIsHeld) {
+  ros::NodeHandle nh;
+  auto odom_pub = nh.advertise<nav_msgs::Odometry>("probe/odom", 10);
+  std::vector<go_feap::PositionCommand::ConstPtr> commands;
+  auto cmd_sub = nh.subscribe<go_feap::PositionCommand>(
+      "probe/position_cmd", 200, [&](const go_feap::PositionCommand::ConstPtr& m) { commands.push_back(m); });
+  ASSERT_TRUE(spinUntil([&] { return odom_pub.getNumSubscribers() > 0 && cmd_sub.getNumPublishers() > 0; }, 60.0))
+      << "the probe trajectory server is not connected";
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double yaw = 0.7;
+  auto odometry = [&](const Vec3& p, double w, double x, double y, double z) {
+    nav_msgs::Odometry m;
+    m.header.stamp = ros::Time::now();
+    m.header.frame_id = "world";
+    m.pose.pose.position.x = p.x(), m.pose.pose.position.y = p.y(), m.pose.pose.position.z = p.z();
+    m.pose.pose.orientation.w = w, m.pose.pose.orientation.x = x;
+    m.pose.pose.orientation.y = y, m.pose.pose.orientation.z = z;
+    return m;
+  };
+  const Vec3 held(1.0, -0.5, 1.2);
+  const nav_msgs::Odometry bad[] = {
+      odometry(held, nan, 0.0, 0.0, nan),                    // orientation not finite
+      odometry(held, 0.0, 0.0, 0.0, 0.0),                    // orientation left unset
+      odometry(Vec3(nan, 0.0, 1.0), 1.0, 0.0, 0.0, 0.0)};  // position not finite
+  // Each unusable kind for 0.5 s of simulated time at 20 Hz: no command follows any.
+  for (const nav_msgs::Odometry& m : bad) {
+    const ros::Time end = ros::Time::now() + ros::Duration(0.5);
+    ros::Time next;
+    spinUntil(
+        [&] {
+          if (ros::Time::now() >= next) {
+            odom_pub.publish(m);
+            next = ros::Time::now() + ros::Duration(0.05);
+          }
+          return ros::Time::now() >= end;
+        },
+        30.0);
+  }
+  spinUntil([] { return false; }, 0.3);  // anything still in flight
+  EXPECT_TRUE(commands.empty()) << commands.size() << " commands after unusable odometry, the first with yaw "
+                                << commands.front()->yaw;
+  commands.clear();
+  // Then a usable pose: held, heading included.
+  const nav_msgs::Odometry good = odometry(held, std::cos(0.5 * yaw), 0.0, 0.0, std::sin(0.5 * yaw));
+  ros::Time next;
+  ASSERT_TRUE(spinUntil(
+      [&] {
+        if (ros::Time::now() >= next) {
+          odom_pub.publish(good);
+          next = ros::Time::now() + ros::Duration(0.05);
+        }
+        return commands.size() >= 20;
+      },
+      30.0))
+      << "no hold command after usable odometry";
+  for (const auto& c : commands) {
+    ASSERT_TRUE(std::isfinite(c->yaw));
+    EXPECT_NEAR(c->yaw, yaw, 1e-9);
+    EXPECT_LT((Vec3(c->position.x, c->position.y, c->position.z) - held).norm(), 1e-9);
+    EXPECT_EQ(c->trajectory_flag, go_feap::PositionCommand::TRAJECTORY_STATUS_EMPTY);
+  }
 }
 
 }  // namespace

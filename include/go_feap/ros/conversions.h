@@ -2,12 +2,15 @@
 #pragma once
 
 #include <geometry_msgs/Point.h>
+#include <geometry_msgs/Pose.h>
 #include <geometry_msgs/Quaternion.h>
 #include <geometry_msgs/Vector3.h>
 
 #include <Eigen/Geometry>
 
 #include <cmath>
+#include <sstream>
+#include <string>
 
 #include "go_feap/common/grid.h"
 
@@ -23,9 +26,31 @@ inline geometry_msgs::Point toPoint(const common::Vec3& v) {
 
 inline common::Vec3 toVec3(const geometry_msgs::Point& p) { return common::Vec3(p.x, p.y, p.z); }
 
-/// Heading (rad, about world z) of an orientation.
+/// Heading (rad, about world z) of an orientation; a quaternion of any nonzero length gives the heading of
+/// its rotation.
 inline double yawOf(const geometry_msgs::Quaternion& q) {
-  return std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
+  return std::atan2(2.0 * (q.w * q.z + q.x * q.y), q.w * q.w + q.x * q.x - q.y * q.y - q.z * q.z);
+}
+
+/// Why an odometry pose cannot be used, or an empty string: a position that is not finite, or an
+/// orientation that is not a rotation (not finite, or a length more than 1e-3 from 1, which tf2 refuses
+/// too; an all-zero quaternion is an orientation left unset). Every nodelet that takes odometry refuses
+/// such a message whole, as if it had not come.
+inline std::string odometryPoseProblem(const geometry_msgs::Pose& pose) {
+  const auto& p = pose.position;
+  const auto& q = pose.orientation;
+  std::ostringstream why;
+  if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+    why << "position (" << p.x << ", " << p.y << ", " << p.z << ") is not finite";
+    return why.str();
+  }
+  const double norm = std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w);
+  if (!std::isfinite(norm) || std::abs(norm - 1.0) > 1e-3) {
+    why << "orientation (x " << q.x << ", y " << q.y << ", z " << q.z << ", w " << q.w
+        << ") is not a unit quaternion";
+    return why.str();
+  }
+  return std::string();
 }
 
 /// A velocity given in the body frame of `orientation` (nav_msgs/Odometry's twist, which is in the
