@@ -101,9 +101,19 @@ class TrajectoryPlanner : public nodelet::Nodelet {
   void onTarget(const ViewpointPath::ConstPtr& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
     if (msg->positions.empty()) return;
+    if (msg->yaws.size() != msg->positions.size()) {
+      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": local_target refused: " << msg->positions.size()
+                                                  << " positions but " << msg->yaws.size() << " yaws");
+      return;
+    }
     const auto& p = msg->positions.front();
     const common::Vec3 target(p.x, p.y, p.z);
-    if (!target.allFinite() || !std::isfinite(msg->yaws.front())) return;
+    if (!target.allFinite() || !std::isfinite(msg->yaws.front())) {
+      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": local_target refused: its first viewpoint (" << p.x << ", "
+                                                  << p.y << ", " << p.z << ", yaw " << msg->yaws.front()
+                                                  << ") is not finite");
+      return;
+    }
     // A newly numbered target is flown to exactly, however near the last one: the local planner judges
     // it reached by its own pose, and after dropping a target it may choose a viewpoint next to it (kept
     // within the tolerances, the vehicle hovered short of it for good). A repeat keeps its number.

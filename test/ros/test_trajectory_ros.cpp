@@ -111,6 +111,16 @@ TEST_F(TrajectoryTargetTest, ANewlyNumberedTargetIsFlownToExactlyEvenNearTheLast
   const auto centre = [&](const Vec3& p) { return Vec3(((p / resolution).array().floor() + 0.5) * resolution); };
   const Vec3 t1 = centre(start_ + 1.0 * forward_), t2 = centre(t1 + 0.2 * forward_), t3 = centre(t2 + 0.2 * forward_);
 
+  // Malformed targets (no heading for the viewpoint; a position not finite) are refused: nothing is
+  // planned, and the planner stays up for the next (a missing heading was read past the end of its array).
+  go_feap::ViewpointPath no_yaw = target(t1, 1);
+  no_yaw.yaws.clear();
+  go_feap::ViewpointPath not_finite = target(t1, 1);
+  not_finite.positions.front().y = std::numeric_limits<double>::quiet_NaN();
+  publishWhile(no_yaw, 1.0, [] { return false; });
+  publishWhile(not_finite, 1.0, [] { return false; });
+  EXPECT_EQ(trajectories_, 0);
+
   // Target 1, repeated as a kept target is: one trajectory there, and the vehicle arrives.
   ASSERT_TRUE(publishWhile(target(t1, 1), 20.0, [&] { return atRestNear(t1); }))
       << "not at target 1; vehicle at " << position_.transpose() << ", " << trajectories_ << " trajectories";
