@@ -91,8 +91,7 @@ class LocalPlanner : public nodelet::Nodelet {
     std::lock_guard<std::mutex> lock(mutex_);
     position_ = common::Vec3(p.x, p.y, p.z);
     yaw_ = ros_conv::yawOf(q);
-    const double tilt = planning::tiltOf(Eigen::Quaterniond(q.w, q.x, q.y, q.z));
-    tilt_ = std::isfinite(tilt) ? tilt : 0.0;
+    tilt_ = planning::tiltOf(Eigen::Quaterniond(q.w, q.x, q.y, q.z));
     const common::Vec3 v_world = ros_conv::worldVelocity(q, msg->twist.twist.linear);
     velocity_ = v_world.allFinite() ? v_world : common::Vec3::Zero();
     speed_ = velocity_.norm();
