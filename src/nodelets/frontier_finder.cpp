@@ -12,6 +12,7 @@
 #include "go_feap/LayerBounds.h"
 #include "go_feap/MapUpdate.h"
 #include "go_feap/ros/conversions.h"
+#include "go_feap/ros/message_checks.h"
 #include "go_feap/common/config_groups.h"
 #include "go_feap/ros/compute_time.h"
 #include "go_feap/ros/params.h"
@@ -52,12 +53,23 @@ class FrontierFinder : public nodelet::Nodelet {
   }
 
   void onLayer(const LayerBounds::ConstPtr& msg) {
+    const std::string bad = ros_check::layerBoundsProblem(*msg);
+    if (!bad.empty()) {
+      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": layer refused: " << bad << "; the band stays as it was");
+      return;
+    }
     std::lock_guard<std::mutex> lock(mutex_);
     band_ = {msg->z_min, msg->z_max};
     if (finder_) finder_->setActiveBand(msg->z_min, msg->z_max);
   }
 
   void onUpdate(const MapUpdate::ConstPtr& msg) {
+    const std::string bad = ros_check::mapUpdateProblem(*msg);
+    if (!bad.empty()) {
+      // Not counted as received: the next update then shows a gap, and every frontier is recomputed.
+      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": map_update " << msg->sequence << " refused: " << bad);
+      return;
+    }
     std::lock_guard<std::mutex> lock(mutex_);
     if (!shared_) {
       NODELET_WARN_THROTTLE(5.0, "%s: map_update before map_handle; waiting for the map", getName().c_str());
@@ -82,8 +94,12 @@ class FrontierFinder : public nodelet::Nodelet {
       } else if (msg->changed_voxels > 0) {
         const auto& geo = occupancy.geometry();
         const double h = 0.5 * geo.resolution();
-        const common::Vec3 lo(msg->changed_min.x + h, msg->changed_min.y + h, msg->changed_min.z + h);
-        const common::Vec3 hi(msg->changed_max.x - h, msg->changed_max.y - h, msg->changed_max.z - h);
+        // Clamped to the map first: a box reaching far outside it would not fit a voxel index.
+        const common::Aabb bounds = geo.bounds();
+        const common::Vec3 lo =
+            common::Vec3(msg->changed_min.x + h, msg->changed_min.y + h, msg->changed_min.z + h).cwiseMax(bounds.min).cwiseMin(bounds.max);
+        const common::Vec3 hi =
+            common::Vec3(msg->changed_max.x - h, msg->changed_max.y - h, msg->changed_max.z - h).cwiseMax(bounds.min).cwiseMin(bounds.max);
         finder_->update(occupancy, geo.coordToIndex(lo), geo.coordToIndex(hi), now);
       }
     }

@@ -23,6 +23,7 @@
 #include "go_feap/FrontierArray.h"
 #include "go_feap/GlobalTour.h"
 #include "go_feap/ros/conversions.h"
+#include "go_feap/ros/message_checks.h"
 #include "go_feap/common/config_groups.h"
 #include "go_feap/ros/compute_time.h"
 #include "go_feap/ros/params.h"
@@ -99,6 +100,11 @@ class GlobalPlanner : public nodelet::Nodelet {
   }
 
   void onFrontiers(const FrontierArray::ConstPtr& msg) {
+    const std::string bad = ros_check::frontierArrayProblem(*msg);
+    if (!bad.empty()) {
+      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": frontiers refused: " << bad);
+      return;
+    }
     std::lock_guard<std::mutex> lock(mutex_);
     last_frontiers_ = msg;
     if (!shared_ || !uav_) {
@@ -121,6 +127,11 @@ class GlobalPlanner : public nodelet::Nodelet {
 
   /// Plans a tour over `msg`'s frontiers and publishes it (mutex_ held; shared_ and uav_ set).
   void plan(const FrontierArray& msg) {
+    const std::string outside = ros_check::frontierOutside(msg, shared_->map->geometry().bounds());
+    if (!outside.empty()) {
+      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": frontiers refused: " << outside);
+      return;
+    }
     std::vector<planning::FrontierSummary> frontiers;
     for (const auto& f : msg.frontiers) {
       if (blacklist_.count(f.id)) continue;  // the layer manager gave up on it

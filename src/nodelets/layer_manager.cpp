@@ -26,6 +26,7 @@
 #include "go_feap/planning/layer_manager.h"
 #include "go_feap/common/config_groups.h"
 #include "go_feap/ros/conversions.h"
+#include "go_feap/ros/message_checks.h"
 #include "go_feap/ros/params.h"
 
 namespace go_feap {
@@ -79,10 +80,20 @@ class LayerManager : public nodelet::Nodelet {
     }
   }
   void onFrontiers(const FrontierArray::ConstPtr& msg) {
+    const std::string bad = ros_check::frontierArrayProblem(*msg);
+    if (!bad.empty()) {
+      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": frontiers refused: " << bad);
+      return;
+    }
     std::lock_guard<std::mutex> lock(mutex_);
     frontiers_ = msg;
   }
   void onMapUpdate(const MapUpdate::ConstPtr& msg) {
+    const std::string bad = ros_check::mapUpdateProblem(*msg);
+    if (!bad.empty()) {
+      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": map_update " << msg->sequence << " refused: " << bad);
+      return;
+    }
     std::lock_guard<std::mutex> lock(mutex_);
     if (msg->changed_voxels > 0) ++progress_;
   }

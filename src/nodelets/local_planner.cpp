@@ -29,6 +29,7 @@
 #include "go_feap/planning/local_planner.h"
 #include "go_feap/planning/viewpoints.h"
 #include "go_feap/ros/conversions.h"
+#include "go_feap/ros/message_checks.h"
 #include "go_feap/common/config_groups.h"
 #include "go_feap/ros/compute_time.h"
 #include "go_feap/ros/params.h"
@@ -113,6 +114,11 @@ class LocalPlanner : public nodelet::Nodelet {
     window_->push(*ratio);
   }
   void onLayer(const LayerBounds::ConstPtr& msg) {
+    const std::string bad = ros_check::layerBoundsProblem(*msg);
+    if (!bad.empty()) {
+      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": layer refused: " << bad << "; the band stays as it was");
+      return;
+    }
     std::lock_guard<std::mutex> lock(mutex_);
     band_ = {msg->z_min, msg->z_max};
     // No frontier in view and no look round yet (the layer manager repeats this while it holds): turn in
@@ -176,13 +182,28 @@ class LocalPlanner : public nodelet::Nodelet {
     return planning::planDue(&held, now, last_plan_, viewpoint_config_.min_visible, local_config_);
   }
   void onFrontiers(const FrontierArray::ConstPtr& msg) {
+    const std::string bad = ros_check::frontierArrayProblem(*msg);
+    if (!bad.empty()) {
+      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": frontiers refused: " << bad);
+      return;
+    }
     std::lock_guard<std::mutex> lock(mutex_);
     frontiers_ = msg;
   }
 
   void onTour(const GlobalTour::ConstPtr& tour) {
+    const std::string bad = ros_check::globalTourProblem(*tour);
+    if (!bad.empty()) {
+      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": global_tour refused: " << bad);
+      return;
+    }
     std::lock_guard<std::mutex> lock(mutex_);
     if (!shared_ || !position_ || !frontiers_) return;
+    const std::string outside = ros_check::frontierOutside(*frontiers_, shared_->map->geometry().bounds());
+    if (!outside.empty()) {
+      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": frontiers refused: " << outside);
+      return;
+    }
     const auto t_compute = ros_conv::WallClock::now();
     std::shared_lock<std::shared_mutex> map_lock(shared_->mutex);
     const map::VoxelMap& m = *shared_->map;

@@ -24,6 +24,7 @@
 #include "go_feap/ExplorationStatus.h"
 #include "go_feap/metrics/metrics.h"
 #include "go_feap/ros/conversions.h"
+#include "go_feap/ros/message_checks.h"
 #include "go_feap/ros/params.h"
 #include "go_feap/ros/shared_map.h"
 #include "go_feap/world/scene.h"
@@ -112,6 +113,11 @@ class MetricsRecorder : public nodelet::Nodelet {
   }
 
   void onStatus(const ExplorationStatus::ConstPtr& msg) {
+    const std::string bad = ros_check::explorationStatusProblem(*msg);
+    if (!bad.empty()) {
+      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": status refused: " << bad);
+      return;
+    }
     std::lock_guard<std::mutex> lock(mutex_);
     status_ = msg;
     if (msg->state == ExplorationStatus::FINISHED && !finished_ && started_at_) finishRun(msg);

@@ -4,9 +4,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <limits>
 
 #include "go_feap/ros/conversions.h"
+#include "go_feap/ros/message_checks.h"
 
 namespace {
 
@@ -14,11 +16,23 @@ using go_feap::common::Vec3;
 using go_feap::ros_conv::odometryPoseProblem;
 using go_feap::ros_conv::worldVelocity;
 using go_feap::ros_conv::yawOf;
+using go_feap::ros_check::frontierArrayProblem;
+using go_feap::ros_check::frontierOutside;
+using go_feap::ros_check::globalTourProblem;
+using go_feap::ros_check::explorationStatusProblem;
+using go_feap::ros_check::layerBoundsProblem;
+using go_feap::ros_check::mapUpdateProblem;
 
 geometry_msgs::Quaternion quat(double w, double x, double y, double z) {
   geometry_msgs::Quaternion q;
   q.w = w, q.x = x, q.y = y, q.z = z;
   return q;
+}
+
+geometry_msgs::Point point(double x, double y, double z) {
+  geometry_msgs::Point p;
+  p.x = x, p.y = y, p.z = z;
+  return p;
 }
 
 geometry_msgs::Vector3 vec(double x, double y, double z) {
@@ -86,6 +100,159 @@ TEST(Conversions, OdometryPosesThatAreNotFiniteOrNotARotationAreNamed) {
   // Within 1e-3 of unit length (as tf2 accepts): used.
   bad.orientation = quat(1.0005, 0, 0, 0);
   EXPECT_EQ(odometryPoseProblem(bad), "");
+}
+
+// The chain's own messages checked on arrival (go_feap/ros/message_checks.h): a well-formed message
+// passes, and each single fault is refused with its field (and the frontier's id) named.
+go_feap::FrontierArray twoFrontiers() {
+  go_feap::FrontierArray msg;
+  for (std::uint32_t id : {7u, 9u}) {
+    go_feap::Frontier f;
+    f.id = id;
+    for (double x : {1.05, 1.15, 1.25}) f.cells.push_back(point(x, -0.95, 1.45));
+    f.average = point(1.15, -0.95, 1.45);
+    f.aabb_min = point(1.0, -1.0, 1.4);
+    f.aabb_max = point(1.3, -0.9, 1.5);
+    f.duration = 3.5;
+    f.omission_likelihood = 0.2;
+    msg.frontiers.push_back(f);
+  }
+  return msg;
+}
+
+bool says(const std::string& problem, const std::string& what) {
+  return problem.find(what) != std::string::npos;
+}
+
+TEST(MessageChecks, FrontierArraysWithAnyValueThatIsNotFiniteOrACountThatDoesNotMatchAreNamed) {
+  const go_feap::FrontierArray good = twoFrontiers();
+  EXPECT_EQ(frontierArrayProblem(good), "");
+  EXPECT_EQ(frontierArrayProblem(go_feap::FrontierArray()), "") << "no frontier is a frontier array";
+  const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+  auto broken = [&](const std::function<void(go_feap::Frontier&)>& fault) {
+    go_feap::FrontierArray msg = good;
+    fault(msg.frontiers[1]);
+    return frontierArrayProblem(msg);
+  };
+  std::string why = broken([&](go_feap::Frontier& f) { f.cells[2].z = nan; });
+  EXPECT_TRUE(says(why, "frontier 9 (index 1)") && says(why, "cell 2")) << why;
+  why = broken([&](go_feap::Frontier& f) { f.average.y = -inf; });
+  EXPECT_TRUE(says(why, "frontier 9") && says(why, "average")) << why;
+  why = broken([&](go_feap::Frontier& f) { f.aabb_max.x = nan; });
+  EXPECT_TRUE(says(why, "box") && says(why, "not finite")) << why;
+  why = broken([&](go_feap::Frontier& f) { std::swap(f.aabb_min, f.aabb_max); });
+  EXPECT_TRUE(says(why, "box") && says(why, "inverted")) << why;
+  why = broken([&](go_feap::Frontier& f) { f.duration = -1.0; });
+  EXPECT_TRUE(says(why, "duration")) << why;
+  why = broken([&](go_feap::Frontier& f) { f.duration = nan; });
+  EXPECT_TRUE(says(why, "duration")) << why;
+  why = broken([&](go_feap::Frontier& f) { f.omission_likelihood = inf; });
+  EXPECT_TRUE(says(why, "omission_likelihood")) << why;
+  why = broken([&](go_feap::Frontier& f) { f.cells.clear(); });
+  EXPECT_TRUE(says(why, "frontier 9") && says(why, "no cells")) << why;
+  why = broken([&](go_feap::Frontier& f) { f.id = 0; });
+  EXPECT_TRUE(says(why, "id 0")) << why;
+  why = broken([&](go_feap::Frontier& f) { f.id = 7; });
+  EXPECT_TRUE(says(why, "frontier 7 (index 1)") && says(why, "twice")) << why;
+  // Viewpoints: optional, but as many yaws and counts as positions, all finite.
+  why = broken([&](go_feap::Frontier& f) {
+    f.viewpoint_positions = {point(0.5, -0.5, 1.5), point(0.6, -0.5, 1.5)};
+    f.viewpoint_yaws = {0.1, 0.2};
+    f.viewpoint_visible = {40, 35};
+  });
+  EXPECT_EQ(why, "");
+  why = broken([&](go_feap::Frontier& f) {
+    f.viewpoint_positions = {point(0.5, -0.5, 1.5), point(0.6, -0.5, 1.5)};
+    f.viewpoint_yaws = {0.1};
+    f.viewpoint_visible = {40, 35};
+  });
+  EXPECT_TRUE(says(why, "2 viewpoint positions but 1 yaws")) << why;
+  why = broken([&](go_feap::Frontier& f) {
+    f.viewpoint_positions = {point(0.5, nan, 1.5)};
+    f.viewpoint_yaws = {0.1};
+    f.viewpoint_visible = {40};
+  });
+  EXPECT_TRUE(says(why, "viewpoint 0")) << why;
+}
+
+TEST(MessageChecks, FrontierCellsAndAveragesOutsideTheMapAreNamed) {
+  const go_feap::common::Aabb map{Vec3(-1.0, -2.0, 0.0), Vec3(2.0, 2.0, 3.0)};
+  go_feap::FrontierArray msg = twoFrontiers();
+  EXPECT_EQ(frontierOutside(msg, map), "");
+  msg.frontiers[1].cells[0].x = 2.0;  // on the map's face: still inside
+  EXPECT_EQ(frontierOutside(msg, map), "");
+  msg.frontiers[1].cells[1].x = 2.0 + 1e-9;
+  std::string why = frontierOutside(msg, map);
+  EXPECT_TRUE(says(why, "frontier 9") && says(why, "cell 1") && says(why, "outside the map")) << why;
+  msg = twoFrontiers();
+  msg.frontiers[0].cells[2].z = 1e300;  // finite, but no voxel index holds it
+  EXPECT_TRUE(says(frontierOutside(msg, map), "frontier 7 (index 0): cell 2")) << frontierOutside(msg, map);
+  msg = twoFrontiers();
+  msg.frontiers[0].average.z = -0.5;
+  EXPECT_TRUE(says(frontierOutside(msg, map), "average")) << frontierOutside(msg, map);
+}
+
+TEST(MessageChecks, ToursLayersMapUpdatesAndStatusesThatAreMalformedAreNamed) {
+  go_feap::GlobalTour tour;
+  tour.frontier_ids = {7, 9};
+  tour.waypoints = {point(1, 0, 1), point(2, 0, 1)};
+  EXPECT_EQ(globalTourProblem(tour), "");
+  EXPECT_EQ(globalTourProblem(go_feap::GlobalTour()), "");
+  go_feap::GlobalTour bad = tour;
+  bad.waypoints.pop_back();
+  EXPECT_TRUE(says(globalTourProblem(bad), "2 frontier ids but 1 waypoints")) << globalTourProblem(bad);
+  bad = tour;
+  bad.waypoints[1].y = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_TRUE(says(globalTourProblem(bad), "waypoint 1") && says(globalTourProblem(bad), "frontier 9"))
+      << globalTourProblem(bad);
+
+  go_feap::LayerBounds layer;
+  layer.index = 1, layer.count = 3, layer.z_min = 1.0, layer.z_max = 2.0;
+  EXPECT_EQ(layerBoundsProblem(layer), "");
+  go_feap::LayerBounds bad_layer = layer;
+  bad_layer.z_min = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_TRUE(says(layerBoundsProblem(bad_layer), "band z")) << layerBoundsProblem(bad_layer);
+  bad_layer = layer;
+  bad_layer.z_max = 1.0;  // empty
+  EXPECT_TRUE(says(layerBoundsProblem(bad_layer), "z_min < z_max")) << layerBoundsProblem(bad_layer);
+  bad_layer = layer;
+  bad_layer.index = 3;
+  EXPECT_TRUE(says(layerBoundsProblem(bad_layer), "index 3")) << layerBoundsProblem(bad_layer);
+  bad_layer.index = 0, bad_layer.count = 0;
+  EXPECT_TRUE(says(layerBoundsProblem(bad_layer), "count 0")) << layerBoundsProblem(bad_layer);
+
+  go_feap::MapUpdate update;
+  update.changed_voxels = 12;
+  update.changed_min = point(0, 0, 0);
+  update.changed_max = point(1, 1, 1);
+  EXPECT_EQ(mapUpdateProblem(update), "");
+  go_feap::MapUpdate bad_update = update;
+  bad_update.changed_max.z = std::numeric_limits<double>::infinity();
+  EXPECT_TRUE(says(mapUpdateProblem(bad_update), "not finite")) << mapUpdateProblem(bad_update);
+  bad_update.changed_voxels = 0;  // nothing changed: the box means nothing
+  EXPECT_EQ(mapUpdateProblem(bad_update), "");
+  bad_update = update;
+  std::swap(bad_update.changed_min, bad_update.changed_max);
+  EXPECT_TRUE(says(mapUpdateProblem(bad_update), "inverted")) << mapUpdateProblem(bad_update);
+
+  go_feap::ExplorationStatus status;
+  status.state = go_feap::ExplorationStatus::FINISHED;
+  status.elapsed = 118.5, status.distance = 120.0, status.coverage = -1.0;  // -1: coverage unknown
+  EXPECT_EQ(explorationStatusProblem(status), "");
+  go_feap::ExplorationStatus bad_status = status;
+  bad_status.state = 4;
+  EXPECT_TRUE(says(explorationStatusProblem(bad_status), "state 4")) << explorationStatusProblem(bad_status);
+  bad_status = status;
+  bad_status.elapsed = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_TRUE(says(explorationStatusProblem(bad_status), "elapsed")) << explorationStatusProblem(bad_status);
+  bad_status.elapsed = 1e12;  // finite, but past what a ros::Duration holds
+  EXPECT_TRUE(says(explorationStatusProblem(bad_status), "elapsed")) << explorationStatusProblem(bad_status);
+  bad_status = status;
+  bad_status.distance = -3.0;
+  EXPECT_TRUE(says(explorationStatusProblem(bad_status), "distance")) << explorationStatusProblem(bad_status);
+  bad_status = status;
+  bad_status.coverage = std::numeric_limits<double>::infinity();
+  EXPECT_TRUE(says(explorationStatusProblem(bad_status), "coverage")) << explorationStatusProblem(bad_status);
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <vector>
 
 #include <std_msgs/Bool.h>
@@ -343,6 +344,101 @@ TEST_F(FrontierPlannerTest, FuelModeLocalPlannerWantsNoTourRightAfterChoosingATa
   }, 30.0)) << "the probe took up no tour";
   EXPECT_EQ(answers.size(), 1u);
   EXPECT_FALSE(answers.front()) << "a tour was wanted right after a target was chosen from the last one";
+}
+
+// The chain's own messages, fed malformed from outside (a bag, a tool), are refused whole and the
+// nodelets go on with what they had (go_feap/ros/message_checks.h). Last in the file: it publishes on
+// the chain's layer topic.
+//  * The probe global planner, wanting a tour, plans none from frontier arrays with a NaN P_avg, a cell
+//    far outside the map (a voxel index cast from it does not exist) or one id twice, then plans from the
+//    same array unbroken.
+//  * The probe local planner answers no tour whose waypoints do not match its ids or are not finite (it
+//    answers every tour it takes up with tour_wanted), then answers the same tour unbroken.
+//  * The frontier finder keeps its band through a layer with a NaN floor and an inverted one: the
+//    frontiers published after still carry the real band's active flags (a NaN or inverted band made
+//    every frontier inactive).
+TEST_F(FrontierPlannerTest, MalformedChainMessagesAreRefusedAndTheNodeletsKeepWorking) {
+  int planned = 0, answers = 0;
+  ros::Subscriber tours = nh_.subscribe<go_feap::GlobalTour>("probe/fuel_tour", 20, [&](const go_feap::GlobalTour::ConstPtr& m) {
+    if (!m->repeated) ++planned;
+  });
+  ros::Subscriber want = nh_.subscribe<std_msgs::Bool>("probe/tour_wanted", 50, [&](const std_msgs::Bool::ConstPtr&) { ++answers; });
+  go_feap::LayerBounds::ConstPtr band;  // the layer manager's last band (the test's own layers not counted)
+  ros::Subscriber layers = nh_.subscribe<go_feap::LayerBounds>("layer", 5, [&](const go_feap::LayerBounds::ConstPtr& m) {
+    if (std::isfinite(m->z_min) && m->z_min < m->z_max) band = m;
+  });
+  ros::Publisher frontier_pub = nh_.advertise<go_feap::FrontierArray>("probe/frontiers", 2);
+  ros::Publisher fuel_wanted_pub = nh_.advertise<std_msgs::Bool>("probe/fuel_tour_wanted", 2, true);
+  ros::Publisher tour_pub = nh_.advertise<go_feap::GlobalTour>("probe/global_tour", 10);
+  ros::Publisher layer_pub = nh_.advertise<go_feap::LayerBounds>("layer", 2);
+  ASSERT_TRUE(spinUntil([&] {
+    return frontiers_ && !frontiers_->frontiers.empty() && tour_ && band && frontier_pub.getNumSubscribers() >= 1 &&
+           fuel_wanted_pub.getNumSubscribers() >= 1 && tour_pub.getNumSubscribers() >= 1 &&
+           layer_pub.getNumSubscribers() >= 2 &&  // the manager, and this test itself
+           tours.getNumPublishers() >= 1 && want.getNumPublishers() >= 1;
+  }, 90.0)) << "no frontiers, tour or band to feed the probes (" << frontier_pub.getNumSubscribers() << " "
+             << fuel_wanted_pub.getNumSubscribers() << " " << tour_pub.getNumSubscribers() << " "
+             << layer_pub.getNumSubscribers() << " " << tours.getNumPublishers() << " " << want.getNumPublishers() << " "
+             << (band != nullptr) << (tour_ != nullptr) << ")";
+  std_msgs::Bool yes;
+  yes.data = true;
+  fuel_wanted_pub.publish(yes);
+  auto pause = [&](double seconds) {
+    const ros::Time start = ros::Time::now();
+    spinUntil([&] { return (ros::Time::now() - start).toSec() >= seconds; }, 30.0);
+  };
+  // One message every 0.15 s (global/rate lets one through per 0.1 s), in turn, until `done` or `seconds`.
+  auto feed = [&](const ros::Publisher& pub, const auto& messages, double seconds, const std::function<bool()>& done) {
+    const ros::Time start = ros::Time::now();
+    ros::Time last;
+    std::size_t i = 0;
+    spinUntil([&] {
+      if (last.isZero() || (ros::Time::now() - last).toSec() >= 0.15) {
+        pub.publish(messages[i++ % messages.size()]);
+        last = ros::Time::now();
+      }
+      return done() || (ros::Time::now() - start).toSec() >= seconds;
+    }, 60.0);
+  };
+  pause(0.5);
+
+  const go_feap::FrontierArray good = *frontiers_;
+  std::vector<go_feap::FrontierArray> broken(3, good);
+  broken[0].frontiers[0].average.x = std::nan("");
+  broken[1].frontiers[0].cells[0].y = 1e300;
+  broken[2].frontiers.push_back(good.frontiers[0]);
+  planned = 0;
+  feed(frontier_pub, broken, 1.5, [] { return false; });
+  EXPECT_EQ(planned, 0) << "the probe global planner planned a tour from malformed frontiers";
+  feed(frontier_pub, std::vector<go_feap::FrontierArray>{good}, 10.0, [&] { return planned >= 1; });
+  EXPECT_GE(planned, 1) << "the probe global planner planned no tour from the same frontiers unbroken";
+
+  go_feap::GlobalTour tour = *tour_;
+  std::vector<go_feap::GlobalTour> bad_tours(2, tour);
+  bad_tours[0].waypoints.pop_back();
+  bad_tours[1].waypoints.back().z = std::numeric_limits<double>::infinity();
+  pause(0.3);
+  answers = 0;
+  feed(tour_pub, bad_tours, 1.5, [] { return false; });
+  EXPECT_EQ(answers, 0) << "the probe local planner took up a malformed tour";
+  feed(tour_pub, std::vector<go_feap::GlobalTour>{tour}, 10.0, [&] { return answers >= 1; });
+  EXPECT_GE(answers, 1) << "the probe local planner took up no tour unbroken";
+
+  std::vector<go_feap::LayerBounds> bad_layers(2, *band);
+  bad_layers[0].z_min = std::nan("");
+  bad_layers[1].z_min = band->z_max + 1.0;
+  bad_layers[1].z_max = band->z_max + 0.5;
+  feed(layer_pub, bad_layers, 1.0, [] { return false; });
+  const ros::Time after = ros::Time::now() + ros::Duration(0.3);
+  ASSERT_TRUE(spinUntil([&] { return frontiers_->header.stamp > after && !frontiers_->frontiers.empty(); }, 30.0));
+  std::size_t active = 0;
+  for (const auto& f : frontiers_->frontiers) {
+    const bool in_band = f.average.z >= band->z_min && f.average.z <= band->z_max;
+    active += in_band;
+    EXPECT_EQ(f.active, in_band) << "frontier " << f.id << " z " << f.average.z << ", band " << band->z_min << " .. "
+                                 << band->z_max;
+  }
+  EXPECT_GT(active, 0u) << "no frontier in the band: the check shows nothing";
 }
 
 }  // namespace

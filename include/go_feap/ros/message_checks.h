@@ -1,0 +1,42 @@
+// Checks on the chain's own messages (frontiers, global_tour, layer, map_update) as they arrive. Each
+// topic can also be fed from outside the chain (a bag, a tool, another planner), and a value that is not
+// finite or a count that does not match would reach the core as a voxel index cast from NaN or a read
+// past an array's end. Each function says what is wrong (naming the field, and the frontier's id where
+// there is one), or returns an empty string; the nodelet then refuses the message whole and keeps what
+// it had.
+#pragma once
+
+#include <string>
+
+#include "go_feap/ExplorationStatus.h"
+#include "go_feap/FrontierArray.h"
+#include "go_feap/GlobalTour.h"
+#include "go_feap/LayerBounds.h"
+#include "go_feap/MapUpdate.h"
+#include "go_feap/common/grid.h"
+
+namespace go_feap::ros_check {
+
+/// Every frontier: an id other than 0 (0 means "no frontier" in a local_target) and unique in the array;
+/// at least one cell; cells, P_avg and box finite, the box not inverted; T and xi finite and >= 0; as
+/// many viewpoint yaws and visible counts as viewpoint positions, all finite.
+std::string frontierArrayProblem(const FrontierArray& msg);
+
+/// The same array against a map: every frontier's cells and P_avg inside `bounds` (the map's extent,
+/// faces included), where a voxel index exists. Call it on an array frontierArrayProblem() passed.
+std::string frontierOutside(const FrontierArray& msg, const common::Aabb& bounds);
+
+/// As many waypoints as frontier ids, every waypoint finite.
+std::string globalTourProblem(const GlobalTour& msg);
+
+/// z_min and z_max finite with z_min < z_max; count >= 1 and index < count.
+std::string layerBoundsProblem(const LayerBounds& msg);
+
+/// With changed voxels: the changed box finite and not inverted.
+std::string mapUpdateProblem(const MapUpdate& msg);
+
+/// A known state (WAIT_TRIGGER .. FINISHED); elapsed and distance finite and >= 0, elapsed under a
+/// year (it becomes a ros::Duration, which throws beyond 2^31 s); coverage finite.
+std::string explorationStatusProblem(const ExplorationStatus& msg);
+
+}  // namespace go_feap::ros_check

@@ -1,0 +1,118 @@
+#include "go_feap/ros/message_checks.h"
+
+#include <cmath>
+#include <sstream>
+#include <unordered_set>
+
+namespace go_feap::ros_check {
+namespace {
+
+bool finite(const geometry_msgs::Point& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
+
+std::string point(const geometry_msgs::Point& p) {
+  std::ostringstream s;
+  s << "(" << p.x << ", " << p.y << ", " << p.z << ")";
+  return s.str();
+}
+
+/// "frontier 7 (index 2)": how every problem with one frontier starts.
+std::string frontierName(const Frontier& f, std::size_t index) {
+  return "frontier " + std::to_string(f.id) + " (index " + std::to_string(index) + ")";
+}
+
+}  // namespace
+
+std::string frontierArrayProblem(const FrontierArray& msg) {
+  std::unordered_set<std::uint32_t> ids;
+  for (std::size_t i = 0; i < msg.frontiers.size(); ++i) {
+    const Frontier& f = msg.frontiers[i];
+    const std::string name = frontierName(f, i);
+    if (f.id == 0) return name + ": id 0 is reserved for no frontier";
+    if (!ids.insert(f.id).second) return name + ": id " + std::to_string(f.id) + " appears twice";
+    if (f.cells.empty()) return name + ": no cells";
+    for (std::size_t c = 0; c < f.cells.size(); ++c)
+      if (!finite(f.cells[c])) return name + ": cell " + std::to_string(c) + " " + point(f.cells[c]) + " is not finite";
+    if (!finite(f.average)) return name + ": average " + point(f.average) + " is not finite";
+    if (!finite(f.aabb_min) || !finite(f.aabb_max))
+      return name + ": box " + point(f.aabb_min) + " .. " + point(f.aabb_max) + " is not finite";
+    if (f.aabb_min.x > f.aabb_max.x || f.aabb_min.y > f.aabb_max.y || f.aabb_min.z > f.aabb_max.z)
+      return name + ": box " + point(f.aabb_min) + " .. " + point(f.aabb_max) + " is inverted";
+    if (!(f.duration >= 0.0) || !std::isfinite(f.duration))
+      return name + ": duration " + std::to_string(f.duration) + " is not finite and >= 0";
+    if (!(f.omission_likelihood >= 0.0) || !std::isfinite(f.omission_likelihood))
+      return name + ": omission_likelihood " + std::to_string(f.omission_likelihood) + " is not finite and >= 0";
+    const std::size_t n = f.viewpoint_positions.size();
+    if (f.viewpoint_yaws.size() != n || f.viewpoint_visible.size() != n)
+      return name + ": " + std::to_string(n) + " viewpoint positions but " + std::to_string(f.viewpoint_yaws.size()) +
+             " yaws and " + std::to_string(f.viewpoint_visible.size()) + " visible counts";
+    for (std::size_t v = 0; v < n; ++v)
+      if (!finite(f.viewpoint_positions[v]) || !std::isfinite(f.viewpoint_yaws[v]))
+        return name + ": viewpoint " + std::to_string(v) + " " + point(f.viewpoint_positions[v]) + " yaw " +
+               std::to_string(f.viewpoint_yaws[v]) + " is not finite";
+  }
+  return std::string();
+}
+
+std::string frontierOutside(const FrontierArray& msg, const common::Aabb& bounds) {
+  auto in = [&](const geometry_msgs::Point& q) {
+    const common::Vec3 p(q.x, q.y, q.z);
+    return (p.array() >= bounds.min.array()).all() && (p.array() <= bounds.max.array()).all();
+  };
+  auto outside = [&](const Frontier& f, std::size_t i, const std::string& what, const geometry_msgs::Point& q) {
+    std::ostringstream s;
+    s << frontierName(f, i) << ": " << what << " " << point(q) << " lies outside the map (" << bounds.min.transpose()
+      << " .. " << bounds.max.transpose() << ")";
+    return s.str();
+  };
+  for (std::size_t i = 0; i < msg.frontiers.size(); ++i) {
+    const Frontier& f = msg.frontiers[i];
+    if (!in(f.average)) return outside(f, i, "average", f.average);
+    for (std::size_t c = 0; c < f.cells.size(); ++c)
+      if (!in(f.cells[c])) return outside(f, i, "cell " + std::to_string(c), f.cells[c]);
+  }
+  return std::string();
+}
+
+std::string globalTourProblem(const GlobalTour& msg) {
+  if (msg.waypoints.size() != msg.frontier_ids.size())
+    return std::to_string(msg.frontier_ids.size()) + " frontier ids but " + std::to_string(msg.waypoints.size()) +
+           " waypoints";
+  for (std::size_t i = 0; i < msg.waypoints.size(); ++i)
+    if (!finite(msg.waypoints[i]))
+      return "waypoint " + std::to_string(i) + " " + point(msg.waypoints[i]) + " (frontier " +
+             std::to_string(msg.frontier_ids[i]) + ") is not finite";
+  return std::string();
+}
+
+std::string layerBoundsProblem(const LayerBounds& msg) {
+  if (!std::isfinite(msg.z_min) || !std::isfinite(msg.z_max) || !(msg.z_min < msg.z_max)) {
+    std::ostringstream s;
+    s << "band z " << msg.z_min << " .. " << msg.z_max << " is not finite with z_min < z_max";
+    return s.str();
+  }
+  if (msg.count < 1 || msg.index >= msg.count)
+    return "band index " + std::to_string(msg.index) + " is not below the count " + std::to_string(msg.count);
+  return std::string();
+}
+
+std::string mapUpdateProblem(const MapUpdate& msg) {
+  if (msg.changed_voxels == 0) return std::string();
+  if (!finite(msg.changed_min) || !finite(msg.changed_max))
+    return "changed box " + point(msg.changed_min) + " .. " + point(msg.changed_max) + " is not finite";
+  if (msg.changed_min.x > msg.changed_max.x || msg.changed_min.y > msg.changed_max.y ||
+      msg.changed_min.z > msg.changed_max.z)
+    return "changed box " + point(msg.changed_min) + " .. " + point(msg.changed_max) + " is inverted";
+  return std::string();
+}
+
+std::string explorationStatusProblem(const ExplorationStatus& msg) {
+  if (msg.state > ExplorationStatus::FINISHED) return "state " + std::to_string(msg.state) + " is not a known state";
+  if (!(msg.elapsed >= 0.0) || !(msg.elapsed < 365.0 * 86400.0))
+    return "elapsed " + std::to_string(msg.elapsed) + " s is not finite, >= 0 and under a year";
+  if (!(msg.distance >= 0.0) || !std::isfinite(msg.distance))
+    return "distance " + std::to_string(msg.distance) + " m is not finite and >= 0";
+  if (!std::isfinite(msg.coverage)) return "coverage is not finite";
+  return std::string();
+}
+
+}  // namespace go_feap::ros_check
