@@ -2,7 +2,8 @@
 // free space to the target viewpoint, a cubic B-spline fitted to it and optimised with NLopt,
 // a yaw spline; replans on a new target, little time left or a predicted collision, and
 // stops safely when planning fails, and plans again when the server dropped the trajectory (its
-// position_cmd names another or none). In: local_target, odom, position_cmd (continuity),
+// position_cmd names another or none) or when the odometry is far from the trajectory's reference (a jump:
+// the next plan starts from the odometry). In: local_target, odom, position_cmd (continuity),
 // map_handle. Out: bspline (go_feap/Bspline), trajectory_marker, frontier_failed.
 #include <nav_msgs/Odometry.h>
 #include <nodelet/nodelet.h>
@@ -36,6 +37,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     config::readReplan(p, replan_);
     config::readTrajectoryPlanner(p, planner_);
     p.get("planner/rate", rate_).get("planner/odom_timeout", odom_timeout_).get("planner/drop_grace", drop_grace_);
+    p.get("planner/max_tracking_error", max_tracking_error_);
     config::readAstar(p, astar_config_);
     config::readAstar(p, scout_config_, "scout_astar");
     config::readAstar(p, coarse_config_, "coarse_astar");
@@ -51,6 +53,8 @@ class TrajectoryPlanner : public nodelet::Nodelet {
                                "parameter '" + p.fullName("planner/odom_timeout") + "' must be > 0");
     ros_params::requireOrThrow(std::isfinite(drop_grace_) && drop_grace_ > 0.0, getName(),
                                "parameter '" + p.fullName("planner/drop_grace") + "' must be > 0");
+    ros_params::requireOrThrow(std::isfinite(max_tracking_error_) && max_tracking_error_ > 0.0, getName(),
+                               "parameter '" + p.fullName("planner/max_tracking_error") + "' must be > 0");
     compute_pub_ = nh.advertise<ComputeTime>("compute_time", 20);
     bspline_pub_ = nh.advertise<Bspline>("bspline", 5);
     marker_pub_ = nh.advertise<visualization_msgs::Marker>("trajectory_marker", 2);
@@ -93,6 +97,8 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     odom_position_ = common::Vec3(p.x, p.y, p.z);
     odom_time_ = ros::Time::now();
     odom_yaw_ = ros_conv::yawOf(q);
+    const common::Vec3 v = ros_conv::worldVelocity(q, msg->twist.twist.linear);
+    odom_velocity_ = v.allFinite() ? v : common::Vec3::Zero();
   }
   void onCommand(const PositionCommand::ConstPtr& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -156,6 +162,22 @@ class TrajectoryPlanner : public nodelet::Nodelet {
       current_.reset();
       target_changed_ = true;
     }
+    // The vehicle is far from the reference of this planner's trajectory (the odometry jumped, or the
+    // controller lost the trajectory): the reference is no start for the next plan, and following it on
+    // would have the controller close the whole gap at once. Plan again from the odometry.
+    if (current_ && command_ && (now - command_->header.stamp).toSec() < 0.1 &&
+        command_->trajectory_flag != PositionCommand::TRAJECTORY_STATUS_EMPTY &&
+        command_->trajectory_id == static_cast<std::uint32_t>(current_->id)) {
+      const common::Vec3 reference(command_->position.x, command_->position.y, command_->position.z);
+      const double off = (reference - *odom_position_).norm();
+      if (off > max_tracking_error_) {
+        NODELET_WARN_STREAM(getName() << ": the vehicle is " << off << " m from the reference of trajectory "
+                                      << current_->id << " (an odometry jump?): replanning from the odometry");
+        current_.reset();
+        target_changed_ = true;
+        from_odometry_ = true;
+      }
+    }
     if (!last_plan_.isZero() && (now - last_plan_).toSec() < planner_.min_time_between_plans) return;
     trajectory::ReplanReason reason;
     {
@@ -175,9 +197,10 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     }
   }
 
-  // Start state: the commanded state when recent (continuity of the reference), else odometry.
+  // Start state: the commanded state when recent (continuity of the reference), else odometry (also
+  // right after the vehicle was found far from the reference).
   void startState(const ros::Time& now, trajectory::PlanRequest& request) const {
-    if (command_ && (now - command_->header.stamp).toSec() < 0.1) {
+    if (!from_odometry_ && command_ && (now - command_->header.stamp).toSec() < 0.1) {
       request.start = common::Vec3(command_->position.x, command_->position.y, command_->position.z);
       request.velocity = common::Vec3(command_->velocity.x, command_->velocity.y, command_->velocity.z);
       request.acceleration =
@@ -185,7 +208,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
       request.yaw = command_->yaw;
     } else {
       request.start = *odom_position_;
-      request.velocity.setZero();
+      request.velocity = odom_velocity_;
       request.acceleration.setZero();
       request.yaw = odom_yaw_;
     }
@@ -197,6 +220,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     request.target = *target_;
     request.target_yaw = target_yaw_;
     request.time = now.toSec();
+    from_odometry_ = false;
     const auto t_compute = ros_conv::WallClock::now();
     trajectory::FlightStep step;
     {
@@ -280,7 +304,9 @@ class TrajectoryPlanner : public nodelet::Nodelet {
   trajectory::ReplanConfig replan_;
   planning::AstarConfig astar_config_, scout_config_, coarse_config_;
   trajectory::TrajectoryPlannerConfig planner_;
-  double rate_ = 10.0, odom_timeout_ = 0.5, drop_grace_ = 0.5;
+  double rate_ = 10.0, odom_timeout_ = 0.5, drop_grace_ = 0.5, max_tracking_error_ = 1.0;
+  bool from_odometry_ = false;  ///< the next plan starts from the odometry: it was far from the reference
+  common::Vec3 odom_velocity_ = common::Vec3::Zero();  ///< world frame
   ros::Time odom_time_;
   bool odom_gap_ = false;
   std::string world_frame_;

@@ -8,6 +8,7 @@
 #include <ros/ros.h>
 
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <vector>
 
@@ -178,6 +179,93 @@ TEST_F(TrajectoryTargetTest, ATrajectoryTheServerDroppedIsPlannedAgain) {
       << "not at the target; vehicle at " << position_.transpose() << " at " << speed_ << " m/s (held at " << held.transpose() << "), "
       << trajectories_ - before << " trajectories planned, the last ending at " << end_.transpose() << "; target " << goal.transpose();
   EXPECT_GE(trajectories_ - before, 2);
+}
+
+// A second trajectory planner (probe/jump/...) fed only by this test, which plays both the vehicle
+// (odometry) and the server (position_cmd following the planner's trajectory). While the odometry stays
+// on the reference nothing is replanned; when the odometry jumps 1.5 m away (a relocalisation) the
+// planner drops its trajectory and plans the next from the odometry's pose and velocity, not from the
+// reference (which the controller would otherwise chase across the whole gap at once).
+TEST_F(TrajectoryTargetTest, AnOdometryJumpAwayFromTheReferenceIsPlannedFromTheOdometry) {
+  auto odom_pub = nh_.advertise<nav_msgs::Odometry>("probe/jump/odom", 10);
+  auto cmd_pub = nh_.advertise<go_feap::PositionCommand>("probe/jump/position_cmd", 10);
+  auto target_pub = nh_.advertise<go_feap::ViewpointPath>("probe/jump/local_target", 5);
+  std::vector<go_feap::ros_traj::Trajectory> planned;
+  auto bspline_sub = nh_.subscribe<go_feap::Bspline>("probe/jump/bspline", 20, [&](const go_feap::Bspline::ConstPtr& m) {
+    auto t = go_feap::ros_traj::fromMsg(*m);
+    ASSERT_TRUE(t) << t.message();
+    planned.push_back(*t);
+  });
+  ASSERT_TRUE(spinUntil(
+      [&] {
+        return position_.x() < 1e8 && odom_pub.getNumSubscribers() > 0 && cmd_pub.getNumSubscribers() > 0 &&
+               target_pub.getNumSubscribers() > 0 && bspline_sub.getNumPublishers() > 0 && speed_ < 0.1;
+      },
+      60.0))
+      << "the probe planner is not connected";
+  // Where the real vehicle is: seen all round by the tests above, so the probe plans in known space.
+  const Vec3 here = position_;
+  Vec3 pose = here, velocity = Vec3(0.4, 0.0, 0.0);  // the probe vehicle's odometry (world frame, level, yaw 0)
+  auto odometry = [&] {
+    nav_msgs::Odometry m;
+    m.header.stamp = ros::Time::now();
+    m.header.frame_id = "world";
+    m.pose.pose.position.x = pose.x(), m.pose.pose.position.y = pose.y(), m.pose.pose.position.z = pose.z();
+    m.pose.pose.orientation.w = 1.0;
+    m.twist.twist.linear.x = velocity.x(), m.twist.twist.linear.y = velocity.y(), m.twist.twist.linear.z = velocity.z();
+    return m;
+  };
+  // The server's command: the reference of the planner's last trajectory, at rest at its start.
+  auto command = [&] {
+    go_feap::PositionCommand m;
+    m.header.stamp = ros::Time::now();
+    m.header.frame_id = "world";
+    const Vec3 p = go_feap::trajectory::sampleTrajectory(planned.back(), 0.0).position;
+    m.position.x = p.x(), m.position.y = p.y(), m.position.z = p.z();
+    m.yaw = yaw_;
+    m.trajectory_flag = go_feap::PositionCommand::TRAJECTORY_STATUS_READY;
+    m.trajectory_id = static_cast<std::uint32_t>(planned.back().id);
+    return m;
+  };
+  // Odometry and (once a trajectory is out) commands at 20 Hz, the target at 5 Hz, for `seconds`.
+  go_feap::ViewpointPath goal = target(here, 1);
+  goal.yaws.front() = yaw_ + 1.0;  // a turn where the vehicle is: a trajectory is planned from anywhere
+  auto play = [&](double seconds, const std::function<bool()>& until) {
+    const ros::Time end = ros::Time::now() + ros::Duration(seconds);
+    ros::Time next, next_target;
+    return spinUntil(
+        [&] {
+          if (ros::Time::now() >= next) {
+            odom_pub.publish(odometry());
+            if (!planned.empty()) cmd_pub.publish(command());
+            next = ros::Time::now() + ros::Duration(0.05);
+          }
+          if (ros::Time::now() >= next_target) {
+            target_pub.publish(goal);
+            next_target = ros::Time::now() + ros::Duration(0.2);
+          }
+          return until() || ros::Time::now() >= end;
+        },
+        60.0) &&
+           until();
+  };
+  ASSERT_TRUE(play(10.0, [&] { return !planned.empty(); })) << "the probe planned no trajectory";
+  // On the reference: nothing new.
+  pose = go_feap::trajectory::sampleTrajectory(planned.back(), 0.0).position;
+  const std::size_t before = planned.size();
+  play(1.5, [] { return false; });
+  EXPECT_EQ(planned.size(), before) << "replanned with the odometry on the reference";
+  // The odometry jumps 1.5 m (more than planner/max_tracking_error) while the server goes on.
+  const std::int64_t old_id = planned.back().id;
+  const Vec3 reference = pose;
+  pose = reference + 1.5 * forward_;
+  ASSERT_TRUE(play(5.0, [&] { return planned.back().id != old_id; })) << "no new trajectory after the odometry jumped";
+  const go_feap::trajectory::TrajectorySample next = go_feap::trajectory::sampleTrajectory(planned.back(), 0.0);
+  EXPECT_LT((next.position - pose).norm(), 0.02) << "the new trajectory starts at " << next.position.transpose()
+                                                 << ", the odometry is at " << pose.transpose()
+                                                 << ", the reference was at " << reference.transpose();
+  EXPECT_LT((next.velocity - velocity).norm(), 0.02) << "not from the odometry's velocity " << velocity.transpose()
+                                                     << " but " << next.velocity.transpose();
 }
 
 // A second trajectory server (probe/...) fed only by this test. It holds the first usable odometry pose
