@@ -76,7 +76,7 @@ class DepthCamera : public nodelet::Nodelet {
     const ros::Time stamp = odom->header.stamp;
     if (!next_frame_.isZero() && stamp < next_frame_) return;
     const double period = 1.0 / rate_;
-    next_frame_ = (next_frame_.isZero() || stamp - next_frame_ > ros::Duration(period)) ? stamp + ros::Duration(period)
+    next_frame_ = (next_frame_.isZero() || stamp.toSec() - next_frame_.toSec() > period) ? stamp + ros::Duration(period)
                                                                                         : next_frame_ + ros::Duration(period);
     const std::string bad = ros_conv::odometryPoseProblem(odom->pose.pose);
     if (!bad.empty()) {

@@ -99,7 +99,8 @@ class EsdfMapper : public nodelet::Nodelet {
   }
 
   void onDepthPose(const sensor_msgs::Image::ConstPtr& depth, const geometry_msgs::PoseStamped::ConstPtr& pose) {
-    const double dt = std::abs((depth->header.stamp - pose->header.stamp).toSec());
+    // In seconds as doubles: ros::Time subtraction throws beyond 2^31 s, and a stamp is the sender's.
+    const double dt = std::abs(depth->header.stamp.toSec() - pose->header.stamp.toSec());
     if (dt > pose_tolerance_ + 1e-9) return skip("pose_time", "camera_pose is " + std::to_string(dt) + " s from the image");
     Eigen::Isometry3d T_W_C;
     tf2::fromMsg(pose->pose, T_W_C);
@@ -178,7 +179,10 @@ class EsdfMapper : public nodelet::Nodelet {
     update_pub_.publish(update);
     NODELET_DEBUG_STREAM(getName() << ": frame " << sequence << " integrated in " << ms << " ms, "
                                    << info->frame.changed_voxels << " voxels changed");
-    if (cloud_period_ > 0.0 && (last_cloud_.isZero() || msg->header.stamp - last_cloud_ >= ros::Duration(cloud_period_))) {
+    // Either way round: a frame stamped far ahead (or time going back, as a bag played again) must not
+    // stop the clouds for good.
+    if (cloud_period_ > 0.0 &&
+        (last_cloud_.isZero() || std::abs(msg->header.stamp.toSec() - last_cloud_.toSec()) >= cloud_period_)) {
       last_cloud_ = msg->header.stamp;
       publishClouds(msg->header.stamp);
     }

@@ -120,8 +120,30 @@ TEST_F(MapperTest, TurningInPlaceMapsTheWallsBadFramesAreSkippedSaveMapWorks) {
     depth_pub_.publish(img);
     spinUntil([] { return false; }, 0.2);
   }
+  // A real frame and its pose again, stamped at 4e9 s (a sender's clock gone wrong): ros::Time arithmetic on
+  // it throws, and once brought the nodelet manager down; a throttle stamped that far ahead must not stop
+  // the clouds for good either.
+  sensor_msgs::Image::ConstPtr real_depth;
+  geometry_msgs::PoseStamped::ConstPtr real_pose;
+  {
+    ros::Subscriber d = nh_.subscribe<sensor_msgs::Image>(
+        "depth", 5, [&](const sensor_msgs::Image::ConstPtr& m) { real_depth = m; });  // the simulator's, from now on
+    ros::Subscriber q = nh_.subscribe<geometry_msgs::PoseStamped>(
+        "camera_pose", 5, [&](const geometry_msgs::PoseStamped::ConstPtr& m) { real_pose = m; });
+    ASSERT_TRUE(spinUntil([&] { return real_depth && real_pose && real_depth->header.stamp == real_pose->header.stamp; }, 30.0))
+        << "no depth frame with its pose";
+  }
+  sensor_msgs::Image far_depth = *real_depth;
+  geometry_msgs::PoseStamped far_pose = *real_pose;
+  far_depth.header.stamp = far_pose.header.stamp = ros::Time(4000000000u, 0);
+  pose_pub_.publish(far_pose);
+  depth_pub_.publish(far_depth);
+  spinUntil([] { return false; }, 0.5);
   cloud_.reset();
   ASSERT_TRUE(spinUntil([&] { return cloud_ != nullptr; }, 30.0)) << "mapper stopped publishing";
+  cloud_.reset();
+  ASSERT_TRUE(spinUntil([&] { return cloud_ != nullptr && cloud_->header.stamp.sec < 4000000000u; }, 30.0))
+      << "no cloud after the frame stamped far ahead";
   const CloudVerdict after = judge(*cloud_, *scene, centre);
   EXPECT_GE(after.points, before.points * 95 / 100) << "map lost after bad frames";
   EXPECT_EQ(after.directions, 4);

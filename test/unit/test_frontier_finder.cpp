@@ -289,6 +289,8 @@ TEST(FrontierFinder, DurationInheritedFromTheOldestAncestor) {
   ASSERT_EQ(f.frontiers().size(), 1u);
   EXPECT_DOUBLE_EQ(f.frontiers()[0].first_seen, 2.0);
   EXPECT_DOUBLE_EQ(f.frontiers()[0].duration(10.0), 8.0);
+  // Asked at a clock that went back (a bag played again): no negative age.
+  EXPECT_DOUBLE_EQ(f.frontiers()[0].duration(1.0), 0.0);
   // A separate new block at t = 9 is young.
   const auto [lo3, hi3] = paint(m, Vec3(2.3, 0.2, 0.0), Vec3(2.8, 0.6, 1.0), VoxelState::kFree);
   f.update(m, lo3, hi3, 9.0);

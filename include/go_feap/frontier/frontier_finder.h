@@ -1,6 +1,7 @@
 // Frontier detection and clustering (DESIGN §3.4, paper §III-A.1, Table I).
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <unordered_map>
 #include <unordered_set>
@@ -53,7 +54,8 @@ struct Frontier {
   bool active = true;           ///< average inside the active altitude band
   std::vector<Viewpoint> viewpoints;  ///< VP
 
-  double duration(double now) const { return now - first_seen; }  ///< T
+  /// T; never below 0 (a clock that went back, as a bag played again).
+  double duration(double now) const { return std::max(0.0, now - first_seen); }
 };
 
 /// Frontiers removed and created by one update.
