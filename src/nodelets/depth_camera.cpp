@@ -74,10 +74,14 @@ class DepthCamera : public nodelet::Nodelet {
   // camera pose and the odometry share one exact stamp.
   void onOdom(const nav_msgs::Odometry::ConstPtr& odom) {
     const ros::Time stamp = odom->header.stamp;
-    if (!next_frame_.isZero() && stamp < next_frame_) return;
     const double period = 1.0 / rate_;
-    next_frame_ = (next_frame_.isZero() || stamp.toSec() - next_frame_.toSec() > period) ? stamp + ros::Duration(period)
-                                                                                        : next_frame_ + ros::Duration(period);
+    const double ahead = next_frame_.isZero() ? 0.0 : next_frame_.toSec() - stamp.toSec();  // s to the next frame
+    if (ahead > 0.0 && ahead <= period) return;  // not yet
+    // On time: the next frame one period on. More than a period late, or more than a period early (a
+    // clock that went back, or one odometry stamp far ahead, which would otherwise hold every frame
+    // back until that time): the frames start again from this stamp.
+    next_frame_ = (next_frame_.isZero() || ahead < -period || ahead > period) ? stamp + ros::Duration(period)
+                                                                              : next_frame_ + ros::Duration(period);
     const std::string bad = ros_conv::odometryPoseProblem(odom->pose.pose);
     if (!bad.empty()) {
       NODELET_WARN_STREAM_THROTTLE(1.0, getName() << ": odometry refused: " << bad << "; frame skipped");

@@ -133,6 +133,21 @@ TEST_F(SimulatorTest, CommandMovesOdomCameraStampsMatchNanIsIgnored) {
   spinSim(1.0);
   EXPECT_GT(odom_count_, before + 50);
   EXPECT_LT((position() - target).norm(), 0.05) << "at " << position().transpose();
+
+  // One odometry message stamped far ahead (4e9 s, a clock gone wrong) must not hold the camera back until
+  // then: frames follow the simulator's odometry again at once.
+  ros::Publisher odom_pub = nh_.advertise<nav_msgs::Odometry>("odom", 1);
+  ASSERT_TRUE(spinUntil([&] { return odom_pub.getNumSubscribers() >= 2; }, 10.0));  // the camera, and this test
+  nav_msgs::Odometry far = *last_odom_;
+  far.header.stamp = ros::Time(4000000000u, 0);
+  odom_pub.publish(far);
+  spinSim(0.2);
+  depths_.clear();
+  spinSim(1.0);
+  std::size_t current = 0;
+  for (const auto& d : depths_) current += d->header.stamp.sec < 4000000000u;
+  EXPECT_GE(current, 10u) << depths_.size() << " depth frames in 1 s after the far stamp, " << current
+                          << " at the simulator's time";
 }
 
 }  // namespace
