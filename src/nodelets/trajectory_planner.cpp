@@ -101,6 +101,18 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     odom_velocity_ = v.allFinite() ? v : common::Vec3::Zero();
   }
   void onCommand(const PositionCommand::ConstPtr& msg) {
+    // The command is the next plan's start: one that is not finite is refused (the last usable one goes
+    // stale, and the plan then starts from the odometry).
+    const bool finite = std::isfinite(msg->position.x) && std::isfinite(msg->position.y) &&
+                        std::isfinite(msg->position.z) && std::isfinite(msg->velocity.x) &&
+                        std::isfinite(msg->velocity.y) && std::isfinite(msg->velocity.z) &&
+                        std::isfinite(msg->acceleration.x) && std::isfinite(msg->acceleration.y) &&
+                        std::isfinite(msg->acceleration.z) && std::isfinite(msg->yaw);
+    if (!finite) {
+      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": position_cmd refused: a position, velocity, acceleration or yaw "
+                                                  "that is not finite");
+      return;
+    }
     std::lock_guard<std::mutex> lock(mutex_);
     command_ = msg;
   }

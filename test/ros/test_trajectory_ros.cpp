@@ -266,6 +266,40 @@ TEST_F(TrajectoryTargetTest, AnOdometryJumpAwayFromTheReferenceIsPlannedFromTheO
                                                  << ", the reference was at " << reference.transpose();
   EXPECT_LT((next.velocity - velocity).norm(), 0.02) << "not from the odometry's velocity " << velocity.transpose()
                                                      << " but " << next.velocity.transpose();
+
+  // Commands that are not finite (a broken bridge) are no start for a plan: a new target while only such
+  // commands come is planned from the odometry.
+  auto broken = [&] {
+    go_feap::PositionCommand m = command();
+    m.velocity.y = std::numeric_limits<double>::quiet_NaN();
+    return m;
+  };
+  const Vec3 odometry_pose = pose;
+  goal = target(odometry_pose, 2);
+  goal.yaws.front() = yaw_ - 1.0;
+  const std::int64_t jumped_id = planned.back().id;
+  const ros::Time goal_from = ros::Time::now() + ros::Duration(0.5);  // the last usable command stale by then
+  const ros::Time end = goal_from + ros::Duration(5.0);
+  ros::Time next_send, next_goal = goal_from;
+  ASSERT_TRUE(spinUntil(
+      [&] {
+        if (ros::Time::now() >= next_send) {
+          odom_pub.publish(odometry());
+          cmd_pub.publish(broken());
+          next_send = ros::Time::now() + ros::Duration(0.05);
+        }
+        if (ros::Time::now() >= next_goal) {
+          target_pub.publish(goal);
+          next_goal = ros::Time::now() + ros::Duration(0.2);
+        }
+        return planned.back().id != jumped_id || ros::Time::now() >= end;
+      },
+      60.0) &&
+              planned.back().id != jumped_id)
+      << "no trajectory to the new target while the commands were not finite";
+  const go_feap::trajectory::TrajectorySample from = go_feap::trajectory::sampleTrajectory(planned.back(), 0.0);
+  ASSERT_TRUE(from.position.allFinite() && from.velocity.allFinite());
+  EXPECT_LT((from.position - odometry_pose).norm(), 0.02) << "starts at " << from.position.transpose();
 }
 
 // A second trajectory server (probe/...) fed only by this test. It holds the first usable odometry pose
