@@ -18,6 +18,7 @@
 #include "go_feap/PositionCommand.h"
 #include "go_feap/ViewpointPath.h"
 #include "go_feap/ros/conversions.h"
+#include "go_feap/ros/message_checks.h"
 #include "go_feap/ros/bspline_conversion.h"
 #include "go_feap/common/config_groups.h"
 #include "go_feap/ros/compute_time.h"
@@ -103,14 +104,9 @@ class TrajectoryPlanner : public nodelet::Nodelet {
   void onCommand(const PositionCommand::ConstPtr& msg) {
     // The command is the next plan's start: one that is not finite is refused (the last usable one goes
     // stale, and the plan then starts from the odometry).
-    const bool finite = std::isfinite(msg->position.x) && std::isfinite(msg->position.y) &&
-                        std::isfinite(msg->position.z) && std::isfinite(msg->velocity.x) &&
-                        std::isfinite(msg->velocity.y) && std::isfinite(msg->velocity.z) &&
-                        std::isfinite(msg->acceleration.x) && std::isfinite(msg->acceleration.y) &&
-                        std::isfinite(msg->acceleration.z) && std::isfinite(msg->yaw);
-    if (!finite) {
-      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": position_cmd refused: a position, velocity, acceleration or yaw "
-                                                  "that is not finite");
+    const std::string bad = ros_check::positionCommandProblem(*msg);
+    if (!bad.empty()) {
+      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": position_cmd refused: " << bad);
       return;
     }
     std::lock_guard<std::mutex> lock(mutex_);

@@ -8,6 +8,10 @@ namespace go_feap::ros_check {
 namespace {
 
 bool finite(const geometry_msgs::Point& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
+bool finite(const geometry_msgs::Vector3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+bool inverted(const geometry_msgs::Point& lo, const geometry_msgs::Point& hi) {
+  return lo.x > hi.x || lo.y > hi.y || lo.z > hi.z;
+}
 
 std::string point(const geometry_msgs::Point& p) {
   std::ostringstream s;
@@ -26,28 +30,28 @@ std::string frontierArrayProblem(const FrontierArray& msg) {
   std::unordered_set<std::uint32_t> ids;
   for (std::size_t i = 0; i < msg.frontiers.size(); ++i) {
     const Frontier& f = msg.frontiers[i];
-    const std::string name = frontierName(f, i);
-    if (f.id == 0) return name + ": id 0 is reserved for no frontier";
-    if (!ids.insert(f.id).second) return name + ": id " + std::to_string(f.id) + " appears twice";
-    if (f.cells.empty()) return name + ": no cells";
+    const auto name = [&] { return frontierName(f, i); };  // built only for a refusal: every frontier, 15 Hz
+    if (f.id == 0) return name() + ": id 0 is reserved for no frontier";
+    if (!ids.insert(f.id).second) return name() + ": id " + std::to_string(f.id) + " appears twice";
+    if (f.cells.empty()) return name() + ": no cells";
     for (std::size_t c = 0; c < f.cells.size(); ++c)
-      if (!finite(f.cells[c])) return name + ": cell " + std::to_string(c) + " " + point(f.cells[c]) + " is not finite";
-    if (!finite(f.average)) return name + ": average " + point(f.average) + " is not finite";
+      if (!finite(f.cells[c])) return name() + ": cell " + std::to_string(c) + " " + point(f.cells[c]) + " is not finite";
+    if (!finite(f.average)) return name() + ": average " + point(f.average) + " is not finite";
     if (!finite(f.aabb_min) || !finite(f.aabb_max))
-      return name + ": box " + point(f.aabb_min) + " .. " + point(f.aabb_max) + " is not finite";
-    if (f.aabb_min.x > f.aabb_max.x || f.aabb_min.y > f.aabb_max.y || f.aabb_min.z > f.aabb_max.z)
-      return name + ": box " + point(f.aabb_min) + " .. " + point(f.aabb_max) + " is inverted";
+      return name() + ": box " + point(f.aabb_min) + " .. " + point(f.aabb_max) + " is not finite";
+    if (inverted(f.aabb_min, f.aabb_max))
+      return name() + ": box " + point(f.aabb_min) + " .. " + point(f.aabb_max) + " is inverted";
     if (!(f.duration >= 0.0) || !std::isfinite(f.duration))
-      return name + ": duration " + std::to_string(f.duration) + " is not finite and >= 0";
+      return name() + ": duration " + std::to_string(f.duration) + " is not finite and >= 0";
     if (!(f.omission_likelihood >= 0.0) || !std::isfinite(f.omission_likelihood))
-      return name + ": omission_likelihood " + std::to_string(f.omission_likelihood) + " is not finite and >= 0";
+      return name() + ": omission_likelihood " + std::to_string(f.omission_likelihood) + " is not finite and >= 0";
     const std::size_t n = f.viewpoint_positions.size();
     if (f.viewpoint_yaws.size() != n || f.viewpoint_visible.size() != n)
-      return name + ": " + std::to_string(n) + " viewpoint positions but " + std::to_string(f.viewpoint_yaws.size()) +
+      return name() + ": " + std::to_string(n) + " viewpoint positions but " + std::to_string(f.viewpoint_yaws.size()) +
              " yaws and " + std::to_string(f.viewpoint_visible.size()) + " visible counts";
     for (std::size_t v = 0; v < n; ++v)
       if (!finite(f.viewpoint_positions[v]) || !std::isfinite(f.viewpoint_yaws[v]))
-        return name + ": viewpoint " + std::to_string(v) + " " + point(f.viewpoint_positions[v]) + " yaw " +
+        return name() + ": viewpoint " + std::to_string(v) + " " + point(f.viewpoint_positions[v]) + " yaw " +
                std::to_string(f.viewpoint_yaws[v]) + " is not finite";
   }
   return std::string();
@@ -99,8 +103,7 @@ std::string mapUpdateProblem(const MapUpdate& msg) {
   if (msg.changed_voxels == 0) return std::string();
   if (!finite(msg.changed_min) || !finite(msg.changed_max))
     return "changed box " + point(msg.changed_min) + " .. " + point(msg.changed_max) + " is not finite";
-  if (msg.changed_min.x > msg.changed_max.x || msg.changed_min.y > msg.changed_max.y ||
-      msg.changed_min.z > msg.changed_max.z)
+  if (inverted(msg.changed_min, msg.changed_max))
     return "changed box " + point(msg.changed_min) + " .. " + point(msg.changed_max) + " is inverted";
   return std::string();
 }
@@ -112,6 +115,13 @@ std::string explorationStatusProblem(const ExplorationStatus& msg) {
   if (!(msg.distance >= 0.0) || !std::isfinite(msg.distance))
     return "distance " + std::to_string(msg.distance) + " m is not finite and >= 0";
   if (!std::isfinite(msg.coverage)) return "coverage is not finite";
+  return std::string();
+}
+
+std::string positionCommandProblem(const PositionCommand& msg) {
+  if (!finite(msg.position)) return "position " + point(msg.position) + " is not finite";
+  if (!finite(msg.velocity) || !finite(msg.acceleration)) return "velocity or acceleration is not finite";
+  if (!std::isfinite(msg.yaw) || !std::isfinite(msg.yaw_dot)) return "yaw or yaw_dot is not finite";
   return std::string();
 }
 

@@ -22,6 +22,7 @@ using go_feap::ros_check::globalTourProblem;
 using go_feap::ros_check::explorationStatusProblem;
 using go_feap::ros_check::layerBoundsProblem;
 using go_feap::ros_check::mapUpdateProblem;
+using go_feap::ros_check::positionCommandProblem;
 
 geometry_msgs::Quaternion quat(double w, double x, double y, double z) {
   geometry_msgs::Quaternion q;
@@ -253,6 +254,23 @@ TEST(MessageChecks, ToursLayersMapUpdatesAndStatusesThatAreMalformedAreNamed) {
   bad_status = status;
   bad_status.coverage = std::numeric_limits<double>::infinity();
   EXPECT_TRUE(says(explorationStatusProblem(bad_status), "coverage")) << explorationStatusProblem(bad_status);
+
+  go_feap::PositionCommand cmd;
+  cmd.position = point(1, 2, 1.5);
+  cmd.velocity.x = 0.5, cmd.acceleration.z = -0.2, cmd.yaw = 0.3, cmd.yaw_dot = 0.1;
+  EXPECT_EQ(positionCommandProblem(cmd), "");
+  go_feap::PositionCommand bad_cmd = cmd;
+  bad_cmd.position.z = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_TRUE(says(positionCommandProblem(bad_cmd), "position")) << positionCommandProblem(bad_cmd);
+  bad_cmd = cmd;
+  bad_cmd.velocity.y = std::numeric_limits<double>::infinity();
+  EXPECT_TRUE(says(positionCommandProblem(bad_cmd), "velocity")) << positionCommandProblem(bad_cmd);
+  bad_cmd = cmd;
+  bad_cmd.acceleration.x = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_TRUE(says(positionCommandProblem(bad_cmd), "acceleration")) << positionCommandProblem(bad_cmd);
+  bad_cmd = cmd;
+  bad_cmd.yaw_dot = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_TRUE(says(positionCommandProblem(bad_cmd), "yaw")) << positionCommandProblem(bad_cmd);
 }
 
 }  // namespace

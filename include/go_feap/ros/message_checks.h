@@ -1,4 +1,5 @@
-// Checks on the chain's own messages (frontiers, global_tour, layer, map_update) as they arrive. Each
+// Checks on the chain's own messages (frontiers, global_tour, layer, map_update, status, position_cmd) as
+// they arrive. Each
 // topic can also be fed from outside the chain (a bag, a tool, another planner), and a value that is not
 // finite or a count that does not match would reach the core as a voxel index cast from NaN or a read
 // past an array's end. Each function says what is wrong (naming the field, and the frontier's id where
@@ -13,6 +14,7 @@
 #include "go_feap/GlobalTour.h"
 #include "go_feap/LayerBounds.h"
 #include "go_feap/MapUpdate.h"
+#include "go_feap/PositionCommand.h"
 #include "go_feap/common/grid.h"
 
 namespace go_feap::ros_check {
@@ -38,5 +40,9 @@ std::string mapUpdateProblem(const MapUpdate& msg);
 /// A known state (WAIT_TRIGGER .. FINISHED); elapsed and distance finite and >= 0, elapsed under a
 /// year (it becomes a ros::Duration, which throws beyond 2^31 s); coverage finite.
 std::string explorationStatusProblem(const ExplorationStatus& msg);
+
+/// Position, velocity, acceleration, yaw and yaw rate all finite (the trajectory planner starts its next
+/// plan from the command).
+std::string positionCommandProblem(const PositionCommand& msg);
 
 }  // namespace go_feap::ros_check
