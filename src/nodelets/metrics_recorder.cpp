@@ -120,11 +120,14 @@ class MetricsRecorder : public nodelet::Nodelet {
     }
     std::lock_guard<std::mutex> lock(mutex_);
     status_ = msg;
-    if (msg->state == ExplorationStatus::FINISHED && !finished_ && started_at_) finishRun(msg);
-    if (msg->state != ExplorationStatus::WAIT_TRIGGER && !started_at_) started_at_ = ros::Time::now() - ros::Duration(msg->elapsed);
+    if (msg->state == ExplorationStatus::FINISHED && !finished_ && started_) finishRun(msg);
+    // Only whether the run has begun: its time is the layer manager's elapsed. (This was the clock minus
+    // elapsed as a ros::Time, which threw, ending the whole nodelet manager, for an elapsed beyond the
+    // clock: a status from a tool or another run early in a simulation.)
+    if (msg->state != ExplorationStatus::WAIT_TRIGGER) started_ = true;
   }
 
-  bool started() const { return started_at_.has_value(); }
+  bool started() const { return started_; }
 
   double currentCoverage() const {
     if (!coverage_ || !shared_) return -1.0;
@@ -242,7 +245,7 @@ class MetricsRecorder : public nodelet::Nodelet {
   metrics::Recorder recorder_;
   metrics::Sample last_sample_;
   ExplorationStatus::ConstPtr status_;
-  std::optional<ros::Time> started_at_;
+  bool started_ = false;  ///< a status past WAIT_TRIGGER has come
   std::optional<common::Vec3> position_, last_position_;
   double distance_ = 0.0, next_progress_ = 0.0;
   std::unique_ptr<metrics::CollisionMonitor> collisions_;

@@ -1,0 +1,168 @@
+// rostest: the MetricsRecorder nodelet measures a run it is told about. The test node drives the
+// simulated clock and plays the layer manager (status), the vehicle (odometry) and the planners
+// (compute_time); the recorder's summary.json must hold what was played: the layer manager's time, the
+// length of the flown path, one collision for one pass through a ground-truth wall (found in the scene
+// by the test itself), the mean compute time of each block. Statuses that are malformed, or that came
+// before the run or whose elapsed time lies beyond the clock, must neither end the recorder nor count.
+#include <gtest/gtest.h>
+#include <nav_msgs/Odometry.h>
+#include <nav_msgs/Path.h>
+#include <ros/ros.h>
+#include <rosgraph_msgs/Clock.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <vector>
+
+#include "go_feap/ComputeTime.h"
+#include "go_feap/ExplorationStatus.h"
+#include "ros_test_util.h"
+
+namespace {
+
+using go_feap::test::spinUntil;
+using Vec3 = Eigen::Vector3d;
+
+go_feap::ExplorationStatus status(std::uint8_t state, const char* name, double elapsed) {
+  go_feap::ExplorationStatus s;
+  s.state = state;
+  s.state_name = name;
+  s.elapsed = elapsed;
+  s.coverage = -1.0;
+  return s;
+}
+
+TEST(MetricsRecorder, SummaryHoldsThePlayedRunAndOddStatusesNeitherEndNorCountInIt) {
+  ros::NodeHandle nh, pnh("~");
+  std::string output_dir;
+  ASSERT_TRUE(pnh.getParam("output_dir", output_dir));
+  std::filesystem::remove_all(output_dir);
+  auto scene = go_feap::test::sceneFromParams();
+  ASSERT_TRUE(scene) << scene.message();
+
+  // A wall met head-on along +x at 1.5 m height, with 1.5 m of clear way before it: `entry` is where the
+  // line enters the wall (1 cm steps).
+  std::optional<Vec3> entry;
+  for (double y = scene->box.min.y() + 0.55; y < scene->box.max.y() - 0.5 && !entry; y += 0.1)
+    for (double x = scene->box.min.x() + 2.0; x < scene->box.max.x() - 0.5 && !entry; x += 0.01) {
+      const Vec3 e(x, y, 1.5);
+      if (!scene->isOccupied(e) || scene->isOccupied(Vec3(e - Vec3(0.01, 0.0, 0.0)))) continue;
+      bool clear = true;
+      for (double back = 0.2; back <= 1.5 + 1e-9 && clear; back += 0.1)
+        clear = go_feap::test::latticeClearance(*scene, e - back * Vec3::UnitX(), 0.15) >= 0.15;
+      if (clear) entry = e;
+    }
+  ASSERT_TRUE(entry) << "no wall found in the scene";
+
+  auto clock_pub = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
+  auto status_pub = nh.advertise<go_feap::ExplorationStatus>("status", 10);
+  auto odom_pub = nh.advertise<nav_msgs::Odometry>("odom", 50);
+  auto compute_pub = nh.advertise<go_feap::ComputeTime>("compute_time", 50);
+  int paths = 0;
+  auto path_sub = nh.subscribe<nav_msgs::Path>("flown_path", 10, [&](const nav_msgs::Path::ConstPtr&) { ++paths; });
+  ASSERT_TRUE(spinUntil(
+      [&] {
+        return status_pub.getNumSubscribers() > 0 && odom_pub.getNumSubscribers() > 0 &&
+               compute_pub.getNumSubscribers() > 0 && clock_pub.getNumSubscribers() > 0 &&
+               path_sub.getNumPublishers() > 0;
+      },
+      60.0))
+      << "the metrics recorder is not connected";
+
+  double now = 1.0;
+  auto tick = [&](double dt) {  // the simulated clock moves on; the recorder gets time to act on it
+    now += dt;
+    rosgraph_msgs::Clock c;
+    c.clock = ros::Time(now);
+    clock_pub.publish(c);
+    spinUntil([] { return false; }, 0.01);
+  };
+  auto send = [&](const go_feap::ExplorationStatus& s) {
+    go_feap::ExplorationStatus m = s;
+    m.header.stamp = ros::Time(now);
+    status_pub.publish(m);
+    tick(0.05);
+  };
+  auto fly = [&](const Vec3& p) {
+    nav_msgs::Odometry m;
+    m.header.stamp = ros::Time(now);
+    m.header.frame_id = "world";
+    m.pose.pose.position.x = p.x(), m.pose.pose.position.y = p.y(), m.pose.pose.position.z = p.z();
+    m.pose.pose.orientation.w = 1.0;
+    odom_pub.publish(m);
+    tick(0.05);
+  };
+  auto compute = [&](const char* block, double ms) {
+    go_feap::ComputeTime m;
+    m.header.stamp = ros::Time(now);
+    m.block = block;
+    m.ms = ms;
+    compute_pub.publish(m);
+    tick(0.01);
+  };
+  for (int i = 0; i < 20; ++i) tick(0.05);
+
+  // Before the trigger: flying and computing count for nothing.
+  send(status(go_feap::ExplorationStatus::WAIT_TRIGGER, "WAIT_TRIGGER", 0.0));
+  const Vec3 start = *entry - Vec3(1.5, 0.0, 0.0);
+  fly(start + Vec3(0.0, 0.0, -0.5));
+  compute("frontier", 1000.0);
+  fly(start);
+
+  // Malformed statuses are refused: none starts the run.
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  send(status(go_feap::ExplorationStatus::EXPLORE, "EXPLORE", nan));
+  send(status(7, "SEVEN", 1.0));
+  fly(start + Vec3(0.0, 0.5, 0.0));
+  fly(start);
+  // The run starts with a status whose elapsed time lies far beyond the clock (a status from a tool or
+  // from another run): this ended the whole nodelet manager.
+  send(status(go_feap::ExplorationStatus::EXPLORE, "EXPLORE", 500.0));
+
+  // The flight: to the wall, 5 cm into it, and back; 5 cm steps.
+  std::vector<Vec3> path{start};
+  const Vec3 inside = *entry + Vec3(0.05, 0.0, 0.0);
+  for (double s = 0.05; s <= (inside - start).norm() + 1e-9; s += 0.05) path.push_back(start + s * Vec3::UnitX());
+  for (double s = 0.05; s <= (inside - start).norm() + 1e-9; s += 0.05) path.push_back(inside - s * Vec3::UnitX());
+  ASSERT_TRUE(scene->isOccupied(path[path.size() / 2])) << "the flight does not reach into the wall";
+  double length = 0.0;
+  for (std::size_t i = 1; i < path.size(); ++i) length += (path[i] - path[i - 1]).norm();
+  for (const Vec3& p : path) fly(p);
+  for (double ms : {2.0, 4.0, 9.0}) compute("frontier", ms);
+  compute("global", 5.0);
+  for (int i = 0; i < 10; ++i) tick(0.1);
+  EXPECT_GT(paths, 0) << "no flown_path sample after the run started";
+
+  go_feap::ExplorationStatus finished = status(go_feap::ExplorationStatus::FINISHED, "FINISHED", 42.5);
+  finished.finish_reason = "complete";
+  finished.blacklisted_frontiers = 2;
+  send(finished);
+  const std::string summary_path = output_dir + "/summary.json";
+  ASSERT_TRUE(spinUntil([&] { return std::filesystem::exists(summary_path); }, 20.0))
+      << "no " << summary_path << ": the recorder did not finish the run (or is gone)";
+  spinUntil([] { return false; }, 0.5);  // the file is complete
+  const nlohmann::json summary = nlohmann::json::parse(std::ifstream(summary_path));
+  std::cout << summary.dump() << "\n";
+  EXPECT_EQ(summary["scene"], "maze_small");
+  EXPECT_EQ(summary["planner"], "metrics_test");
+  EXPECT_EQ(summary["finish_reason"], "complete");
+  EXPECT_EQ(summary["blacklisted_frontiers"], 2);
+  EXPECT_DOUBLE_EQ(summary["exploration_time_s"].get<double>(), 42.5);
+  EXPECT_NEAR(summary["flight_distance_m"].get<double>(), length, 1e-6);
+  EXPECT_EQ(summary["collisions"], 1);
+  EXPECT_DOUBLE_EQ(summary["min_obstacle_distance_m"].get<double>(), 0.0);
+  EXPECT_NEAR(summary["compute_ms"]["frontier"]["mean"].get<double>(), 5.0, 1e-9);
+  EXPECT_EQ(summary["compute_ms"]["frontier"]["count"], 3);
+  EXPECT_NEAR(summary["compute_ms"]["global"]["mean"].get<double>(), 5.0, 1e-9);
+  EXPECT_NEAR(summary["compute_ms"]["total"]["mean"].get<double>(), 10.0, 1e-9);
+  for (const char* f : {"metrics.csv", "coverage.png"})
+    EXPECT_TRUE(std::filesystem::exists(output_dir + "/" + f)) << f;
+}
+
+}  // namespace
+
+GO_FEAP_ROSTEST_MAIN("test_metrics_ros")
