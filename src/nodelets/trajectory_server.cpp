@@ -3,7 +3,10 @@
 // position where the last trajectory ended, or where the vehicle was, when none is active.
 // When odometry stops for longer than server/odom_timeout the current trajectory is dropped
 // and the reference holds where it was; the next trajectory resumes (the planner replans once
-// odometry is back).
+// odometry is back). A trajectory whose reference, when it is taken (now, or at its start if that is
+// later), lies farther than server/max_start_offset from the vehicle's odometry is refused: the
+// controller would chase a step that large at once (a stale trajectory from a bag, another planner, a
+// start time long past).
 #include <nav_msgs/Odometry.h>
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
@@ -11,6 +14,7 @@
 
 #include <mutex>
 #include <optional>
+#include <sstream>
 
 #include "go_feap/PositionCommand.h"
 #include "go_feap/ros/conversions.h"
@@ -25,7 +29,10 @@ class TrajectoryServer : public nodelet::Nodelet {
     ros::NodeHandle& nh = getNodeHandle();
     ros_params::ParamReader p(getPrivateNodeHandle());
     p.get("server/rate", rate_).get("server/odom_timeout", odom_timeout_).get("world_frame", world_frame_);
+    p.get("server/max_start_offset", max_start_offset_);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
+    ros_params::requireOrThrow(std::isfinite(max_start_offset_) && max_start_offset_ > 0.0, getName(),
+                               "parameter '" + p.fullName("server/max_start_offset") + "' must be > 0");
     ros_params::requireOrThrow(rate_ >= 10.0 && rate_ <= 1000.0, getName(),
                                "parameter '" + p.fullName("server/rate") + "' must be in [10, 1000] Hz");
     ros_params::requireOrThrow(std::isfinite(odom_timeout_) && odom_timeout_ > 0.0, getName(),
@@ -43,7 +50,29 @@ class TrajectoryServer : public nodelet::Nodelet {
       NODELET_WARN_STREAM_THROTTLE(1.0, getName() << ": trajectory " << msg->traj_id << " refused: " << t.message());
       return;
     }
+    const std::string bad = startProblem(*t, ros::Time::now().toSec());
+    if (!bad.empty()) {
+      NODELET_WARN_STREAM_THROTTLE(1.0, getName() << ": trajectory " << msg->traj_id << " refused: " << bad
+                                                  << "; the reference stays as it was");
+      return;
+    }
     current_ = std::move(t).value();
+  }
+
+  // Why a trajectory cannot be taken over at time `now` (s), or "" when it can. In seconds as doubles: a
+  // start time is the sender's, and ros::Time arithmetic throws beyond 2^31 s.
+  std::string startProblem(const ros_traj::Trajectory& t, double now) const {
+    if (!odom_position_) return "no odometry yet to check where it starts";
+    const double from = std::max(0.0, now - t.start_time.toSec());
+    const Eigen::Vector3d p = trajectory::sampleTrajectory(t, from).position;
+    const double offset = (p - *odom_position_).norm();
+    if (!(offset <= max_start_offset_)) {
+      std::ostringstream why;
+      why << "its reference " << from << " s after its start is " << offset << " m from the odometry (more than "
+          << "server/max_start_offset " << max_start_offset_ << " m)";
+      return why.str();
+    }
+    return "";
   }
 
   void onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
@@ -56,6 +85,7 @@ class TrajectoryServer : public nodelet::Nodelet {
     const auto& q = msg->pose.pose.orientation;
     std::lock_guard<std::mutex> lock(mutex_);
     last_odom_ = ros::Time::now();
+    odom_position_ = Eigen::Vector3d(p.x, p.y, p.z);
     if (odom_gap_) {
       odom_gap_ = false;
       NODELET_WARN_STREAM(getName() << ": odometry is back; following the next trajectory");
@@ -82,7 +112,8 @@ class TrajectoryServer : public nodelet::Nodelet {
     Eigen::Vector3d p, v = Eigen::Vector3d::Zero(), a = Eigen::Vector3d::Zero();
     double yaw = hold_yaw_, yaw_dot = 0.0;
     if (current_ && now >= current_->start_time) {
-      const trajectory::TrajectorySample sample = trajectory::sampleTrajectory(*current_, (now - current_->start_time).toSec());
+      const trajectory::TrajectorySample sample =
+          trajectory::sampleTrajectory(*current_, now.toSec() - current_->start_time.toSec());
       p = sample.position, v = sample.velocity, a = sample.acceleration;
       yaw = sample.yaw, yaw_dot = sample.yaw_dot;
       cmd.trajectory_flag = sample.completed ? PositionCommand::TRAJECTORY_STATUS_COMPLETED
@@ -104,8 +135,9 @@ class TrajectoryServer : public nodelet::Nodelet {
     cmd_pub_.publish(cmd);
   }
 
-  double rate_ = 100.0, odom_timeout_ = 0.5;
+  double rate_ = 100.0, odom_timeout_ = 0.5, max_start_offset_ = 1.5;
   ros::Time last_odom_;
+  std::optional<Eigen::Vector3d> odom_position_;  ///< m, of the latest usable odometry
   bool odom_gap_ = false;
   std::string world_frame_;
   std::mutex mutex_;

@@ -7,6 +7,7 @@
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -366,6 +367,80 @@ TEST(TrajectoryServerOdometry, UnusableOdometryIsRefusedAndTheFirstGoodPoseIsHel
     EXPECT_LT((Vec3(c->position.x, c->position.y, c->position.z) - held).norm(), 1e-9);
     EXPECT_EQ(c->trajectory_flag, go_feap::PositionCommand::TRAJECTORY_STATUS_EMPTY);
   }
+}
+
+// The probe server takes over a trajectory only where its reference, when taken (now, or at its start if
+// later), lies within server/max_start_offset of the odometry: one starting 3 m away, and one planned
+// from the vehicle's pose but started at 0 s (its reference now is its end, 3 m away), are refused and
+// the server goes on holding; one starting 0.5 m away (a tracking error) is followed from there.
+TEST(TrajectoryServerStart, TrajectoriesStartingFarFromTheOdometryAreRefused) {
+  ros::NodeHandle nh;
+  double max_offset = 0.0;
+  ASSERT_TRUE(ros::param::get("/probe_trajectory_server/server/max_start_offset", max_offset));
+  auto odom_pub = nh.advertise<nav_msgs::Odometry>("probe/odom", 10);
+  auto bspline_pub = nh.advertise<go_feap::Bspline>("probe/bspline", 10);
+  go_feap::PositionCommand::ConstPtr command;
+  auto cmd_sub = nh.subscribe<go_feap::PositionCommand>(
+      "probe/position_cmd", 200, [&](const go_feap::PositionCommand::ConstPtr& m) { command = m; });
+  ASSERT_TRUE(spinUntil(
+      [&] {
+        return odom_pub.getNumSubscribers() > 0 && bspline_pub.getNumSubscribers() > 0 && cmd_sub.getNumPublishers() > 0;
+      },
+      60.0))
+      << "the probe trajectory server is not connected";
+  const Vec3 vehicle(0.5, 0.5, 1.5);
+  ros::Time next_odom;
+  // Spins for `seconds` of simulated time, the odometry at `vehicle` at 20 Hz; the latest command then.
+  auto hover = [&](double seconds) {
+    const ros::Time end = ros::Time::now() + ros::Duration(seconds);
+    spinUntil(
+        [&] {
+          if (ros::Time::now() >= next_odom) {
+            nav_msgs::Odometry m;
+            m.header.stamp = ros::Time::now();
+            m.header.frame_id = "world";
+            m.pose.pose.position.x = vehicle.x(), m.pose.pose.position.y = vehicle.y(), m.pose.pose.position.z = vehicle.z();
+            m.pose.pose.orientation.w = 1.0;
+            odom_pub.publish(m);
+            next_odom = ros::Time::now() + ros::Duration(0.05);
+          }
+          return ros::Time::now() >= end;
+        },
+        30.0);
+    return command;
+  };
+  hover(0.5);
+  ASSERT_TRUE(command) << "no command";
+  // A straight flight from a to b over 3 s (7 control points, 0.75 s knot span), heading 0.
+  auto line = [&](const Vec3& a, const Vec3& b, std::int64_t id, const ros::Time& start) {
+    Eigen::MatrixXd q(3, 7), y = Eigen::MatrixXd::Zero(1, 4);
+    for (int i = 0; i < 7; ++i) q.col(i) = a + (b - a) * std::clamp((i - 1) / 4.0, 0.0, 1.0);
+    go_feap::ros_traj::Trajectory t;
+    t.position = go_feap::trajectory::UniformBspline(q, 3, 0.75);
+    t.yaw = go_feap::trajectory::UniformBspline(y, 3, 0.75);
+    t.id = id;
+    t.start_time = start;
+    return go_feap::ros_traj::toMsg(t);
+  };
+  auto commanded = [&] { return Vec3(command->position.x, command->position.y, command->position.z); };
+  const Vec3 ahead = vehicle + Vec3(3.0, 0.0, 0.0);
+  ASSERT_GT(3.0, max_offset);
+  bspline_pub.publish(line(ahead, ahead + Vec3(1.0, 0.0, 0.0), 901, ros::Time::now()));
+  hover(1.0);
+  EXPECT_NE(command->trajectory_id, 901u) << "a trajectory starting 3 m away was taken";
+  EXPECT_GT((commanded() - ahead).norm(), max_offset) << "the reference went towards it";
+  const Vec3 before = commanded();
+  while (ros::ok() && ros::Time::now().toSec() < 5.0) hover(0.5);
+  bspline_pub.publish(line(vehicle, ahead, 902, ros::Time(1e-3)));  // long over: now its end
+  hover(1.0);
+  EXPECT_NE(command->trajectory_id, 902u) << "a trajectory started at 0 s was taken";
+  EXPECT_LT((commanded() - before).norm(), 1e-9) << "the held reference moved";
+  ASSERT_GT(max_offset, 0.5);
+  const Vec3 near = vehicle + Vec3(0.0, 0.5, 0.0);
+  bspline_pub.publish(line(near, near + Vec3(1.0, 0.0, 0.0), 903, ros::Time::now()));
+  ASSERT_TRUE(spinUntil([&] { return hover(0.05)->trajectory_id == 903u; }, 20.0)) << "a trajectory 0.5 m away was refused";
+  EXPECT_LT((commanded() - near).norm(), 0.15) << "not followed from its start";
+  EXPECT_EQ(command->trajectory_flag, go_feap::PositionCommand::TRAJECTORY_STATUS_READY);
 }
 
 }  // namespace
