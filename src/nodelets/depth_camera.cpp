@@ -16,6 +16,7 @@
 
 #include "go_feap/common/config_groups.h"
 #include "go_feap/ros/conversions.h"
+#include "go_feap/ros/guarded.h"
 #include "go_feap/ros/params.h"
 #include "go_feap/sim/depth_camera.h"
 #include "go_feap/world/scene.h"
@@ -59,7 +60,7 @@ class DepthCamera : public nodelet::Nodelet {
     depth_pub_ = nh.advertise<sensor_msgs::Image>("depth", 2);
     info_pub_ = nh.advertise<sensor_msgs::CameraInfo>("camera_info", 2);
     pose_pub_ = nh.advertise<geometry_msgs::PoseStamped>("camera_pose", 2);
-    odom_sub_ = nh.subscribe("odom", 10, &DepthCamera::onOdom, this, ros::TransportHints().tcpNoDelay());
+    odom_sub_ = ros_guard::subscribe(nh, getName(), "odom", 10, &DepthCamera::onOdom, this, ros::TransportHints().tcpNoDelay());
 
     geometry_msgs::TransformStamped tf = tf2::eigenToTransform(T_B_C_);
     tf.header.stamp = ros::Time::now();

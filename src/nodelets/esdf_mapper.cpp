@@ -29,6 +29,7 @@
 #include "go_feap/SaveMap.h"
 #include "go_feap/common/config_groups.h"
 #include "go_feap/ros/compute_time.h"
+#include "go_feap/ros/guarded.h"
 #include "go_feap/ros/params.h"
 #include "go_feap/ros/shared_map.h"
 
@@ -68,21 +69,21 @@ class EsdfMapper : public nodelet::Nodelet {
     handle_pub_ = nh.advertise<ros_map::MapHandle>("map_handle", 1, /*latch=*/true);
     cloud_pub_ = nh.advertise<sensor_msgs::PointCloud2>("occupied_cloud", 1);
     slice_pub_ = nh.advertise<sensor_msgs::PointCloud2>("esdf_slice", 1);
-    save_srv_ = nh.advertiseService("save_map", &EsdfMapper::onSave, this);
-    info_sub_ = nh.subscribe("camera_info", 1, &EsdfMapper::onInfo, this);
+    save_srv_ = ros_guard::service(nh, getName(), "save_map", &EsdfMapper::onSave, this);
+    info_sub_ = ros_guard::subscribe(nh, getName(), "camera_info", 1, &EsdfMapper::onInfo, this);
     if (sync_mode_ == "tf") {
       tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
       tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, nh);
-      depth_only_sub_ = nh.subscribe("depth", 5, &EsdfMapper::onDepthTf, this);
+      depth_only_sub_ = ros_guard::subscribe(nh, getName(), "depth", 5, &EsdfMapper::onDepthTf, this);
     } else {
       depth_sub_.subscribe(nh, "depth", 5);
       pose_sub_.subscribe(nh, "camera_pose", 20);
       if (sync_mode_ == "exact") {
         exact_sync_ = std::make_unique<message_filters::Synchronizer<ExactPolicy>>(ExactPolicy(20), depth_sub_, pose_sub_);
-        exact_sync_->registerCallback(&EsdfMapper::onDepthPose, this);
+        exact_sync_->registerCallback(&EsdfMapper::onDepthPair, this);
       } else {
         approx_sync_ = std::make_unique<message_filters::Synchronizer<ApproxPolicy>>(ApproxPolicy(20), depth_sub_, pose_sub_);
-        approx_sync_->registerCallback(&EsdfMapper::onDepthPose, this);
+        approx_sync_->registerCallback(&EsdfMapper::onDepthPair, this);
       }
     }
     publishHandle();
@@ -96,6 +97,11 @@ class EsdfMapper : public nodelet::Nodelet {
     map::DepthIntrinsics K{static_cast<int>(info->width), static_cast<int>(info->height), info->K[0], info->K[4],
                            info->K[2], info->K[5]};
     intrinsics_ = K;
+  }
+
+  // The synchroniser's callback, under ros_guard like every other.
+  void onDepthPair(const sensor_msgs::Image::ConstPtr& depth, const geometry_msgs::PoseStamped::ConstPtr& pose) {
+    ros_guard::run(getName(), "the depth and camera_pose callback", [&] { onDepthPose(depth, pose); });
   }
 
   void onDepthPose(const sensor_msgs::Image::ConstPtr& depth, const geometry_msgs::PoseStamped::ConstPtr& pose) {

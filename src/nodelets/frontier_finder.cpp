@@ -15,6 +15,7 @@
 #include "go_feap/ros/message_checks.h"
 #include "go_feap/common/config_groups.h"
 #include "go_feap/ros/compute_time.h"
+#include "go_feap/ros/guarded.h"
 #include "go_feap/ros/params.h"
 #include "go_feap/ros/shared_map.h"
 
@@ -36,9 +37,9 @@ class FrontierFinder : public nodelet::Nodelet {
     compute_pub_ = nh.advertise<ComputeTime>("compute_time", 20);
     frontier_pub_ = nh.advertise<FrontierArray>("frontiers", 2);
     marker_pub_ = nh.advertise<visualization_msgs::MarkerArray>("frontier_markers", 2);
-    handle_sub_ = nh.subscribe("map_handle", 1, &FrontierFinder::onHandle, this);
-    update_sub_ = nh.subscribe("map_update", 20, &FrontierFinder::onUpdate, this);
-    layer_sub_ = nh.subscribe("layer", 1, &FrontierFinder::onLayer, this);
+    handle_sub_ = ros_guard::subscribe(nh, getName(), "map_handle", 1, &FrontierFinder::onHandle, this);
+    update_sub_ = ros_guard::subscribe(nh, getName(), "map_update", 20, &FrontierFinder::onUpdate, this);
+    layer_sub_ = ros_guard::subscribe(nh, getName(), "layer", 1, &FrontierFinder::onLayer, this);
   }
 
   void onHandle(const boost::shared_ptr<const ros_map::MapHandle>& msg) {

@@ -26,6 +26,7 @@
 #include "go_feap/ros/message_checks.h"
 #include "go_feap/common/config_groups.h"
 #include "go_feap/ros/compute_time.h"
+#include "go_feap/ros/guarded.h"
 #include "go_feap/ros/params.h"
 #include "go_feap/planning/tour_planner.h"
 #include "go_feap/ros/shared_map.h"
@@ -49,11 +50,11 @@ class GlobalPlanner : public nodelet::Nodelet {
     compute_pub_ = nh.advertise<ComputeTime>("compute_time", 20);
     tour_pub_ = nh.advertise<GlobalTour>("global_tour", 2);
     marker_pub_ = nh.advertise<visualization_msgs::Marker>("global_tour_marker", 2);
-    handle_sub_ = nh.subscribe("map_handle", 1, &GlobalPlanner::onHandle, this);
-    odom_sub_ = nh.subscribe("odom", 5, &GlobalPlanner::onOdom, this);
-    frontier_sub_ = nh.subscribe("frontiers", 2, &GlobalPlanner::onFrontiers, this);
-    blacklist_sub_ = nh.subscribe("blacklist", 1, &GlobalPlanner::onBlacklist, this);
-    wanted_sub_ = nh.subscribe("tour_wanted", 2, &GlobalPlanner::onWanted, this);
+    handle_sub_ = ros_guard::subscribe(nh, getName(), "map_handle", 1, &GlobalPlanner::onHandle, this);
+    odom_sub_ = ros_guard::subscribe(nh, getName(), "odom", 5, &GlobalPlanner::onOdom, this);
+    frontier_sub_ = ros_guard::subscribe(nh, getName(), "frontiers", 2, &GlobalPlanner::onFrontiers, this);
+    blacklist_sub_ = ros_guard::subscribe(nh, getName(), "blacklist", 1, &GlobalPlanner::onBlacklist, this);
+    wanted_sub_ = ros_guard::subscribe(nh, getName(), "tour_wanted", 2, &GlobalPlanner::onWanted, this);
   }
 
   void onWanted(const std_msgs::Bool::ConstPtr& msg) {

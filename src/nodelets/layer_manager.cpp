@@ -27,6 +27,7 @@
 #include "go_feap/common/config_groups.h"
 #include "go_feap/ros/conversions.h"
 #include "go_feap/ros/message_checks.h"
+#include "go_feap/ros/guarded.h"
 #include "go_feap/ros/params.h"
 
 namespace go_feap {
@@ -49,13 +50,13 @@ class LayerManager : public nodelet::Nodelet {
     status_pub_ = nh.advertise<ExplorationStatus>("status", 5, /*latch=*/true);
     blacklist_pub_ = nh.advertise<std_msgs::UInt32MultiArray>("blacklist", 1, /*latch=*/true);
     marker_pub_ = nh.advertise<visualization_msgs::Marker>("layer_marker", 1, /*latch=*/true);
-    frontier_sub_ = nh.subscribe("frontiers", 2, &LayerManager::onFrontiers, this);
-    update_sub_ = nh.subscribe("map_update", 20, &LayerManager::onMapUpdate, this);
-    failed_sub_ = nh.subscribe("frontier_failed", 100, &LayerManager::onFailed, this);
-    odom_sub_ = nh.subscribe("odom", 2, &LayerManager::onOdom, this);
-    goal_sub_ = nh.subscribe("move_base_simple/goal", 1, &LayerManager::onGoal, this);
-    trigger_srv_ = nh.advertiseService("trigger", &LayerManager::onTrigger, this);
-    timer_ = nh.createTimer(ros::Duration(1.0 / rate_), &LayerManager::onTimer, this);
+    frontier_sub_ = ros_guard::subscribe(nh, getName(), "frontiers", 2, &LayerManager::onFrontiers, this);
+    update_sub_ = ros_guard::subscribe(nh, getName(), "map_update", 20, &LayerManager::onMapUpdate, this);
+    failed_sub_ = ros_guard::subscribe(nh, getName(), "frontier_failed", 100, &LayerManager::onFailed, this);
+    odom_sub_ = ros_guard::subscribe(nh, getName(), "odom", 2, &LayerManager::onOdom, this);
+    goal_sub_ = ros_guard::subscribe(nh, getName(), "move_base_simple/goal", 1, &LayerManager::onGoal, this);
+    trigger_srv_ = ros_guard::service(nh, getName(), "trigger", &LayerManager::onTrigger, this);
+    timer_ = ros_guard::timer(nh, getName(), ros::Duration(1.0 / rate_), &LayerManager::onTimer, this);
     if (auto_start_) pending_trigger_ = true;
   }
 

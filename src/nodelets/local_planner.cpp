@@ -32,6 +32,7 @@
 #include "go_feap/ros/message_checks.h"
 #include "go_feap/common/config_groups.h"
 #include "go_feap/ros/compute_time.h"
+#include "go_feap/ros/guarded.h"
 #include "go_feap/ros/params.h"
 #include "go_feap/ros/shared_map.h"
 
@@ -57,15 +58,15 @@ class LocalPlanner : public nodelet::Nodelet {
     compute_pub_ = nh.advertise<ComputeTime>("compute_time", 20);
     target_pub_ = nh.advertise<ViewpointPath>("local_target", 2);
     marker_pub_ = nh.advertise<visualization_msgs::MarkerArray>("viewpoint_markers", 2);
-    handle_sub_ = nh.subscribe("map_handle", 1, &LocalPlanner::onHandle, this);
-    odom_sub_ = nh.subscribe("odom", 5, &LocalPlanner::onOdom, this);
-    depth_sub_ = nh.subscribe("depth", 2, &LocalPlanner::onDepth, this);
-    layer_sub_ = nh.subscribe("layer", 1, &LocalPlanner::onLayer, this);
-    frontier_sub_ = nh.subscribe("frontiers", 2, &LocalPlanner::onFrontiers, this);
-    tour_sub_ = nh.subscribe("global_tour", 2, &LocalPlanner::onTour, this);
+    handle_sub_ = ros_guard::subscribe(nh, getName(), "map_handle", 1, &LocalPlanner::onHandle, this);
+    odom_sub_ = ros_guard::subscribe(nh, getName(), "odom", 5, &LocalPlanner::onOdom, this);
+    depth_sub_ = ros_guard::subscribe(nh, getName(), "depth", 2, &LocalPlanner::onDepth, this);
+    layer_sub_ = ros_guard::subscribe(nh, getName(), "layer", 1, &LocalPlanner::onLayer, this);
+    frontier_sub_ = ros_guard::subscribe(nh, getName(), "frontiers", 2, &LocalPlanner::onFrontiers, this);
+    tour_sub_ = ros_guard::subscribe(nh, getName(), "global_tour", 2, &LocalPlanner::onTour, this);
     failed_pub_ = nh.advertise<std_msgs::UInt32>("frontier_failed", 100);
     wanted_pub_ = nh.advertise<std_msgs::Bool>("tour_wanted", 2);
-    failed_sub_ = nh.subscribe("frontier_failed", 100, &LocalPlanner::onFailed, this);
+    failed_sub_ = ros_guard::subscribe(nh, getName(), "frontier_failed", 100, &LocalPlanner::onFailed, this);
   }
 
   void onHandle(const boost::shared_ptr<const ros_map::MapHandle>& msg) {

@@ -25,6 +25,7 @@
 #include "go_feap/metrics/metrics.h"
 #include "go_feap/ros/conversions.h"
 #include "go_feap/ros/message_checks.h"
+#include "go_feap/ros/guarded.h"
 #include "go_feap/ros/params.h"
 #include "go_feap/ros/shared_map.h"
 #include "go_feap/world/scene.h"
@@ -65,11 +66,11 @@ class MetricsRecorder : public nodelet::Nodelet {
     coverage_pub_ = nh.advertise<std_msgs::Float64>("coverage", 2);
     path_pub_ = nh.advertise<nav_msgs::Path>("flown_path", 1);
     path_.header.frame_id = world_frame_;
-    handle_sub_ = nh.subscribe("map_handle", 1, &MetricsRecorder::onHandle, this);
-    odom_sub_ = nh.subscribe("odom", 20, &MetricsRecorder::onOdom, this);
-    status_sub_ = nh.subscribe("status", 5, &MetricsRecorder::onStatus, this);
-    compute_sub_ = nh.subscribe("compute_time", 50, &MetricsRecorder::onCompute, this);
-    timer_ = nh.createTimer(ros::Duration(1.0 / sample_rate_), &MetricsRecorder::onTimer, this);
+    handle_sub_ = ros_guard::subscribe(nh, getName(), "map_handle", 1, &MetricsRecorder::onHandle, this);
+    odom_sub_ = ros_guard::subscribe(nh, getName(), "odom", 20, &MetricsRecorder::onOdom, this);
+    status_sub_ = ros_guard::subscribe(nh, getName(), "status", 5, &MetricsRecorder::onStatus, this);
+    compute_sub_ = ros_guard::subscribe(nh, getName(), "compute_time", 50, &MetricsRecorder::onCompute, this);
+    timer_ = ros_guard::timer(nh, getName(), ros::Duration(1.0 / sample_rate_), &MetricsRecorder::onTimer, this);
   }
 
   void onHandle(const boost::shared_ptr<const ros_map::MapHandle>& msg) {

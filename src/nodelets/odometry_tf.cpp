@@ -17,6 +17,7 @@
 #include <cmath>
 
 #include "go_feap/ros/conversions.h"
+#include "go_feap/ros/guarded.h"
 #include "go_feap/ros/params.h"
 
 namespace go_feap {
@@ -49,7 +50,7 @@ class OdometryTf : public nodelet::Nodelet {
     ros_params::requireOrThrow(std::isfinite(warn_period_) && warn_period_ > 0.0, getName(),
                                "parameter '" + p.fullName("warn_period") + "' must be > 0");
     broadcaster_ = std::make_unique<tf2_ros::TransformBroadcaster>();
-    odom_sub_ = getNodeHandle().subscribe("odom", 20, &OdometryTf::onOdom, this);
+    odom_sub_ = ros_guard::subscribe(getNodeHandle(), getName(), "odom", 20, &OdometryTf::onOdom, this);
   }
 
   void onOdom(const nav_msgs::Odometry::ConstPtr& msg) {

@@ -15,6 +15,7 @@
 
 #include "go_feap/PositionCommand.h"
 #include "go_feap/common/config_groups.h"
+#include "go_feap/ros/guarded.h"
 #include "go_feap/ros/params.h"
 #include "go_feap/sim/vehicle.h"
 #include "go_feap/world/scene.h"
@@ -71,7 +72,7 @@ class QuadrotorSim : public nodelet::Nodelet {
 
     odom_pub_ = nh.advertise<nav_msgs::Odometry>("odom", 10);
     if (publish_clock_) clock_pub_ = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
-    cmd_sub_ = nh.subscribe("position_cmd", 10, &QuadrotorSim::onCommand, this, ros::TransportHints().tcpNoDelay());
+    cmd_sub_ = ros_guard::subscribe(nh, getName(), "position_cmd", 10, &QuadrotorSim::onCommand, this, ros::TransportHints().tcpNoDelay());
     NODELET_INFO_STREAM(me << ": vehicle at (" << start.transpose() << "), yaw " << start_yaw << ", scene '"
                            << scene.name << "', rate factor " << rate_factor_);
     running_ = true;

@@ -22,6 +22,7 @@
 #include "go_feap/ros/bspline_conversion.h"
 #include "go_feap/common/config_groups.h"
 #include "go_feap/ros/compute_time.h"
+#include "go_feap/ros/guarded.h"
 #include "go_feap/ros/params.h"
 #include "go_feap/ros/shared_map.h"
 #include "go_feap/trajectory/trajectory_planner.h"
@@ -60,11 +61,11 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     bspline_pub_ = nh.advertise<Bspline>("bspline", 5);
     marker_pub_ = nh.advertise<visualization_msgs::Marker>("trajectory_marker", 2);
     failed_pub_ = nh.advertise<std_msgs::UInt32>("frontier_failed", 10);
-    handle_sub_ = nh.subscribe("map_handle", 1, &TrajectoryPlanner::onHandle, this);
-    odom_sub_ = nh.subscribe("odom", 5, &TrajectoryPlanner::onOdom, this);
-    cmd_sub_ = nh.subscribe("position_cmd", 5, &TrajectoryPlanner::onCommand, this);
-    target_sub_ = nh.subscribe("local_target", 2, &TrajectoryPlanner::onTarget, this);
-    timer_ = nh.createTimer(ros::Duration(1.0 / rate_), &TrajectoryPlanner::onTimer, this);
+    handle_sub_ = ros_guard::subscribe(nh, getName(), "map_handle", 1, &TrajectoryPlanner::onHandle, this);
+    odom_sub_ = ros_guard::subscribe(nh, getName(), "odom", 5, &TrajectoryPlanner::onOdom, this);
+    cmd_sub_ = ros_guard::subscribe(nh, getName(), "position_cmd", 5, &TrajectoryPlanner::onCommand, this);
+    target_sub_ = ros_guard::subscribe(nh, getName(), "local_target", 2, &TrajectoryPlanner::onTarget, this);
+    timer_ = ros_guard::timer(nh, getName(), ros::Duration(1.0 / rate_), &TrajectoryPlanner::onTimer, this);
   }
 
   void onHandle(const boost::shared_ptr<const ros_map::MapHandle>& msg) {

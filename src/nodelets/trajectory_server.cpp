@@ -19,6 +19,7 @@
 #include "go_feap/PositionCommand.h"
 #include "go_feap/ros/conversions.h"
 #include "go_feap/ros/bspline_conversion.h"
+#include "go_feap/ros/guarded.h"
 #include "go_feap/ros/params.h"
 
 namespace go_feap {
@@ -38,9 +39,9 @@ class TrajectoryServer : public nodelet::Nodelet {
     ros_params::requireOrThrow(std::isfinite(odom_timeout_) && odom_timeout_ > 0.0, getName(),
                                "parameter '" + p.fullName("server/odom_timeout") + "' must be > 0");
     cmd_pub_ = nh.advertise<PositionCommand>("position_cmd", 10);
-    bspline_sub_ = nh.subscribe("bspline", 5, &TrajectoryServer::onBspline, this);
-    odom_sub_ = nh.subscribe("odom", 5, &TrajectoryServer::onOdom, this);
-    timer_ = nh.createTimer(ros::Duration(1.0 / rate_), &TrajectoryServer::onTimer, this);
+    bspline_sub_ = ros_guard::subscribe(nh, getName(), "bspline", 5, &TrajectoryServer::onBspline, this);
+    odom_sub_ = ros_guard::subscribe(nh, getName(), "odom", 5, &TrajectoryServer::onOdom, this);
+    timer_ = ros_guard::timer(nh, getName(), ros::Duration(1.0 / rate_), &TrajectoryServer::onTimer, this);
   }
 
   void onBspline(const Bspline::ConstPtr& msg) {

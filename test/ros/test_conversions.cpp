@@ -7,7 +7,13 @@
 #include <functional>
 #include <limits>
 
+#include <std_msgs/UInt32.h>
+
+#include <boost/make_shared.hpp>
+#include <stdexcept>
+
 #include "go_feap/ros/conversions.h"
+#include "go_feap/ros/guarded.h"
 #include "go_feap/ros/message_checks.h"
 
 namespace {
@@ -271,6 +277,33 @@ TEST(MessageChecks, ToursLayersMapUpdatesAndStatusesThatAreMalformedAreNamed) {
   bad_cmd = cmd;
   bad_cmd.yaw_dot = std::numeric_limits<double>::quiet_NaN();
   EXPECT_TRUE(says(positionCommandProblem(bad_cmd), "yaw")) << positionCommandProblem(bad_cmd);
+}
+
+// ros_guard: an exception a nodelet's callback throws stays in the callback (roscpp would pass it to
+// std::terminate and end the nodelet manager); the callback runs again for the next message.
+struct ThrowsOnZero {
+  int calls = 0;
+  void onMessage(const std_msgs::UInt32::ConstPtr& msg) {
+    ++calls;
+    if (msg->data == 0) throw std::runtime_error("zero");
+  }
+};
+
+TEST(Guarded, AnExceptionFromACallbackStaysInItAndTheNextMessageIsTaken) {
+  namespace guard = go_feap::ros_guard;
+  ros::Time::init();  // the log's throttle reads the clock (a nodelet's is always set up)
+  ThrowsOnZero object;
+  const auto callback = guard::wrap("/probe", "the callback of 'count'", &ThrowsOnZero::onMessage, &object);
+  auto zero = boost::make_shared<std_msgs::UInt32>(), one = boost::make_shared<std_msgs::UInt32>();
+  zero->data = 0, one->data = 1;
+  EXPECT_NO_THROW(callback(zero));
+  EXPECT_NO_THROW(callback(one));
+  EXPECT_NO_THROW(callback(zero));
+  EXPECT_EQ(object.calls, 3);
+  EXPECT_FALSE(guard::run("/probe", "a block", [] { throw std::out_of_range("index"); }));
+  EXPECT_TRUE(guard::run("/probe", "a block", [] {}));
+  // Only std::exception: others (boost::thread_interrupted stops the manager's threads) pass on.
+  EXPECT_THROW(guard::run("/probe", "a block", [] { throw 7; }), int);
 }
 
 }  // namespace
