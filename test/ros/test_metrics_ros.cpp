@@ -63,7 +63,8 @@ TEST(MetricsRecorder, SummaryHoldsThePlayedRunAndOddStatusesNeitherEndNorCountIn
   auto odom_pub = nh.advertise<nav_msgs::Odometry>("odom", 50);
   auto compute_pub = nh.advertise<go_feap::ComputeTime>("compute_time", 50);
   int paths = 0;
-  auto path_sub = nh.subscribe<nav_msgs::Path>("flown_path", 10, [&](const nav_msgs::Path::ConstPtr&) { ++paths; });
+  auto path_sub =
+      nh.subscribe<nav_msgs::Path>("flown_path", 10, [&](const nav_msgs::Path::ConstPtr&) { ++paths; });
   ASSERT_TRUE(spinUntil(
       [&] {
         return status_pub.getNumSubscribers() > 0 && odom_pub.getNumSubscribers() > 0 &&
@@ -126,8 +127,10 @@ TEST(MetricsRecorder, SummaryHoldsThePlayedRunAndOddStatusesNeitherEndNorCountIn
   // The flight: to the wall, 5 cm into it, and back; 5 cm steps.
   std::vector<Vec3> path{start};
   const Vec3 inside = *entry + Vec3(0.05, 0.0, 0.0);
-  for (double s = 0.05; s <= (inside - start).norm() + 1e-9; s += 0.05) path.push_back(start + s * Vec3::UnitX());
-  for (double s = 0.05; s <= (inside - start).norm() + 1e-9; s += 0.05) path.push_back(inside - s * Vec3::UnitX());
+  for (double s = 0.05; s <= (inside - start).norm() + 1e-9; s += 0.05)
+    path.push_back(start + s * Vec3::UnitX());
+  for (double s = 0.05; s <= (inside - start).norm() + 1e-9; s += 0.05)
+    path.push_back(inside - s * Vec3::UnitX());
   ASSERT_TRUE(scene->isOccupied(path[path.size() / 2])) << "the flight does not reach into the wall";
   double length = 0.0;
   for (std::size_t i = 1; i < path.size(); ++i) length += (path[i] - path[i - 1]).norm();

@@ -2,15 +2,17 @@
 // callback is not caught by roscpp: it reaches std::terminate and takes down the whole nodelet manager,
 // with every nodelet and the map in it (a status message once did that to the chain through the
 // metrics recorder). The nodelets subscribe through these helpers: such an exception is logged as an
-// error naming the nodelet, the callback and what was thrown, at most once a second per callback, and
-// the nodelet goes on with the next message. Only std::exception is caught: anything else (as
-// boost::thread_interrupted, with which the nodelet manager stops its worker threads) passes on.
+// error naming the nodelet, the callback and what was thrown (at most once a second for each nodelet
+// class and message type), and the nodelet goes on with the next message. Only std::exception is
+// caught: anything else (as boost::thread_interrupted, with which the nodelet manager stops its worker
+// threads) passes on.
 #pragma once
+
+#include <ros/ros.h>
 
 #include <boost/function.hpp>
 #include <boost/shared_ptr.hpp>
-#include <ros/ros.h>
-
+#include <cstdint>
 #include <exception>
 #include <string>
 #include <utility>
@@ -25,17 +27,18 @@ bool run(const std::string& who, const std::string& what, Fn&& fn) {
     std::forward<Fn>(fn)();
     return true;
   } catch (const std::exception& e) {
-    ROS_ERROR_STREAM_THROTTLE_NAMED(1.0, who, who << ": " << what << " aborted by an exception: " << e.what()
-                                                  << "; the nodelet goes on with the next one");
+    ROS_ERROR_STREAM_THROTTLE_NAMED(1.0, who,
+                                    who << ": " << what << " aborted by an exception: " << e.what()
+                                        << "; the nodelet goes on with the next one");
   }
   return false;
 }
 
 /// `object`'s member `callback` as a subscription callback under run().
 template <typename T, typename M>
-boost::function<void(const boost::shared_ptr<M const>&)> wrap(const std::string& who, const std::string& what,
-                                                              void (T::*callback)(const boost::shared_ptr<M const>&),
-                                                              T* object) {
+boost::function<void(const boost::shared_ptr<M const>&)> wrap(
+    const std::string& who, const std::string& what, void (T::*callback)(const boost::shared_ptr<M const>&),
+    T* object) {
   return [who, what, callback, object](const boost::shared_ptr<M const>& msg) {
     run(who, what, [&] { (object->*callback)(msg); });
   };
@@ -43,9 +46,9 @@ boost::function<void(const boost::shared_ptr<M const>&)> wrap(const std::string&
 
 /// nh.subscribe(topic, queue, callback, object, hints), the callback under run().
 template <typename T, typename M>
-ros::Subscriber subscribe(ros::NodeHandle& nh, const std::string& who, const std::string& topic, std::uint32_t queue,
-                          void (T::*callback)(const boost::shared_ptr<M const>&), T* object,
-                          const ros::TransportHints& hints = ros::TransportHints()) {
+ros::Subscriber subscribe(ros::NodeHandle& nh, const std::string& who, const std::string& topic,
+                          std::uint32_t queue, void (T::*callback)(const boost::shared_ptr<M const>&),
+                          T* object, const ros::TransportHints& hints = ros::TransportHints()) {
   return nh.subscribe<M>(topic, queue, wrap(who, "the callback of '" + topic + "'", callback, object),
                          ros::VoidConstPtr(), hints);
 }
@@ -54,9 +57,10 @@ ros::Subscriber subscribe(ros::NodeHandle& nh, const std::string& who, const std
 template <typename T>
 ros::Timer timer(ros::NodeHandle& nh, const std::string& who, const ros::Duration& period,
                  void (T::*callback)(const ros::TimerEvent&), T* object) {
-  return nh.createTimer(period, boost::function<void(const ros::TimerEvent&)>([who, callback, object](const ros::TimerEvent& e) {
-                          run(who, "the timer callback", [&] { (object->*callback)(e); });
-                        }));
+  return nh.createTimer(period, boost::function<void(const ros::TimerEvent&)>(
+                                    [who, callback, object](const ros::TimerEvent& e) {
+                                      run(who, "the timer callback", [&] { (object->*callback)(e); });
+                                    }));
 }
 
 /// nh.advertiseService(name, callback, object), the callback under run(): a call it aborts fails.
