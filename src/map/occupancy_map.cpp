@@ -89,6 +89,15 @@ double OccupancyMap::probability(const Index3& idx) const {
   return 1.0 / (1.0 + std::exp(-v / kScale));
 }
 
+common::Status DepthIntrinsics::validate() const {
+  if (width <= 0 || height <= 0)
+    return common::Status::Error("camera intrinsics are invalid: the image is " + std::to_string(width) + "x" +
+                                 std::to_string(height) + " pixels");
+  if (!(fx > 0.0 && fy > 0.0 && std::isfinite(fx) && std::isfinite(fy) && std::isfinite(cx) && std::isfinite(cy)))
+    return common::Status::Error("camera intrinsics are invalid (fx, fy must be finite and > 0, cx, cy finite)");
+  return common::Status::Ok();
+}
+
 common::Status OccupancyMap::checkFrame(const cv::Mat& depth, const DepthIntrinsics& K) const {
   if (depth.empty()) return common::Status::Error("depth image is empty");
   if (depth.type() != CV_32FC1 && depth.type() != CV_16UC1)
@@ -96,10 +105,7 @@ common::Status OccupancyMap::checkFrame(const cv::Mat& depth, const DepthIntrins
   if (depth.cols != K.width || depth.rows != K.height)
     return common::Status::Error("depth image is " + std::to_string(depth.cols) + "x" + std::to_string(depth.rows) +
                                  " but camera_info says " + std::to_string(K.width) + "x" + std::to_string(K.height));
-  if (!(K.fx > 0.0 && K.fy > 0.0 && std::isfinite(K.cx) && std::isfinite(K.cy) && std::isfinite(K.fx) &&
-        std::isfinite(K.fy)))
-    return common::Status::Error("camera intrinsics are invalid (fx, fy must be finite and > 0)");
-  return common::Status::Ok();
+  return K.validate();
 }
 
 common::Result<FrameChange> OccupancyMap::integrate(const cv::Mat& depth, const DepthIntrinsics& K,

@@ -20,7 +20,10 @@
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cstdint>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -92,10 +95,21 @@ class EsdfMapper : public nodelet::Nodelet {
                            << shared_->map->memoryBytes() / (1024 * 1024) << " MiB), sync " << sync_mode_);
   }
 
+  // A camera_info that cannot describe the images (a driver restarting, a zero K) is refused: the frames
+  // go on with the last valid intrinsics instead of all being skipped until a valid one comes.
   void onInfo(const sensor_msgs::CameraInfo::ConstPtr& info) {
+    const auto side = [](std::uint32_t n) {  // pixels, within int (an image's sides are ints)
+      return static_cast<int>(std::min<std::uint32_t>(n, std::numeric_limits<int>::max()));
+    };
+    const map::DepthIntrinsics K{side(info->width), side(info->height), info->K[0], info->K[4], info->K[2], info->K[5]};
+    const common::Status st = K.validate();
     std::lock_guard<std::mutex> lock(input_mutex_);
-    map::DepthIntrinsics K{static_cast<int>(info->width), static_cast<int>(info->height), info->K[0], info->K[4],
-                           info->K[2], info->K[5]};
+    if (!st.ok()) {
+      NODELET_WARN_STREAM_THROTTLE(warn_period_, getName() << ": camera_info refused: " << st.message() << "; "
+                                                           << (intrinsics_ ? "the last valid intrinsics stay"
+                                                                           : "no frame is integrated until a valid one"));
+      return;
+    }
     intrinsics_ = K;
   }
 

@@ -6,12 +6,15 @@
 #include <nav_msgs/Odometry.h>
 #include <octomap/OcTree.h>
 #include <ros/ros.h>
+#include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 
 #include "go_feap/MapUpdate.h"
 #include "go_feap/PositionCommand.h"
@@ -170,6 +173,69 @@ TEST_F(MapperTest, TurningInPlaceMapsTheWallsBadFramesAreSkippedSaveMapWorks) {
   srv.request.path = "/nonexistent_dir/x.bt";
   ASSERT_TRUE(ros::service::call("save_map", srv));
   EXPECT_FALSE(srv.response.success);
+}
+
+// The probe mapper, fed only by this test, gets the simulated camera's camera_info and then one it cannot
+// use (a zero K, NaN, a 0x0 image): it keeps the last valid intrinsics, so the next real frame and its pose
+// are integrated (a map_update each), where it used to skip every frame until a valid camera_info came.
+// Before any valid one, a frame is skipped.
+TEST_F(MapperTest, ACameraInfoThatCannotBeUsedIsRefusedAndTheLastValidOneStays) {
+  auto info_pub = nh_.advertise<sensor_msgs::CameraInfo>("probe/camera_info", 5, /*latch=*/true);
+  auto depth_pub = nh_.advertise<sensor_msgs::Image>("probe/depth", 5);
+  auto pose_pub = nh_.advertise<geometry_msgs::PoseStamped>("probe/camera_pose", 5);
+  std::size_t updates = 0;
+  auto update_sub = nh_.subscribe<go_feap::MapUpdate>("probe/map_update", 10,
+                                                      [&](const go_feap::MapUpdate::ConstPtr&) { ++updates; });
+  sensor_msgs::CameraInfo::ConstPtr info;
+  sensor_msgs::Image::ConstPtr depth;
+  geometry_msgs::PoseStamped::ConstPtr pose;
+  {
+    auto i = nh_.subscribe<sensor_msgs::CameraInfo>("camera_info", 5, [&](const sensor_msgs::CameraInfo::ConstPtr& m) { info = m; });
+    auto d = nh_.subscribe<sensor_msgs::Image>("depth", 5, [&](const sensor_msgs::Image::ConstPtr& m) { depth = m; });
+    auto q = nh_.subscribe<geometry_msgs::PoseStamped>("camera_pose", 5,
+                                                       [&](const geometry_msgs::PoseStamped::ConstPtr& m) { pose = m; });
+    ASSERT_TRUE(spinUntil([&] { return info && depth && pose && depth->header.stamp == pose->header.stamp; }, 30.0))
+        << "no camera_info, or no depth frame with its pose";
+  }
+  ASSERT_TRUE(spinUntil(
+      [&] {
+        return info_pub.getNumSubscribers() > 0 && depth_pub.getNumSubscribers() > 0 &&
+               pose_pub.getNumSubscribers() > 0 && update_sub.getNumPublishers() > 0;
+      },
+      30.0))
+      << "the probe mapper is not connected";
+  int frame = 0;
+  auto send_frame = [&] {  // the same frame and pose, newly stamped each time (the pair is matched by stamp)
+    sensor_msgs::Image d = *depth;
+    geometry_msgs::PoseStamped q = *pose;
+    d.header.stamp = q.header.stamp = depth->header.stamp + ros::Duration(0.001 * ++frame);
+    pose_pub.publish(q);
+    depth_pub.publish(d);
+    spinUntil([] { return false; }, 0.5);
+  };
+  sensor_msgs::CameraInfo zero_k = *info;
+  std::fill(zero_k.K.begin(), zero_k.K.end(), 0.0);
+  sensor_msgs::CameraInfo nan_fx = *info;
+  nan_fx.K[0] = std::numeric_limits<double>::quiet_NaN();
+  sensor_msgs::CameraInfo no_size = *info;
+  no_size.width = no_size.height = 0;
+
+  info_pub.publish(zero_k);  // before any valid one: the frame is skipped
+  spinUntil([] { return false; }, 0.3);
+  send_frame();
+  EXPECT_EQ(updates, 0u) << "a frame integrated with a zero K";
+  info_pub.publish(*info);
+  spinUntil([] { return false; }, 0.3);
+  send_frame();
+  ASSERT_TRUE(spinUntil([&] { return updates == 1; }, 10.0)) << "the frame with a valid camera_info was not integrated";
+  for (const sensor_msgs::CameraInfo& bad : {zero_k, nan_fx, no_size}) {
+    const std::size_t before = updates;
+    info_pub.publish(bad);
+    spinUntil([] { return false; }, 0.3);
+    send_frame();
+    EXPECT_TRUE(spinUntil([&] { return updates == before + 1; }, 10.0))
+        << "no frame integrated after a camera_info with K " << bad.K[0] << ", " << bad.width << "x" << bad.height;
+  }
 }
 
 }  // namespace

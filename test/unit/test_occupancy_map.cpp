@@ -2,8 +2,13 @@
 // known scenes, integrated, and compared voxel by voxel.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
+#include <functional>
 #include <set>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "go_feap/map/voxel_map.h"
 #include "go_feap/sim/depth_camera.h"
@@ -192,6 +197,22 @@ TEST(OccupancyMap, BadFramesAreRefusedAndChangeNothing) {
   cv::Mat ok(cam.height, cam.width, CV_32FC1, cv::Scalar(2.0f));
   auto c = m.integrate(ok, K, bad);
   ASSERT_FALSE(c);
+  // Intrinsics that cannot describe the image: named, and the frame changes nothing.
+  for (auto [field, broken] : std::vector<std::pair<std::string, std::function<void(map::DepthIntrinsics&)>>>{
+           {"0x0", [](map::DepthIntrinsics& k) { k.width = 0, k.height = 0; }},
+           {"fx", [](map::DepthIntrinsics& k) { k.fx = 0.0; }},
+           {"fx", [](map::DepthIntrinsics& k) { k.fy = std::nan(""); }},
+           {"cx", [](map::DepthIntrinsics& k) { k.cy = INFINITY; }}}) {
+    map::DepthIntrinsics k = K;
+    broken(k);
+    const common::Status st = k.validate();
+    ASSERT_FALSE(st.ok()) << field;
+    EXPECT_NE(st.message().find(field), std::string::npos) << st.message();
+    if (k.width == K.width) {
+      EXPECT_FALSE(m.integrate(ok, k, T)) << field;
+    }
+  }
+  EXPECT_TRUE(K.validate().ok()) << K.validate().message();
   EXPECT_EQ(m.occupancy().knownCount(), 0u);
 }
 

@@ -37,8 +37,11 @@ struct OccupancyConfig {
 
 /// Pinhole camera model of the depth image.
 struct DepthIntrinsics {
-  int width = 0, height = 0;
-  double fx = 0, fy = 0, cx = 0, cy = 0;
+  int width = 0, height = 0;             ///< pixels
+  double fx = 0, fy = 0, cx = 0, cy = 0;  ///< pixels
+
+  /// Error naming what is wrong unless width and height are > 0, fx and fy finite and > 0, cx and cy finite.
+  common::Status validate() const;
 };
 
 /// What one integrated frame changed.
