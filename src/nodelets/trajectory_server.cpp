@@ -12,6 +12,7 @@
 #include <pluginlib/class_list_macros.hpp>
 #include <ros/ros.h>
 
+#include <algorithm>
 #include <mutex>
 #include <optional>
 #include <sstream>
