@@ -76,7 +76,9 @@ class QuadrotorSim : public nodelet::Nodelet {
     NODELET_INFO_STREAM(me << ": vehicle at (" << start.transpose() << "), yaw " << start_yaw << ", scene '"
                            << scene.name << "', rate factor " << rate_factor_);
     running_ = true;
-    thread_ = std::thread(&QuadrotorSim::loop, this);
+    // An exception escaping a thread ends the process: here it ends the simulation, logged, and the
+    // nodelets in the manager keep what they have (the odometry timeouts then hold the chain).
+    thread_ = std::thread([this] { ros_guard::run(getName(), "the simulation thread", [this] { loop(); }); });
   }
 
   void onCommand(const PositionCommand::ConstPtr& msg) {
