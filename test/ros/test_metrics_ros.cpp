@@ -80,8 +80,11 @@ TEST(MetricsRecorder, SummaryHoldsThePlayedRunAndOddStatusesNeitherEndNorCountIn
     rosgraph_msgs::Clock c;
     c.clock = ros::Time(now);
     clock_pub.publish(c);
-    spinUntil([] { return false; }, 0.01);
+    spinUntil([] { return false; }, 0.02);
   };
+  // Each topic has its own queue in the recorder (odometry 20 deep), handled by the manager's threads in
+  // any order: what must come before what is kept apart by a pause.
+  auto settle = [] { spinUntil([] { return false; }, 0.5); };
   auto send = [&](const go_feap::ExplorationStatus& s) {
     go_feap::ExplorationStatus m = s;
     m.header.stamp = ros::Time(now);
@@ -120,9 +123,11 @@ TEST(MetricsRecorder, SummaryHoldsThePlayedRunAndOddStatusesNeitherEndNorCountIn
   send(status(7, "SEVEN", 1.0));
   fly(start + Vec3(0.0, 0.5, 0.0));
   fly(start);
+  settle();
   // The run starts with a status whose elapsed time lies far beyond the clock (a status from a tool or
   // from another run): this ended the whole nodelet manager.
   send(status(go_feap::ExplorationStatus::EXPLORE, "EXPLORE", 500.0));
+  settle();
 
   // The flight: to the wall, 5 cm into it, and back; 5 cm steps.
   std::vector<Vec3> path{start};
@@ -138,6 +143,7 @@ TEST(MetricsRecorder, SummaryHoldsThePlayedRunAndOddStatusesNeitherEndNorCountIn
   for (double ms : {2.0, 4.0, 9.0}) compute("frontier", ms);
   compute("global", 5.0);
   for (int i = 0; i < 10; ++i) tick(0.1);
+  settle();
   EXPECT_GT(paths, 0) << "no flown_path sample after the run started";
 
   go_feap::ExplorationStatus finished = status(go_feap::ExplorationStatus::FINISHED, "FINISHED", 42.5);
