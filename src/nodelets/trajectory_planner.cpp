@@ -174,7 +174,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     // The vehicle is far from the reference of this planner's trajectory (the odometry jumped, or the
     // controller lost the trajectory): the reference is no start for the next plan, and following it on
     // would have the controller close the whole gap at once. Plan again from the odometry.
-    if (current_ && command_ && now.toSec() - command_->header.stamp.toSec() < 0.1 &&
+    if (current_ && commandRecent(now) &&
         command_->trajectory_flag != PositionCommand::TRAJECTORY_STATUS_EMPTY &&
         command_->trajectory_id == static_cast<std::uint32_t>(current_->id)) {
       const common::Vec3 reference(command_->position.x, command_->position.y, command_->position.z);
@@ -206,10 +206,16 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     }
   }
 
+  // A position_cmd from the last 0.1 s: the reference the server is sending now (in seconds as doubles:
+  // its stamp is the sender's).
+  bool commandRecent(const ros::Time& now) const {
+    return command_ && now.toSec() - command_->header.stamp.toSec() < 0.1;
+  }
+
   // Start state: the commanded state when recent (continuity of the reference), else odometry (also
   // right after the vehicle was found far from the reference).
   void startState(const ros::Time& now, trajectory::PlanRequest& request) const {
-    if (!from_odometry_ && command_ && now.toSec() - command_->header.stamp.toSec() < 0.1) {
+    if (!from_odometry_ && commandRecent(now)) {
       request.start = common::Vec3(command_->position.x, command_->position.y, command_->position.z);
       request.velocity = common::Vec3(command_->velocity.x, command_->velocity.y, command_->velocity.z);
       request.acceleration =

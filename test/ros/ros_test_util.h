@@ -30,6 +30,36 @@ bool spinUntil(Pred pred, double wall_timeout) {
   return pred();
 }
 
+/// A periodic action in simulated time: due() holds at `first` (at once by default) and then once every
+/// `period` seconds, as the test plays a sensor or a planner at a fixed rate.
+class Every {
+ public:
+  explicit Every(double period, ros::Time first = ros::Time()) : period_(period), next_(first) {}
+  bool due() {
+    if (ros::Time::now() < next_) return false;
+    next_ = ros::Time::now() + ros::Duration(period_);
+    return true;
+  }
+
+ private:
+  double period_;
+  ros::Time next_;
+};
+
+/// Spins, calling tick() each time round (to publish what is due), until until() holds or `sim_seconds`
+/// of simulated time pass (at most `wall_timeout` wall seconds); returns until().
+template <typename Tick, typename Until>
+bool spinSimUntil(double sim_seconds, Tick tick, Until until, double wall_timeout = 60.0) {
+  const ros::Time end = ros::Time::now() + ros::Duration(sim_seconds);
+  spinUntil(
+      [&] {
+        tick();
+        return until() || ros::Time::now() >= end;
+      },
+      wall_timeout);
+  return until();
+}
+
 /// The scene named by the test node's private parameters `scene` and `seed`.
 inline common::Result<world::Scene> sceneFromParams() {
   ros::NodeHandle pnh("~");

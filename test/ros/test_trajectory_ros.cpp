@@ -24,6 +24,8 @@ namespace {
 
 using go_feap::common::Vec3;
 using go_feap::test::latticeClearance;
+using go_feap::test::Every;
+using go_feap::test::spinSimUntil;
 using go_feap::test::spinUntil;
 
 class TrajectoryTargetTest : public ::testing::Test {
@@ -72,18 +74,9 @@ class TrajectoryTargetTest : public ::testing::Test {
   // `sim_seconds` of simulated time, or until `until()` holds; returns until().
   template <typename Until>
   bool publishWhile(const go_feap::ViewpointPath& m, double sim_seconds, Until until) {
-    const ros::Time end = ros::Time::now() + ros::Duration(sim_seconds);
-    ros::Time next;
-    return spinUntil(
-        [&] {
-          if (ros::Time::now() >= next) {
-            target_pub_.publish(m);
-            next = ros::Time::now() + ros::Duration(0.2);
-          }
-          return until() || ros::Time::now() >= end;
-        },
-        60.0) &&
-           until();
+    Every target(0.2);
+    return spinSimUntil(
+        sim_seconds, [&] { if (target.due()) target_pub_.publish(m); }, until);
   }
   bool atRestNear(const Vec3& p) const { return (position_ - p).norm() < 0.08 && speed_ < 0.1; }
 
@@ -232,23 +225,17 @@ TEST_F(TrajectoryTargetTest, AnOdometryJumpAwayFromTheReferenceIsPlannedFromTheO
   go_feap::ViewpointPath goal = target(here, 1);
   goal.yaws.front() = yaw_ + 1.0;  // a turn where the vehicle is: a trajectory is planned from anywhere
   auto play = [&](double seconds, const std::function<bool()>& until) {
-    const ros::Time end = ros::Time::now() + ros::Duration(seconds);
-    ros::Time next, next_target;
-    return spinUntil(
+    Every send(0.05), target(0.2);
+    return spinSimUntil(
+        seconds,
         [&] {
-          if (ros::Time::now() >= next) {
+          if (send.due()) {
             odom_pub.publish(odometry());
             if (!planned.empty()) cmd_pub.publish(command());
-            next = ros::Time::now() + ros::Duration(0.05);
           }
-          if (ros::Time::now() >= next_target) {
-            target_pub.publish(goal);
-            next_target = ros::Time::now() + ros::Duration(0.2);
-          }
-          return until() || ros::Time::now() >= end;
+          if (target.due()) target_pub.publish(goal);
         },
-        60.0) &&
-           until();
+        until);
   };
   ASSERT_TRUE(play(10.0, [&] { return !planned.empty(); })) << "the probe planned no trajectory";
   // On the reference: nothing new.
@@ -279,24 +266,17 @@ TEST_F(TrajectoryTargetTest, AnOdometryJumpAwayFromTheReferenceIsPlannedFromTheO
   goal = target(odometry_pose, 2);
   goal.yaws.front() = yaw_ - 1.0;
   const std::int64_t jumped_id = planned.back().id;
-  const ros::Time goal_from = ros::Time::now() + ros::Duration(0.5);  // the last usable command stale by then
-  const ros::Time end = goal_from + ros::Duration(5.0);
-  ros::Time next_send, next_goal = goal_from;
-  ASSERT_TRUE(spinUntil(
+  Every send(0.05), target(0.2, ros::Time::now() + ros::Duration(0.5));  // the last usable command stale by then
+  ASSERT_TRUE(spinSimUntil(
+      5.5,
       [&] {
-        if (ros::Time::now() >= next_send) {
+        if (send.due()) {
           odom_pub.publish(odometry());
           cmd_pub.publish(broken());
-          next_send = ros::Time::now() + ros::Duration(0.05);
         }
-        if (ros::Time::now() >= next_goal) {
-          target_pub.publish(goal);
-          next_goal = ros::Time::now() + ros::Duration(0.2);
-        }
-        return planned.back().id != jumped_id || ros::Time::now() >= end;
+        if (target.due()) target_pub.publish(goal);
       },
-      60.0) &&
-              planned.back().id != jumped_id)
+      [&] { return planned.back().id != jumped_id; }))
       << "no trajectory to the new target while the commands were not finite";
   const go_feap::trajectory::TrajectorySample from = go_feap::trajectory::sampleTrajectory(planned.back(), 0.0);
   ASSERT_TRUE(from.position.allFinite() && from.velocity.allFinite());
@@ -332,17 +312,9 @@ TEST(TrajectoryServerOdometry, UnusableOdometryIsRefusedAndTheFirstGoodPoseIsHel
       odometry(Vec3(nan, 0.0, 1.0), 1.0, 0.0, 0.0, 0.0)};  // position not finite
   // Each unusable kind for 0.5 s of simulated time at 20 Hz: no command follows any.
   for (const nav_msgs::Odometry& m : bad) {
-    const ros::Time end = ros::Time::now() + ros::Duration(0.5);
-    ros::Time next;
-    spinUntil(
-        [&] {
-          if (ros::Time::now() >= next) {
-            odom_pub.publish(m);
-            next = ros::Time::now() + ros::Duration(0.05);
-          }
-          return ros::Time::now() >= end;
-        },
-        30.0);
+    Every send(0.05);
+    spinSimUntil(
+        0.5, [&] { if (send.due()) odom_pub.publish(m); }, [] { return false; }, 30.0);
   }
   spinUntil([] { return false; }, 0.3);  // anything still in flight
   EXPECT_TRUE(commands.empty()) << commands.size() << " commands after unusable odometry, the first with yaw "
@@ -350,16 +322,9 @@ TEST(TrajectoryServerOdometry, UnusableOdometryIsRefusedAndTheFirstGoodPoseIsHel
   commands.clear();
   // Then a usable pose: held, heading included.
   const nav_msgs::Odometry good = odometry(held, std::cos(0.5 * yaw), 0.0, 0.0, std::sin(0.5 * yaw));
-  ros::Time next;
-  ASSERT_TRUE(spinUntil(
-      [&] {
-        if (ros::Time::now() >= next) {
-          odom_pub.publish(good);
-          next = ros::Time::now() + ros::Duration(0.05);
-        }
-        return commands.size() >= 20;
-      },
-      30.0))
+  Every send(0.05);
+  ASSERT_TRUE(spinSimUntil(
+      60.0, [&] { if (send.due()) odom_pub.publish(good); }, [&] { return commands.size() >= 20; }, 30.0))
       << "no hold command after usable odometry";
   for (const auto& c : commands) {
     ASSERT_TRUE(std::isfinite(c->yaw));
@@ -389,24 +354,19 @@ TEST(TrajectoryServerStart, TrajectoriesStartingFarFromTheOdometryAreRefused) {
       60.0))
       << "the probe trajectory server is not connected";
   const Vec3 vehicle(0.5, 0.5, 1.5);
-  ros::Time next_odom;
+  Every send(0.05);
   // Spins for `seconds` of simulated time, the odometry at `vehicle` at 20 Hz; the latest command then.
   auto hover = [&](double seconds) {
-    const ros::Time end = ros::Time::now() + ros::Duration(seconds);
-    spinUntil(
-        [&] {
-          if (ros::Time::now() >= next_odom) {
-            nav_msgs::Odometry m;
-            m.header.stamp = ros::Time::now();
-            m.header.frame_id = "world";
-            m.pose.pose.position.x = vehicle.x(), m.pose.pose.position.y = vehicle.y(), m.pose.pose.position.z = vehicle.z();
-            m.pose.pose.orientation.w = 1.0;
-            odom_pub.publish(m);
-            next_odom = ros::Time::now() + ros::Duration(0.05);
-          }
-          return ros::Time::now() >= end;
-        },
-        30.0);
+    const auto publish_odometry = [&] {
+      nav_msgs::Odometry m;
+      m.header.stamp = ros::Time::now();
+      m.header.frame_id = "world";
+      m.pose.pose.position.x = vehicle.x(), m.pose.pose.position.y = vehicle.y(), m.pose.pose.position.z = vehicle.z();
+      m.pose.pose.orientation.w = 1.0;
+      odom_pub.publish(m);
+    };
+    spinSimUntil(
+        seconds, [&] { if (send.due()) publish_odometry(); }, [] { return false; }, 30.0);
     return command;
   };
   hover(0.5);
