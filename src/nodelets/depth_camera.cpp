@@ -12,6 +12,8 @@
 #include <tf2_eigen/tf2_eigen.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 
+#include <cmath>
+#include <limits>
 #include <random>
 
 #include "go_feap/common/config_groups.h"
@@ -45,7 +47,7 @@ class DepthCamera : public nodelet::Nodelet {
     ros_params::requireOrThrow(rate_ > 0.0 && rate_ <= 100.0, me,
                                "parameter '" + p.fullName("depth_camera/rate") + "' must be in (0, 100] Hz");
     const Eigen::Matrix3d R = T_B_C.topLeftCorner<3, 3>();
-    ros_params::requireOrThrow(T_B_C.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1)) &&
+    ros_params::requireOrThrow(T_B_C.allFinite() && T_B_C.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1)) &&
                                    (R.transpose() * R).isApprox(Eigen::Matrix3d::Identity(), 1e-6) &&
                                    R.determinant() > 0.0,
                                me, "parameter '" + p.fullName("depth_camera/T_B_C") + "' must be a rigid transform");
@@ -76,13 +78,14 @@ class DepthCamera : public nodelet::Nodelet {
   void onOdom(const nav_msgs::Odometry::ConstPtr& odom) {
     const ros::Time stamp = odom->header.stamp;
     const double period = 1.0 / rate_;
-    const double ahead = next_frame_.isZero() ? 0.0 : next_frame_.toSec() - stamp.toSec();  // s to the next frame
+    const double now = stamp.toSec();
+    const double ahead = std::isnan(next_frame_) ? 0.0 : next_frame_ - now;  // s to the next frame
     if (ahead > 0.0 && ahead <= period) return;  // not yet
     // On time: the next frame one period on. More than a period late, or more than a period early (a
     // clock that went back, or one odometry stamp far ahead, which would otherwise hold every frame
-    // back until that time): the frames start again from this stamp.
-    next_frame_ = (next_frame_.isZero() || ahead < -period || ahead > period) ? stamp + ros::Duration(period)
-                                                                              : next_frame_ + ros::Duration(period);
+    // back until that time): the frames start again from this stamp. In seconds as a double: a
+    // ros::Time one period past a stamp near 2^32 s would throw.
+    next_frame_ = (std::isnan(next_frame_) || ahead < -period || ahead > period) ? now + period : next_frame_ + period;
     const std::string bad = ros_conv::odometryPoseProblem(odom->pose.pose);
     if (!bad.empty()) {
       NODELET_WARN_STREAM_THROTTLE(1.0, getName() << ": odometry refused: " << bad << "; frame skipped");
@@ -133,7 +136,7 @@ class DepthCamera : public nodelet::Nodelet {
   std::unique_ptr<world::Scene> scene_;
   std::unique_ptr<sim::DepthRenderer> renderer_;
   std::mt19937_64 rng_;
-  ros::Time next_frame_;
+  double next_frame_ = std::numeric_limits<double>::quiet_NaN();  // stamp of the next frame, s; NaN before the first
   ros::Publisher depth_pub_, info_pub_, pose_pub_;
   ros::Subscriber odom_sub_;
   tf2_ros::StaticTransformBroadcaster static_tf_;

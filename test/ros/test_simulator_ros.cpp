@@ -152,6 +152,22 @@ TEST_F(SimulatorTest, CommandMovesOdomCameraStampsMatchNanIsIgnored) {
   for (const auto& d : depths_) current += d->header.stamp.sec < 4000000000u;
   EXPECT_GE(current, 10u) << depths_.size() << " depth frames in 1 s after the far stamp, " << current
                           << " at the simulator's time";
+
+  // One stamped within a frame period of the largest time a ros::Time holds: its frame is taken (the next
+  // frame's time, one period on, is past that largest time), and the frames after it follow the simulator.
+  nav_msgs::Odometry edge = *last_odom_;
+  edge.header.stamp = ros::Time(4294967295u, 990000000u);
+  depths_.clear();
+  odom_pub.publish(edge);
+  spinSim(1.0);
+  std::size_t at_edge = 0;
+  current = 0;
+  for (const auto& d : depths_) {
+    at_edge += d->header.stamp == edge.header.stamp;
+    current += d->header.stamp.sec < 4000000000u;
+  }
+  EXPECT_EQ(at_edge, 1u) << "no depth frame at the stamp 1 ms before the largest ros::Time";
+  EXPECT_GE(current, 10u) << "after the stamp at the largest ros::Time";
 }
 
 }  // namespace
