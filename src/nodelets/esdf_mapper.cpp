@@ -22,6 +22,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <map>
@@ -32,7 +33,9 @@
 #include "go_feap/SaveMap.h"
 #include "go_feap/common/config_groups.h"
 #include "go_feap/ros/compute_time.h"
+#include "go_feap/ros/conversions.h"
 #include "go_feap/ros/guarded.h"
+#include "go_feap/ros/message_checks.h"
 #include "go_feap/ros/params.h"
 #include "go_feap/ros/shared_map.h"
 
@@ -61,10 +64,16 @@ class EsdfMapper : public nodelet::Nodelet {
     ros_params::requireOrThrow(box.valid(), me, "parameter '" + p.fullName("exploration_box") + "' needs min < max");
     ros_params::requireOrThrow(sync_mode_ == "exact" || sync_mode_ == "approximate" || sync_mode_ == "tf", me,
                                "parameter '" + p.fullName("mapper/sync_mode") + "' must be exact, approximate or tf");
-    ros_params::requireOrThrow(pose_tolerance_ >= 0.0 && max_pose_jump_ > 0.0 && cloud_period_ >= 0.0 &&
-                                   warn_period_ > 0.0,
-                               me, "parameters '" + p.fullName("mapper") +
-                                       "/{pose_tolerance, max_pose_jump, cloud_period, warn_period}' must be >= 0 (> 0 for the last)");
+    ros_params::requireOrThrow(pose_tolerance_ >= 0.0 && pose_tolerance_ <= 1.0, me,
+                               "parameter '" + p.fullName("mapper/pose_tolerance") + "' must be in [0, 1] s");
+    ros_params::requireOrThrow(std::isfinite(max_pose_jump_) && max_pose_jump_ > 0.0, me,
+                               "parameter '" + p.fullName("mapper/max_pose_jump") + "' must be finite and > 0");
+    ros_params::requireOrThrow(std::isfinite(cloud_period_) && cloud_period_ >= 0.0, me,
+                               "parameter '" + p.fullName("mapper/cloud_period") + "' must be finite and >= 0");
+    ros_params::requireOrThrow(std::isfinite(warn_period_) && warn_period_ > 0.0, me,
+                               "parameter '" + p.fullName("mapper/warn_period") + "' must be finite and > 0");
+    ros_params::requireOrThrow(std::isfinite(slice_height_), me,
+                               "parameter '" + p.fullName("mapper/esdf_slice_height") + "' must be finite");
 
     shared_ = std::make_shared<ros_map::SharedMap>(std::make_unique<map::VoxelMap>(c, box));
     compute_pub_ = nh.advertise<ComputeTime>("compute_time", 20);
@@ -122,12 +131,21 @@ class EsdfMapper : public nodelet::Nodelet {
     // In seconds as doubles: ros::Time subtraction throws beyond 2^31 s, and a stamp is the sender's.
     const double dt = std::abs(depth->header.stamp.toSec() - pose->header.stamp.toSec());
     if (dt > pose_tolerance_ + 1e-9) return skip("pose_time", "camera_pose is " + std::to_string(dt) + " s from the image");
+    // A pose in another frame (odom, the body) would put the frame in the wrong place of the map, and an
+    // unset (all-zero) quaternion would be read as no rotation at all.
+    if (pose->header.frame_id != world_frame_)
+      return skip("pose_frame", "camera_pose is in frame '" + pose->header.frame_id + "', not the map's '" +
+                                    world_frame_ + "'");
+    const std::string bad = ros_conv::odometryPoseProblem(pose->pose);
+    if (!bad.empty()) return skip("pose", "camera_pose refused: " + bad);
     Eigen::Isometry3d T_W_C;
     tf2::fromMsg(pose->pose, T_W_C);
     integrate(depth, T_W_C);
   }
 
   void onDepthTf(const sensor_msgs::Image::ConstPtr& depth) {
+    // Time 0 asks tf2 for the latest transform, which is not the image's pose.
+    if (depth->header.stamp.isZero()) return skip("stamp", "depth image stamped 0: its camera pose cannot be looked up");
     geometry_msgs::TransformStamped tf;
     try {
       tf = tf_buffer_->lookupTransform(world_frame_, depth->header.frame_id, depth->header.stamp,
@@ -153,13 +171,12 @@ class EsdfMapper : public nodelet::Nodelet {
       return skip("pose_jump", "camera pose jumped by more than " + std::to_string(max_pose_jump_) +
                                    " m since the last frame (relocalisation?)");
     }
-    if (msg->encoding != sensor_msgs::image_encodings::TYPE_32FC1 &&
-        msg->encoding != sensor_msgs::image_encodings::TYPE_16UC1 && msg->encoding != "mono16")
-      return skip("encoding", "depth encoding '" + msg->encoding + "' is neither 32FC1 (m) nor 16UC1 (mm)");
+    const std::string bad = ros_check::depthImageProblem(*msg);
+    if (!bad.empty()) return skip("image", "depth image refused: " + bad);
     cv_bridge::CvImageConstPtr image;
     try {
       image = cv_bridge::toCvShare(msg);
-    } catch (const cv_bridge::Exception& e) {
+    } catch (const std::exception& e) {  // cv_bridge::Exception, or cv::Exception from OpenCV under it
       return skip("image", std::string("cannot read the depth image: ") + e.what());
     }
     const auto t0 = std::chrono::steady_clock::now();

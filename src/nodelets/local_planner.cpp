@@ -99,10 +99,15 @@ class LocalPlanner : public nodelet::Nodelet {
     speed_ = velocity_.norm();
   }
   void onDepth(const sensor_msgs::Image::ConstPtr& msg) {
+    const std::string bad = ros_check::depthImageProblem(*msg);
+    if (!bad.empty()) {
+      NODELET_WARN_STREAM_THROTTLE(5.0, getName() << ": depth image refused: " << bad << "; frame not counted");
+      return;
+    }
     cv_bridge::CvImageConstPtr image;
     try {
       image = cv_bridge::toCvShare(msg);
-    } catch (const cv_bridge::Exception& e) {
+    } catch (const std::exception& e) {  // cv_bridge::Exception, or cv::Exception from OpenCV under it
       NODELET_WARN_STREAM_THROTTLE(5.0, getName() << ": depth image unreadable (" << e.what() << "); skipped");
       return;
     }

@@ -1,6 +1,9 @@
 #include "go_feap/ros/message_checks.h"
 
+#include <sensor_msgs/image_encodings.h>
+
 #include <cmath>
+#include <cstdint>
 #include <sstream>
 #include <unordered_set>
 
@@ -96,6 +99,24 @@ std::string layerBoundsProblem(const LayerBounds& msg) {
   }
   if (msg.count < 1 || msg.index >= msg.count)
     return "band index " + std::to_string(msg.index) + " is not below the count " + std::to_string(msg.count);
+  return std::string();
+}
+
+std::string depthImageProblem(const sensor_msgs::Image& msg) {
+  std::uint64_t bytes_per_pixel = 0;
+  if (msg.encoding == sensor_msgs::image_encodings::TYPE_32FC1) bytes_per_pixel = 4;
+  if (msg.encoding == sensor_msgs::image_encodings::TYPE_16UC1 || msg.encoding == sensor_msgs::image_encodings::MONO16)
+    bytes_per_pixel = 2;
+  if (bytes_per_pixel == 0) return "encoding '" + msg.encoding + "' is neither 32FC1 (m) nor 16UC1 / mono16 (mm)";
+  const std::string size = std::to_string(msg.width) + "x" + std::to_string(msg.height);
+  if (msg.width == 0 || msg.height == 0) return "the image is " + size;
+  if (msg.step < msg.width * bytes_per_pixel || msg.step % bytes_per_pixel != 0)
+    return "step " + std::to_string(msg.step) + " is not a whole number of " + std::to_string(bytes_per_pixel) +
+           "-byte pixels at least " + std::to_string(msg.width) + " wide";
+  const std::uint64_t expected = std::uint64_t{msg.height} * msg.step;
+  if (msg.data.size() != expected)
+    return std::to_string(msg.data.size()) + " bytes of data, where " + size + " with step " +
+           std::to_string(msg.step) + " needs " + std::to_string(expected);
   return std::string();
 }
 

@@ -7,6 +7,8 @@
 #include <functional>
 #include <limits>
 
+#include <cv_bridge/cv_bridge.h>
+#include <sensor_msgs/image_encodings.h>
 #include <std_msgs/UInt32.h>
 
 #include <boost/make_shared.hpp>
@@ -25,6 +27,7 @@ using go_feap::ros_conv::yawOf;
 using go_feap::ros_check::frontierArrayProblem;
 using go_feap::ros_check::frontierOutside;
 using go_feap::ros_check::globalTourProblem;
+using go_feap::ros_check::depthImageProblem;
 using go_feap::ros_check::explorationStatusProblem;
 using go_feap::ros_check::layerBoundsProblem;
 using go_feap::ros_check::mapUpdateProblem;
@@ -288,6 +291,54 @@ struct ThrowsOnZero {
     if (msg->data == 0) throw std::runtime_error("zero");
   }
 };
+
+// Depth images: what the check passes, cv_bridge reads as a cv::Mat whose rows all lie in the data; what
+// it names is each way of getting that wrong, including a step whose height x step wraps round 2^32 and
+// so matches a tiny buffer in cv_bridge's own 32-bit check.
+TEST(MessageChecks, DepthImagesThatCannotBeReadWholeAreNamed) {
+  sensor_msgs::Image img;
+  img.encoding = sensor_msgs::image_encodings::TYPE_32FC1;
+  img.width = 4;
+  img.height = 3;
+  img.step = 20;  // padded rows
+  img.data.assign(60, 0);
+  EXPECT_EQ(depthImageProblem(img), "");
+  const cv::Mat m = cv_bridge::toCvShare(boost::make_shared<sensor_msgs::Image>(img))->image;
+  EXPECT_EQ(m.rows, 3);
+  EXPECT_EQ(m.cols, 4);
+  EXPECT_LE(static_cast<std::size_t>(m.ptr(2) - m.ptr(0)) + 16u, img.data.size());
+  for (const char* mm : {"16UC1", "mono16"}) {
+    sensor_msgs::Image u = img;
+    u.encoding = mm;
+    u.step = 8;
+    u.data.assign(24, 0);
+    EXPECT_EQ(depthImageProblem(u), "") << mm;
+  }
+
+  sensor_msgs::Image bad = img;
+  bad.encoding = "rgb8";
+  EXPECT_TRUE(says(depthImageProblem(bad), "encoding 'rgb8'")) << depthImageProblem(bad);
+  bad = img;
+  bad.width = 0;
+  EXPECT_TRUE(says(depthImageProblem(bad), "0x3")) << depthImageProblem(bad);
+  bad = img;
+  bad.step = 12;  // narrower than 4 pixels of 4 bytes
+  EXPECT_TRUE(says(depthImageProblem(bad), "step 12")) << depthImageProblem(bad);
+  bad = img;
+  bad.step = 18;  // not a whole number of pixels
+  bad.data.assign(54, 0);
+  EXPECT_TRUE(says(depthImageProblem(bad), "step 18")) << depthImageProblem(bad);
+  bad = img;
+  bad.data.pop_back();
+  EXPECT_TRUE(says(depthImageProblem(bad), "59 bytes")) << depthImageProblem(bad);
+  // 480 rows of 8947852 bytes are 4294968960 bytes, which is 1664 modulo 2^32.
+  bad = img;
+  bad.width = 640;
+  bad.height = 480;
+  bad.step = 8947852;
+  bad.data.assign(1664, 0);
+  EXPECT_TRUE(says(depthImageProblem(bad), "needs 4294968960")) << depthImageProblem(bad);
+}
 
 TEST(Guarded, AnExceptionFromACallbackStaysInItAndTheNextMessageIsTaken) {
   namespace guard = go_feap::ros_guard;

@@ -12,6 +12,7 @@
 #include <sensor_msgs/point_cloud2_iterator.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -175,67 +176,114 @@ TEST_F(MapperTest, TurningInPlaceMapsTheWallsBadFramesAreSkippedSaveMapWorks) {
   EXPECT_FALSE(srv.response.success);
 }
 
-// The probe mapper, fed only by this test, gets the simulated camera's camera_info and then one it cannot
-// use (a zero K, NaN, a 0x0 image): it keeps the last valid intrinsics, so the next real frame and its pose
-// are integrated (a map_update each), where it used to skip every frame until a valid camera_info came.
-// Before any valid one, a frame is skipped.
-TEST_F(MapperTest, ACameraInfoThatCannotBeUsedIsRefusedAndTheLastValidOneStays) {
-  auto info_pub = nh_.advertise<sensor_msgs::CameraInfo>("probe/camera_info", 5, /*latch=*/true);
-  auto depth_pub = nh_.advertise<sensor_msgs::Image>("probe/depth", 5);
-  auto pose_pub = nh_.advertise<geometry_msgs::PoseStamped>("probe/camera_pose", 5);
+// The probe mapper (probe/... in mapper.test) is fed only by this test: its inputs, its map_updates counted,
+// and a real frame with its pose and camera_info from the simulated camera to feed it.
+struct Probe {
+  ros::NodeHandle nh;
+  ros::Publisher info_pub = nh.advertise<sensor_msgs::CameraInfo>("probe/camera_info", 5, /*latch=*/true);
+  ros::Publisher depth_pub = nh.advertise<sensor_msgs::Image>("probe/depth", 5);
+  ros::Publisher pose_pub = nh.advertise<geometry_msgs::PoseStamped>("probe/camera_pose", 5);
   std::size_t updates = 0;
-  auto update_sub = nh_.subscribe<go_feap::MapUpdate>("probe/map_update", 10,
-                                                      [&](const go_feap::MapUpdate::ConstPtr&) { ++updates; });
+  ros::Subscriber update_sub =
+      nh.subscribe<go_feap::MapUpdate>("probe/map_update", 10, [this](const go_feap::MapUpdate::ConstPtr&) { ++updates; });
   sensor_msgs::CameraInfo::ConstPtr info;
   sensor_msgs::Image::ConstPtr depth;
   geometry_msgs::PoseStamped::ConstPtr pose;
-  {
-    auto i = nh_.subscribe<sensor_msgs::CameraInfo>("camera_info", 5, [&](const sensor_msgs::CameraInfo::ConstPtr& m) { info = m; });
-    auto d = nh_.subscribe<sensor_msgs::Image>("depth", 5, [&](const sensor_msgs::Image::ConstPtr& m) { depth = m; });
-    auto q = nh_.subscribe<geometry_msgs::PoseStamped>("camera_pose", 5,
-                                                       [&](const geometry_msgs::PoseStamped::ConstPtr& m) { pose = m; });
-    ASSERT_TRUE(spinUntil([&] { return info && depth && pose && depth->header.stamp == pose->header.stamp; }, 30.0))
-        << "no camera_info, or no depth frame with its pose";
-  }
-  ASSERT_TRUE(spinUntil(
-      [&] {
-        return info_pub.getNumSubscribers() > 0 && depth_pub.getNumSubscribers() > 0 &&
-               pose_pub.getNumSubscribers() > 0 && update_sub.getNumPublishers() > 0;
-      },
-      30.0))
-      << "the probe mapper is not connected";
   int frame = 0;
-  auto send_frame = [&] {  // the same frame and pose, newly stamped each time (the pair is matched by stamp)
-    sensor_msgs::Image d = *depth;
-    geometry_msgs::PoseStamped q = *pose;
+
+  // Takes a frame, its pose and the camera_info from the simulated camera, and waits for the probe.
+  ::testing::AssertionResult connect() {
+    {
+      auto i = nh.subscribe<sensor_msgs::CameraInfo>("camera_info", 5, [&](const sensor_msgs::CameraInfo::ConstPtr& m) { info = m; });
+      auto d = nh.subscribe<sensor_msgs::Image>("depth", 5, [&](const sensor_msgs::Image::ConstPtr& m) { depth = m; });
+      auto q = nh.subscribe<geometry_msgs::PoseStamped>("camera_pose", 5,
+                                                        [&](const geometry_msgs::PoseStamped::ConstPtr& m) { pose = m; });
+      if (!spinUntil([&] { return info && depth && pose && depth->header.stamp == pose->header.stamp; }, 30.0))
+        return ::testing::AssertionFailure() << "no camera_info, or no depth frame with its pose";
+    }
+    if (!spinUntil(
+            [&] {
+              return info_pub.getNumSubscribers() > 0 && depth_pub.getNumSubscribers() > 0 &&
+                     pose_pub.getNumSubscribers() > 0 && update_sub.getNumPublishers() > 0;
+            },
+            30.0))
+      return ::testing::AssertionFailure() << "the probe mapper is not connected";
+    return ::testing::AssertionSuccess();
+  }
+  // Sends an image and a pose, newly stamped alike (the pair is matched by stamp), and waits 0.5 s.
+  void send(sensor_msgs::Image d, geometry_msgs::PoseStamped q) {
     d.header.stamp = q.header.stamp = depth->header.stamp + ros::Duration(0.001 * ++frame);
     pose_pub.publish(q);
     depth_pub.publish(d);
     spinUntil([] { return false; }, 0.5);
-  };
-  sensor_msgs::CameraInfo zero_k = *info;
+  }
+  void sendReal() { send(*depth, *pose); }
+};
+
+// A camera_info the mapper cannot use (a zero K, NaN, a 0x0 image) is refused and the last valid
+// intrinsics stay, so the next real frame and its pose are integrated (a map_update each), where it used
+// to skip every frame until a valid camera_info came. Before any valid one, a frame is skipped.
+TEST_F(MapperTest, ACameraInfoThatCannotBeUsedIsRefusedAndTheLastValidOneStays) {
+  Probe probe;
+  ASSERT_TRUE(probe.connect());
+  sensor_msgs::CameraInfo zero_k = *probe.info;
   std::fill(zero_k.K.begin(), zero_k.K.end(), 0.0);
-  sensor_msgs::CameraInfo nan_fx = *info;
+  sensor_msgs::CameraInfo nan_fx = *probe.info;
   nan_fx.K[0] = std::numeric_limits<double>::quiet_NaN();
-  sensor_msgs::CameraInfo no_size = *info;
+  sensor_msgs::CameraInfo no_size = *probe.info;
   no_size.width = no_size.height = 0;
 
-  info_pub.publish(zero_k);  // before any valid one: the frame is skipped
+  probe.info_pub.publish(zero_k);  // before any valid one: the frame is skipped
   spinUntil([] { return false; }, 0.3);
-  send_frame();
-  EXPECT_EQ(updates, 0u) << "a frame integrated with a zero K";
-  info_pub.publish(*info);
+  probe.sendReal();
+  EXPECT_EQ(probe.updates, 0u) << "a frame integrated with a zero K";
+  probe.info_pub.publish(*probe.info);
   spinUntil([] { return false; }, 0.3);
-  send_frame();
-  ASSERT_TRUE(spinUntil([&] { return updates == 1; }, 10.0)) << "the frame with a valid camera_info was not integrated";
+  probe.sendReal();
+  ASSERT_TRUE(spinUntil([&] { return probe.updates == 1; }, 10.0))
+      << "the frame with a valid camera_info was not integrated";
   for (const sensor_msgs::CameraInfo& bad : {zero_k, nan_fx, no_size}) {
-    const std::size_t before = updates;
-    info_pub.publish(bad);
+    const std::size_t before = probe.updates;
+    probe.info_pub.publish(bad);
     spinUntil([] { return false; }, 0.3);
-    send_frame();
-    EXPECT_TRUE(spinUntil([&] { return updates == before + 1; }, 10.0))
+    probe.sendReal();
+    EXPECT_TRUE(spinUntil([&] { return probe.updates == before + 1; }, 10.0))
         << "no frame integrated after a camera_info with K " << bad.K[0] << ", " << bad.width << "x" << bad.height;
   }
+}
+
+// Frames that would put wrong data in the map, or read past an image's buffer, are skipped and the mapper
+// takes the next real frame: a camera_pose whose orientation is unset (all zero, which tf2 reads as no
+// rotation) or given in another frame than the map's, and an image whose 480 rows of 8947852 bytes wrap
+// round 2^32 to the 1664 bytes it carries (cv_bridge's own size check passes it, and the mapper read
+// gigabytes past the buffer and took the nodelet manager down), or whose step is not a whole pixel.
+TEST_F(MapperTest, FramesWithAnUnsetOrForeignPoseOrAnImageShorterThanItsSizeAreSkipped) {
+  Probe probe;
+  ASSERT_TRUE(probe.connect());
+  probe.info_pub.publish(*probe.info);
+  spinUntil([] { return false; }, 0.3);
+  probe.sendReal();
+  ASSERT_TRUE(spinUntil([&] { return probe.updates == 1; }, 10.0)) << "a real frame was not integrated";
+
+  geometry_msgs::PoseStamped unset = *probe.pose;
+  unset.pose.orientation = geometry_msgs::Quaternion();  // x = y = z = w = 0
+  geometry_msgs::PoseStamped foreign = *probe.pose;
+  foreign.header.frame_id = "odom";
+  sensor_msgs::Image wrapped = *probe.depth;
+  wrapped.step = 8947852;
+  wrapped.data.assign(1664, 0);
+  ASSERT_EQ(std::uint64_t{wrapped.height} * wrapped.step % (std::uint64_t{1} << 32), wrapped.data.size());
+  sensor_msgs::Image odd_step = *probe.depth;
+  odd_step.step = odd_step.width * 4 + 2;
+  odd_step.data.assign(std::size_t{odd_step.height} * odd_step.step, 0);
+  probe.send(*probe.depth, unset);
+  probe.send(*probe.depth, foreign);
+  probe.send(wrapped, *probe.pose);
+  probe.send(odd_step, *probe.pose);
+  spinUntil([] { return false; }, 1.0);
+  EXPECT_EQ(probe.updates, 1u) << "a frame with an unset or foreign pose or an unreadable image was integrated";
+  probe.sendReal();
+  EXPECT_TRUE(spinUntil([&] { return probe.updates == 2; }, 10.0)) << "the next real frame was not integrated";
 }
 
 }  // namespace

@@ -1,11 +1,12 @@
-// Checks on the chain's own messages (frontiers, global_tour, layer, map_update, status, position_cmd) as
-// they arrive. Each
-// topic can also be fed from outside the chain (a bag, a tool, another planner), and a value that is not
+// Checks on the chain's own messages (frontiers, global_tour, layer, map_update, status, position_cmd) and
+// on depth images, as they arrive. Each topic can also be fed from outside the chain (a bag, a tool, another planner), and a value that is not
 // finite or a count that does not match would reach the core as a voxel index cast from NaN or a read
 // past an array's end. Each function says what is wrong (naming the field, and the frontier's id where
 // there is one), or returns an empty string; the nodelet then refuses the message whole and keeps what
 // it had.
 #pragma once
+
+#include <sensor_msgs/Image.h>
 
 #include <string>
 
@@ -18,6 +19,12 @@
 #include "go_feap/common/grid.h"
 
 namespace go_feap::ros_check {
+
+/// A depth image the chain can read: encoding 32FC1 (m), 16UC1 or mono16 (mm); width and height above
+/// 0; a row step of at least width pixels and a whole number of them; and exactly height x step bytes of
+/// data, counted in 64 bits (cv_bridge compares them in 32, so a step whose product wraps round passes
+/// there and the image is read far past its buffer).
+std::string depthImageProblem(const sensor_msgs::Image& msg);
 
 /// Every frontier: an id other than 0 (0 means "no frontier" in a local_target) and unique in the array;
 /// at least one cell; cells, P_avg and box finite, the box not inverted; T and xi finite and >= 0; as
