@@ -1,5 +1,7 @@
 #include "go_feap/world/scene.h"
 
+#include <algorithm>
+#include <cmath>
 #include <limits>
 #include <sstream>
 #include <vector>
@@ -9,6 +11,12 @@ namespace go_feap::world {
 std::size_t Scene::occupiedCount() const {
   std::size_t n = 0;
   for (std::uint8_t v : occupied.data()) n += (v != 0);
+  return n;
+}
+
+double sceneVoxelCount(const Aabb& box, double resolution, double margin) {
+  double n = 1.0;
+  for (int a = 0; a < 3; ++a) n *= std::max(1.0, std::ceil((box.max[a] - box.min[a] + 2.0 * margin) / resolution) + 1.0);
   return n;
 }
 
@@ -22,6 +30,8 @@ Scene makeEmptyScene(const std::string& name, const Aabb& box, double resolution
 }
 
 bool markOccupied(Scene& scene, const Vec3& p) {
+  const Aabb grid = scene.geometry().bounds();
+  if (!((p.array() >= grid.min.array()).all() && (p.array() < grid.max.array()).all())) return false;  // NaN too
   const Index3 idx = scene.geometry().coordToIndex(p);
   if (!scene.geometry().inside(idx)) return false;
   scene.occupied.at(idx) = 1;

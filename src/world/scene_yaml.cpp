@@ -1,6 +1,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <filesystem>
+#include <limits>
 #include <sstream>
 
 #include "go_feap/world/generators.h"
@@ -112,6 +113,13 @@ common::Result<SceneFileSpec> parseSceneYaml(const std::string& yaml_path) {
       spec.margin = number(s["margin"], "scene.margin");
       if (!(spec.margin >= 0.0)) throw KeyError{"key 'scene.margin' must be >= 0"};
     }
+    const double voxels = sceneVoxelCount(spec.box, spec.resolution, spec.margin);
+    if (!(voxels <= kMaxSceneVoxels)) {
+      std::ostringstream why;
+      why << "keys 'scene.box', 'scene.margin' and 'scene.resolution' give a grid of " << voxels
+          << " voxels, more than the " << kMaxSceneVoxels << " a scene may have (is the resolution in metres?)";
+      throw KeyError{why.str()};
+    }
   } catch (const KeyError& e) {
     return R::Error(yaml_path + ": " + e.message);
   } catch (const YAML::Exception& e) {
@@ -138,17 +146,28 @@ common::Result<Scene> loadSceneFile(const SceneFileSpec& spec) {
   } else if (ext == ".bt") {
     auto cubes = loadOctomap(spec.file);
     if (!cubes) return cubes.status();
-    // A pruned leaf may span many voxels: mark every voxel whose centre it covers. For a
-    // rotated frame, sample the cube at the scene resolution.
-    const double step = spec.resolution * 0.5;
+    // A pruned leaf may span many voxels: mark every grid voxel whose centre the leaf's cube, placed
+    // by T_world_file (rotated or scaled), covers. Only the grid voxels within the placed cube's bounds
+    // are looked at, so a large leaf costs no more than the grid (and a scale leaves no gaps).
+    const Eigen::Affine3d T_inv = T.inverse();
+    const auto& geo = scene.geometry();
     for (const OccupiedCube& cube : *cubes) {
-      const int n = std::max(1, static_cast<int>(std::ceil(cube.size / step)));
-      const double d = cube.size / n;
-      for (int i = 0; i < n; ++i)
-        for (int j = 0; j < n; ++j)
-          for (int k = 0; k < n; ++k) {
-            const Vec3 p = cube.centre - Vec3::Constant(0.5 * cube.size) + Vec3(i + 0.5, j + 0.5, k + 0.5) * d;
-            markOccupied(scene, T * p);
+      Aabb bounds{Vec3::Constant(std::numeric_limits<double>::infinity()),
+                  Vec3::Constant(-std::numeric_limits<double>::infinity())};
+      for (int c = 0; c < 8; ++c) {
+        const Vec3 corner = cube.centre + 0.5 * cube.size * Vec3(c & 1 ? 1 : -1, c & 2 ? 1 : -1, c & 4 ? 1 : -1);
+        bounds.min = bounds.min.cwiseMin(T * corner);
+        bounds.max = bounds.max.cwiseMax(T * corner);
+      }
+      Index3 lo, hi;
+      geo.centreRange(bounds, lo, hi);
+      const double half = 0.5 * cube.size * (1.0 + 1e-9);
+      for (int z = lo.z(); z < hi.z(); ++z)
+        for (int y = lo.y(); y < hi.y(); ++y)
+          for (int x = lo.x(); x < hi.x(); ++x) {
+            const Index3 idx(x, y, z);
+            if (((T_inv * geo.indexToCoord(idx)) - cube.centre).cwiseAbs().maxCoeff() <= half)
+              scene.occupied.at(idx) = 1;
           }
     }
   } else {

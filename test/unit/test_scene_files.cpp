@@ -228,6 +228,48 @@ TEST(Octomap, LoadsOccupiedLeavesIncludingPrunedOnes) {
   EXPECT_FALSE(s->isOccupied(Vec3(0.85, 0.05, 0.45)));
 }
 
+// Placed by a T_world_file that scales by 4 and turns a quarter round z, each 0.1 m leaf covers a 0.4 m
+// cube of the scene: every scene voxel whose centre lies in a placed cube is marked, and no other (the
+// oracle maps each voxel centre back into the file). Sampling the leaves in file units left 7 of each 8
+// voxels of a wall unmarked. A leaf far outside the scene (pruned to a large cube there) costs nothing.
+TEST(Octomap, ScaledAndTurnedLeavesMarkEveryVoxelTheyCover) {
+  TempDir d;
+  octomap::OcTree tree(0.1);
+  std::vector<Vec3> leaves;
+  for (double y = -0.15; y < 0.2; y += 0.1)
+    for (double z = 0.05; z < 0.3; z += 0.1) leaves.emplace_back(0.05, y, z);
+  for (const Vec3& c : leaves) tree.updateNode(octomap::point3d(c.x(), c.y(), c.z()), true);
+  for (double x = 400.05; x < 401.6; x += 0.1)
+    for (double y = 400.05; y < 401.6; y += 0.1)
+      for (double z = 0.05; z < 1.6; z += 0.1) tree.updateNode(octomap::point3d(x, y, z), true);
+  tree.prune();
+  ASSERT_TRUE(tree.writeBinary(d.file("s.bt")));
+  std::string yaml = sceneYaml("s.bt", "ground_plane: false", "[-0.95, -0.95, 1.55]");
+  const std::string identity = "[1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]";
+  yaml.replace(yaml.find(identity), identity.size(), "[0,-4,0,0, 4,0,0,0, 0,0,4,0, 0,0,0,1]");
+  writeText(d.file("s.yaml"), yaml);
+  auto s = loadSceneYaml(d.file("s.yaml"));
+  ASSERT_TRUE(s) << s.message();
+  Eigen::Matrix4d T;
+  T << 0, -4, 0, 0, 4, 0, 0, 0, 0, 0, 4, 0, 0, 0, 0, 1;
+  const Eigen::Affine3d to_file(T.inverse());
+  const auto& g = s->geometry();
+  std::size_t expected = 0, wrong = 0;
+  for (int z = 0; z < g.dims().z(); ++z)
+    for (int y = 0; y < g.dims().y(); ++y)
+      for (int x = 0; x < g.dims().x(); ++x) {
+        const Index3 idx(x, y, z);
+        const Vec3 f = to_file * g.indexToCoord(idx);
+        bool in = false;
+        for (const Vec3& c : leaves) in = in || (f - c).cwiseAbs().maxCoeff() <= 0.05;
+        expected += in;
+        wrong += in != (s->occupied.at(idx) != 0);
+      }
+  EXPECT_EQ(expected, 4u * 3 * 64);  // 12 leaves of 4x4x4 voxels, all inside the grid
+  EXPECT_EQ(wrong, 0u);
+  EXPECT_EQ(s->occupiedCount(), expected);
+}
+
 TEST(RoundTrip, MazeThroughPcdAndBtKeepsTheOccupiedSet) {
   TempDir d;
   auto maze = generateMaze(MazeConfig(), 1);
@@ -474,6 +516,11 @@ TEST(BadInput, SceneYamlMissingOrWronglyTypedKeys) {
       {"  resolution: 0.1\n", "", "scene.resolution"},
       {"resolution: 0.1", "resolution: fine", "scene.resolution"},
       {"resolution: 0.1", "resolution: -0.1", "scene.resolution"},
+      // a typo in the resolution: 3e9 voxels is refused, not allocated; at 2^-20 m the voxel count
+      // wraps round 2^64 to 0, which once left an empty buffer that the loader wrote past
+      {"resolution: 0.1", "resolution: 0.002", "scene.resolution"},
+      {"resolution: 0.1", "resolution: 9.5367431640625e-07", "scene.resolution"},
+      {"box: {min: [-1, -1, -1], max: [2, 2, 2]}", "box: {min: [-1, -1, -1], max: [1e12, 2, 2]}", "scene.box"},
       {"max: [2, 2, 2]", "max: [2, 2]", "scene.box.max"},
       {"min: [-1, -1, -1]", "min: [3, -1, -1]", "scene.box"},
       {"  T_world_file: [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]\n", "", "scene.T_world_file"},

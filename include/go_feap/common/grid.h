@@ -81,8 +81,9 @@ class GridGeometry {
     for (int a = 0; a < 3; ++a) {
       const double fl = (box.min[a] - origin_[a]) / resolution_ - 0.5;
       const double fh = (box.max[a] - origin_[a]) / resolution_ - 0.5;
-      lo[a] = std::max(0, static_cast<int>(std::ceil(fl - 1e-9)));
-      hi[a] = std::min(dims_[a], static_cast<int>(std::floor(fh + 1e-9)) + 1);
+      // Clamped as doubles: a box far outside the grid must not overflow the cast to int.
+      lo[a] = static_cast<int>(std::clamp(std::ceil(fl - 1e-9), 0.0, static_cast<double>(dims_[a])));
+      hi[a] = static_cast<int>(std::clamp(std::floor(fh + 1e-9) + 1.0, 0.0, static_cast<double>(dims_[a])));
     }
   }
   std::size_t linear(const Index3& idx) const {

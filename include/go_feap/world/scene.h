@@ -39,6 +39,14 @@ struct Scene {
   std::size_t occupiedCount() const;
 };
 
+/// Most voxels a scene's grid may have (one byte each): 2^30, a 1 GiB grid, as 0.1 m voxels over about
+/// 1000 m x 1000 m x 107 m. A typo in a resolution must be refused, not allocated (or wrapped round).
+inline constexpr double kMaxSceneVoxels = 1073741824.0;
+
+/// Voxels (as a double: it may not fit an integer) of the grid covering `box` expanded by `margin` at
+/// `resolution`.
+double sceneVoxelCount(const Aabb& box, double resolution, double margin);
+
 /// Empty scene whose grid covers `box` expanded by `margin` metres.
 Scene makeEmptyScene(const std::string& name, const Aabb& box, double resolution, double margin);
 
