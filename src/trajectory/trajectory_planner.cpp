@@ -248,8 +248,10 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
   const double voxel_clearance = flyableClearance(optimizer, astar.geometry().resolution());
   planning::AstarConfig wide = astar.config();
   wide.known_radius = std::min(voxel_clearance, wide.clearance);
+  // Only a search that does look farther: with a flight clearance below the check's radius the wide search
+  // would be this one again, failing the same way, and each retry would start another (without end).
   const bool widenable = config.unseen_retry && wide.known_clearance && !wide.unknown_is_free &&
-                         astar.config().known_radius < voxel_clearance;
+                         wide.known_radius > astar.config().known_radius;
   if (request.widen && widenable) {
     PlanRequest plain = request;
     plain.widen = false;
@@ -456,7 +458,7 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
     // failure, so that the frontier counts a failed attempt instead of holding the vehicle for minutes.
     if (duration >= total * config.max_slowdown) break;
     duration = std::min(duration * std::min(f, 4.0), total * config.max_slowdown);
-    spacing = std::max(0.5 * astar.geometry().resolution(), 0.5 * spacing);
+    spacing = std::max(0.5 * spacing, std::min(spacing, 0.5 * astar.geometry().resolution()));  // never coarser
   }
   if (fine && (!spline || fine->duration() < spline->duration())) {
     spline = std::move(*fine);
