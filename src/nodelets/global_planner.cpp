@@ -43,8 +43,8 @@ class GlobalPlanner : public nodelet::Nodelet {
     config::readAstar(p, astar_config_, "distance_astar");
     p.get("world_frame", world_frame_);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
-    ros_params::requireOrThrow(std::isfinite(rate_) && rate_ > 0.0, getName(),
-                               "parameter '" + p.fullName("global/rate") + "' must be > 0");
+    ros_params::requireOrThrow(rate_ > 0.0 && rate_ <= 1000.0, getName(),
+                               "parameter '" + p.fullName("global/rate") + "' must be in (0, 1000] Hz");
     for (const common::Status& st : {config_.validate(), astar_config_.validate()})
       ros_params::requireOrThrow(st.ok(), getName(), st.message());
     compute_pub_ = nh.advertise<ComputeTime>("compute_time", 20);
@@ -114,6 +114,11 @@ class GlobalPlanner : public nodelet::Nodelet {
     }
     // Plan at most at global/rate (frontiers arrive with every depth frame).
     const ros::Time now = ros::Time::now();
+    if (now < last_plan_) {  // a clock that went back (a bag played again): plan from now on, not from then
+      NODELET_WARN_STREAM(getName() << ": the clock went back " << last_plan_.toSec() - now.toSec()
+                                    << " s: planning again from now");
+      last_plan_ = ros::Time();
+    }
     if (!last_plan_.isZero() && (now - last_plan_).toSec() < 1.0 / rate_ - 1e-6) return;
     last_plan_ = now;
     if (!wanted_ && last_tour_) {

@@ -15,6 +15,7 @@
 #include <visualization_msgs/Marker.h>
 #include <std_srvs/Trigger.h>
 
+#include <algorithm>
 #include <cmath>
 #include <mutex>
 #include <optional>
@@ -38,13 +39,16 @@ class LayerManager : public nodelet::Nodelet {
     ros::NodeHandle& nh = getNodeHandle();
     ros_params::ParamReader p(getPrivateNodeHandle());
     config::readLayers(p, config_);
-    p.get("layers/rate", rate_);
+    p.get("layers/rate", rate_).get("metrics/max_odom_step", max_odom_step_);
     p.get("layers/auto_start", auto_start_).get("world_frame", world_frame_);
     config::readBox(p, box_);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
     ros_params::requireOrThrow(config_.validate().ok(), getName(), config_.validate().message());
     ros_params::requireOrThrow(box_.valid(), getName(), "parameter 'exploration_box' needs min < max");
-    ros_params::requireOrThrow(rate_ > 0.0, getName(), "parameter '" + p.fullName("layers/rate") + "' must be > 0");
+    ros_params::requireOrThrow(rate_ > 0.0 && rate_ <= 1000.0, getName(),
+                               "parameter '" + p.fullName("layers/rate") + "' must be in (0, 1000] Hz");
+    ros_params::requireOrThrow(max_odom_step_ > 0.0 && std::isfinite(max_odom_step_), getName(),
+                               "parameter '" + p.fullName("metrics/max_odom_step") + "' must be finite and > 0");
 
     layer_pub_ = nh.advertise<LayerBounds>("layer", 1, /*latch=*/true);
     status_pub_ = nh.advertise<ExplorationStatus>("status", 5, /*latch=*/true);
@@ -72,7 +76,12 @@ class LayerManager : public nodelet::Nodelet {
     const double z = p.z();
     const bool flying = manager_ && (manager_->state() == planning::ExplorationState::kExplore ||
                                      manager_->state() == planning::ExplorationState::kFinalPass);
-    if (flying && last_position_) distance_ += (p - *last_position_).norm();
+    if (flying) {
+      if (const std::optional<double> step = ros_conv::flownStep(last_position_, p, max_odom_step_))
+        distance_ += *step;
+      else
+        NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": " << ros_conv::odometryJump(*last_position_, p));
+    }
     last_position_ = p;
     yaw_ = ros_conv::yawOf(msg->pose.pose.orientation);
     if (!manager_) {
@@ -200,7 +209,9 @@ class LayerManager : public nodelet::Nodelet {
     status.state = static_cast<std::uint8_t>(out.state);
     status.state_name = planning::toString(out.state);
     status.layer = layer.index;
-    status.elapsed = t_start_ ? (now - *t_start_).toSec() : 0.0;
+    // Never below 0: a clock that went back (a bag played again) would make every status one that
+    // MetricsRecorder refuses, the finishing one too.
+    status.elapsed = t_start_ ? std::max(0.0, now.toSec() - t_start_->toSec()) : 0.0;
     status.distance = distance_;
     status.coverage = -1.0;  // unknown here: the metrics recorder compares with ground truth
     status.frontier_count = frontiers_ ? static_cast<std::uint32_t>(frontiers_->frontiers.size()) : 0;
@@ -212,6 +223,7 @@ class LayerManager : public nodelet::Nodelet {
   planning::LayerManagerConfig config_;
   common::Aabb box_;
   double rate_ = 5.0;
+  double max_odom_step_ = 1.0;  ///< m, a longer step between odometry messages is a jump, not flight
   bool auto_start_ = false;
   std::string world_frame_;
   std::mutex mutex_;

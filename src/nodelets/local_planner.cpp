@@ -228,6 +228,11 @@ class LocalPlanner : public nodelet::Nodelet {
     }
     // The current target first: while planning could not replace it (planning::planDue()), repeat it.
     const double now = ros::Time::now().toSec();
+    if (now < last_plan_) {  // a clock that went back (a bag played again): plan from now on, not from then
+      NODELET_WARN_STREAM(getName() << ": the clock went back " << last_plan_ - now << " s: planning again from now");
+      last_plan_ = -1e9;
+      committed_at_ = std::min(committed_at_, now);
+    }
     std::optional<planning::CurrentTarget> current;
     if (target_)
       current = planning::assessTarget(*target_, committed_at_, *position_, yaw_, speed_, tilt_, all,

@@ -41,13 +41,16 @@ class MetricsRecorder : public nodelet::Nodelet {
     std::string scene_spec;
     p.get("scene", scene_spec).get("metrics/sample_rate", sample_rate_);
     p.get("metrics/collision_distance", collision_distance_).get("metrics/output_dir", output_dir_);
+    p.get("metrics/max_odom_step", max_odom_step_);
     p.get("metrics/planner", planner_).get("metrics/shutdown_on_finish", shutdown_on_finish_);
     p.get("metrics/progress_period", progress_period_).get("world_frame", world_frame_);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
-    ros_params::requireOrThrow(std::isfinite(sample_rate_) && sample_rate_ > 0.0, getName(),
-                               "parameter '" + p.fullName("metrics/sample_rate") + "' must be > 0");
+    ros_params::requireOrThrow(sample_rate_ > 0.0 && sample_rate_ <= 1000.0, getName(),
+                               "parameter '" + p.fullName("metrics/sample_rate") + "' must be in (0, 1000] Hz");
     ros_params::requireOrThrow(std::isfinite(collision_distance_) && collision_distance_ >= 0.0, getName(),
                                "parameter '" + p.fullName("metrics/collision_distance") + "' must be >= 0");
+    ros_params::requireOrThrow(std::isfinite(max_odom_step_) && max_odom_step_ > 0.0, getName(),
+                               "parameter '" + p.fullName("metrics/max_odom_step") + "' must be finite and > 0");
     ros_params::requireOrThrow(std::isfinite(progress_period_) && progress_period_ > 0.0, getName(),
                                "parameter '" + p.fullName("metrics/progress_period") + "' must be > 0");
     metrics::Summary& s = recorder_.summary();
@@ -96,7 +99,10 @@ class MetricsRecorder : public nodelet::Nodelet {
     std::lock_guard<std::mutex> lock(mutex_);
     position_ = p;
     if (!started() || finished_) return;
-    if (last_position_) distance_ += (p - *last_position_).norm();
+    if (const std::optional<double> step = ros_conv::flownStep(last_position_, p, max_odom_step_))
+      distance_ += *step;
+    else
+      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": " << ros_conv::odometryJump(*last_position_, p));
     last_position_ = p;
     if (!collisions_) return;
     if (collisions_->update(p))
@@ -236,7 +242,7 @@ class MetricsRecorder : public nodelet::Nodelet {
     if (shutdown_on_finish_) ros::requestShutdown();
   }
 
-  double sample_rate_ = 2.0, collision_distance_ = 0.1, progress_period_ = 5.0;
+  double sample_rate_ = 2.0, collision_distance_ = 0.1, progress_period_ = 5.0, max_odom_step_ = 1.0;
   std::string output_dir_, planner_, world_frame_;
   bool shutdown_on_finish_ = false;
   std::mutex mutex_;

@@ -10,6 +10,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <mutex>
 #include <thread>
 
@@ -49,10 +50,16 @@ class QuadrotorSim : public nodelet::Nodelet {
     p.get("use_scene_start", use_scene_start).getVec3("start", start).get("start_yaw", start_yaw);
     ros_params::requireOrThrow(p.ok(), me, p.error());
     for (const common::Status& st : {q.validate(), c.validate()}) ros_params::requireOrThrow(st.ok(), me, st.message());
-    ros_params::requireOrThrow(rate_factor_ > 0.0, me, "parameter '" + p.fullName("simulation/rate_factor") + "' must be > 0");
+    ros_params::requireOrThrow(rate_factor_ > 0.0 && rate_factor_ <= 1000.0, me,
+                               "parameter '" + p.fullName("simulation/rate_factor") + "' must be in (0, 1000]");
+    // NaN would switch the command checks off (no norm is > NaN).
+    ros_params::requireOrThrow(std::isfinite(max_cmd_acc_) && max_cmd_acc_ > 0.0, me,
+                               "parameter '" + p.fullName("simulation/max_command_acceleration") + "' must be > 0");
+    ros_params::requireOrThrow(std::isfinite(max_cmd_out_) && max_cmd_out_ >= 0.0, me,
+                               "parameter '" + p.fullName("simulation/max_command_outside") + "' must be >= 0");
     ros_params::requireOrThrow(odom_rate_ >= 10.0 && odom_rate_ <= q.dynamics_rate, me,
                                "parameter '" + p.fullName("simulation/odom_rate") + "' must be in [10, dynamics_rate]");
-    ros_params::requireOrThrow(command_timeout_ > 0.0, me,
+    ros_params::requireOrThrow(std::isfinite(command_timeout_) && command_timeout_ > 0.0, me,
                                "parameter '" + p.fullName("simulation/command_timeout") + "' must be > 0");
     ros_params::requireOrThrow(publish_clock_ || rate_factor_ == 1.0, me,
                                "parameter '" + p.fullName("simulation/rate_factor") +
@@ -63,6 +70,12 @@ class QuadrotorSim : public nodelet::Nodelet {
     if (use_scene_start) {
       start = scene.start.position;
       start_yaw = scene.start.yaw;
+    } else {  // a start of its own: finite, in the scene's box and not inside an obstacle
+      ros_params::requireOrThrow(start.allFinite() && std::isfinite(start_yaw), me,
+                                 "parameters '" + p.fullName("start") + "' and '" + p.fullName("start_yaw") +
+                                     "' must be finite");
+      ros_params::requireOrThrow(scene.box.contains(start) && !scene.isOccupied(start), me,
+                                 "parameter '" + p.fullName("start") + "' must lie in the scene's box, in free space");
     }
     vehicle_ = std::make_unique<sim::SimulatedVehicle>(q, c);
     vehicle_->reset(start, start_yaw);

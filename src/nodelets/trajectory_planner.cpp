@@ -49,8 +49,8 @@ class TrajectoryPlanner : public nodelet::Nodelet {
          {o.validate(), replan_.validate(), astar_config_.validate(), scout_config_.validate(), coarse_config_.validate(),
           planner_.validate()})
       ros_params::requireOrThrow(st.ok(), getName(), st.message());
-    ros_params::requireOrThrow(std::isfinite(rate_) && rate_ > 0.0, getName(),
-                               "parameter '" + p.fullName("planner/rate") + "' must be > 0");
+    ros_params::requireOrThrow(rate_ > 0.0 && rate_ <= 1000.0, getName(),
+                               "parameter '" + p.fullName("planner/rate") + "' must be in (0, 1000] Hz");
     ros_params::requireOrThrow(std::isfinite(odom_timeout_) && odom_timeout_ > 0.0, getName(),
                                "parameter '" + p.fullName("planner/odom_timeout") + "' must be > 0");
     ros_params::requireOrThrow(std::isfinite(drop_grace_) && drop_grace_ > 0.0, getName(),
@@ -186,6 +186,14 @@ class TrajectoryPlanner : public nodelet::Nodelet {
         target_changed_ = true;
         from_odometry_ = true;
       }
+    }
+    if (now < last_plan_) {  // a clock that went back (a bag played again): the trajectory's times are void
+      NODELET_WARN_STREAM(getName() << ": the clock went back " << last_plan_.toSec() - now.toSec()
+                                    << " s: replanning from the odometry");
+      last_plan_ = ros::Time();
+      current_.reset();
+      target_changed_ = true;
+      from_odometry_ = true;
     }
     if (!last_plan_.isZero() && (now - last_plan_).toSec() < planner_.min_time_between_plans) return;
     trajectory::ReplanReason reason;

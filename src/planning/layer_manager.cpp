@@ -10,8 +10,8 @@ common::Status LayerManagerConfig::validate() const {
   auto bad = [](const std::string& key, const std::string& why) {
     return common::Status::Error("layers: " + key + " " + why);
   };
-  if (!(layer_height > 0.0)) return bad("layer_height", "must be > 0");
-  if (!(settle_time >= 0.0)) return bad("settle_time", "must be >= 0");
+  if (!(layer_height > 0.0) || !std::isfinite(layer_height)) return bad("layer_height", "must be finite and > 0");
+  if (!(settle_time >= 0.0) || !std::isfinite(settle_time)) return bad("settle_time", "must be finite and >= 0");
   if (max_retries < 1) return bad("max_retries", "must be >= 1");
   if (!(time_limit > 0.0)) return bad("time_limit", "must be > 0");
   if (!(stuck_timeout > 0.0)) return bad("stuck_timeout", "must be > 0");

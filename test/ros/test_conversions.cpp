@@ -134,6 +134,16 @@ bool says(const std::string& problem, const std::string& what) {
   return problem.find(what) != std::string::npos;
 }
 
+// Flown distance from odometry: the first message adds nothing, a step up to max_step adds its length,
+// a longer one is a jump (a relocalisation) and adds nothing.
+TEST(Conversions, FlownStepsCountUpToTheJumpLimit) {
+  using go_feap::ros_conv::flownStep;
+  EXPECT_EQ(flownStep(std::nullopt, Vec3(5, 0, 0), 1.0), std::optional<double>(0.0));
+  EXPECT_NEAR(*flownStep(Vec3(0, 0, 0), Vec3(0.6, 0.8, 0), 1.0), 1.0, 1e-12);
+  EXPECT_FALSE(flownStep(Vec3(0, 0, 0), Vec3(0, 0, 1.2), 1.0).has_value());
+  EXPECT_NE(go_feap::ros_conv::odometryJump(Vec3(0, 0, 0), Vec3(0, 0, 1.2)).find("1.2"), std::string::npos);
+}
+
 TEST(MessageChecks, FrontierArraysWithAnyValueThatIsNotFiniteOrACountThatDoesNotMatchAreNamed) {
   const go_feap::FrontierArray good = twoFrontiers();
   EXPECT_EQ(frontierArrayProblem(good), "");

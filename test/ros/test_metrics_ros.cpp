@@ -140,6 +140,12 @@ TEST(MetricsRecorder, SummaryHoldsThePlayedRunAndOddStatusesNeitherEndNorCountIn
   double length = 0.0;
   for (std::size_t i = 1; i < path.size(); ++i) length += (path[i] - path[i - 1]).norm();
   for (const Vec3& p : path) fly(p);
+  // A relocalisation: the odometry jumps 1.2 m (more than metrics/max_odom_step, 1 m) and goes on from
+  // there; the jump is not flight, the 5 cm after it are.
+  settle();
+  fly(start + Vec3(1.2, 0.0, 0.0));
+  fly(start + Vec3(1.15, 0.0, 0.0));
+  length += 0.05;
   for (double ms : {2.0, 4.0, 9.0}) compute("frontier", ms);
   compute("global", 5.0);
   for (int i = 0; i < 10; ++i) tick(0.1);

@@ -1,6 +1,8 @@
 // The exploration state machine: every transition, band order, blacklist bound, termination.
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include "go_feap/planning/layer_manager.h"
 
 using namespace go_feap::planning;
@@ -180,6 +182,13 @@ TEST(LayerManager, ValidateNamesKeys) {
   LayerManagerConfig c = config();
   c.layer_height = 0.0;
   EXPECT_NE(c.validate().message().find("layer_height"), std::string::npos);
+  // One band over everything is a large finite height: an infinite one makes NaN band bounds.
+  c.layer_height = std::numeric_limits<double>::infinity();
+  EXPECT_NE(c.validate().message().find("layer_height"), std::string::npos);
+  c.layer_height = 1000.0;
+  EXPECT_TRUE(c.validate().ok());
+  c.settle_time = std::numeric_limits<double>::infinity();
+  EXPECT_NE(c.validate().message().find("settle_time"), std::string::npos);
   c = config();
   c.max_retries = 0;
   EXPECT_NE(c.validate().message().find("max_retries"), std::string::npos);

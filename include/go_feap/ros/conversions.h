@@ -9,6 +9,7 @@
 #include <Eigen/Geometry>
 
 #include <cmath>
+#include <optional>
 #include <sstream>
 #include <string>
 
@@ -48,6 +49,21 @@ inline std::string odometryPoseProblem(const geometry_msgs::Pose& pose) {
   else
     why << "orientation (x " << q.x << ", y " << q.y << ", z " << q.z << ", w " << q.w << ") is not a unit quaternion";
   return why.str();
+}
+
+/// The step from the last odometry position to `p` as flown distance: 0 without a last position, and
+/// nothing when it is longer than `max_step` (a jump: a relocalisation, or a gap in the odometry).
+inline std::optional<double> flownStep(const std::optional<common::Vec3>& last, const common::Vec3& p, double max_step) {
+  if (!last) return 0.0;
+  const double step = (p - *last).norm();
+  if (step > max_step) return std::nullopt;
+  return step;
+}
+
+/// What flownStep() refused, for the log.
+inline std::string odometryJump(const common::Vec3& last, const common::Vec3& p) {
+  return "odometry jumped " + std::to_string((p - last).norm()) +
+         " m (more than metrics/max_odom_step): not counted as flown";
 }
 
 /// A velocity given in the body frame of `orientation` (nav_msgs/Odometry's twist, which is in the
