@@ -4,6 +4,7 @@
 // length of the flown path, one collision for one pass through a ground-truth wall (found in the scene
 // by the test itself), the mean compute time of each block. Statuses that are malformed, or that came
 // before the run or whose elapsed time lies beyond the clock, must neither end the recorder nor count.
+// Then the clock goes back, and a probe layer manager's elapsed time must stay at 0 or above.
 #include <gtest/gtest.h>
 #include <nav_msgs/Odometry.h>
 #include <nav_msgs/Path.h>
@@ -176,6 +177,43 @@ TEST(MetricsRecorder, SummaryHoldsThePlayedRunAndOddStatusesNeitherEndNorCountIn
   EXPECT_NEAR(summary["compute_ms"]["total"]["mean"].get<double>(), 10.0, 1e-9);
   for (const char* f : {"metrics.csv", "coverage.png"})
     EXPECT_TRUE(std::filesystem::exists(output_dir + "/" + f)) << f;
+}
+
+// A layer manager (probe/... in metrics.test) has explored since the first test's odometry came. The
+// clock then goes back (a bag played again): its statuses keep coming with an elapsed time of 0 or more.
+// It used to be the clock minus the start, below 0, so that MetricsRecorder refused every status after
+// it, the one saying FINISHED too.
+TEST(LayerManager, ElapsedTimeStaysAtOrAboveZeroWhenTheClockGoesBack) {
+  ros::NodeHandle nh;
+  auto clock_pub = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
+  std::vector<go_feap::ExplorationStatus> statuses;
+  auto status_sub = nh.subscribe<go_feap::ExplorationStatus>(
+      "probe/status", 50, [&](const go_feap::ExplorationStatus::ConstPtr& m) { statuses.push_back(*m); });
+  ASSERT_TRUE(spinUntil([&] { return status_sub.getNumPublishers() > 0 && clock_pub.getNumSubscribers() > 0; }, 30.0))
+      << "the probe layer manager is not connected";
+  double now = ros::Time::now().toSec();
+  auto run_clock = [&](double seconds) {
+    for (double t = 0.0; t < seconds; t += 0.05) {
+      now += 0.05;
+      rosgraph_msgs::Clock c;
+      c.clock = ros::Time(now);
+      clock_pub.publish(c);
+      spinUntil([] { return false; }, 0.02);
+    }
+  };
+  run_clock(2.0);
+  ASSERT_FALSE(statuses.empty()) << "no status from the probe layer manager";
+  const go_feap::ExplorationStatus last = statuses.back();
+  ASSERT_NE(last.state, go_feap::ExplorationStatus::WAIT_TRIGGER) << "the probe layer manager did not start";
+  ASSERT_GT(last.elapsed, 1.0);
+  ASSERT_GT(now - last.elapsed, 0.6) << "the run started too early for the clock to go back before it";
+
+  now = 0.5;  // before the run started
+  statuses.clear();
+  run_clock(2.0);
+  ASSERT_GE(statuses.size(), 3u) << "no status after the clock went back";
+  for (const go_feap::ExplorationStatus& s : statuses)
+    EXPECT_GE(s.elapsed, 0.0) << "at " << s.header.stamp.toSec() << " s";
 }
 
 }  // namespace
