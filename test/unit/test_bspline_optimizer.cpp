@@ -1487,6 +1487,43 @@ TEST(TrajectoryPlanner, AWayRefusedForUnseenSpaceBesideItIsSearchedAgainKeepingI
   EXPECT_TRUE(report.unseen_at.has_value());
 }
 
+// A flight search whose clearance (0.12 m) is below the check's radius (0.25 m less half a voxel
+// diagonal: 0.163 m, which takes in the diagonal neighbours) cannot be widened to the check: the retry's
+// search keeps unseen space 0.12 m away all round, which leaves out a pocket diagonal to the way, so it
+// finds the same way and every spline along it is refused again. The retry is then not tried at all
+// (once widened, the search does not look farther): the plan fails and says where. It used to retry
+// the same search from inside the retry, without end, until the stack ran out.
+TEST(TrajectoryPlanner, ARetryThatCannotLookFartherIsNotRepeated) {
+  const Vec3 pocket(3.15, 2.15, 1.05);  // diagonal to the way's voxels at y 2.05
+  World world(Vec3(6, 4, 2));
+  mapFreeBut(world, pocket);
+  OptimizerConfig optimizer = optimizerConfig();
+  optimizer.min_clearance = 0.25;
+  const double res = world.geo().resolution();
+  const double check = traj::flyableClearance(optimizer, res);
+  ASSERT_GT(check, std::sqrt(2.0) * res);  // the check looks at the diagonal neighbours
+  AstarConfig narrow = flightAstarConfig();
+  narrow.clearance = 0.12;
+  ASSERT_TRUE(narrow.validate().ok()) << narrow.validate().message();
+  ASSERT_LT(narrow.clearance, std::sqrt(2.0) * res);  // a search widened to it does not
+  const Astar astar(world.occupancy(), world.esdf(), narrow);
+  traj::TrajectoryPlannerConfig planner;
+  ASSERT_TRUE(planner.unseen_retry);
+  traj::PlanRequest request;
+  request.start = Vec3(1.05, 2.05, 1.05);
+  request.target = Vec3(5.05, 2.05, 1.05);
+  request.yaw = 0.0;
+  traj::PlanReport report;
+  const auto planned = traj::planTrajectory(request, astar, world.esdf(), optimizer, planner, &report);
+  ASSERT_FALSE(planned);
+  EXPECT_NE(planned.message().find("leaves known flyable space"), std::string::npos) << planned.message();
+  ASSERT_TRUE(report.unseen_at.has_value());
+  EXPECT_LT((*report.unseen_at - pocket).norm(), check + 0.5 * std::sqrt(3.0) * res);
+  // Asked to widen from the start (a replan after a widened plan): one wide search, the same answer.
+  request.widen = true;
+  EXPECT_FALSE(traj::planTrajectory(request, astar, world.esdf(), optimizer, planner, &report));
+}
+
 // planForTarget(), the one order the bench and the nodelet follow, carries what it learnt about a target
 // from plan to plan in the caller's TargetAttempts: a widened plan makes the next one wide from the start,
 // a look at unseen space is flown once, and one scout too many brakes and fails the target. A fresh record
