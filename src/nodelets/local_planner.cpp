@@ -16,6 +16,7 @@
 #include <visualization_msgs/MarkerArray.h>
 
 #include <algorithm>
+#include <cmath>
 #include <functional>
 #include <mutex>
 #include <std_msgs/Bool.h>
@@ -53,6 +54,8 @@ class LocalPlanner : public nodelet::Nodelet {
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
     for (const common::Status& st : {v.validate(), l.validate(), astar_config_.validate()})
       ros_params::requireOrThrow(st.ok(), getName(), st.message());
+    ros_params::requireOrThrow(frontier_extent_ > 0.0 && std::isfinite(frontier_extent_), getName(),
+                               "parameter '" + p.fullName("frontier/max_cluster_extent") + "' must be finite and > 0");
     window_ = std::make_unique<planning::ObstacleWindow>(l.window_size, l.clutter_threshold);
 
     compute_pub_ = nh.advertise<ComputeTime>("compute_time", 20);
