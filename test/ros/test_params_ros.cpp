@@ -1,0 +1,77 @@
+// rostest: a nodelet given an invalid or missing parameter does not start, and says which. The test
+// loads each nodelet into an empty manager through its load_nodelet service, under a name whose private
+// parameters (params.test) are the shipped config with one value made invalid or left out: the load
+// fails and the manager logs a fatal message naming the parameter in full. The same nodelet with the
+// shipped config unchanged starts, so each failure is the one parameter's doing, and the manager lives
+// on through every refusal.
+#include <gtest/gtest.h>
+#include <nodelet/NodeletLoad.h>
+#include <nodelet/NodeletUnload.h>
+#include <ros/ros.h>
+#include <rosgraph_msgs/Log.h>
+
+#include <string>
+#include <vector>
+
+#include "ros_test_util.h"
+
+namespace {
+
+using go_feap::test::spinUntil;
+
+struct Case {
+  const char* name;  // the nodelet's name: its private parameters are /name/...
+  const char* type;
+  const char* key;   // the parameter the message must name, in full: /name/key
+};
+
+TEST(Parameters, ANodeletWithAnInvalidOrMissingParameterDoesNotStartAndNamesIt) {
+  ros::NodeHandle nh;
+  std::vector<std::string> fatal;
+  auto log_sub = nh.subscribe<rosgraph_msgs::Log>("/rosout", 200, [&](const rosgraph_msgs::Log::ConstPtr& m) {
+    if (m->level >= rosgraph_msgs::Log::FATAL) fatal.push_back(m->msg);
+  });
+  ASSERT_TRUE(ros::service::waitForService("go_feap_manager/load_nodelet", ros::Duration(30.0)));
+  ASSERT_TRUE(spinUntil([&] { return log_sub.getNumPublishers() > 0; }, 10.0));
+  auto load = [](const std::string& name, const std::string& type) {
+    nodelet::NodeletLoad srv;
+    srv.request.name = "/" + name;
+    srv.request.type = type;
+    return ros::service::call("go_feap_manager/load_nodelet", srv) && srv.response.success;
+  };
+
+  ASSERT_TRUE(load("good_layer_manager", "go_feap/LayerManager")) << "the shipped config does not start";
+  const std::vector<Case> cases = {
+      {"bad_layers_rate", "go_feap/LayerManager", "layers/rate"},                // 1e9 Hz: a timer that never sleeps
+      {"bad_layer_height", "go_feap/LayerManager", "layers: layer_height"},     // infinite: NaN bands
+      {"bad_max_odom_step", "go_feap/LayerManager", "metrics/max_odom_step"},   // -1 m
+      {"missing_layers", "go_feap/LayerManager", "layers/"},                    // no exploration.yaml at all
+      {"bad_pose_tolerance", "go_feap/EsdfMapper", "mapper/pose_tolerance"},    // 5 s
+      {"bad_cluster_extent", "go_feap/LocalPlanner", "frontier/max_cluster_extent"},  // NaN
+      {"bad_camera_extrinsic", "go_feap/DepthCamera", "depth_camera/T_B_C"},    // a NaN translation
+      {"bad_command_limit", "go_feap/QuadrotorSim", "simulation/max_command_acceleration"},  // NaN
+      {"bad_start", "go_feap/QuadrotorSim", "start"},                           // 100 m outside the maze
+  };
+  for (const Case& c : cases) {
+    const std::string full = std::string("/") + c.name + "/" + c.key;
+    const std::string core = std::string("/") + c.name + ": " + c.key;  // a core config's own message
+    fatal.clear();
+    EXPECT_FALSE(load(c.name, c.type)) << c.name << " started";
+    EXPECT_TRUE(spinUntil(
+        [&] {
+          for (const std::string& m : fatal)
+            if (m.find(full) != std::string::npos || m.find(core) != std::string::npos) return true;
+          return false;
+        },
+        10.0))
+        << c.name << ": no fatal message naming " << full << "; fatal messages: " << ::testing::PrintToString(fatal);
+  }
+  // The manager is still there: the good nodelet unloads.
+  nodelet::NodeletUnload unload;
+  unload.request.name = "/good_layer_manager";
+  EXPECT_TRUE(ros::service::call("go_feap_manager/unload_nodelet", unload) && unload.response.success);
+}
+
+}  // namespace
+
+GO_FEAP_ROSTEST_MAIN("test_params_ros")
