@@ -30,9 +30,7 @@ Scene makeEmptyScene(const std::string& name, const Aabb& box, double resolution
 }
 
 bool markOccupied(Scene& scene, const Vec3& p) {
-  const Aabb grid = scene.geometry().bounds();
-  if (!((p.array() >= grid.min.array()).all() && (p.array() < grid.max.array()).all())) return false;  // NaN too
-  const Index3 idx = scene.geometry().coordToIndex(p);
+  const Index3 idx = scene.geometry().clampedIndex(p);  // a point far outside (or NaN) must not overflow
   if (!scene.geometry().inside(idx)) return false;
   scene.occupied.at(idx) = 1;
   return true;

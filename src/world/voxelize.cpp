@@ -43,14 +43,8 @@ void voxelizeTriangle(Scene& scene, const Vec3& a, const Vec3& b, const Vec3& c)
   // triangle lying exactly on a voxel face marks the voxel on its positive side only.
   const double eps = 1e-6 * res;
   const Vec3 lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
-  // The index range clamped to the grid as doubles: a vertex far outside it (1e30 is finite) must not
-  // overflow the cast to int.
-  const auto index = [&](const Vec3& p) {
-    const Vec3 f = ((p - geo.origin()) / res).array().floor().matrix();
-    return f.cwiseMax(Vec3::Constant(-1.0)).cwiseMin(geo.dims().cast<double>()).cast<int>().eval();
-  };
-  const Index3 i0 = index(lo - Vec3::Constant(eps)).cwiseMax(Index3::Zero());
-  const Index3 i1 = index(hi + Vec3::Constant(eps)).cwiseMin(geo.dims() - Index3::Ones());
+  const Index3 i0 = geo.clampedIndex(lo - Vec3::Constant(eps)).cwiseMax(Index3::Zero());
+  const Index3 i1 = geo.clampedIndex(hi + Vec3::Constant(eps)).cwiseMin(geo.dims() - Index3::Ones());
   for (int z = i0.z(); z <= i1.z(); ++z)
     for (int y = i0.y(); y <= i1.y(); ++y)
       for (int x = i0.x(); x <= i1.x(); ++x) {

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <limits>
 #include <random>
 #include <utility>
 #include <vector>
@@ -29,6 +30,19 @@ TEST(GridGeometry, IndexCoordRoundTrip) {
   }
   EXPECT_FALSE(g.inside(g.coordToIndex(Vec3(-2.01, 0, 0.5))));
   EXPECT_TRUE(g.inside(g.coordToIndex(Vec3(-2.0, 0, 0.5))));
+}
+
+// clampedIndex() is coordToIndex() wherever that is within one voxel of the grid, and otherwise the
+// nearest index just outside it: a point at 1e30 m (finite) or NaN never reaches the cast to int.
+TEST(GridGeometry, ClampedIndexAgreesNearTheGridAndStaysJustOutsideFarFromIt) {
+  const GridGeometry g(Vec3(-2.0, -1.0, 0.0), 0.1, Index3(40, 20, 10));
+  for (double x = -2.095; x < 2.095; x += 0.013)
+    EXPECT_EQ(g.clampedIndex(Vec3(x, 0.42, 0.5)), g.coordToIndex(Vec3(x, 0.42, 0.5))) << x;
+  EXPECT_EQ(g.clampedIndex(Vec3(1e30, -1e30, 0.55)), Index3(40, -1, 5));
+  EXPECT_EQ(g.clampedIndex(Vec3(-1e300, 1e300, 1e12)), Index3(-1, 20, 10));
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(g.clampedIndex(Vec3(nan, 0.0, 0.0)), Index3(-1, 10, 0));
+  EXPECT_FALSE(g.inside(g.clampedIndex(Vec3(nan, 0.0, 0.0))));
 }
 
 TEST(GridGeometry, CentreRangeHoldsExactlyTheCentresInsideTheBox) {

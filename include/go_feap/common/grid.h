@@ -68,6 +68,17 @@ class GridGeometry {
   Index3 coordToIndex(const Vec3& p) const {
     return ((p - origin_) * inv_resolution_).array().floor().cast<int>();
   }
+  /// coordToIndex() clamped to [-1, dims] on each axis before the cast to int: any point, however far
+  /// outside the grid (1e30 is finite), gives an index, outside the grid when the point is (NaN gives -1).
+  /// For loaders and clipping; hot paths use coordToIndex() on points known to be near the grid.
+  Index3 clampedIndex(const Vec3& p) const {
+    Index3 idx;
+    for (int a = 0; a < 3; ++a) {
+      const double f = std::floor((p[a] - origin_[a]) * inv_resolution_);
+      idx[a] = f >= -1.0 ? static_cast<int>(std::min(f, static_cast<double>(dims_[a]))) : -1;
+    }
+    return idx;
+  }
   /// Centre of voxel `idx`.
   Vec3 indexToCoord(const Index3& idx) const {
     return origin_ + (idx.cast<double>().array() + 0.5).matrix() * resolution_;
