@@ -73,6 +73,10 @@ double flyableClearance(const OptimizerConfig& optimizer, double resolution) {
   return optimizer.min_clearance - 0.5 * std::sqrt(3.0) * resolution;
 }
 
+double refitSpacing(double spacing, double resolution) {
+  return std::max(0.5 * spacing, std::min(spacing, 0.5 * resolution));
+}
+
 bool staysFlyable(const UniformBspline& spline, const planning::Astar& astar, double min_distance,
                   double exempt_radius, std::optional<Vec3>* unseen_at) {
   if (unseen_at) unseen_at->reset();
@@ -458,7 +462,7 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
     // failure, so that the frontier counts a failed attempt instead of holding the vehicle for minutes.
     if (duration >= total * config.max_slowdown) break;
     duration = std::min(duration * std::min(f, 4.0), total * config.max_slowdown);
-    spacing = std::max(0.5 * spacing, std::min(spacing, 0.5 * astar.geometry().resolution()));  // never coarser
+    spacing = refitSpacing(spacing, astar.geometry().resolution());
   }
   if (fine && (!spline || fine->duration() < spline->duration())) {
     spline = std::move(*fine);

@@ -1487,6 +1487,34 @@ TEST(TrajectoryPlanner, AWayRefusedForUnseenSpaceBesideItIsSearchedAgainKeepingI
   EXPECT_TRUE(report.unseen_at.has_value());
 }
 
+// A refit samples the path at half the spacing that failed, down to half a voxel; a short hop that started
+// finer than that keeps its spacing. It used to be raised to half a voxel, so that a 0.25 m hop (6 spans of
+// 4.2 cm) was refitted with 5 samples, fewer than the optimiser's 7 control points need.
+TEST(TrajectoryPlanner, ARefitNeverSamplesThePathMoreCoarsely) {
+  const double res = 0.1;
+  EXPECT_DOUBLE_EQ(traj::refitSpacing(0.3, res), 0.15);
+  EXPECT_DOUBLE_EQ(traj::refitSpacing(0.08, res), 0.05);  // half of it would be finer than half a voxel
+  EXPECT_DOUBLE_EQ(traj::refitSpacing(0.05, res), 0.05);
+  EXPECT_DOUBLE_EQ(traj::refitSpacing(0.25 / 6.0, res), 0.25 / 6.0);
+  for (double spacing = 0.001; spacing < 1.0; spacing *= 1.1) {
+    const double next = traj::refitSpacing(spacing, res);
+    EXPECT_LE(next, spacing) << spacing;
+    EXPECT_GE(next, 0.5 * spacing) << spacing;
+    EXPECT_GE(next, std::min(spacing, 0.5 * res) - 1e-15) << spacing;
+  }
+  // What that means for the samples of a 0.25 m hop: never fewer than its first fit's 7.
+  const std::vector<Vec3> hop{Vec3(1.0, 1.0, 1.0), Vec3(1.25, 1.0, 1.0)};
+  double spacing = 0.25 / 6.0;
+  std::size_t samples = traj::UniformBspline::resamplePolyline(hop, spacing).size();
+  ASSERT_GE(samples, 7u);
+  for (int refit = 0; refit < 4; ++refit) {
+    spacing = traj::refitSpacing(spacing, res);
+    const std::size_t now = traj::UniformBspline::resamplePolyline(hop, spacing).size();
+    EXPECT_GE(now, samples) << "refit " << refit;
+    samples = now;
+  }
+}
+
 // A flight search whose clearance (0.12 m) is below the check's radius (0.25 m less half a voxel
 // diagonal: 0.163 m, which takes in the diagonal neighbours) cannot be widened to the check: the retry's
 // search keeps unseen space 0.12 m away all round, which leaves out a pocket diagonal to the way, so it

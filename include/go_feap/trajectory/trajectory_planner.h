@@ -187,6 +187,11 @@ class SearchMemory {
 /// a voxel's centre may lie that far from the curve.
 double flyableClearance(const OptimizerConfig& optimizer, double resolution);
 
+/// m: the path sample spacing of planTrajectory()'s next refit after `spacing` failed: half of it, so that
+/// the fit hugs the searched path more closely, but not below half a voxel, and never coarser than
+/// `spacing` (a hop shorter than 0.6 m starts finer than half a voxel, to have its 7 control points).
+double refitSpacing(double spacing, double resolution);
+
 /// True when `spline`, sampled at most a quarter voxel apart, stays in voxels astar.traversableWith(.,
 /// min_distance) accepts (known free, at least min_distance from mapped obstacles and from the box's
 /// faces) wherever it is farther than exempt_radius from its start, and ends in one. Near the start the
