@@ -1,6 +1,7 @@
 // Frontier detection against hand-built grids and a full recomputation.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <functional>
 #include <limits>
 #include <random>
@@ -39,6 +40,7 @@ std::set<std::vector<std::size_t>> clusterSets(const frontier::FrontierFinder& f
   for (const auto& fr : f.frontiers()) {
     std::vector<std::size_t> v;
     for (const Index3& c : fr.cells) v.push_back(g.linear(c));
+    std::sort(v.begin(), v.end());
     out.insert(v);
   }
   return out;
@@ -89,30 +91,48 @@ bool frontierCell(const map::OccupancyMap& m, const Index3& idx) {
   return false;
 }
 
-// Sizes of the 26-connected components of `cells`.
-std::vector<std::size_t> componentSizes(const std::set<std::size_t>& cells, const common::GridGeometry& g) {
+// The 26-connected components of `cells`.
+std::vector<std::set<std::size_t>> components(const std::set<std::size_t>& cells, const common::GridGeometry& g) {
   std::set<std::size_t> left = cells;
-  std::vector<std::size_t> sizes;
+  std::vector<std::set<std::size_t>> out;
   while (!left.empty()) {
     std::vector<std::size_t> stack{*left.begin()};
+    std::set<std::size_t> component{*left.begin()};
     left.erase(left.begin());
-    std::size_t n = 0;
     while (!stack.empty()) {
       const Index3 c = g.unlinear(stack.back());
       stack.pop_back();
-      ++n;
       for (int dz = -1; dz <= 1; ++dz)
         for (int dy = -1; dy <= 1; ++dy)
           for (int dx = -1; dx <= 1; ++dx) {
             const Index3 nb = c + Index3(dx, dy, dz);
             if (!g.inside(nb)) continue;
             auto it = left.find(g.linear(nb));
-            if (it != left.end()) stack.push_back(*it), left.erase(it);
+            if (it != left.end()) stack.push_back(*it), component.insert(*it), left.erase(it);
           }
     }
-    sizes.push_back(n);
+    out.push_back(std::move(component));
   }
+  return out;
+}
+
+std::vector<std::size_t> componentSizes(const std::set<std::size_t>& cells, const common::GridGeometry& g) {
+  std::vector<std::size_t> sizes;
+  for (const auto& c : components(cells, g)) sizes.push_back(c.size());
   return sizes;
+}
+
+// The oracle's clusters without a size limit: the 26-connected components of the frontier cells
+// (frontierCell(), over the whole grid) with at least min_cluster_cells cells.
+std::set<std::vector<std::size_t>> oracleClusters(const map::OccupancyMap& m, int min_cluster_cells) {
+  const auto& g = m.geometry();
+  std::set<std::size_t> cells;
+  for (std::size_t l = 0; l < g.size(); ++l)
+    if (frontierCell(m, g.unlinear(l))) cells.insert(l);
+  std::set<std::vector<std::size_t>> out;
+  for (const auto& c : components(cells, g))
+    if (static_cast<int>(c.size()) >= min_cluster_cells) out.insert(std::vector<std::size_t>(c.begin(), c.end()));
+  return out;
 }
 
 // What a local update guarantees, checked against the map and a full recomputation: clusters are
@@ -203,6 +223,41 @@ TEST(FrontierFinder, IncrementalEqualsFullRecomputationOnRandomUpdates) {
   });
 }
 
+// Without a size limit, the clusters after any update are the oracle's: the 26-connected components of
+// the frontier cells found voxel by voxel, those of min_cluster_cells or more.
+TEST(FrontierFinder, UnsplitClustersAreTheConnectedComponentsOfTheFrontierCells) {
+  frontier::FrontierConfig cfg = randomUpdateConfig();
+  cfg.max_cluster_extent = 100.0;
+  randomUpdates(cfg, [&](const auto& box, const auto& list, const auto& full, const auto& m, const std::string& at) {
+    const auto oracle = oracleClusters(m, cfg.min_cluster_cells);
+    ASSERT_EQ(clusterSets(full, m.geometry()), oracle) << at;
+    ASSERT_EQ(clusterSets(box, m.geometry()), oracle) << "box, " << at;
+    ASSERT_EQ(clusterSets(list, m.geometry()), oracle) << "list, " << at;
+  });
+}
+
+// Frontier cells that touch only along an edge or at a corner are one cluster: a staircase of single
+// free voxels in unknown space, each one voxel on in x and y (and z) from the last.
+TEST(FrontierFinder, CellsTouchingOnlyDiagonallyAreOneCluster) {
+  map::OccupancyMap m(mapConfig(), kBox);
+  const auto& g = m.geometry();
+  auto free = [&](double x, double y, double z) { m.setState(g.coordToIndex(Vec3(x, y, z)), VoxelState::kFree); };
+  for (int i = 0; i < 8; ++i) {  // edge to edge, two staircases at different heights
+    free(0.55 + 0.1 * i, 0.55 + 0.1 * i, 0.35);
+    free(0.55 + 0.1 * i, 1.45 - 0.1 * i, 0.75);
+  }
+  for (int i = 0; i < 6; ++i) free(2.05 + 0.1 * i, 0.45 + 0.1 * i, 0.15 + 0.1 * i);  // corner to corner
+  frontier::FrontierConfig cfg;
+  cfg.min_cluster_cells = 5;
+  cfg.max_cluster_extent = 100.0;
+  frontier::FrontierFinder f(cfg, g, kBox);
+  f.recomputeAll(m, 0.0);
+  EXPECT_EQ(clusterSets(f, g), oracleClusters(m, cfg.min_cluster_cells));
+  std::multiset<std::size_t> sizes;
+  for (const auto& fr : f.frontiers()) sizes.insert(fr.cells.size());
+  EXPECT_EQ(sizes, (std::multiset<std::size_t>{6, 8, 8}));
+}
+
 // With max_regrow_cells = 0 every update keeps the clusters it does not touch.
 TEST(FrontierFinder, LocalUpdatesKeepValidClustersOnRandomUpdates) {
   frontier::FrontierConfig cfg = randomUpdateConfig();
@@ -241,8 +296,9 @@ TEST(FrontierFinder, UpdateKeepsTheClustersItDoesNotTouch) {
   EXPECT_FALSE(delta.removed.empty());
   EXPECT_LT(delta.removed.size(), before / 2);
   // Every removed cluster was near the change; the far end's clusters are untouched.
-  for (const auto& fr : f.frontiers())
+  for (const auto& fr : f.frontiers()) {
     if (fr.average.x() < 1.5) EXPECT_DOUBLE_EQ(fr.first_seen, 0.0);
+  }
   for (std::uint32_t id : delta.added) {
     const frontier::Frontier* fr = f.find(id);
     ASSERT_NE(fr, nullptr);
@@ -300,6 +356,24 @@ TEST(FrontierFinder, DurationInheritedFromTheOldestAncestor) {
   EXPECT_EQ(ages, (std::set<double>{2.0, 9.0}));
 }
 
+// Two frontiers of different ages joined into one by an update: the joined one is as old as the older.
+TEST(FrontierFinder, AJoinedFrontierIsAsOldAsItsOldestPart) {
+  map::OccupancyMap m(mapConfig(), kBox);
+  frontier::FrontierConfig cfg;
+  cfg.max_cluster_extent = 100.0;
+  frontier::FrontierFinder f(cfg, m.geometry(), kBox);
+  const auto [lo1, hi1] = paint(m, Vec3(1.6, 0.5, 0.0), Vec3(2.0, 1.0, 1.0), VoxelState::kFree);
+  f.update(m, lo1, hi1, 5.0);  // the younger first in id order
+  const auto [lo0, hi0] = paint(m, Vec3(0.5, 0.5, 0.0), Vec3(0.9, 1.0, 1.0), VoxelState::kFree);
+  f.update(m, lo0, hi0, 2.0);
+  ASSERT_EQ(f.frontiers().size(), 2u);
+  // The block between them at t = 9 joins them.
+  const auto [lo2, hi2] = paint(m, Vec3(0.9, 0.5, 0.0), Vec3(1.6, 1.0, 1.0), VoxelState::kFree);
+  f.update(m, lo2, hi2, 9.0);
+  ASSERT_EQ(f.frontiers().size(), 1u);
+  EXPECT_DOUBLE_EQ(f.frontiers()[0].first_seen, 2.0);
+}
+
 TEST(FrontierFinder, NearCountsAndActiveBand) {
   map::OccupancyMap m(mapConfig(), {Vec3(0, 0, 0), Vec3(10, 2, 1)});
   const Aabb box{Vec3(0, 0, 0), Vec3(10, 2, 1)};
@@ -312,6 +386,15 @@ TEST(FrontierFinder, NearCountsAndActiveBand) {
   f.recomputeAll(m, 0.0);
   ASSERT_EQ(f.frontiers().size(), 3u);
   for (const auto& fr : f.frontiers()) EXPECT_EQ(fr.n_near, fr.average.x() < 5.0 ? 1 : 0) << fr.average.transpose();
+  // Just inside and just outside s_near: 1.5 m apart counts at s_near 1.51, not at 1.49.
+  cfg.s_near = 1.51;
+  frontier::FrontierFinder wider(cfg, m.geometry(), box);
+  wider.recomputeAll(m, 0.0);
+  for (const auto& fr : wider.frontiers()) EXPECT_EQ(fr.n_near, fr.average.x() < 5.0 ? 1 : 0) << fr.average.transpose();
+  cfg.s_near = 1.49;
+  frontier::FrontierFinder narrower(cfg, m.geometry(), box);
+  narrower.recomputeAll(m, 0.0);
+  for (const auto& fr : narrower.frontiers()) EXPECT_EQ(fr.n_near, 0) << fr.average.transpose();
   f.setActiveBand(0.6, 2.0);
   for (const auto& fr : f.frontiers()) EXPECT_FALSE(fr.active);
   f.setActiveBand(0.0, 1.0);

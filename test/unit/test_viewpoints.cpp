@@ -307,10 +307,16 @@ TEST(Viewpoints, CountVisibleMatchesBruteForce) {
   }
 }
 
+// With known_clearance, a place whose voxels max(clearance, one voxel) away along the axes are not all known
+// is left out too (a flight could not end there). Ties between yaws go to the earliest candidate (the one
+// facing the frontier's average first).
 TEST(Viewpoints, SampledViewpointsMatchExhaustiveEnumeration) {
-  const ViewpointConfig cfg = testConfig();
   const double z_min = 0.4, z_max = 1.4;
-  for (unsigned seed : {11u, 12u, 13u}) {
+  int left_out_for_unknown = 0;
+  for (int run = 0; run < 6; ++run) {  // seeds 11-13 without known_clearance, then with it
+    const unsigned seed = 11u + static_cast<unsigned>(run % 3);
+    ViewpointConfig cfg = testConfig();
+    cfg.known_clearance = run >= 3;
     World w(Index3(40, 40, 20));
     Rng rng(seed);
     randomise(w, rng, 30, 0);
@@ -318,6 +324,13 @@ TEST(Viewpoints, SampledViewpointsMatchExhaustiveEnumeration) {
     w.set(lo, lo + Index3(rng(3, 6), rng(3, 6), 8), VoxelState::kUnknown);
     const Frontier f = frontierOf(w);
     ASSERT_GE(f.cells.size(), 50u);
+    if (cfg.known_clearance) {  // single unknown voxels scattered through free space (after the frontier)
+      const Index3 d = w.geo().dims();
+      for (int i = 0; i < 400; ++i) {
+        const Index3 idx(rng(0, d.x() - 1), rng(0, d.y() - 1), rng(0, d.z() - 1));
+        if (w.map().state(idx) == VoxelState::kFree) w.set(idx, idx, VoxelState::kUnknown);
+      }
+    }
 
     const std::vector<Viewpoint> vps = sampleViewpoints(f, w.map(), w.esdf(), z_min, z_max, cfg);
     ASSERT_FALSE(vps.empty()) << seed;
@@ -339,6 +352,8 @@ TEST(Viewpoints, SampledViewpointsMatchExhaustiveEnumeration) {
       const std::vector<int> counts = oracleCounts(w, vp.position, yaws, f.cells, cfg);
       EXPECT_EQ(countVisible(vp.position, vp.yaw, f.cells, w.map(), cfg), vp.visible_cells);
       EXPECT_EQ(*std::max_element(counts.begin(), counts.end()), vp.visible_cells);
+      const std::size_t first_best = std::max_element(counts.begin(), counts.end()) - counts.begin();
+      EXPECT_DOUBLE_EQ(vp.yaw, yaws[first_best]) << "a tie not given to the earliest candidate yaw";
       EXPECT_TRUE(
           std::any_of(yaws.begin(), yaws.end(), [&](double y) { return std::abs(y - vp.yaw) < 1e-12; }));
     }
@@ -362,15 +377,27 @@ TEST(Viewpoints, SampledViewpointsMatchExhaustiveEnumeration) {
           const std::vector<int> counts =
               oracleCounts(w, q, candidateYaws(q, f.average, cfg.yaw_samples), f.cells, cfg);
           if (*std::max_element(counts.begin(), counts.end()) < cfg.min_visible) continue;
+          if (cfg.known_clearance) {
+            const double step = std::max(cfg.clearance, w.map().geometry().resolution());
+            bool all_known = true;
+            for (int axis = 0; axis < 3; ++axis)
+              for (double sgn : {-1.0, 1.0})
+                all_known = all_known && w.map().state(Vec3(q + sgn * step * Vec3::Unit(axis))) != VoxelState::kUnknown;
+            if (!all_known) {
+              ++left_out_for_unknown;
+              continue;
+            }
+          }
           if (std::none_of(expected.begin(), expected.end(),
                            [&](const Vec3& e) { return (e - q).norm() < 1e-9; }))
             expected.push_back(q);
         }
-    ASSERT_EQ(vps.size(), expected.size()) << seed;
+    ASSERT_EQ(vps.size(), expected.size()) << seed << (cfg.known_clearance ? " known_clearance" : "");
     for (const Vec3& e : expected)
       EXPECT_TRUE(std::any_of(vps.begin(), vps.end(),
                               [&](const Viewpoint& v) { return (v.position - e).norm() < 1e-9; }));
   }
+  EXPECT_GT(left_out_for_unknown, 0) << "no place in the fixtures borders unknown space";
 }
 
 TEST(Viewpoints, HeightsAreClampedToTheBand) {
