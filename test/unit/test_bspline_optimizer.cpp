@@ -583,6 +583,44 @@ TEST(Replan, ServerDroppedOnlyWhenAReportAfterTheGraceFollowsAnotherOrNone) {
   EXPECT_FALSE(go_feap::trajectory::serverDropped(7, 10.0, false, 0, std::nan(""), 0.5));
 }
 
+// replanReason() on a trajectory being flown: an obstacle mapped across its way ahead, within the collision
+// horizon, is a predicted collision; one it has flown past, or beyond the horizon, is not; a trajectory
+// ending at its target is flown out, a partial one is replanned before its end.
+TEST(Replan, AnObstacleMappedAheadWithinTheHorizonIsAPredictedCollision) {
+  World world(Vec3(6.0, 4.0, 2.0));
+  world.sync();
+  const OptimizerConfig optimizer = optimizerConfig();
+  traj::TrajectoryPlannerConfig planner;
+  const ReplanConfig replan;
+  traj::Trajectory flown;
+  flown.goal = Vec3(5.0, 2.0, 1.0);
+  flown.position = UniformBspline::fitPath(UniformBspline::resamplePolyline({Vec3(1.0, 2.0, 1.0), flown.goal}, 0.3),
+                                           0.3, Vec3::Zero(), Vec3::Zero());
+  const double T = flown.duration();
+  ASSERT_GT(T, 3.0);
+  auto reason = [&](double t) {
+    return traj::replanReason(&flown, t, flown.goal, false, world.esdf(), replan, optimizer, planner);
+  };
+  EXPECT_EQ(reason(0.2), ReplanReason::kNone);
+  EXPECT_EQ(reason(T - 0.5), ReplanReason::kNone);  // ends at its target: flown out
+  world.addBox(Index3(25, 10, 0), Index3(26, 30, 19));  // a wall across the way at x 2.5-2.7 m
+  world.sync();
+  double reach = -1.0;  // when the flight first comes within min_clearance of it
+  for (int k = 0; k <= 10000 && reach < 0; ++k)
+    if (world.esdf().distance(flown.position.position(T * k / 10000)) < optimizer.min_clearance) reach = T * k / 10000;
+  ASSERT_GT(reach, 0.5);
+  EXPECT_EQ(reason(0.2), ReplanReason::kPredictedCollision);
+  EXPECT_EQ(reason(reach - 0.1), ReplanReason::kPredictedCollision);
+  double past = reach;  // where it is clear of the wall again
+  while (past < T && world.esdf().distance(flown.position.position(past)) < optimizer.min_clearance) past += 0.01;
+  ASSERT_LT(past + 0.1, T - replan.min_time_left);
+  EXPECT_EQ(reason(past + 0.1), ReplanReason::kNone);
+  planner.collision_horizon = 0.5 * (reach - 0.2);
+  EXPECT_EQ(reason(0.2), ReplanReason::kNone) << "beyond the horizon";
+  flown.partial = true;
+  EXPECT_EQ(reason(T - 0.5), ReplanReason::kShortTimeLeft);
+}
+
 TEST(Replan, FirstCollisionTimeMatchesFineSampling) {
   World world(Vec3(6.0, 4.0, 2.0));
   world.addBox(Index3(30, 0, 0), Index3(32, 39, 19));  // wall at x in [3.0, 3.3]
