@@ -910,6 +910,41 @@ TEST(TrajectoryPlanner, ReplansKeepTheReferenceAcceleration) {
   }
 }
 
+// A start velocity with a small part across the path's first leg (0.08 m/s, within profile_max_cross_speed)
+// is still flown by the timed fit when the profile leaves acceleration across the path (profile_acceleration
+// 0.8 of a_max against the 0.95 margin: 1.02 m/s^2): the crossing part fades out within Te = 4 |v_cross| /
+// a_cross, after which the flight runs along the path, and the limits hold throughout.
+TEST(TrajectoryPlanner, AStartVelocityAcrossThePathFadesOutInTheTimedFit) {
+  OpenRoom room(Vec3(12, 12, 3));
+  const OptimizerConfig optimizer = optimizerConfig();
+  traj::TrajectoryPlannerConfig planner;
+  planner.profile_acceleration = 0.8;
+  traj::PlanRequest request;
+  request.start = Vec3(4.05, 6.05, 1.55);
+  request.target = Vec3(8.05, 6.05, 1.55);
+  request.velocity = Vec3(1.0, 0.08, 0.0);
+  traj::PlanReport report;
+  const auto planned = traj::planTrajectory(request, room.astar, room.world.esdf(), optimizer, planner, &report);
+  ASSERT_TRUE(planned) << planned.message();
+  EXPECT_TRUE(report.profiled);
+  EXPECT_LT((traj::sampleTrajectory(*planned, 0.0).velocity - request.velocity).norm(), 1e-6);
+  const double a_limit = optimizer.feasibility_margin * optimizer.a_max;
+  const double a_along = planner.profile_acceleration * optimizer.a_max;
+  const double te = 4.0 * 0.08 / std::sqrt(a_limit * a_limit - a_along * a_along);
+  double drift = 0.0;  // the largest offset across the path
+  for (double t = 0.0; t <= planned->duration(); t += 0.01) {
+    const traj::TrajectorySample s = traj::sampleTrajectory(*planned, t);
+    drift = std::max(drift, std::abs(s.position.y() - 6.05));
+    if (t > te + 2 * planner.profile_knot_span) EXPECT_LT(std::abs(s.velocity.y()), 1e-3) << "at " << t << " s";
+  }
+  // v_cross t (1 - t / Te)^2 peaks at t = Te / 3: 4 / 27 v_cross Te across the path.
+  EXPECT_NEAR(drift, 4.0 / 27.0 * 0.08 * te, 0.25 * 4.0 / 27.0 * 0.08 * te);
+  double v = 0.0, a = 0.0;
+  finiteDifferenceDynamics(planned->position, 4000, v, a);
+  EXPECT_LE(v, (1.0 + optimizer.limit_tolerance) * optimizer.v_max);
+  EXPECT_LE(a, (1.0 + optimizer.limit_tolerance) * optimizer.a_max);
+}
+
 // A path longer than the horizon is flown only that far along it (partial, the goal kept), and such a
 // trajectory is replanned when little time is left on it, while one that ends at its goal is not; a goal
 // farther than target_tolerance from the target is a new target. Without a horizon the whole corridor is
