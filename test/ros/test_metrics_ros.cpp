@@ -10,8 +10,12 @@
 #include <nav_msgs/Path.h>
 #include <ros/ros.h>
 #include <rosgraph_msgs/Clock.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+#include <geometry_msgs/PoseStamped.h>
 
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -21,6 +25,8 @@
 
 #include "go_feap/ComputeTime.h"
 #include "go_feap/ExplorationStatus.h"
+#include "go_feap/FrontierArray.h"
+#include "go_feap/GlobalTour.h"
 #include "ros_test_util.h"
 
 namespace {
@@ -214,6 +220,86 @@ TEST(LayerManager, ElapsedTimeStaysAtOrAboveZeroWhenTheClockGoesBack) {
   ASSERT_GE(statuses.size(), 3u) << "no status after the clock went back";
   for (const go_feap::ExplorationStatus& s : statuses)
     EXPECT_GE(s.elapsed, 0.0) << "at " << s.header.stamp.toSec() << " s";
+}
+
+// A global planner (probe/gp/... in metrics.test) plans at global/rate (10 Hz) from the test's frontier
+// messages. The clock then goes back 80 s (a bag played again): it plans again at once, where it used
+// to wait until the clock had caught up with its last plan.
+TEST(GlobalPlanner, PlansAgainAtOnceWhenTheClockGoesBack) {
+  ros::NodeHandle nh;
+  auto clock_pub = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
+  auto odom_pub = nh.advertise<nav_msgs::Odometry>("probe/gp/odom", 10);
+  auto frontier_pub = nh.advertise<go_feap::FrontierArray>("probe/gp/frontiers", 10);
+  auto info_pub = nh.advertise<sensor_msgs::CameraInfo>("probe/mapper/camera_info", 1, /*latch=*/true);
+  auto depth_pub = nh.advertise<sensor_msgs::Image>("probe/mapper/depth", 2);
+  auto pose_pub = nh.advertise<geometry_msgs::PoseStamped>("probe/mapper/camera_pose", 2);
+  std::vector<go_feap::GlobalTour> tours;
+  auto tour_sub = nh.subscribe<go_feap::GlobalTour>(
+      "probe/gp/global_tour", 50, [&](const go_feap::GlobalTour::ConstPtr& m) { tours.push_back(*m); });
+  ASSERT_TRUE(spinUntil([&] {
+    return tour_sub.getNumPublishers() > 0 && clock_pub.getNumSubscribers() > 0 && odom_pub.getNumSubscribers() > 0 &&
+           frontier_pub.getNumSubscribers() > 0 && info_pub.getNumSubscribers() > 0 && depth_pub.getNumSubscribers() > 0 &&
+           pose_pub.getNumSubscribers() > 0;
+  }, 30.0)) << "the probe global planner or mapper is not connected";
+  // One depth frame for the mapper (3 m everywhere, from 1 m up looking along +x), after which it shares
+  // its map with the planner.
+  sensor_msgs::CameraInfo info;
+  info.width = 64, info.height = 48;
+  info.K = {40.0, 0.0, 32.0, 0.0, 40.0, 24.0, 0.0, 0.0, 1.0};
+  info_pub.publish(info);
+  sensor_msgs::Image depth;
+  depth.width = 64, depth.height = 48, depth.encoding = "32FC1", depth.step = 64 * 4;
+  depth.data.resize(depth.step * depth.height);
+  const float metres = 3.0f;
+  for (std::size_t i = 0; i < depth.data.size(); i += 4) std::memcpy(&depth.data[i], &metres, 4);
+  geometry_msgs::PoseStamped pose;
+  pose.header.frame_id = "world";
+  pose.pose.position.z = 1.0;
+  pose.pose.orientation.w = 0.5, pose.pose.orientation.x = -0.5, pose.pose.orientation.y = 0.5,
+  pose.pose.orientation.z = -0.5;  // optical frame: z along +x, x along -y, y along -z
+  go_feap::FrontierArray frontiers;
+  go_feap::Frontier f;
+  f.id = 1;
+  for (double y : {-0.1, 0.0, 0.1}) {
+    geometry_msgs::Point c;
+    c.x = 2.05, c.y = y + 0.05, c.z = 1.05;
+    f.cells.push_back(c);
+  }
+  f.average = f.cells[1];
+  f.aabb_min = f.cells[0], f.aabb_max = f.cells[2];
+  f.active = true;
+  frontiers.frontiers.push_back(f);
+  nav_msgs::Odometry odom;
+  odom.header.frame_id = "world";
+  odom.pose.pose.position.z = 1.0;
+  odom.pose.pose.orientation.w = 1.0;
+  double now = 100.0;
+  depth.header.stamp = pose.header.stamp = ros::Time(now);
+  pose_pub.publish(pose);
+  depth_pub.publish(depth);
+  auto run = [&](double seconds) {  // clock, odometry and frontiers every 0.05 s
+    for (double t = 0.0; t < seconds; t += 0.05) {
+      now += 0.05;
+      rosgraph_msgs::Clock c;
+      c.clock = ros::Time(now);
+      clock_pub.publish(c);
+      spinUntil([] { return false; }, 0.01);
+      odom.header.stamp = frontiers.header.stamp = ros::Time(now);
+      odom_pub.publish(odom);
+      frontiers.header.stamp = ros::Time(now);
+      frontier_pub.publish(frontiers);
+      spinUntil([] { return false; }, 0.02);
+    }
+  };
+  run(2.0);
+  ASSERT_GE(tours.size(), 3u) << "the probe global planner planned no tours";
+  EXPECT_EQ(tours.back().frontier_ids, std::vector<std::uint32_t>{1});
+  now = 20.0;
+  tours.clear();
+  run(2.0);
+  int planned = 0;
+  for (const go_feap::GlobalTour& t : tours) planned += !t.repeated && t.header.stamp.toSec() < 30.0;
+  EXPECT_GE(planned, 5) << tours.size() << " tours in 2 s after the clock went back 80 s";
 }
 
 }  // namespace
