@@ -34,6 +34,12 @@ namespace {
 using go_feap::test::spinUntil;
 using Vec3 = Eigen::Vector3d;
 
+void publishClock(const ros::Publisher& clock_pub, double now) {
+  rosgraph_msgs::Clock c;
+  c.clock = ros::Time(now);
+  clock_pub.publish(c);
+}
+
 go_feap::ExplorationStatus status(std::uint8_t state, const char* name, double elapsed) {
   go_feap::ExplorationStatus s;
   s.state = state;
@@ -84,9 +90,7 @@ TEST(MetricsRecorder, SummaryHoldsThePlayedRunAndOddStatusesNeitherEndNorCountIn
   double now = 1.0;
   auto tick = [&](double dt) {  // the simulated clock moves on; the recorder gets time to act on it
     now += dt;
-    rosgraph_msgs::Clock c;
-    c.clock = ros::Time(now);
-    clock_pub.publish(c);
+    publishClock(clock_pub, now);
     spinUntil([] { return false; }, 0.02);
   };
   // Each topic has its own queue in the recorder (odometry 20 deep), handled by the manager's threads in
@@ -201,9 +205,7 @@ TEST(LayerManager, ElapsedTimeStaysAtOrAboveZeroWhenTheClockGoesBack) {
   auto run_clock = [&](double seconds) {
     for (double t = 0.0; t < seconds; t += 0.05) {
       now += 0.05;
-      rosgraph_msgs::Clock c;
-      c.clock = ros::Time(now);
-      clock_pub.publish(c);
+      publishClock(clock_pub, now);
       spinUntil([] { return false; }, 0.02);
     }
   };
@@ -280,13 +282,10 @@ TEST(GlobalPlanner, PlansAgainAtOnceWhenTheClockGoesBack) {
   auto run = [&](double seconds) {  // clock, odometry and frontiers every 0.05 s
     for (double t = 0.0; t < seconds; t += 0.05) {
       now += 0.05;
-      rosgraph_msgs::Clock c;
-      c.clock = ros::Time(now);
-      clock_pub.publish(c);
+      publishClock(clock_pub, now);
       spinUntil([] { return false; }, 0.01);
       odom.header.stamp = frontiers.header.stamp = ros::Time(now);
       odom_pub.publish(odom);
-      frontiers.header.stamp = ros::Time(now);
       frontier_pub.publish(frontiers);
       spinUntil([] { return false; }, 0.02);
     }
