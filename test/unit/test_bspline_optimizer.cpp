@@ -935,7 +935,9 @@ TEST(TrajectoryPlanner, AStartVelocityAcrossThePathFadesOutInTheTimedFit) {
   for (double t = 0.0; t <= planned->duration(); t += 0.01) {
     const traj::TrajectorySample s = traj::sampleTrajectory(*planned, t);
     drift = std::max(drift, std::abs(s.position.y() - 6.05));
-    if (t > te + 2 * planner.profile_knot_span) EXPECT_LT(std::abs(s.velocity.y()), 1e-3) << "at " << t << " s";
+    if (t > te + 2 * planner.profile_knot_span) {
+      EXPECT_LT(std::abs(s.velocity.y()), 1e-3) << "at " << t << " s";
+    }
   }
   // v_cross t (1 - t / Te)^2 peaks at t = Te / 3: 4 / 27 v_cross Te across the path.
   EXPECT_NEAR(drift, 4.0 / 27.0 * 0.08 * te, 0.25 * 4.0 / 27.0 * 0.08 * te);
@@ -1047,6 +1049,39 @@ TEST(TrajectoryPlanner, EnclosedStartsLookAroundInsteadOfFailingTheTarget) {
   EXPECT_EQ(reason(look.duration() - 0.5 * replan.min_time_left), ReplanReason::kShortTimeLeft);
 }
 
+// Known free space with walls across the room every `width` voxels, their gap alternating at either end:
+// a zig-zag corridor (0.9-1.2 m wide for width 8-10).
+void zigZagCorridor(World& world, int width) {
+  const Index3 dims = world.geo().dims();
+  world.setFree(Index3::Zero(), dims - Index3::Ones());
+  for (int k = 1; k * width < dims.x() - 5; ++k) {
+    const int x = k * width;
+    if (k % 2) {
+      world.addBox(Index3(x, 0, 0), Index3(x + 1, dims.y() - 9, dims.z() - 1));
+    } else {
+      world.addBox(Index3(x, 8, 0), Index3(x + 1, dims.y() - 1, dims.z() - 1));
+    }
+  }
+  world.sync();
+}
+
+// A zig-zag corridor of trial's width (8 + trial % 3 voxels), its flight search, and a request starting in
+// its first leg at a random y.
+struct ZigZagRoom {
+  ZigZagRoom(int trial, Rng& rng, const AstarConfig& config)
+      : width(8 + trial % 3), world(Vec3(8, 8, 2)), astar(built(world, width).occupancy(), world.esdf(), config) {
+    request.start = Vec3(0.5 * width * 0.1, 4.0 + rng(-2.0, 2.0), 1.0);
+  }
+  static World& built(World& w, int width) {
+    zigZagCorridor(w, width);
+    return w;
+  }
+  int width;
+  World world;
+  Astar astar;
+  traj::PlanRequest request;
+};
+
 // Through zig-zag corridors (mapped walls, known free space) 0.8-1.0 m wide, from a start already moving
 // along the first leg: every plan succeeds or fails with a reason, and every returned trajectory keeps
 // min_clearance from the walls beyond snap_radius (dense sampling of the ESDF) and the limits.
@@ -1060,20 +1095,10 @@ TEST(TrajectoryPlanner, TightCornersAreFlownWithClearance) {
   Rng rng(5);
   int ok = 0, total = 0;
   for (int trial = 0; trial < 30; ++trial) {
-    World world(Vec3(8, 8, 2));
-    const Index3 dims = world.geo().dims();
-    world.setFree(Index3::Zero(), dims - Index3::Ones());
-    // Walls across the room with a gap alternating at either end: a zig-zag corridor 0.9-1.2 m wide.
-    const int width = 8 + trial % 3;
-    for (int k = 1; k * width < dims.x() - 5; ++k) {
-      const int x = k * width;
-      if (k % 2) world.addBox(Index3(x, 0, 0), Index3(x + 1, dims.y() - 9, dims.z() - 1));
-      else world.addBox(Index3(x, 8, 0), Index3(x + 1, dims.y() - 1, dims.z() - 1));
-    }
-    world.sync();
-    const Astar astar(world.occupancy(), world.esdf(), astar_config);
-    traj::PlanRequest request;
-    request.start = Vec3(0.5 * width * 0.1, 4.0 + rng(-2.0, 2.0), 1.0);
+    ZigZagRoom room(trial, rng, astar_config);
+    const World& world = room.world;
+    const Astar& astar = room.astar;
+    traj::PlanRequest& request = room.request;
     request.velocity = Vec3(0.0, rng(-1.2, 1.2), 0.0);  // along the first leg
     request.target = Vec3(7.4, 4.0 + rng(-2.0, 2.0), 1.0);
     request.yaw = 0.0;
@@ -1097,6 +1122,51 @@ TEST(TrajectoryPlanner, TightCornersAreFlownWithClearance) {
     EXPECT_LE(a, 1.05 * optimizer.a_max);
   }
   EXPECT_GE(ok, total - 1) << ok << " of " << total << " plans succeeded";
+}
+
+// Fitted to samples 1 m apart, the optimum cuts the zig-zag corridor's corners (too close to the walls, or
+// through space the search did not vouch for): every first attempt fails. The refits, each at half the
+// spacing (and slower where a limit broke), hug the searched path closer until one passes: with max_refits
+// 0 no plan succeeds, with the default every one does, after one refit or more, keeping min_clearance.
+TEST(TrajectoryPlanner, RefitsCloserToThePathRescueOptimaThatCutCorners) {
+  const OptimizerConfig optimizer = optimizerConfig();
+  AstarConfig astar_config;
+  astar_config.unknown_is_free = false;
+  astar_config.known_clearance = true;
+  astar_config.clearance = 0.3;
+  traj::TrajectoryPlannerConfig planner;
+  planner.path_spacing = 1.0;
+  planner.profile_acceleration = 0.0;  // no timed fit, no finer optimisation beside, no retry: the refits alone
+  planner.fine_spans = 0;
+  planner.unseen_retry = false;
+  ASSERT_GE(planner.max_refits, 2);
+  Rng rng(5);
+  int rescued = 0;
+  for (int trial = 0; trial < 12; ++trial) {
+    ZigZagRoom room(trial, rng, astar_config);
+    const World& world = room.world;
+    const Astar& astar = room.astar;
+    traj::PlanRequest& request = room.request;
+    request.target = Vec3(7.4, 4.0 + rng(-2.0, 2.0), 1.0);
+    traj::TrajectoryPlannerConfig once = planner;
+    once.max_refits = 0;
+    EXPECT_FALSE(traj::planTrajectory(request, astar, world.esdf(), optimizer, once)) << "trial " << trial;
+    traj::PlanReport report;
+    const auto planned = traj::planTrajectory(request, astar, world.esdf(), optimizer, planner, &report);
+    ASSERT_TRUE(planned) << "trial " << trial << ": " << planned.message();
+    EXPECT_GE(report.refits, 1) << "trial " << trial;
+    rescued += report.refits >= 1;
+    const UniformBspline& p = planned->position;
+    for (int i = 0; i <= 4000; ++i) {
+      const Vec3 q = p.position(p.duration() * i / 4000);
+      if ((q - request.start).norm() <= planner.snap_radius) continue;
+      ASSERT_GE(world.esdf().distance(q), optimizer.min_clearance - 1e-9) << "trial " << trial << " at " << q.transpose();
+    }
+    if (!planned->partial) {  // else it ends `horizon` along the path
+      EXPECT_LT((p.position(p.duration()) - request.target).norm(), 0.5 * std::sqrt(3.0) * kRes + 1e-9) << "trial " << trial;
+    }
+  }
+  EXPECT_EQ(rescued, 12);
 }
 
 // Two known rooms with unseen space between: no path through known space, so the trajectory goes
