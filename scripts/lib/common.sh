@@ -20,7 +20,7 @@ GO_FEAP_APT_PACKAGES=(
 
 log() { printf '[go_feap] %s\n' "$*" >&2; }
 
-# usage SCRIPT: prints the comment block at the top of SCRIPT (after its #! line), without the "# ".
+# usage_of SCRIPT: prints the comment block at the top of SCRIPT (after its #! line), without the "# ".
 usage_of() { awk 'NR == 1 { next } /^#/ { sub(/^# ?/, ""); print; next } { exit }' "$1"; }
 
 # Installs the Debian packages that are missing; a second run installs nothing.

@@ -412,7 +412,7 @@ TEST(BsplineOptimizer, ImpossibleProblemsFailAndReturnNothing) {
 }
 
 // What NLopt minimises is BsplineCost with every term: the reported final cost is the full cost of the
-// result, no more than the initial cost; and a straight flight 0.25 m past a block's edge (inside
+// result, no more than the initial cost; and a straight flight 0.3 m past a block's edge (inside
 // `clearance`, outside `min_clearance`) is pushed off it, the free control points' shortfall cut.
 TEST(BsplineOptimizer, MinimisesTheFullCostAndPushesThePathOffAnEdge) {
   World world(Vec3(6.0, 4.0, 2.0));
