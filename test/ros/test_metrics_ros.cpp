@@ -27,6 +27,7 @@
 #include "go_feap/ExplorationStatus.h"
 #include "go_feap/FrontierArray.h"
 #include "go_feap/GlobalTour.h"
+#include "go_feap/MapUpdate.h"
 #include "ros_test_util.h"
 
 namespace {
@@ -276,9 +277,19 @@ TEST(GlobalPlanner, PlansAgainAtOnceWhenTheClockGoesBack) {
   odom.pose.pose.position.z = 1.0;
   odom.pose.pose.orientation.w = 1.0;
   double now = 100.0;
-  depth.header.stamp = pose.header.stamp = ros::Time(now);
-  pose_pub.publish(pose);
-  depth_pub.publish(depth);
+  // camera_info and the frame travel on separate connections, so the frame may come first and be
+  // skipped ("no camera_info received yet"): it is sent again, newly stamped, until the mapper integrates it.
+  int updates = 0;
+  auto update_sub = nh.subscribe<go_feap::MapUpdate>("probe/mapper/map_update", 10,
+                                                     [&](const go_feap::MapUpdate::ConstPtr&) { ++updates; });
+  ASSERT_TRUE(spinUntil([&] { return update_sub.getNumPublishers() > 0; }, 30.0)) << "the probe mapper is not connected";
+  for (int attempt = 0; attempt < 10 && updates == 0; ++attempt) {
+    depth.header.stamp = pose.header.stamp = ros::Time(now + 0.01 * attempt);
+    pose_pub.publish(pose);
+    depth_pub.publish(depth);
+    spinUntil([&] { return updates > 0; }, 2.0);
+  }
+  ASSERT_GT(updates, 0) << "the probe mapper integrated none of 10 frames";
   auto run = [&](double seconds) {  // clock, odometry and frontiers every 0.05 s
     for (double t = 0.0; t < seconds; t += 0.05) {
       now += 0.05;
