@@ -1127,7 +1127,8 @@ TEST(TrajectoryPlanner, TightCornersAreFlownWithClearance) {
 // Fitted to samples 1 m apart, the optimum cuts the zig-zag corridor's corners (too close to the walls, or
 // through space the search did not vouch for): every first attempt fails. The refits, each at half the
 // spacing (and slower where a limit broke), hug the searched path closer until one passes: with max_refits
-// 0 no plan succeeds, with the default every one does, after one refit or more, keeping min_clearance.
+// 0, or max_slowdown 1, no plan succeeds; with the defaults every one does, after one refit or more,
+// keeping min_clearance.
 TEST(TrajectoryPlanner, RefitsCloserToThePathRescueOptimaThatCutCorners) {
   const OptimizerConfig optimizer = optimizerConfig();
   AstarConfig astar_config;
@@ -1151,6 +1152,12 @@ TEST(TrajectoryPlanner, RefitsCloserToThePathRescueOptimaThatCutCorners) {
     traj::TrajectoryPlannerConfig once = planner;
     once.max_refits = 0;
     EXPECT_FALSE(traj::planTrajectory(request, astar, world.esdf(), optimizer, once)) << "trial " << trial;
+    // Every refit is slower than the one before (by 1.5 at least): with max_slowdown 1 there is none.
+    traj::TrajectoryPlannerConfig capped = planner;
+    capped.max_slowdown = 1.0;
+    traj::PlanReport capped_report;
+    EXPECT_FALSE(traj::planTrajectory(request, astar, world.esdf(), optimizer, capped, &capped_report)) << "trial " << trial;
+    EXPECT_EQ(capped_report.refits, 0) << "trial " << trial;
     traj::PlanReport report;
     const auto planned = traj::planTrajectory(request, astar, world.esdf(), optimizer, planner, &report);
     ASSERT_TRUE(planned) << "trial " << trial << ": " << planned.message();
