@@ -4,7 +4,8 @@
 // length of the flown path, one collision for one pass through a ground-truth wall (found in the scene
 // by the test itself), the mean compute time of each block. Statuses that are malformed, or that came
 // before the run or whose elapsed time lies beyond the clock, must neither end the recorder nor count.
-// Then the clock goes back, and a probe layer manager's elapsed time must stay at 0 or above.
+// Then the clock goes back, and a probe layer manager's elapsed time must stay at 0 or above; a probe
+// global planner and a probe local planner, on a probe mapper's map of one synthetic frame, must plan again.
 #include <gtest/gtest.h>
 #include <nav_msgs/Odometry.h>
 #include <nav_msgs/Path.h>
@@ -28,6 +29,7 @@
 #include "go_feap/FrontierArray.h"
 #include "go_feap/GlobalTour.h"
 #include "go_feap/MapUpdate.h"
+#include "go_feap/ViewpointPath.h"
 #include "ros_test_util.h"
 
 namespace {
@@ -225,27 +227,23 @@ TEST(LayerManager, ElapsedTimeStaysAtOrAboveZeroWhenTheClockGoesBack) {
     EXPECT_GE(s.elapsed, 0.0) << "at " << s.header.stamp.toSec() << " s";
 }
 
-// A global planner (probe/gp/... in metrics.test) plans at global/rate (10 Hz) from the test's frontier
-// messages. The clock then goes back 80 s (a bag played again): it plans again at once, where it used
-// to wait until the clock had caught up with its last plan.
-TEST(GlobalPlanner, PlansAgainAtOnceWhenTheClockGoesBack) {
-  ros::NodeHandle nh;
-  auto clock_pub = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
-  auto odom_pub = nh.advertise<nav_msgs::Odometry>("probe/gp/odom", 10);
-  auto frontier_pub = nh.advertise<go_feap::FrontierArray>("probe/gp/frontiers", 10);
+// One depth frame for the probe mapper (probe/mapper/... in metrics.test; 3 m everywhere, from 1 m up
+// looking along +x, stamped `stamp`), after which it shares its map with the probe planners. camera_info
+// and the frame travel on separate connections, so the frame may come first and be skipped ("no
+// camera_info received yet"): it is sent again, newly stamped, until the mapper integrates it. False when
+// it integrated none of 10.
+bool feedProbeMapper(ros::NodeHandle& nh, double stamp) {
   auto info_pub = nh.advertise<sensor_msgs::CameraInfo>("probe/mapper/camera_info", 1, /*latch=*/true);
   auto depth_pub = nh.advertise<sensor_msgs::Image>("probe/mapper/depth", 2);
   auto pose_pub = nh.advertise<geometry_msgs::PoseStamped>("probe/mapper/camera_pose", 2);
-  std::vector<go_feap::GlobalTour> tours;
-  auto tour_sub = nh.subscribe<go_feap::GlobalTour>(
-      "probe/gp/global_tour", 50, [&](const go_feap::GlobalTour::ConstPtr& m) { tours.push_back(*m); });
-  ASSERT_TRUE(spinUntil([&] {
-    return tour_sub.getNumPublishers() > 0 && clock_pub.getNumSubscribers() > 0 && odom_pub.getNumSubscribers() > 0 &&
-           frontier_pub.getNumSubscribers() > 0 && info_pub.getNumSubscribers() > 0 && depth_pub.getNumSubscribers() > 0 &&
-           pose_pub.getNumSubscribers() > 0;
-  }, 30.0)) << "the probe global planner or mapper is not connected";
-  // One depth frame for the mapper (3 m everywhere, from 1 m up looking along +x), after which it shares
-  // its map with the planner.
+  int updates = 0;
+  auto update_sub = nh.subscribe<go_feap::MapUpdate>("probe/mapper/map_update", 10,
+                                                     [&](const go_feap::MapUpdate::ConstPtr&) { ++updates; });
+  if (!spinUntil([&] {
+        return info_pub.getNumSubscribers() > 0 && depth_pub.getNumSubscribers() > 0 &&
+               pose_pub.getNumSubscribers() > 0 && update_sub.getNumPublishers() > 0;
+      }, 30.0))
+    return false;
   sensor_msgs::CameraInfo info;
   info.width = 64, info.height = 48;
   info.K = {40.0, 0.0, 32.0, 0.0, 40.0, 24.0, 0.0, 0.0, 1.0};
@@ -260,36 +258,56 @@ TEST(GlobalPlanner, PlansAgainAtOnceWhenTheClockGoesBack) {
   pose.pose.position.z = 1.0;
   pose.pose.orientation.w = 0.5, pose.pose.orientation.x = -0.5, pose.pose.orientation.y = 0.5,
   pose.pose.orientation.z = -0.5;  // optical frame: z along +x, x along -y, y along -z
-  go_feap::FrontierArray frontiers;
-  go_feap::Frontier f;
-  f.id = 1;
-  for (double y : {-0.1, 0.0, 0.1}) {
-    geometry_msgs::Point c;
-    c.x = 2.05, c.y = y + 0.05, c.z = 1.05;
-    f.cells.push_back(c);
-  }
-  f.average = f.cells[1];
-  f.aabb_min = f.cells[0], f.aabb_max = f.cells[2];
-  f.active = true;
-  frontiers.frontiers.push_back(f);
-  nav_msgs::Odometry odom;
-  odom.header.frame_id = "world";
-  odom.pose.pose.position.z = 1.0;
-  odom.pose.pose.orientation.w = 1.0;
-  double now = 100.0;
-  // camera_info and the frame travel on separate connections, so the frame may come first and be
-  // skipped ("no camera_info received yet"): it is sent again, newly stamped, until the mapper integrates it.
-  int updates = 0;
-  auto update_sub = nh.subscribe<go_feap::MapUpdate>("probe/mapper/map_update", 10,
-                                                     [&](const go_feap::MapUpdate::ConstPtr&) { ++updates; });
-  ASSERT_TRUE(spinUntil([&] { return update_sub.getNumPublishers() > 0; }, 30.0)) << "the probe mapper is not connected";
   for (int attempt = 0; attempt < 10 && updates == 0; ++attempt) {
-    depth.header.stamp = pose.header.stamp = ros::Time(now + 0.01 * attempt);
+    depth.header.stamp = pose.header.stamp = ros::Time(stamp + 0.01 * attempt);
     pose_pub.publish(pose);
     depth_pub.publish(depth);
     spinUntil([&] { return updates > 0; }, 2.0);
   }
-  ASSERT_GT(updates, 0) << "the probe mapper integrated none of 10 frames";
+  return updates > 0;
+}
+
+// A frontier of known free cells a metre ahead of the probe mapper's camera, id 1: x 2.05 m, y from
+// -y_half to +y_half, z from 1.05 - z_half to 1.05 + z_half, 0.1 m apart.
+go_feap::FrontierArray frontierAhead(double y_half, double z_half) {
+  go_feap::FrontierArray frontiers;
+  go_feap::Frontier f;
+  f.id = 1;
+  for (double y = -y_half; y <= y_half + 1e-9; y += 0.1)
+    for (double z = -z_half; z <= z_half + 1e-9; z += 0.1) {
+      geometry_msgs::Point c;
+      c.x = 2.05, c.y = y + 0.05, c.z = 1.05 + z;
+      f.cells.push_back(c);
+    }
+  f.average.x = 2.05, f.average.y = 0.05, f.average.z = 1.05;
+  f.aabb_min = f.cells.front(), f.aabb_max = f.cells.back();
+  f.active = true;
+  frontiers.frontiers.push_back(f);
+  return frontiers;
+}
+
+// A global planner (probe/gp/... in metrics.test) plans at global/rate (10 Hz) from the test's frontier
+// messages. The clock then goes back 80 s (a bag played again): it plans again at once, where it used
+// to wait until the clock had caught up with its last plan.
+TEST(GlobalPlanner, PlansAgainAtOnceWhenTheClockGoesBack) {
+  ros::NodeHandle nh;
+  auto clock_pub = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
+  auto odom_pub = nh.advertise<nav_msgs::Odometry>("probe/gp/odom", 10);
+  auto frontier_pub = nh.advertise<go_feap::FrontierArray>("probe/gp/frontiers", 10);
+  std::vector<go_feap::GlobalTour> tours;
+  auto tour_sub = nh.subscribe<go_feap::GlobalTour>(
+      "probe/gp/global_tour", 50, [&](const go_feap::GlobalTour::ConstPtr& m) { tours.push_back(*m); });
+  ASSERT_TRUE(spinUntil([&] {
+    return tour_sub.getNumPublishers() > 0 && clock_pub.getNumSubscribers() > 0 && odom_pub.getNumSubscribers() > 0 &&
+           frontier_pub.getNumSubscribers() > 0;
+  }, 30.0)) << "the probe global planner is not connected";
+  double now = 100.0;
+  ASSERT_TRUE(feedProbeMapper(nh, now)) << "the probe mapper integrated none of 10 frames";
+  go_feap::FrontierArray frontiers = frontierAhead(0.1, 0.0);
+  nav_msgs::Odometry odom;
+  odom.header.frame_id = "world";
+  odom.pose.pose.position.z = 1.0;
+  odom.pose.pose.orientation.w = 1.0;
   auto run = [&](double seconds) {  // clock, odometry and frontiers every 0.05 s
     for (double t = 0.0; t < seconds; t += 0.05) {
       now += 0.05;
@@ -310,6 +328,64 @@ TEST(GlobalPlanner, PlansAgainAtOnceWhenTheClockGoesBack) {
   int planned = 0;
   for (const go_feap::GlobalTour& t : tours) planned += !t.repeated && t.header.stamp.toSec() < 30.0;
   EXPECT_GE(planned, 5) << tours.size() << " tours in 2 s after the clock went back 80 s";
+}
+
+// A local planner in the fuel mode (probe/lp/... in metrics.test) takes a viewpoint of the test's frontier
+// as its target and then, while it holds it, plans again only every replan_period (1.5 s, past
+// commit_time), not at each tour. The clock then goes back 80 s (a bag played again): it plans again
+// within commit_time and replan_period, where it used to wait until the clock had caught up with its
+// last plan and its commitment.
+TEST(LocalPlanner, PlansAgainWhenTheClockGoesBack) {
+  ros::NodeHandle nh;
+  auto clock_pub = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
+  auto odom_pub = nh.advertise<nav_msgs::Odometry>("probe/lp/odom", 10);
+  auto frontier_pub = nh.advertise<go_feap::FrontierArray>("probe/lp/frontiers", 10);
+  auto tour_pub = nh.advertise<go_feap::GlobalTour>("probe/lp/global_tour", 10);
+  std::vector<double> plans;  // compute_time stamps of the local block: one per plan
+  auto compute_sub = nh.subscribe<go_feap::ComputeTime>("probe/lp/compute_time", 50, [&](const go_feap::ComputeTime::ConstPtr& m) {
+    if (m->block == "local") plans.push_back(m->header.stamp.toSec());
+  });
+  std::vector<go_feap::ViewpointPath> targets;
+  auto target_sub = nh.subscribe<go_feap::ViewpointPath>(
+      "probe/lp/local_target", 50, [&](const go_feap::ViewpointPath::ConstPtr& m) { targets.push_back(*m); });
+  ASSERT_TRUE(spinUntil([&] {
+    return compute_sub.getNumPublishers() > 0 && target_sub.getNumPublishers() > 0 && clock_pub.getNumSubscribers() > 0 &&
+           odom_pub.getNumSubscribers() > 0 && frontier_pub.getNumSubscribers() > 0 && tour_pub.getNumSubscribers() > 0;
+  }, 30.0)) << "the probe local planner is not connected";
+  double now = 200.0;
+  ASSERT_TRUE(feedProbeMapper(nh, now)) << "the probe mapper integrated none of 10 frames";
+  go_feap::FrontierArray frontiers = frontierAhead(0.3, 0.2);  // 35 cells: more than min_visible
+  go_feap::GlobalTour tour;
+  tour.header.frame_id = "world";
+  tour.frontier_ids = {1};
+  tour.waypoints = {frontiers.frontiers[0].average};
+  nav_msgs::Odometry odom;
+  odom.header.frame_id = "world";
+  odom.pose.pose.position.z = 1.0;
+  odom.pose.pose.orientation.w = 1.0;
+  auto run = [&](double seconds) {  // clock, odometry, frontiers and a tour every 0.1 s
+    for (double t = 0.0; t < seconds; t += 0.1) {
+      now += 0.1;
+      publishClock(clock_pub, now);
+      spinUntil([] { return false; }, 0.01);
+      odom.header.stamp = frontiers.header.stamp = tour.header.stamp = ros::Time(now);
+      odom_pub.publish(odom);
+      frontier_pub.publish(frontiers);
+      spinUntil([] { return false; }, 0.01);
+      tour_pub.publish(tour);
+      spinUntil([] { return false; }, 0.03);
+    }
+  };
+  run(4.0);
+  ASSERT_FALSE(targets.empty()) << "the probe local planner chose no target";
+  ASSERT_EQ(targets.front().frontier_ids, std::vector<std::uint32_t>{1}) << "its target is not a viewpoint of frontier 1";
+  // Held: planned at the first tour and then every 1.5 s, not at each of the 40 tours.
+  ASSERT_GE(plans.size(), 2u);
+  ASSERT_LE(plans.size(), 4u) << "the probe local planner plans at every tour: the held target is not held";
+  now -= 80.0;
+  plans.clear();
+  run(4.0);
+  EXPECT_GE(plans.size(), 1u) << "no plan in 4 s after the clock went back 80 s";
 }
 
 }  // namespace
