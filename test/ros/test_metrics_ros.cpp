@@ -5,7 +5,7 @@
 // by the test itself), the mean compute time of each block. Statuses that are malformed, or that came
 // before the run or whose elapsed time lies beyond the clock, must neither end the recorder nor count.
 // Then the clock goes back, and a probe layer manager's elapsed time must stay at 0 or above; a probe
-// global planner and a probe local planner, on a probe mapper's map of one synthetic frame, must plan again.
+// global, local and trajectory planner, on a probe mapper's map of one synthetic frame, must plan again.
 #include <gtest/gtest.h>
 #include <nav_msgs/Odometry.h>
 #include <nav_msgs/Path.h>
@@ -19,11 +19,13 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <vector>
 
+#include "go_feap/Bspline.h"
 #include "go_feap/ComputeTime.h"
 #include "go_feap/ExplorationStatus.h"
 #include "go_feap/FrontierArray.h"
@@ -41,6 +43,19 @@ void publishClock(const ros::Publisher& clock_pub, double now) {
   rosgraph_msgs::Clock c;
   c.clock = ros::Time(now);
   clock_pub.publish(c);
+}
+
+// Plays `seconds` of the clock in steps of `step`, from `now` (advanced): each step publishes the clock,
+// lets the nodes hear it, stamps and publishes the step's messages (`send(now)`), and spins for `wait` s.
+void playClock(const ros::Publisher& clock_pub, double& now, double seconds, double step, double wait,
+               const std::function<void(double)>& send) {
+  for (double t = 0.0; t < seconds - 1e-9; t += step) {
+    now += step;
+    publishClock(clock_pub, now);
+    spinUntil([] { return false; }, 0.01);
+    send(now);
+    spinUntil([] { return false; }, wait);
+  }
 }
 
 go_feap::ExplorationStatus status(std::uint8_t state, const char* name, double elapsed) {
@@ -286,6 +301,15 @@ go_feap::FrontierArray frontierAhead(double y_half, double z_half) {
   return frontiers;
 }
 
+// The vehicle at rest where the probe mapper's camera was (1 m up, facing +x).
+nav_msgs::Odometry odometryAtTheCamera() {
+  nav_msgs::Odometry odom;
+  odom.header.frame_id = "world";
+  odom.pose.pose.position.z = 1.0;
+  odom.pose.pose.orientation.w = 1.0;
+  return odom;
+}
+
 // A global planner (probe/gp/... in metrics.test) plans at global/rate (10 Hz) from the test's frontier
 // messages. The clock then goes back 80 s (a bag played again): it plans again at once, where it used
 // to wait until the clock had caught up with its last plan.
@@ -304,20 +328,13 @@ TEST(GlobalPlanner, PlansAgainAtOnceWhenTheClockGoesBack) {
   double now = 100.0;
   ASSERT_TRUE(feedProbeMapper(nh, now)) << "the probe mapper integrated none of 10 frames";
   go_feap::FrontierArray frontiers = frontierAhead(0.1, 0.0);
-  nav_msgs::Odometry odom;
-  odom.header.frame_id = "world";
-  odom.pose.pose.position.z = 1.0;
-  odom.pose.pose.orientation.w = 1.0;
+  nav_msgs::Odometry odom = odometryAtTheCamera();
   auto run = [&](double seconds) {  // clock, odometry and frontiers every 0.05 s
-    for (double t = 0.0; t < seconds; t += 0.05) {
-      now += 0.05;
-      publishClock(clock_pub, now);
-      spinUntil([] { return false; }, 0.01);
-      odom.header.stamp = frontiers.header.stamp = ros::Time(now);
+    playClock(clock_pub, now, seconds, 0.05, 0.02, [&](double t) {
+      odom.header.stamp = frontiers.header.stamp = ros::Time(t);
       odom_pub.publish(odom);
       frontier_pub.publish(frontiers);
-      spinUntil([] { return false; }, 0.02);
-    }
+    });
   };
   run(2.0);
   ASSERT_GE(tours.size(), 3u) << "the probe global planner planned no tours";
@@ -359,22 +376,14 @@ TEST(LocalPlanner, PlansAgainWhenTheClockGoesBack) {
   tour.header.frame_id = "world";
   tour.frontier_ids = {1};
   tour.waypoints = {frontiers.frontiers[0].average};
-  nav_msgs::Odometry odom;
-  odom.header.frame_id = "world";
-  odom.pose.pose.position.z = 1.0;
-  odom.pose.pose.orientation.w = 1.0;
+  nav_msgs::Odometry odom = odometryAtTheCamera();
   auto run = [&](double seconds) {  // clock, odometry, frontiers and a tour every 0.1 s
-    for (double t = 0.0; t < seconds; t += 0.1) {
-      now += 0.1;
-      publishClock(clock_pub, now);
-      spinUntil([] { return false; }, 0.01);
-      odom.header.stamp = frontiers.header.stamp = tour.header.stamp = ros::Time(now);
+    playClock(clock_pub, now, seconds, 0.1, 0.04, [&](double t) {
+      odom.header.stamp = frontiers.header.stamp = tour.header.stamp = ros::Time(t);
       odom_pub.publish(odom);
       frontier_pub.publish(frontiers);
-      spinUntil([] { return false; }, 0.01);
       tour_pub.publish(tour);
-      spinUntil([] { return false; }, 0.03);
-    }
+    });
   };
   run(4.0);
   ASSERT_FALSE(targets.empty()) << "the probe local planner chose no target";
@@ -386,6 +395,57 @@ TEST(LocalPlanner, PlansAgainWhenTheClockGoesBack) {
   plans.clear();
   run(4.0);
   EXPECT_GE(plans.size(), 1u) << "no plan in 4 s after the clock went back 80 s";
+}
+
+// A trajectory planner (probe/tp/... in metrics.test) flies the vehicle, held still by the test at 1 m up,
+// towards a target 1.5 m ahead in the probe mapper's known space. The clock then goes back 80 s (a bag
+// played again): its trajectory's times are void, and it plans again from the odometry at once, where it
+// used to plan nothing until the clock had caught up with its last plan.
+TEST(TrajectoryPlanner, PlansAgainFromTheOdometryWhenTheClockGoesBack) {
+  ros::NodeHandle nh;
+  auto clock_pub = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
+  auto odom_pub = nh.advertise<nav_msgs::Odometry>("probe/tp/odom", 10);
+  auto target_pub = nh.advertise<go_feap::ViewpointPath>("probe/tp/local_target", 10);
+  std::vector<go_feap::Bspline> trajectories;
+  auto bspline_sub = nh.subscribe<go_feap::Bspline>(
+      "probe/tp/bspline", 50, [&](const go_feap::Bspline::ConstPtr& m) { trajectories.push_back(*m); });
+  ASSERT_TRUE(spinUntil([&] {
+    return bspline_sub.getNumPublishers() > 0 && clock_pub.getNumSubscribers() > 0 && odom_pub.getNumSubscribers() > 0 &&
+           target_pub.getNumSubscribers() > 0;
+  }, 30.0)) << "the probe trajectory planner is not connected";
+  double now = 300.0;
+  ASSERT_TRUE(feedProbeMapper(nh, now)) << "the probe mapper integrated none of 10 frames";
+  go_feap::ViewpointPath target;
+  target.header.frame_id = "world";
+  geometry_msgs::Point ahead;
+  ahead.x = 1.5, ahead.z = 1.0;
+  target.positions = {ahead};
+  target.yaws = {0.0};
+  target.frontier_ids = {1};
+  target.target_seq = 1;
+  nav_msgs::Odometry odom = odometryAtTheCamera();
+  auto run = [&](double seconds) {  // clock, odometry and the target every 0.05 s
+    playClock(clock_pub, now, seconds, 0.05, 0.02, [&](double t) {
+      odom.header.stamp = target.header.stamp = ros::Time(t);
+      odom_pub.publish(odom);
+      target_pub.publish(target);
+    });
+  };
+  run(3.0);
+  ASSERT_FALSE(trajectories.empty()) << "the probe trajectory planner planned no trajectory";
+  const double back_from = now;
+  now -= 80.0;
+  trajectories.clear();
+  run(3.0);
+  int planned = 0;
+  for (const go_feap::Bspline& b : trajectories) {
+    if (b.start_time.toSec() > back_from - 70.0) continue;  // planned before the clock went back
+    ++planned;
+    ASSERT_FALSE(b.pos_pts.empty());
+    const geometry_msgs::Point& start = b.pos_pts.front();
+    EXPECT_LT(std::hypot(start.x, start.y, start.z - 1.0), 0.2) << "not from the odometry";
+  }
+  EXPECT_GE(planned, 1) << trajectories.size() << " trajectories in 3 s after the clock went back 80 s, none since";
 }
 
 }  // namespace
