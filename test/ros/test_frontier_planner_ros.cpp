@@ -6,6 +6,7 @@
 #include <ros/ros.h>
 
 #include <cmath>
+#include <deque>
 #include <functional>
 #include <limits>
 #include <vector>
@@ -34,7 +35,7 @@ using go_feap::common::Vec3;
 class FrontierPlannerTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    frontier_sub_ = nh_.subscribe("frontiers", 2, &FrontierPlannerTest::onFrontiers, this);
+    frontier_sub_ = nh_.subscribe("frontiers", 20, &FrontierPlannerTest::onFrontiers, this);
     tour_sub_ = nh_.subscribe("global_tour", 2, &FrontierPlannerTest::onTour, this);
     odom_sub_ = nh_.subscribe("odom", 2, &FrontierPlannerTest::onOdom, this);
     status_sub_ = nh_.subscribe("status", 5, &FrontierPlannerTest::onStatus, this);
@@ -42,12 +43,21 @@ class FrontierPlannerTest : public ::testing::Test {
     target_sub_ = nh_.subscribe("local_target", 2, &FrontierPlannerTest::onTarget, this);
     cmd_pub_ = nh_.advertise<go_feap::PositionCommand>("position_cmd", 10);
   }
-  void onFrontiers(const go_feap::FrontierArray::ConstPtr& m) { frontiers_ = m; }
+  void onFrontiers(const go_feap::FrontierArray::ConstPtr& m) {
+    frontiers_ = m;
+    recent_frontiers_.push_back(m);
+    if (recent_frontiers_.size() > 30) recent_frontiers_.pop_front();
+  }
+  // A tour is paired with the frontier array it was planned from (the global planner stamps it with that
+  // array's stamp): the tour may overtake the array on its own connection, and frontier ids change with
+  // every update.
   void onTour(const go_feap::GlobalTour::ConstPtr& m) {
-    if (frontiers_ && !m->frontier_ids.empty()) {
-      tour_ = m;
-      tour_frontiers_ = frontiers_;
-    }
+    if (m->frontier_ids.empty()) return;
+    for (const auto& f : recent_frontiers_)
+      if (f->header.stamp == m->header.stamp) {
+        tour_ = m;
+        tour_frontiers_ = f;
+      }
   }
   void onOdom(const nav_msgs::Odometry::ConstPtr& m) { odom_ = m; }
   void onStatus(const go_feap::ExplorationStatus::ConstPtr& m) { status_ = m; }
@@ -65,6 +75,7 @@ class FrontierPlannerTest : public ::testing::Test {
   go_feap::LayerBounds::ConstPtr layer_;
   ros::Publisher cmd_pub_;
   go_feap::FrontierArray::ConstPtr frontiers_, tour_frontiers_;
+  std::deque<go_feap::FrontierArray::ConstPtr> recent_frontiers_;
   go_feap::GlobalTour::ConstPtr tour_;
   nav_msgs::Odometry::ConstPtr odom_;
 };
@@ -203,17 +214,23 @@ TEST_F(FrontierPlannerTest, FuelModeGlobalPlannerPlansOnlyWhenTheLocalPlannerWan
   ASSERT_TRUE(spinUntil([&] { return fuel_target && !fuel_target->frontier_ids.empty() && fuel_target->frontier_ids.front() != 0; }, 90.0))
       << "no fuel/local_target at a frontier";
   // Held: the vehicle does not fly here, so nothing reaches or clears the target within commit_time.
+  // Counted until five repeated tours and five answers wanting none (at 10 Hz, about 0.5 s; longer when
+  // frames are lost under load), over a window of `held` seconds: at most one plan at its start and one
+  // every replan_period (1.5 s) after, where planning at global/rate would give one per repeat.
   counting = true;
   const ros::Time start = ros::Time::now();
-  ASSERT_TRUE(spinUntil([&] { return (ros::Time::now() - start).toSec() >= 1.2; }, 30.0));
+  ASSERT_TRUE(spinUntil([&] { return repeated >= 5 && not_wanted >= 5; }, 30.0))
+      << repeated << " repeated tours and " << not_wanted << " answers wanting none while the target was held";
   counting = false;
-  EXPECT_GE(repeated, 5) << "the last tour was not sent again while the target was held";
-  EXPECT_GE(not_wanted, 5);
-  EXPECT_LE(planned, 2) << "the global planner planned " << planned << " tours while the target was held";
+  const double held = (ros::Time::now() - start).toSec();
+  const int allowed = 2 + static_cast<int>(held / 1.5);
+  EXPECT_LE(planned, allowed) << "the global planner planned " << planned << " tours in " << held
+                              << " s while the target was held";
   // Planning calls while held (a failed plan sends no tour, and a call at the window's edge may have its
   // tour outside it, so they are not matched one to one with planned tours): a repeat that planned would
   // count as many calls as repeats.
-  EXPECT_LE(computed, 2) << computed << " planning calls while the target was held (" << repeated << " repeated tours)";
+  EXPECT_LE(computed, allowed) << computed << " planning calls in " << held << " s while the target was held ("
+                               << repeated << " repeated tours)";
 
   // Dropped: a tour is due, planned, and a new target chosen from it.
   const std::uint32_t seq = fuel_target->target_seq;
@@ -307,9 +324,13 @@ TEST_F(FrontierPlannerTest, FuelModeGlobalPlannerPlansAtOnceWhenATourIsWantedAga
   std_msgs::Bool wanted;
   wanted.data = false;
   wanted_pub.publish(wanted);
-  pause(0.3);
-  const int before = planned;
-  ASSERT_TRUE(feed([&] { return repeated >= 1; })) << "no repeated tour while no tour was wanted";
+  // Tours come in order on one connection: from the first repeated one on, "no tour wanted" is in force
+  // (it travels on another connection, so a tour may still be planned before it arrives).
+  int before = -1;  // planned tours when the first repeated one came
+  ASSERT_TRUE(feed([&] {
+    if (repeated >= 1 && before < 0) before = planned;
+    return repeated >= 3;
+  })) << "no repeated tours while no tour was wanted";
   EXPECT_EQ(planned, before) << "a tour was planned while none was wanted";
   pause(0.3);  // the last frontier message's tour, if any, is in
   const int held = planned;
@@ -333,15 +354,26 @@ TEST_F(FrontierPlannerTest, FuelModeLocalPlannerWantsNoTourRightAfterChoosingATa
   ros::Publisher tour_pub = nh_.advertise<go_feap::GlobalTour>("probe/fuel_local/global_tour", 10);
   ASSERT_TRUE(spinUntil([&] { return tour_ && tour_pub.getNumSubscribers() >= 1 && want.getNumPublishers() >= 1; }, 90.0))
       << "no tour to feed the probe";
-  // One tour at a time until the probe takes one up (before it has the map and odometry it answers none).
+  // Tours marked repeated, one a second, until the probe answers one (before it has the map and odometry
+  // it answers none; a repeated tour it answers without planning): then it is ready.
+  go_feap::GlobalTour tour = *tour_;
+  tour.repeated = true;
   ros::WallTime last;
   ASSERT_TRUE(spinUntil([&] {
     if (answers.empty() && (last.isZero() || (ros::WallTime::now() - last).toSec() >= 1.0)) {
-      tour_pub.publish(*tour_);
+      tour_pub.publish(tour);
       last = ros::WallTime::now();
     }
-    return !answers.empty() && probe_target;
+    return !answers.empty();
   }, 30.0)) << "the probe took up no tour";
+  spinUntil([] { return false; }, 0.5);
+  ASSERT_FALSE(probe_target) << "a target chosen from a repeated tour";
+  // Then one tour to plan against: one answer, with the target.
+  answers.clear();
+  tour.repeated = false;
+  tour_pub.publish(tour);
+  ASSERT_TRUE(spinUntil([&] { return !answers.empty() && probe_target; }, 30.0)) << "no answer and target for the tour";
+  spinUntil([] { return false; }, 0.5);
   EXPECT_EQ(answers.size(), 1u);
   EXPECT_FALSE(answers.front()) << "a tour was wanted right after a target was chosen from the last one";
 }
