@@ -3,8 +3,9 @@
 #
 # Starts rviz with rviz/exploration.rviz (or $RVIZ_CONFIG) on a virtual X screen
 # (xvfb-run, 1280x800x24), waits SECONDS (default 15), saves a screenshot of the whole
-# screen to OUT.png (ImageMagick `import -window root`), stops rviz and prints the
-# rviz ERROR lines it saw. rviz's full output is kept in OUT.rviz.log.
+# screen to OUT.png (ImageMagick `import -window root`; taken again every 2 s, up to 10
+# times, while the screen is blank), stops rviz and prints the rviz ERROR lines it saw.
+# rviz's full output is kept in OUT.rviz.log.
 #
 # Needs a ROS master already running (ROS_MASTER_URI); it never starts one.
 # Exit status: 0 when the screenshot was written, 1 otherwise.
@@ -79,7 +80,14 @@ if ! kill -0 "$rpid" 2>/dev/null; then
   echo "[rviz_screenshot] rviz exited (status $rc) before the screenshot" >&2
   exit 3
 fi
-import -window root "$out" || exit 4
+# A screen still blank (rviz slow to draw on a loaded machine) is taken again, every 2 s, up to 10 times.
+for try in 1 2 3 4 5 6 7 8 9 10; do
+  import -window root "$out" || exit 4
+  sd="$(convert "$out" -format "%[fx:standard_deviation]" info: 2>/dev/null || echo 1)"
+  awk -v sd="$sd" "BEGIN { exit !(sd > 0.01) }" && break
+  echo "[rviz_screenshot] the screen is still blank (try $try): waiting 2 s more" >&2
+  sleep 2
+done
 exit 0
 '
 
