@@ -45,11 +45,16 @@ TEST(Onboard, RunsTheChainOnD435iDepthAndVioOdometry) {
   // world -> body_vio follows odometry; body_vio -> camera_depth_optical_frame is the D435i extrinsic.
   // Looked up at the stamp of an odometry message (OdometryTf stamps the TF with it), so the
   // comparison does not depend on whether the vehicle moved in between.
+  // One stamp is tried for 2 s before a newer one: the newest odometry is often a hop ahead of its TF.
   geometry_msgs::TransformStamped tf;
   nav_msgs::Odometry::ConstPtr at;
+  ros::WallTime taken;
   ASSERT_TRUE(spinUntil(
       [&] {
-        at = odom;
+        if (!at || (ros::WallTime::now() - taken).toSec() > 2.0) {
+          at = odom;
+          taken = ros::WallTime::now();
+        }
         try {
           tf = buffer.lookupTransform("world", "camera_depth_optical_frame", at->header.stamp);
           return true;
