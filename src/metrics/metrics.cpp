@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <fstream>
 #include <iomanip>
 #include <sstream>
@@ -162,10 +163,28 @@ common::Status Recorder::writeAll(const std::string& dir) const {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) return common::Status::Error(dir + ": cannot be created (" + ec.message() + ")");
-  for (const common::Status& st :
-       {writeSummary(dir + "/summary.json"), writeCsv(dir + "/metrics.csv"),
-        writePlot(dir + "/coverage.png", summary_.scene + " (seed " + std::to_string(summary_.seed) + ")")})
-    if (!st.ok()) return st;
+  // Each file is written under a temporary name (keeping its extension, which tells OpenCV the format)
+  // and renamed into place, summary.json last: whoever sees a file sees it whole, and summary.json's
+  // presence means all three are there.
+  const std::string title = summary_.scene + " (seed " + std::to_string(summary_.seed) + ")";
+  const std::vector<std::pair<std::string, std::function<common::Status(const std::string&)>>> files = {
+      {"metrics.csv", [&](const std::string& path) { return writeCsv(path); }},
+      {"coverage.png", [&](const std::string& path) { return writePlot(path, title); }},
+      {"summary.json", [&](const std::string& path) { return writeSummary(path); }},
+  };
+  for (const auto& [name, write] : files) {
+    const std::filesystem::path final_path = std::filesystem::path(dir) / name;
+    const std::filesystem::path partial = std::filesystem::path(dir) / (".partial-" + name);
+    if (const common::Status st = write(partial.string()); !st.ok()) {
+      std::filesystem::remove(partial, ec);
+      return st;
+    }
+    std::filesystem::rename(partial, final_path, ec);
+    if (ec) {
+      std::filesystem::remove(partial, ec);
+      return common::Status::Error(final_path.string() + ": cannot be written (" + ec.message() + ")");
+    }
+  }
   return common::Status::Ok();
 }
 

@@ -291,6 +291,19 @@ TEST(Metrics, RecorderWritesSummaryCsvAndPlot) {
   EXPECT_EQ(plot.cols, 800);
   EXPECT_EQ(plot.rows, 500);
   EXPECT_FALSE(r.writeAll("/proc/go_feap_no_such_dir").ok());
+  for (const auto& entry : fs::directory_iterator(dir))
+    EXPECT_EQ(entry.path().filename().string().rfind(".partial-", 0), std::string::npos) << entry.path() << " left";
+  fs::remove_all(dir);
+
+  // summary.json comes last: when the plot cannot take its place (a directory of that name is in the
+  // way), the call fails naming it and there is no summary.json to say the run's files are all there.
+  fs::create_directories(dir / "coverage.png" / "in_the_way");
+  const go_feap::common::Status blocked = r.writeAll(dir.string());
+  EXPECT_FALSE(blocked.ok());
+  EXPECT_NE(blocked.message().find("coverage.png"), std::string::npos) << blocked.message();
+  EXPECT_FALSE(fs::exists(dir / "summary.json"));
+  EXPECT_TRUE(fs::exists(dir / "metrics.csv"));
+  EXPECT_FALSE(fs::exists(dir / ".partial-coverage.png"));
   fs::remove_all(dir);
 }
 

@@ -132,7 +132,9 @@ class Recorder {
   common::Status writeCsv(const std::string& path) const;
   /// coverage.png: coverage (%) against time (s), the paper's Fig. 9 style.
   common::Status writePlot(const std::string& path, const std::string& title) const;
-  /// The three files into `dir` (created if missing).
+  /// The three files into `dir` (created if missing): metrics.csv, coverage.png and summary.json last,
+  /// each written under a temporary name (.partial-NAME) and renamed into place, so that a file seen is
+  /// whole, and summary.json seen means all three are there. The first failure stops it, naming the file.
   common::Status writeAll(const std::string& dir) const;
 
  private:
