@@ -14,6 +14,7 @@
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <geometry_msgs/PoseStamped.h>
+#include <visualization_msgs/Marker.h>
 
 #include <cmath>
 #include <cstring>
@@ -96,11 +97,16 @@ TEST(MetricsRecorder, SummaryHoldsThePlayedRunAndOddStatusesNeitherEndNorCountIn
   int paths = 0;
   auto path_sub =
       nh.subscribe<nav_msgs::Path>("flown_path", 10, [&](const nav_msgs::Path::ConstPtr&) { ++paths; });
+  // The recorder's status text sits 1 m above the last odometry it took.
+  std::optional<Vec3> text_at;
+  auto text_sub = nh.subscribe<visualization_msgs::Marker>("status_text", 10, [&](const visualization_msgs::Marker::ConstPtr& m) {
+    text_at = Vec3(m->pose.position.x, m->pose.position.y, m->pose.position.z - 1.0);
+  });
   ASSERT_TRUE(spinUntil(
       [&] {
         return status_pub.getNumSubscribers() > 0 && odom_pub.getNumSubscribers() > 0 &&
                compute_pub.getNumSubscribers() > 0 && clock_pub.getNumSubscribers() > 0 &&
-               path_sub.getNumPublishers() > 0;
+               path_sub.getNumPublishers() > 0 && text_sub.getNumPublishers() > 0;
       },
       60.0))
       << "the metrics recorder is not connected";
@@ -152,10 +158,21 @@ TEST(MetricsRecorder, SummaryHoldsThePlayedRunAndOddStatusesNeitherEndNorCountIn
   send(status(7, "SEVEN", 1.0));
   fly(start + Vec3(0.0, 0.5, 0.0));
   fly(start);
+  // The odometry so far taken (one queue, in order: the last message is the last taken), and the
+  // statuses too (a pause), before the run starts.
+  text_at.reset();
+  ASSERT_TRUE(spinUntil([&] {
+    tick(0.05);
+    return text_at && (*text_at - start).norm() < 1e-9;
+  }, 20.0)) << "the recorder took no odometry before the run";
   settle();
   // The run starts with a status whose elapsed time lies far beyond the clock (a status from a tool or
-  // from another run): this ended the whole nodelet manager.
+  // from another run): this ended the whole nodelet manager. Its first flown_path says it has started.
   send(status(go_feap::ExplorationStatus::EXPLORE, "EXPLORE", 500.0));
+  ASSERT_TRUE(spinUntil([&] {
+    tick(0.05);
+    return paths > 0;
+  }, 20.0)) << "no flown_path after the run started";
   settle();
 
   // The flight: to the wall, 5 cm into it, and back; 5 cm steps.
@@ -179,7 +196,6 @@ TEST(MetricsRecorder, SummaryHoldsThePlayedRunAndOddStatusesNeitherEndNorCountIn
   compute("global", 5.0);
   for (int i = 0; i < 10; ++i) tick(0.1);
   settle();
-  EXPECT_GT(paths, 0) << "no flown_path sample after the run started";
 
   go_feap::ExplorationStatus finished = status(go_feap::ExplorationStatus::FINISHED, "FINISHED", 42.5);
   finished.finish_reason = "complete";
