@@ -1,9 +1,11 @@
 // rostest: onboard.launch (D435i + VIO configuration) starts and runs on simulated inputs: the
 // depth arrives as 16UC1 millimetres and is integrated through TF lookups (sync_mode tf); the
 // OdometryTf nodelet turns odometry into world -> body_vio and adds the D435i extrinsic from
-// config/d435i.yaml; exploration waits for the trigger, then position commands flow.
+// config/d435i.yaml; exploration waits for the trigger, then position commands flow and the metrics
+// recorder publishes the flown path.
 #include <gtest/gtest.h>
 #include <nav_msgs/Odometry.h>
+#include <nav_msgs/Path.h>
 #include <ros/ros.h>
 #include <sensor_msgs/Image.h>
 #include <std_srvs/Trigger.h>
@@ -31,6 +33,8 @@ TEST(Onboard, RunsTheChainOnD435iDepthAndVioOdometry) {
       "map_update", 10, [&](const go_feap::MapUpdate::ConstPtr& m) { changed += m->changed_voxels; });
   auto status_sub = nh.subscribe<go_feap::ExplorationStatus>(
       "status", 5, [&](const go_feap::ExplorationStatus::ConstPtr& m) { status = m; });
+  nav_msgs::Path::ConstPtr path;
+  auto path_sub = nh.subscribe<nav_msgs::Path>("flown_path", 2, [&](const nav_msgs::Path::ConstPtr& m) { path = m; });
   auto cmd_sub = nh.subscribe<go_feap::PositionCommand>("position_cmd", 10, [&](const go_feap::PositionCommand::ConstPtr&) {
     ++commands;
   });
@@ -79,6 +83,9 @@ TEST(Onboard, RunsTheChainOnD435iDepthAndVioOdometry) {
   ASSERT_TRUE(spinUntil([&] { return status->state == go_feap::ExplorationStatus::EXPLORE; }, 20.0));
   const std::size_t before = commands;
   EXPECT_TRUE(spinUntil([&] { return commands > before + 50; }, 20.0)) << "no position commands";
+  // The metrics recorder (sensor_view.launch) records the flight in the world frame.
+  EXPECT_TRUE(spinUntil([&] { return path && !path->poses.empty(); }, 20.0)) << "no flown_path from the recorder";
+  if (path) EXPECT_EQ(path->header.frame_id, "world");
 }
 
 }  // namespace
