@@ -32,6 +32,7 @@
 #include "go_feap/FrontierArray.h"
 #include "go_feap/GlobalTour.h"
 #include "go_feap/MapUpdate.h"
+#include "go_feap/PositionCommand.h"
 #include "go_feap/ViewpointPath.h"
 #include "ros_test_util.h"
 
@@ -374,9 +375,9 @@ TEST(LocalPlanner, PlansAgainWhenTheClockGoesBack) {
   auto odom_pub = nh.advertise<nav_msgs::Odometry>("probe/lp/odom", 10);
   auto frontier_pub = nh.advertise<go_feap::FrontierArray>("probe/lp/frontiers", 10);
   auto tour_pub = nh.advertise<go_feap::GlobalTour>("probe/lp/global_tour", 10);
-  std::vector<double> plans;  // compute_time stamps of the local block: one per plan
+  std::size_t plans = 0;  // compute_time messages of the local block: one per plan
   auto compute_sub = nh.subscribe<go_feap::ComputeTime>("probe/lp/compute_time", 50, [&](const go_feap::ComputeTime::ConstPtr& m) {
-    if (m->block == "local") plans.push_back(m->header.stamp.toSec());
+    if (m->block == "local") ++plans;
   });
   std::vector<go_feap::ViewpointPath> targets;
   auto target_sub = nh.subscribe<go_feap::ViewpointPath>(
@@ -405,29 +406,31 @@ TEST(LocalPlanner, PlansAgainWhenTheClockGoesBack) {
   ASSERT_FALSE(targets.empty()) << "the probe local planner chose no target";
   ASSERT_EQ(targets.front().frontier_ids, std::vector<std::uint32_t>{1}) << "its target is not a viewpoint of frontier 1";
   // Held: planned at the first tour and then every 1.5 s, not at each of the 40 tours.
-  ASSERT_GE(plans.size(), 2u);
-  ASSERT_LE(plans.size(), 4u) << "the probe local planner plans at every tour: the held target is not held";
+  ASSERT_GE(plans, 2u);
+  ASSERT_LE(plans, 4u) << "the probe local planner plans at every tour: the held target is not held";
   now -= 80.0;
-  plans.clear();
+  plans = 0;
   run(4.0);
-  EXPECT_GE(plans.size(), 1u) << "no plan in 4 s after the clock went back 80 s";
+  EXPECT_GE(plans, 1u) << "no plan in 4 s after the clock went back 80 s";
 }
 
 // A trajectory planner (probe/tp/... in metrics.test) flies the vehicle, held still by the test at 1 m up,
-// towards a target 1.5 m ahead in the probe mapper's known space. The clock then goes back 80 s (a bag
-// played again): its trajectory's times are void, and it plans again from the odometry at once, where it
-// used to plan nothing until the clock had caught up with its last plan.
+// towards a target 1.5 m ahead in the probe mapper's known space; the test's position commands, a
+// reference 0.3 m ahead of the odometry, are where its plans start. The clock then goes back 80 s (a bag
+// played again): its trajectory's times are void, and it plans again at once, from the odometry, where
+// it used to plan nothing until the clock had caught up with its last plan.
 TEST(TrajectoryPlanner, PlansAgainFromTheOdometryWhenTheClockGoesBack) {
   ros::NodeHandle nh;
   auto clock_pub = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
   auto odom_pub = nh.advertise<nav_msgs::Odometry>("probe/tp/odom", 10);
   auto target_pub = nh.advertise<go_feap::ViewpointPath>("probe/tp/local_target", 10);
+  auto cmd_pub = nh.advertise<go_feap::PositionCommand>("probe/tp/position_cmd", 10);
   std::vector<go_feap::Bspline> trajectories;
   auto bspline_sub = nh.subscribe<go_feap::Bspline>(
       "probe/tp/bspline", 50, [&](const go_feap::Bspline::ConstPtr& m) { trajectories.push_back(*m); });
   ASSERT_TRUE(spinUntil([&] {
     return bspline_sub.getNumPublishers() > 0 && clock_pub.getNumSubscribers() > 0 && odom_pub.getNumSubscribers() > 0 &&
-           target_pub.getNumSubscribers() > 0;
+           target_pub.getNumSubscribers() > 0 && cmd_pub.getNumSubscribers() > 0;
   }, 30.0)) << "the probe trajectory planner is not connected";
   double now = 300.0;
   ASSERT_TRUE(feedProbeMapper(nh, now)) << "the probe mapper integrated none of 10 frames";
@@ -440,28 +443,40 @@ TEST(TrajectoryPlanner, PlansAgainFromTheOdometryWhenTheClockGoesBack) {
   target.frontier_ids = {1};
   target.target_seq = 1;
   nav_msgs::Odometry odom = odometryAtTheCamera();
-  auto run = [&](double seconds) {  // clock, odometry and the target every 0.05 s
+  go_feap::PositionCommand cmd;  // the server's reference, at rest, following the planner's last trajectory
+  cmd.header.frame_id = "world";
+  cmd.position.x = 0.3, cmd.position.z = 1.0;
+  cmd.trajectory_flag = go_feap::PositionCommand::TRAJECTORY_STATUS_READY;
+  auto run = [&](double seconds) {  // clock, odometry, the command and the target every 0.05 s
     playClock(clock_pub, now, seconds, 0.05, 0.02, [&](double t) {
-      odom.header.stamp = target.header.stamp = ros::Time(t);
+      odom.header.stamp = target.header.stamp = cmd.header.stamp = ros::Time(t);
+      if (!trajectories.empty()) cmd.trajectory_id = static_cast<std::uint32_t>(trajectories.back().traj_id);
       odom_pub.publish(odom);
+      cmd_pub.publish(cmd);
       target_pub.publish(target);
     });
   };
+  // Where a trajectory starts: its first control point (at rest, the first three coincide there).
+  auto startOf = [](const go_feap::Bspline& b) {
+    return Vec3(b.pos_pts.front().x, b.pos_pts.front().y, b.pos_pts.front().z);
+  };
+  const Vec3 at_odometry(0.0, 0.0, 1.0), at_command(0.3, 0.0, 1.0);
   run(3.0);
   ASSERT_FALSE(trajectories.empty()) << "the probe trajectory planner planned no trajectory";
+  ASSERT_LT((startOf(trajectories.back()) - at_command).norm(), 0.1) << "the plans do not start at the command";
   const double back_from = now;
   now -= 80.0;
   trajectories.clear();
   run(3.0);
-  int planned = 0;
-  for (const go_feap::Bspline& b : trajectories) {
-    if (b.start_time.toSec() > back_from - 70.0) continue;  // planned before the clock went back
-    ++planned;
-    ASSERT_FALSE(b.pos_pts.empty());
-    const geometry_msgs::Point& start = b.pos_pts.front();
-    EXPECT_LT(std::hypot(start.x, start.y, start.z - 1.0), 0.2) << "not from the odometry";
-  }
-  EXPECT_GE(planned, 1) << trajectories.size() << " trajectories in 3 s after the clock went back 80 s, none since";
+  std::optional<go_feap::Bspline> first_since;
+  for (const go_feap::Bspline& b : trajectories)
+    if (b.start_time.toSec() < back_from - 70.0) {  // planned since the clock went back
+      first_since = b;
+      break;
+    }
+  ASSERT_TRUE(first_since) << trajectories.size() << " trajectories in 3 s after the clock went back 80 s, none since";
+  EXPECT_LT((startOf(*first_since) - at_odometry).norm(), 0.1)
+      << "starts at " << startOf(*first_since).transpose() << ", not at the odometry";
 }
 
 }  // namespace
