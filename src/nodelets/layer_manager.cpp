@@ -19,6 +19,7 @@
 #include <cmath>
 #include <mutex>
 #include <optional>
+#include <set>
 
 #include "go_feap/ExplorationStatus.h"
 #include "go_feap/FrontierArray.h"
@@ -196,12 +197,19 @@ class LayerManager : public nodelet::Nodelet {
       slab.color.r = 0.3, slab.color.g = 0.6, slab.color.b = 1.0, slab.color.a = 0.08;
       marker_pub_.publish(slab);
     }
-    if (manager_ && manager_->blacklist().size() != blacklisted_) {
-      blacklisted_ = manager_->blacklist().size();
+    // Sent whenever it changes: frontiers the finder no longer lists leave it as others join, so one
+    // step can change it and keep its size.
+    if (manager_ && manager_->blacklist() != blacklisted_) {
+      std::string added;
+      for (std::uint32_t id : manager_->blacklist())
+        if (!blacklisted_.count(id)) added += (added.empty() ? "" : ", ") + std::to_string(id);
+      blacklisted_ = manager_->blacklist();
       std_msgs::UInt32MultiArray list;
-      list.data.assign(manager_->blacklist().begin(), manager_->blacklist().end());
+      list.data.assign(blacklisted_.begin(), blacklisted_.end());
       blacklist_pub_.publish(list);
-      NODELET_WARN_STREAM(getName() << ": " << blacklisted_ << " frontier(s) blacklisted after repeated failures");
+      if (!added.empty())
+        NODELET_WARN_STREAM(getName() << ": frontier(s) " << added << " blacklisted after " << config_.max_retries
+                                      << " failed attempts (" << blacklisted_.size() << " on the blacklist)");
     }
     published_ = true;
     ExplorationStatus status;
@@ -239,7 +247,7 @@ class LayerManager : public nodelet::Nodelet {
   bool look_around_ = false;
   double distance_ = 0.0;
   ros::Publisher layer_pub_, status_pub_, blacklist_pub_, marker_pub_;
-  std::size_t blacklisted_ = 0;
+  std::set<std::uint32_t> blacklisted_;  ///< as last published
   ros::Subscriber frontier_sub_, update_sub_, failed_sub_, odom_sub_, goal_sub_;
   ros::ServiceServer trigger_srv_;
   ros::Timer timer_;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <optional>
 
 namespace go_feap::planning {
@@ -62,6 +63,19 @@ std::size_t LayerManager::countUsable(const std::vector<std::uint32_t>& ids) con
       std::count_if(ids.begin(), ids.end(), [&](std::uint32_t id) { return !blacklist_.count(id); }));
 }
 
+void LayerManager::forgetGoneFrontiers(const std::vector<std::uint32_t>& present) {
+  // Ids only grow, and a frontier whose cells change comes back under a new one: an id at or below the
+  // highest yet seen that is not in the list now is gone for good, and so are its records. A higher one
+  // (a failure reported against frontiers newer than the list here) is kept until a list shows it.
+  for (std::uint32_t id : present) highest_seen_ = std::max(highest_seen_, id);
+  if (failures_.empty()) return;
+  std::vector<std::uint32_t> sorted(present);
+  std::sort(sorted.begin(), sorted.end());
+  auto gone = [&](std::uint32_t id) { return id <= highest_seen_ && !std::binary_search(sorted.begin(), sorted.end(), id); };
+  for (auto it = failures_.begin(); it != failures_.end();) it = gone(it->first) ? failures_.erase(it) : std::next(it);
+  for (auto it = blacklist_.begin(); it != blacklist_.end();) it = gone(*it) ? blacklist_.erase(it) : std::next(it);
+}
+
 LayerOutputs LayerManager::output() const {
   LayerOutputs out;
   out.state = state_;
@@ -100,6 +114,7 @@ LayerOutputs LayerManager::step(const LayerInputs& in, double t) {
   // exploration open forever.
   for (std::uint32_t id : in.failed)
     if (++failures_[id] >= config_.max_retries) blacklist_.insert(id);
+  forgetGoneFrontiers(in.all_frontiers);
 
   if (state_ == ExplorationState::kWaitTrigger) {
     if (in.trigger) {

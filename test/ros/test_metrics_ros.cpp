@@ -11,6 +11,8 @@
 #include <nav_msgs/Path.h>
 #include <ros/ros.h>
 #include <rosgraph_msgs/Clock.h>
+#include <std_msgs/UInt32.h>
+#include <std_msgs/UInt32MultiArray.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <geometry_msgs/PoseStamped.h>
@@ -325,6 +327,59 @@ nav_msgs::Odometry odometryAtTheCamera() {
   odom.pose.pose.position.z = 1.0;
   odom.pose.pose.orientation.w = 1.0;
   return odom;
+}
+
+// The probe layer manager's blacklist (max_retries 3) follows the frontiers listed. Frontier 5 fails three
+// times and is blacklisted. Then, with the clock held, frontier 6 replaces it in the list and fails three
+// times: at the next step 5 leaves the blacklist as 6 joins it. The list changes and keeps its size, and
+// it is sent again (it used to be sent only when its size changed, and it kept ids that were gone).
+TEST(LayerManager, BlacklistFollowsTheFrontiersListed) {
+  ros::NodeHandle nh;
+  auto clock_pub = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
+  auto frontiers_pub = nh.advertise<go_feap::FrontierArray>("probe/frontiers", 10);
+  auto failed_pub = nh.advertise<std_msgs::UInt32>("probe/frontier_failed", 10);
+  std::vector<std::vector<std::uint32_t>> lists;
+  auto blacklist_sub = nh.subscribe<std_msgs::UInt32MultiArray>(
+      "probe/blacklist", 10, [&](const std_msgs::UInt32MultiArray::ConstPtr& m) { lists.push_back(m->data); });
+  int statuses = 0;
+  auto status_sub = nh.subscribe<go_feap::ExplorationStatus>("probe/status", 50,
+                                                             [&](const go_feap::ExplorationStatus::ConstPtr&) { ++statuses; });
+  ASSERT_TRUE(spinUntil([&] {
+    return frontiers_pub.getNumSubscribers() > 0 && failed_pub.getNumSubscribers() > 0 &&
+           blacklist_sub.getNumPublishers() > 0 && status_sub.getNumPublishers() > 0 && clock_pub.getNumSubscribers() > 0;
+  }, 30.0)) << "the probe layer manager is not connected";
+  double now = ros::Time::now().toSec();
+  auto tick_until = [&](const std::function<bool()>& done) {
+    for (int i = 0; i < 100 && !done(); ++i) {
+      now += 0.05;
+      publishClock(clock_pub, now);
+      spinUntil(done, 0.02);
+    }
+    return done();
+  };
+  ASSERT_TRUE(tick_until([&] { return statuses > 0; })) << "the probe layer manager sends no status";
+  auto list_and_fail = [&](std::uint32_t id) {
+    go_feap::FrontierArray frontiers = frontierAhead(0.3, 0.3);
+    frontiers.header.stamp = ros::Time(now);
+    frontiers.header.frame_id = "world";
+    frontiers.frontiers[0].id = id;
+    frontiers_pub.publish(frontiers);
+    std_msgs::UInt32 failed;
+    failed.data = id;
+    for (int k = 0; k < 3; ++k) failed_pub.publish(failed);
+  };
+  using Ids = std::vector<std::uint32_t>;
+  list_and_fail(5);
+  ASSERT_TRUE(tick_until([&] { return !lists.empty() && lists.back() == Ids{5}; }))
+      << "frontier 5 failed three times and is not blacklisted";
+  // Both reach the layer manager before its next step, which only the clock starts.
+  list_and_fail(6);
+  spinUntil([] { return false; }, 0.5);
+  EXPECT_TRUE(tick_until([&] { return lists.back() == Ids{6}; }))
+      << "the blacklist is not [6] once 6 replaced 5 and failed three times (last sent: " << lists.back().size()
+      << " ids, the first " << (lists.back().empty() ? 0u : lists.back().front()) << ")";
+  for (const Ids& l : lists)
+    for (std::uint32_t id : l) EXPECT_TRUE(id == 5 || id == 6) << "blacklisted " << id;
 }
 
 // A global planner (probe/gp/... in metrics.test) plans at global/rate (10 Hz) from the test's frontier

@@ -153,6 +153,48 @@ TEST(LayerManager, UnreachableFrontiersAreBlacklistedAfterBoundedRetries) {
   EXPECT_EQ(out.blacklisted_left, 0u);  // 9 was cleared after all
 }
 
+TEST(LayerManager, RecordsOfFrontiersThatAreGoneAreForgotten) {
+  LayerManager m(config(), {Vec3(0, 0, 0), Vec3(10, 10, 1)}, 0.5);  // one band, max_retries = 2
+  LayerInputs trig = frontiers({9}, {9}, 0);
+  trig.trigger = true;
+  m.step(trig, 0.0);
+  lookRound(m, 0.0);  // lists frontier 1 only: 9 is at or below the highest id seen, but no record yet
+  std::uint64_t p = 1;
+  double t = 1.0;
+  auto failing = [&](std::vector<std::uint32_t> all, std::vector<std::uint32_t> failed) {
+    LayerInputs in = frontiers(all, all, ++p);
+    in.failed = std::move(failed);
+    return m.step(in, t += 0.1);
+  };
+  failing({9}, {9});
+  failing({9}, {9});
+  EXPECT_TRUE(m.isBlacklisted(9));
+  // A failure on 12 reported before any list held 12 (the planners saw a newer frontier update than the
+  // one here): kept, and it counts towards the blacklist once the lists catch up.
+  failing({9}, {12});
+  EXPECT_EQ(m.failureRecords(), 2u);
+  failing({9, 12}, {12});
+  EXPECT_TRUE(m.isBlacklisted(12));
+  EXPECT_EQ(failing({9, 12}, {}).blacklisted_left, 2u);
+  // 9 is gone (its cells changed, so it came back, if at all, under a new id): its records go with it.
+  EXPECT_EQ(failing({12, 20}, {}).blacklisted_left, 1u);
+  EXPECT_FALSE(m.isBlacklisted(9));
+  EXPECT_TRUE(m.isBlacklisted(12));
+  EXPECT_EQ(m.failureRecords(), 1u);
+  failing({20}, {});
+  EXPECT_TRUE(m.blacklist().empty());
+  EXPECT_EQ(m.failureRecords(), 0u);
+  // A long run: a thousand frontiers each fail twice and vanish; the records stay bounded.
+  for (std::uint32_t id = 100; id < 1100; ++id) {
+    failing({id}, {id});
+    failing({id}, {id});
+    ASSERT_TRUE(m.isBlacklisted(id));
+  }
+  failing({2000}, {});
+  EXPECT_TRUE(m.blacklist().empty());
+  EXPECT_EQ(m.failureRecords(), 0u);
+}
+
 TEST(LayerManager, TimeLimitAndStuckTerminate) {
   LayerManagerConfig c = config();
   c.time_limit = 10.0;

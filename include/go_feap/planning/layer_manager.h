@@ -77,7 +77,12 @@ class LayerManager {
 
   const std::vector<int>& bandOrder() const { return order_; }
   Band band(int index) const;
+  /// Frontiers given up on after max_retries failed attempts. Ids the frontier finder no longer lists
+  /// (every id up to the highest any step's all_frontiers held that is missing from the latest) are
+  /// forgotten, with their failure counts: ids are never reused, so a long run keeps only live ones.
   const std::set<std::uint32_t>& blacklist() const { return blacklist_; }
+  /// Frontiers with a failed attempt on record (blacklisted ones included).
+  std::size_t failureRecords() const { return failures_.size(); }
   bool isBlacklisted(std::uint32_t id) const { return blacklist_.count(id) > 0; }
   ExplorationState state() const { return state_; }
   /// The heading has been in every octant since the trigger (a start facing a wall has not).
@@ -85,6 +90,7 @@ class LayerManager {
 
  private:
   std::size_t countUsable(const std::vector<std::uint32_t>& ids) const;
+  void forgetGoneFrontiers(const std::vector<std::uint32_t>& present);
   LayerOutputs output() const;
 
   LayerManagerConfig config_;
@@ -101,6 +107,7 @@ class LayerManager {
   double progress_time_ = 0.0;
   std::map<std::uint32_t, int> failures_;
   std::set<std::uint32_t> blacklist_;
+  std::uint32_t highest_seen_ = 0;  ///< the highest frontier id any step's all_frontiers held
   std::uint32_t headings_seen_ = 0;  ///< bit k: the heading has been in octant k since the trigger
 };
 
