@@ -77,6 +77,20 @@ class DepthCamera : public nodelet::Nodelet {
   // camera pose and the odometry share one exact stamp.
   void onOdom(const nav_msgs::Odometry::ConstPtr& odom) {
     const ros::Time stamp = odom->header.stamp;
+    // Odometry whose stamp stands still (a source stamping every message alike, or a stalled clock
+    // relayed): frames are timed by the stamps, so none comes until it moves on. Said once the stamp has
+    // come kStallMessages times in a row, and again every 5 s while it lasts.
+    if (stamp == last_stamp_) {
+      if (++repeats_ >= kStallMessages)
+        NODELET_WARN_STREAM_THROTTLE(5.0, getName() << ": odometry stamp " << stamp.toSec() << " s repeated in "
+                                                    << repeats_ + 1 << " messages in a row: no depth frame until it advances");
+      return;
+    }
+    if (repeats_ >= kStallMessages)
+      NODELET_INFO_STREAM(getName() << ": odometry stamps advance again after " << repeats_ + 1 << " messages stamped "
+                                    << last_stamp_.toSec() << " s");
+    repeats_ = 0;
+    last_stamp_ = stamp;
     const double period = 1.0 / rate_;
     const double now = stamp.toSec();
     const double ahead = std::isnan(next_frame_) ? 0.0 : next_frame_ - now;  // s to the next frame
@@ -136,6 +150,9 @@ class DepthCamera : public nodelet::Nodelet {
   std::unique_ptr<world::Scene> scene_;
   std::unique_ptr<sim::DepthRenderer> renderer_;
   std::mt19937_64 rng_;
+  static constexpr int kStallMessages = 10;  ///< repeats of one odometry stamp before it is reported
+  ros::Time last_stamp_;                      ///< of the last odometry message
+  int repeats_ = 0;                           ///< messages since then with the same stamp
   double next_frame_ = std::numeric_limits<double>::quiet_NaN();  // stamp of the next frame, s; NaN before the first
   ros::Publisher depth_pub_, info_pub_, pose_pub_;
   ros::Subscriber odom_sub_;

@@ -2,6 +2,7 @@
 #include <geometry_msgs/PoseStamped.h>
 #include <gtest/gtest.h>
 #include <nav_msgs/Odometry.h>
+#include <rosgraph_msgs/Log.h>
 #include <ros/ros.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
@@ -12,6 +13,8 @@
 #include <deque>
 #include <limits>
 #include <mutex>
+#include <string>
+#include <vector>
 
 #include "go_feap/PositionCommand.h"
 #include "ros_test_util.h"
@@ -187,6 +190,52 @@ TEST_F(SimulatorTest, CommandMovesOdomCameraStampsMatchNanIsIgnored) {
   }
   EXPECT_LE(at_edge, static_cast<std::size_t>(sends)) << "more frames at the edge stamp than it was sent";
   EXPECT_GE(current, 10u) << "after the stamp at the largest ros::Time";
+}
+
+// The probe camera (probe/... in simulator.test) gets odometry whose stamp stands still: one frame, and
+// then a warning naming the stamp, where it used to say nothing. Once the stamps advance, frames follow
+// and it says so.
+TEST_F(SimulatorTest, OdometryWhoseStampStandsStillIsReported) {
+  ASSERT_TRUE(spinUntil([&] { return last_odom_ != nullptr; }, 60.0)) << "no odom";
+  ros::Publisher odom_pub = nh_.advertise<nav_msgs::Odometry>("probe/odom", 10);
+  std::vector<ros::Time> frames;
+  ros::Subscriber depth_sub = nh_.subscribe<sensor_msgs::Image>(
+      "probe/depth", 10, [&](const sensor_msgs::Image::ConstPtr& m) { frames.push_back(m->header.stamp); });
+  std::vector<std::string> said;
+  ros::Subscriber log_sub = nh_.subscribe<rosgraph_msgs::Log>("/rosout", 100, [&](const rosgraph_msgs::Log::ConstPtr& m) {
+    if (m->msg.find("/probe_depth_camera:") != std::string::npos) said.push_back(m->msg);  // m->name is the manager
+  });
+  ASSERT_TRUE(spinUntil([&] { return odom_pub.getNumSubscribers() > 0 && depth_sub.getNumPublishers() > 0 &&
+                                     log_sub.getNumPublishers() > 0; }, 30.0))
+      << "the probe camera is not connected";
+  auto heard = [&](const std::string& what) {
+    for (const std::string& m : said)
+      if (m.find(what) != std::string::npos) return true;
+    return false;
+  };
+  nav_msgs::Odometry odom = *last_odom_;
+  odom.header.stamp = ros::Time(1000.0);
+  // Sent at 50 Hz of wall time, well within what the camera takes: none is dropped from its queue.
+  int sends = 0;
+  const bool warned = spinUntil([&] {
+    if (heard("odometry stamp 1000 s repeated")) return true;
+    odom_pub.publish(odom);
+    ++sends;
+    ros::WallDuration(0.02).sleep();
+    return false;
+  }, 20.0);
+  EXPECT_TRUE(warned) << sends << " messages stamped 1000 s and no word of it";
+  EXPECT_LE(frames.size(), 1u) << "frames from one repeated stamp";
+  for (const ros::Time& f : frames) EXPECT_EQ(f, odom.header.stamp);
+
+  frames.clear();
+  for (int k = 1; k <= 20; ++k) {
+    odom.header.stamp = ros::Time(1000.0 + 0.05 * k);
+    odom_pub.publish(odom);
+    spinUntil([] { return false; }, 0.02);
+  }
+  EXPECT_TRUE(spinUntil([&] { return frames.size() >= 5 && heard("odometry stamps advance again"); }, 10.0))
+      << frames.size() << " frames over 1 s of advancing stamps";
 }
 
 }  // namespace
