@@ -2,7 +2,8 @@
 // depth arrives as 16UC1 millimetres and is integrated through TF lookups (sync_mode tf); the
 // OdometryTf nodelet turns odometry into world -> body_vio and adds the D435i extrinsic from
 // config/d435i.yaml; exploration waits for the trigger, then position commands flow and the metrics
-// recorder publishes the flown path.
+// recorder publishes the flown path. The simulator's topics are under /vehicle, which onboard.test names
+// in onboard.launch's arguments.
 #include <gtest/gtest.h>
 #include <nav_msgs/Odometry.h>
 #include <nav_msgs/Path.h>
@@ -27,15 +28,15 @@ TEST(Onboard, RunsTheChainOnD435iDepthAndVioOdometry) {
   nav_msgs::Odometry::ConstPtr odom;
   go_feap::ExplorationStatus::ConstPtr status;
   std::size_t changed = 0, commands = 0;
-  auto depth_sub = nh.subscribe<sensor_msgs::Image>("depth", 2, [&](const sensor_msgs::Image::ConstPtr& m) { depth = m; });
-  auto odom_sub = nh.subscribe<nav_msgs::Odometry>("odom", 10, [&](const nav_msgs::Odometry::ConstPtr& m) { odom = m; });
+  auto depth_sub = nh.subscribe<sensor_msgs::Image>("vehicle/depth", 2, [&](const sensor_msgs::Image::ConstPtr& m) { depth = m; });
+  auto odom_sub = nh.subscribe<nav_msgs::Odometry>("vehicle/odom", 10, [&](const nav_msgs::Odometry::ConstPtr& m) { odom = m; });
   auto update_sub = nh.subscribe<go_feap::MapUpdate>(
       "map_update", 10, [&](const go_feap::MapUpdate::ConstPtr& m) { changed += m->changed_voxels; });
   auto status_sub = nh.subscribe<go_feap::ExplorationStatus>(
       "status", 5, [&](const go_feap::ExplorationStatus::ConstPtr& m) { status = m; });
   nav_msgs::Path::ConstPtr path;
   auto path_sub = nh.subscribe<nav_msgs::Path>("flown_path", 2, [&](const nav_msgs::Path::ConstPtr& m) { path = m; });
-  auto cmd_sub = nh.subscribe<go_feap::PositionCommand>("position_cmd", 10, [&](const go_feap::PositionCommand::ConstPtr&) {
+  auto cmd_sub = nh.subscribe<go_feap::PositionCommand>("vehicle/position_cmd", 10, [&](const go_feap::PositionCommand::ConstPtr&) {
     ++commands;
   });
   tf2_ros::Buffer buffer;
