@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <sstream>
 
 #include "go_feap/common/bits.h"
 #include "go_feap/common/raycast.h"
@@ -95,6 +96,18 @@ common::Status DepthIntrinsics::validate() const {
                                  std::to_string(height) + " pixels");
   if (!(fx > 0.0 && fy > 0.0 && std::isfinite(fx) && std::isfinite(fy) && std::isfinite(cx) && std::isfinite(cy)))
     return common::Status::Error("camera intrinsics are invalid (fx, fy must be finite and > 0, cx, cy finite)");
+  // Every pixel's ray within 85 degrees of the optical axis (a view under 170 degrees across): a focal length
+  // of 1e-310 pixels made rays of NaN, cast for seconds over the whole grid, and tiny ones clear space the
+  // camera never saw.
+  const double reach = std::tan(85.0 * M_PI / 180.0);
+  const double across_x = std::max(std::abs(cx), std::abs(width - cx)) / fx;
+  const double across_y = std::max(std::abs(cy), std::abs(height - cy)) / fy;
+  if (!(across_x <= reach && across_y <= reach)) {
+    std::ostringstream why;
+    why << "camera intrinsics are invalid: fx " << fx << ", fy " << fy << ", cx " << cx << ", cy " << cy << " for "
+        << width << "x" << height << " pixels give rays more than 85 degrees off the optical axis";
+    return common::Status::Error(why.str());
+  }
   return common::Status::Ok();
 }
 

@@ -135,7 +135,11 @@ nlohmann::json toJson(const Summary& s) {
 
 }  // namespace
 
-std::string summaryJson(const Summary& summary) { return toJson(summary).dump(2); }
+// Strings that are not UTF-8 (a finish reason from outside the chain) are written with U+FFFD in place of
+// their bad bytes: nlohmann would throw, and the run would end without its summary.
+std::string summaryJson(const Summary& summary) {
+  return toJson(summary).dump(2, ' ', false, nlohmann::json::error_handler_t::replace);
+}
 
 common::Status Recorder::writeSummary(const std::string& path) const {
   std::ofstream out(path);

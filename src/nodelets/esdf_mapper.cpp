@@ -128,6 +128,9 @@ class EsdfMapper : public nodelet::Nodelet {
   }
 
   void onDepthPose(const sensor_msgs::Image::ConstPtr& depth, const geometry_msgs::PoseStamped::ConstPtr& pose) {
+    // Stamps are the map's clock (a frontier's age counts from the frame that found it): a frame stamped 0
+    // would date its frontiers to the epoch for good.
+    if (depth->header.stamp.isZero()) return skip("stamp", "depth image stamped 0");
     // In seconds as doubles: ros::Time subtraction throws beyond 2^31 s, and a stamp is the sender's.
     const double dt = std::abs(depth->header.stamp.toSec() - pose->header.stamp.toSec());
     if (dt > pose_tolerance_ + 1e-9) return skip("pose_time", "camera_pose is " + std::to_string(dt) + " s from the image");

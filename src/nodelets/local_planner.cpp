@@ -48,7 +48,7 @@ class LocalPlanner : public nodelet::Nodelet {
     auto& l = local_config_;
     config::readViewpoints(p, v);
     config::readLocal(p, l);
-    p.get("frontier/max_cluster_extent", frontier_extent_);
+    p.get("frontier/max_cluster_extent", frontier_extent_).get("local/max_input_speed", max_input_speed_);
     config::readAstar(p, astar_config_, "distance_astar");
     p.get("world_frame", world_frame_);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
@@ -56,6 +56,9 @@ class LocalPlanner : public nodelet::Nodelet {
       ros_params::requireOrThrow(st.ok(), getName(), st.message());
     ros_params::requireOrThrow(frontier_extent_ > 0.0 && std::isfinite(frontier_extent_), getName(),
                                "parameter '" + p.fullName("frontier/max_cluster_extent") + "' must be finite and > 0");
+    ros_params::requireOrThrow(std::isfinite(max_input_speed_) && max_input_speed_ > 0.0, getName(),
+                               "parameter '" + p.fullName("local/max_input_speed") + "' must be > 0");
+    speed_limit_name_ = p.fullName("local/max_input_speed");
     window_ = std::make_unique<planning::ObstacleWindow>(l.window_size, l.clutter_threshold);
 
     compute_pub_ = nh.advertise<ComputeTime>("compute_time", 20);
@@ -86,19 +89,22 @@ class LocalPlanner : public nodelet::Nodelet {
     astar_ = std::make_unique<planning::Astar>(shared_->map->occupancy(), shared_->map->esdf(), astar_config_);
   }
   void onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
-    const std::string bad = ros_conv::odometryPoseProblem(msg->pose.pose);
+    std::string bad = ros_conv::odometryPoseProblem(msg->pose.pose);
+    const auto& p = msg->pose.pose.position;
+    const auto& q = msg->pose.pose.orientation;
+    // The velocity prices every leg from the vehicle: one not finite (it used to be taken as rest) or
+    // faster than local/max_input_speed refuses the message whole.
+    const common::Vec3 v_world = bad.empty() ? ros_conv::worldVelocity(q, msg->twist.twist.linear) : common::Vec3::Zero();
+    if (bad.empty()) bad = ros_conv::velocityProblem(v_world, max_input_speed_, speed_limit_name_);
     if (!bad.empty()) {
       NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": odometry refused: " << bad);
       return;
     }
-    const auto& p = msg->pose.pose.position;
-    const auto& q = msg->pose.pose.orientation;
     std::lock_guard<std::mutex> lock(mutex_);
     position_ = common::Vec3(p.x, p.y, p.z);
     yaw_ = ros_conv::yawOf(q);
     tilt_ = planning::tiltOf(Eigen::Quaterniond(q.w, q.x, q.y, q.z));
-    const common::Vec3 v_world = ros_conv::worldVelocity(q, msg->twist.twist.linear);
-    velocity_ = v_world.allFinite() ? v_world : common::Vec3::Zero();
+    velocity_ = v_world;
     speed_ = velocity_.norm();
   }
   void onDepth(const sensor_msgs::Image::ConstPtr& msg) {
@@ -372,7 +378,8 @@ class LocalPlanner : public nodelet::Nodelet {
   std::uint32_t target_frontier_ = 0;
   std::uint32_t target_seq_ = 0;  ///< ViewpointPath::target_seq of the last new target
   bool target_quicker_ = false;  ///< the target won on cost (planning::CurrentTarget::quicker)
-  double committed_at_ = 0.0, speed_ = 0.0, frontier_extent_ = 2.0;
+  double committed_at_ = 0.0, speed_ = 0.0, frontier_extent_ = 2.0, max_input_speed_ = 20.0;
+  std::string speed_limit_name_;  ///< local/max_input_speed's full name, for the messages
   double last_plan_ = -1e9;  ///< s (ROS time), when a tour was last planned against (planning::planDue())
   ros::Subscriber handle_sub_, odom_sub_, depth_sub_, layer_sub_, frontier_sub_, tour_sub_, failed_sub_;
 };

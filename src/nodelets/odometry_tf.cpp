@@ -63,8 +63,18 @@ class OdometryTf : public nodelet::Nodelet {
     }
     const auto& p = msg->pose.pose.position;
     const auto& q = msg->pose.pose.orientation;
-    if (msg->header.stamp == last_stamp_) return;  // TF refuses repeated stamps
+    const Eigen::Vector3d position(p.x, p.y, p.z);
+    if (msg->header.stamp == last_stamp_) {  // TF refuses repeated stamps: the first pose of a stamp stands
+      // A copy is harmless; another pose under the same stamp is a source stamping alike, and is said.
+      const double apart = (position - last_position_).norm();
+      if (apart > 1e-6)
+        NODELET_WARN_STREAM_THROTTLE(warn_period_, getName() << ": odometry stamp " << last_stamp_.toSec()
+                                                             << " s repeated with a pose " << apart
+                                                             << " m from the first: dropped, the TF keeps the first");
+      return;
+    }
     last_stamp_ = msg->header.stamp;
+    last_position_ = position;
     geometry_msgs::TransformStamped t;
     t.header.stamp = msg->header.stamp;
     t.header.frame_id = world_frame_;
@@ -78,6 +88,7 @@ class OdometryTf : public nodelet::Nodelet {
   double warn_period_ = 2.0;
   std::uint64_t refused_ = 0;
   ros::Time last_stamp_;
+  Eigen::Vector3d last_position_ = Eigen::Vector3d::Zero();  ///< of the odometry stamped last_stamp_
   std::unique_ptr<tf2_ros::TransformBroadcaster> broadcaster_;
   tf2_ros::StaticTransformBroadcaster static_broadcaster_;
   ros::Subscriber odom_sub_;

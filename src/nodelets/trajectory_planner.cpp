@@ -39,7 +39,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     config::readReplan(p, replan_);
     config::readTrajectoryPlanner(p, planner_);
     p.get("planner/rate", rate_).get("planner/odom_timeout", odom_timeout_).get("planner/drop_grace", drop_grace_);
-    p.get("planner/max_tracking_error", max_tracking_error_);
+    p.get("planner/max_tracking_error", max_tracking_error_).get("planner/max_input_speed", max_input_speed_);
     config::readAstar(p, astar_config_);
     config::readAstar(p, scout_config_, "scout_astar");
     config::readAstar(p, coarse_config_, "coarse_astar");
@@ -57,6 +57,9 @@ class TrajectoryPlanner : public nodelet::Nodelet {
                                "parameter '" + p.fullName("planner/drop_grace") + "' must be > 0");
     ros_params::requireOrThrow(std::isfinite(max_tracking_error_) && max_tracking_error_ > 0.0, getName(),
                                "parameter '" + p.fullName("planner/max_tracking_error") + "' must be > 0");
+    ros_params::requireOrThrow(std::isfinite(max_input_speed_) && max_input_speed_ > 0.0, getName(),
+                               "parameter '" + p.fullName("planner/max_input_speed") + "' must be > 0");
+    speed_limit_name_ = p.fullName("planner/max_input_speed");
     compute_pub_ = nh.advertise<ComputeTime>("compute_time", 20);
     bspline_pub_ = nh.advertise<Bspline>("bspline", 5);
     marker_pub_ = nh.advertise<visualization_msgs::Marker>("trajectory_marker", 2);
@@ -88,24 +91,30 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     coarse_ = std::make_unique<planning::Astar>(shared_->map->occupancy(), shared_->map->esdf(), coarse_config_);
   }
   void onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
-    const std::string bad = ros_conv::odometryPoseProblem(msg->pose.pose);
+    std::string bad = ros_conv::odometryPoseProblem(msg->pose.pose);
+    const auto& p = msg->pose.pose.position;
+    const auto& q = msg->pose.pose.orientation;
+    // The velocity is the start of every plan from the odometry: one not finite (it used to be taken as
+    // rest) or faster than planner/max_input_speed refuses the message whole.
+    const common::Vec3 v = bad.empty() ? ros_conv::worldVelocity(q, msg->twist.twist.linear) : common::Vec3::Zero();
+    if (bad.empty()) bad = ros_conv::velocityProblem(v, max_input_speed_, speed_limit_name_);
     if (!bad.empty()) {
       NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": odometry refused: " << bad);
       return;
     }
-    const auto& p = msg->pose.pose.position;
-    const auto& q = msg->pose.pose.orientation;
     std::lock_guard<std::mutex> lock(mutex_);
     odom_position_ = common::Vec3(p.x, p.y, p.z);
     odom_time_ = ros::Time::now();
     odom_yaw_ = ros_conv::yawOf(q);
-    const common::Vec3 v = ros_conv::worldVelocity(q, msg->twist.twist.linear);
-    odom_velocity_ = v.allFinite() ? v : common::Vec3::Zero();
+    odom_velocity_ = v;
   }
   void onCommand(const PositionCommand::ConstPtr& msg) {
     // The command is the next plan's start: one that is not finite is refused (the last usable one goes
     // stale, and the plan then starts from the odometry).
-    const std::string bad = ros_check::positionCommandProblem(*msg);
+    std::string bad = ros_check::positionCommandProblem(*msg);
+    if (bad.empty())
+      bad = ros_conv::velocityProblem(common::Vec3(msg->velocity.x, msg->velocity.y, msg->velocity.z), max_input_speed_,
+                                      speed_limit_name_);
     if (!bad.empty()) {
       NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": position_cmd refused: " << bad);
       return;
@@ -327,7 +336,8 @@ class TrajectoryPlanner : public nodelet::Nodelet {
   trajectory::ReplanConfig replan_;
   planning::AstarConfig astar_config_, scout_config_, coarse_config_;
   trajectory::TrajectoryPlannerConfig planner_;
-  double rate_ = 10.0, odom_timeout_ = 0.5, drop_grace_ = 0.5, max_tracking_error_ = 1.0;
+  double rate_ = 10.0, odom_timeout_ = 0.5, drop_grace_ = 0.5, max_tracking_error_ = 1.0, max_input_speed_ = 20.0;
+  std::string speed_limit_name_;  ///< planner/max_input_speed's full name, for the messages
   bool from_odometry_ = false;  ///< the next plan starts from the odometry: it was far from the reference
   common::Vec3 odom_velocity_ = common::Vec3::Zero();  ///< world frame
   ros::Time odom_time_;

@@ -6,7 +6,9 @@
 // odometry is back). A trajectory whose reference, when it is taken (now, or at its start if that is
 // later), lies farther than server/max_start_offset from the vehicle's odometry is refused: the
 // controller would chase a step that large at once (a stale trajectory from a bag, another planner, a
-// start time long past).
+// start time long past). So is one whose control polygon moves faster than server/max_speed or
+// accelerates harder than server/max_acceleration (corrupt: control points of 1e308 m, or a knot span so
+// short that the reference would leap to the end at once).
 #include <nav_msgs/Odometry.h>
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
@@ -32,7 +34,12 @@ class TrajectoryServer : public nodelet::Nodelet {
     ros_params::ParamReader p(getPrivateNodeHandle());
     p.get("server/rate", rate_).get("server/odom_timeout", odom_timeout_).get("world_frame", world_frame_);
     p.get("server/max_start_offset", max_start_offset_);
+    p.get("server/max_speed", max_speed_).get("server/max_acceleration", max_acceleration_);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
+    ros_params::requireOrThrow(std::isfinite(max_speed_) && max_speed_ > 0.0, getName(),
+                               "parameter '" + p.fullName("server/max_speed") + "' must be > 0");
+    ros_params::requireOrThrow(std::isfinite(max_acceleration_) && max_acceleration_ > 0.0, getName(),
+                               "parameter '" + p.fullName("server/max_acceleration") + "' must be > 0");
     ros_params::requireOrThrow(std::isfinite(max_start_offset_) && max_start_offset_ > 0.0, getName(),
                                "parameter '" + p.fullName("server/max_start_offset") + "' must be > 0");
     ros_params::requireOrThrow(rate_ >= 10.0 && rate_ <= 1000.0, getName(),
@@ -52,7 +59,9 @@ class TrajectoryServer : public nodelet::Nodelet {
       NODELET_WARN_STREAM_THROTTLE(1.0, getName() << ": trajectory " << msg->traj_id << " refused: " << t.message());
       return;
     }
-    const std::string bad = startProblem(*t, ros::Time::now().toSec());
+    std::string bad = ros_traj::motionProblem(*t, max_speed_, max_acceleration_);
+    if (!bad.empty()) bad += " (server/max_speed, server/max_acceleration)";
+    if (bad.empty()) bad = startProblem(*t, ros::Time::now().toSec());
     if (!bad.empty()) {
       NODELET_WARN_STREAM_THROTTLE(1.0, getName() << ": trajectory " << msg->traj_id << " refused: " << bad
                                                   << "; the reference stays as it was");
@@ -137,7 +146,7 @@ class TrajectoryServer : public nodelet::Nodelet {
     cmd_pub_.publish(cmd);
   }
 
-  double rate_ = 100.0, odom_timeout_ = 0.5, max_start_offset_ = 1.5;
+  double rate_ = 100.0, odom_timeout_ = 0.5, max_start_offset_ = 1.5, max_speed_ = 30.0, max_acceleration_ = 50.0;
   ros::Time last_odom_;
   std::optional<Eigen::Vector3d> odom_position_;  ///< m, of the latest usable odometry
   bool odom_gap_ = false;

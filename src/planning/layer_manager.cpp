@@ -43,8 +43,10 @@ LayerManager::LayerManager(const LayerManagerConfig& config, const common::Aabb&
     : config_(config), box_(box) {
   const double height = box.max.z() - box.min.z();
   count_ = std::max(1, static_cast<int>(std::ceil(height / config.layer_height - 1e-9)));
-  const int start = std::clamp(static_cast<int>(std::floor((start_z - box.min.z()) / config.layer_height)), 0,
-                               count_ - 1);
+  // Clamped as a double first: a start far outside the box (1e300 m, or NaN, from odometry gone wrong) would
+  // not fit an int, and the cast would be undefined. A NaN start takes the lowest band.
+  const double band_of_start = std::floor((start_z - box.min.z()) / config.layer_height);
+  const int start = std::isnan(band_of_start) ? 0 : static_cast<int>(std::clamp(band_of_start, 0.0, count_ - 1.0));
   for (int k = start; k < count_; ++k) order_.push_back(k);
   for (int k = start - 1; k >= 0; --k) order_.push_back(k);
 }

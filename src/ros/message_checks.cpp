@@ -88,6 +88,12 @@ std::string globalTourProblem(const GlobalTour& msg) {
     if (!finite(msg.waypoints[i]))
       return "waypoint " + std::to_string(i) + " " + point(msg.waypoints[i]) + " (frontier " +
              std::to_string(msg.frontier_ids[i]) + ") is not finite";
+  // A tour visits each frontier once; the local planner copies each listed frontier (cells and all), so a
+  // million repeats of one id would take gigabytes.
+  std::unordered_set<std::uint32_t> ids;
+  for (std::size_t i = 0; i < msg.frontier_ids.size(); ++i)
+    if (!ids.insert(msg.frontier_ids[i]).second)
+      return "frontier " + std::to_string(msg.frontier_ids[i]) + " appears twice (at " + std::to_string(i) + ")";
   return std::string();
 }
 

@@ -58,13 +58,19 @@ Wrench So3Controller::compute(const QuadrotorState& s, const PositionReference& 
 }
 
 common::Status checkReference(const PositionReference& ref, const common::Aabb& bounds, double max_acceleration,
-                              double max_outside) {
+                              double max_outside, double max_speed) {
   if (!ref.position.allFinite() || !ref.velocity.allFinite() || !ref.acceleration.allFinite() ||
       !std::isfinite(ref.yaw) || !std::isfinite(ref.yaw_dot))
     return common::Status::Error("command has NaN or Inf fields");
   if (ref.acceleration.norm() > max_acceleration) {
     std::ostringstream os;
     os << "command acceleration " << ref.acceleration.norm() << " m/s^2 exceeds " << max_acceleration;
+    return common::Status::Error(os.str());
+  }
+  // A finite velocity as large as 1e308 m/s made the controller's force infinite and the state NaN for good.
+  if (!(ref.velocity.stableNorm() <= max_speed)) {  // stableNorm: 1e308 m/s squared would overflow
+    std::ostringstream os;
+    os << "command velocity " << ref.velocity.stableNorm() << " m/s exceeds " << max_speed;
     return common::Status::Error(os.str());
   }
   const Eigen::Vector3d outside =

@@ -84,7 +84,10 @@ UniformBspline safeStop(const Vec3& p, const Vec3& v, double a_max) {
   // Velocity control points V_i = a dt (m - i) dir, i = 0..m, fall linearly to exactly 0 at V_m; the
   // average of V_0 and V_1 is the start velocity when dt = speed / (a (m - 1/2)). Every acceleration
   // control point is then -a_max dir or 0.
-  const int m = std::max(2, static_cast<int>(std::ceil(speed / a_max / kTargetSpan)) + 1);
+  // At most kMaxSpans spans (longer ones, past kMaxSpans * kTargetSpan s of braking, from a speed no vehicle
+  // reaches): the size stays bounded whatever the speed, and the cast below defined.
+  constexpr double kMaxSpans = 4000.0;
+  const int m = static_cast<int>(std::clamp(std::ceil(speed / a_max / kTargetSpan) + 1.0, 2.0, kMaxSpans));
   const double dt = speed / (a_max * (m - 0.5));
   Eigen::Matrix3Xd q(3, m + 3);
   q.col(0).setZero();

@@ -14,7 +14,9 @@
 #include <boost/make_shared.hpp>
 #include <stdexcept>
 
+#include "go_feap/ros/bspline_conversion.h"
 #include "go_feap/ros/conversions.h"
+#include "go_feap/trajectory/replan.h"
 #include "go_feap/ros/guarded.h"
 #include "go_feap/ros/message_checks.h"
 
@@ -136,6 +138,38 @@ bool says(const std::string& problem, const std::string& what) {
 
 // Flown distance from odometry: the first message adds nothing, a step up to max_step adds its length,
 // a longer one is a jump (a relocalisation) and adds nothing.
+TEST(Conversions, VelocitiesNotFiniteOrFasterThanTheLimitAreNamed) {
+  using go_feap::ros_conv::velocityProblem;
+  EXPECT_EQ(velocityProblem(Vec3(12, 0, 16), 20.0, "planner/max_input_speed"), "");  // 20 m/s
+  EXPECT_TRUE(says(velocityProblem(Vec3(0, std::nan(""), 0), 20.0, "x"), "velocity (0, nan, 0) is not finite"))
+      << velocityProblem(Vec3(0, std::nan(""), 0), 20.0, "x");
+  // 1e200 m/s: its square overflows, and the speed named is still the true one.
+  const std::string fast = velocityProblem(Vec3(1e200, 0, 0), 20.0, "/tp/planner/max_input_speed");
+  EXPECT_TRUE(says(fast, "speed 1e+200 m/s is above /tp/planner/max_input_speed (20 m/s)")) << fast;
+  EXPECT_TRUE(says(velocityProblem(Vec3(0, 0, -20.5), 20.0, "x"), "speed 20.5 m/s")) << velocityProblem(Vec3(0, 0, -20.5), 20.0, "x");
+}
+
+// What the trajectory server refuses: a trajectory commanding more than its speed or acceleration limit.
+TEST(Conversions, TrajectoriesMovingFasterThanTheServerTakesAreNamed) {
+  using go_feap::ros_traj::motionProblem;
+  go_feap::ros_traj::Trajectory t;
+  // A braking plan from 20 m/s (planner/max_input_speed) at 2 m/s^2: its polygon stays within 30 m/s.
+  t.position = go_feap::trajectory::safeStop(Vec3(0, 0, 1), Vec3(20, 0, 0), 2.0);
+  EXPECT_EQ(motionProblem(t, 30.0, 50.0), "");
+  EXPECT_TRUE(says(motionProblem(t, 30.0, 1.5), "m/s^2, above 1.5 m/s^2")) << motionProblem(t, 30.0, 1.5);
+  // The same points 1e-9 s apart: the reference would leap to the end at once.
+  Eigen::MatrixXd q = t.position.controlPoints();
+  t.position = go_feap::trajectory::UniformBspline(q, 3, 1e-9);
+  EXPECT_TRUE(says(motionProblem(t, 30.0, 50.0), "m/s, above 30 m/s")) << motionProblem(t, 30.0, 50.0);
+  // Finite control points whose differences overflow.
+  q.col(q.cols() - 1) << 1e308, -1e308, 0.0;
+  t.position = go_feap::trajectory::UniformBspline(q, 3, 0.1);
+  EXPECT_TRUE(says(motionProblem(t, 30.0, 50.0), "above 30 m/s")) << motionProblem(t, 30.0, 50.0);
+  // Standing still is fine.
+  t.position = go_feap::trajectory::UniformBspline(Eigen::MatrixXd::Ones(3, 6), 3, 0.1);
+  EXPECT_EQ(motionProblem(t, 30.0, 50.0), "");
+}
+
 TEST(Conversions, FlownStepsCountUpToTheJumpLimit) {
   using go_feap::ros_conv::flownStep;
   EXPECT_EQ(flownStep(std::nullopt, Vec3(5, 0, 0), 1.0), std::optional<double>(0.0));
@@ -225,6 +259,10 @@ TEST(MessageChecks, ToursLayersMapUpdatesAndStatusesThatAreMalformedAreNamed) {
   bad.waypoints[1].y = std::numeric_limits<double>::quiet_NaN();
   EXPECT_TRUE(says(globalTourProblem(bad), "waypoint 1") && says(globalTourProblem(bad), "frontier 9"))
       << globalTourProblem(bad);
+  bad = tour;
+  bad.frontier_ids = {7, 9, 7};
+  bad.waypoints.push_back(point(3, 0, 1));
+  EXPECT_TRUE(says(globalTourProblem(bad), "frontier 7 appears twice (at 2)")) << globalTourProblem(bad);
 
   go_feap::LayerBounds layer;
   layer.index = 1, layer.count = 3, layer.z_min = 1.0, layer.z_max = 2.0;

@@ -50,6 +50,7 @@ TEST(Parameters, ANodeletWithAnInvalidOrMissingParameterDoesNotStartAndNamesIt) 
       {"bad_cluster_extent", "go_feap/LocalPlanner", "frontier/max_cluster_extent"},  // NaN
       {"bad_camera_extrinsic", "go_feap/DepthCamera", "depth_camera/T_B_C"},    // a NaN translation
       {"bad_command_limit", "go_feap/QuadrotorSim", "simulation/max_command_acceleration"},  // NaN
+      {"bad_input_speed", "go_feap/TrajectoryPlanner", "planner/max_input_speed"},  // NaN: no speed refused
       {"bad_start", "go_feap/QuadrotorSim", "start"},                           // 100 m outside the maze
   };
   for (const Case& c : cases) {

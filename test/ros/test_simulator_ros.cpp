@@ -137,6 +137,9 @@ TEST_F(SimulatorTest, CommandMovesOdomCameraStampsMatchNanIsIgnored) {
     spinSim(0.05);
   }
   command(target + Eigen::Vector3d(0, 0, 0), 0.5, /*ax=*/1000.0);  // absurd acceleration: refused too
+  go_feap::PositionCommand fast = go_feap::test::holdCommand(target, 0.5);
+  fast.velocity.z = 1e308;  // finite: it made the controller's state NaN for good, and odometry stopped
+  cmd_pub_.publish(fast);
   spinSim(1.0);
   EXPECT_GT(odom_count_, before + 50);
   EXPECT_LT((position() - target).norm(), 0.05) << "at " << position().transpose();

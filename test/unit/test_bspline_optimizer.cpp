@@ -676,6 +676,15 @@ TEST(SafeStop, BrakesToRestWithinTheStoppingDistance) {
     EXPECT_LE(s.maxDerivativeNorm(2, 1), a_max * (1 + 1e-9));
     EXPECT_LE(v_fd, speed * (1 + 1e-3) + 1e-6);
   }
+  // From a speed no vehicle reaches (corrupt odometry: 1e7 m/s), the spline stays small and still brakes
+  // from v at a_max to rest. It used to take one span per 0.05 s of braking: 1e8 of them, gigabytes.
+  const Vec3 absurd = Vec3(1, -2, 0.5).normalized() * 1e7;
+  const UniformBspline fast = traj::safeStop(Vec3(1, 2, 3), absurd, 2.0);
+  EXPECT_LE(fast.numControlPoints(), 4003);
+  EXPECT_LT((Vec3(fast.evaluate(0.0, 1)) - absurd).norm(), 1e-9 * 1e7);
+  EXPECT_LE(fast.maxDerivativeNorm(2, 1), 2.0 * (1 + 1e-6));
+  EXPECT_LT(fast.evaluate(fast.duration(), 1).norm(), 1e-6);
+  EXPECT_NEAR(fast.duration(), 1e7 / 2.0, fast.knotSpan());
   const UniformBspline hold = traj::safeStop(Vec3(1, 2, 3), Vec3::Zero(), 1.0);
   EXPECT_LT((hold.position(0.3) - Vec3(1, 2, 3)).norm(), 1e-12);
   EXPECT_EQ(hold.maxVelocity(), 0.0);

@@ -52,6 +52,11 @@ TEST(LayerManager, BandsGoUpFromTheStartBandThenDown) {
   LayerManager low(config(), kBox, 0.0), high(config(), kBox, 5.5);
   EXPECT_EQ(low.bandOrder(), (std::vector<int>{0, 1, 2, 3, 4, 5}));
   EXPECT_EQ(high.bandOrder(), (std::vector<int>{5, 4, 3, 2, 1, 0}));
+  // A start far outside the box (odometry gone wrong) takes the nearest band; the cast to int of the band
+  // number, 1e300, was undefined.
+  LayerManager far_up(config(), kBox, 1e300), far_down(config(), kBox, -1e300);
+  EXPECT_EQ(far_up.bandOrder(), (std::vector<int>{5, 4, 3, 2, 1, 0}));
+  EXPECT_EQ(far_down.bandOrder(), (std::vector<int>{0, 1, 2, 3, 4, 5}));
 }
 
 TEST(LayerManager, WalksEveryTransitionToComplete) {

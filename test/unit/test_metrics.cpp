@@ -258,6 +258,22 @@ TEST(Metrics, IncrementalCoverageEqualsTheFullCountFrameByFrame) {
   EXPECT_DOUBLE_EQ(again.current(), tracker.coverage(map));
 }
 
+// A finish reason (it comes in a status message) that is not UTF-8: the summary is still written, with
+// U+FFFD for the bad byte. nlohmann's dump threw, and the run ended without summary.json.
+TEST(Metrics, SummaryWithBytesThatAreNotTextIsStillWritten) {
+  metrics::Summary s = summary("maze", "go_feap", 10.0, 12.5, 0.5, 1, "comp\xfflete", 2.0);
+  std::string json;
+  ASSERT_NO_THROW(json = metrics::summaryJson(s));
+  EXPECT_NE(json.find("\"finish_reason\": \"comp\xef\xbf\xbdlete\""), std::string::npos) << json;
+  metrics::Recorder r;
+  r.summary() = s;
+  const fs::path dir = fs::temp_directory_path() / "go_feap_test_recorder_bytes";
+  fs::remove_all(dir);
+  EXPECT_TRUE(r.writeAll(dir.string()).ok());
+  EXPECT_TRUE(fs::exists(dir / "summary.json"));
+  fs::remove_all(dir);
+}
+
 TEST(Metrics, RecorderWritesSummaryCsvAndPlot) {
   metrics::Recorder r;
   r.summary() = summary("maze", "go_feap", 10.0, 12.5, 0.5, 1, "complete", 2.0);

@@ -202,7 +202,11 @@ TEST(OccupancyMap, BadFramesAreRefusedAndChangeNothing) {
            {"0x0", [](map::DepthIntrinsics& k) { k.width = 0, k.height = 0; }},
            {"fx", [](map::DepthIntrinsics& k) { k.fx = 0.0; }},
            {"fx", [](map::DepthIntrinsics& k) { k.fy = std::nan(""); }},
-           {"cx", [](map::DepthIntrinsics& k) { k.cy = INFINITY; }}}) {
+           {"cx", [](map::DepthIntrinsics& k) { k.cy = INFINITY; }},
+           // Finite and > 0, but rays of NaN (1e-310: inf / inf), or a view of nearly 180 degrees.
+           {"85 degrees", [](map::DepthIntrinsics& k) { k.fy = 1e-310; }},
+           {"85 degrees", [](map::DepthIntrinsics& k) { k.fx = 1e-3; }},
+           {"85 degrees", [](map::DepthIntrinsics& k) { k.cx = -1e6; }}}) {
     map::DepthIntrinsics k = K;
     broken(k);
     const common::Status st = k.validate();

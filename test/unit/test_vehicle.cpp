@@ -178,6 +178,12 @@ TEST(Reference, BadCommandsAreRefusedWithAReason) {
   PositionReference acc = ok;
   acc.acceleration = Eigen::Vector3d(0, 0, 60);
   EXPECT_NE(checkReference(acc, bounds).message().find("acceleration"), std::string::npos);
+  PositionReference fast = ok;
+  fast.velocity = Eigen::Vector3d(0, 0, 1e308);  // finite, and it made the controller's state NaN for good
+  EXPECT_NE(checkReference(fast, bounds).message().find("velocity 1e+308 m/s exceeds 20"), std::string::npos)
+      << checkReference(fast, bounds).message();
+  fast.velocity = Eigen::Vector3d(12, 0, 16);  // 20 m/s: accepted
+  EXPECT_TRUE(checkReference(fast, bounds));
   PositionReference far = ok;
   far.position = Eigen::Vector3d(25, 0, 1);
   EXPECT_NE(checkReference(far, bounds).message().find("outside"), std::string::npos);

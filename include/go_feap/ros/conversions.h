@@ -51,6 +51,22 @@ inline std::string odometryPoseProblem(const geometry_msgs::Pose& pose) {
   return why.str();
 }
 
+/// Why a velocity (odometry's, or a command's) cannot be planned from: not finite, or faster than
+/// `max_speed` m/s (the parameter `limit_name`), which no vehicle flies and a planner must not brake from
+/// (a braking plan from 1e7 m/s took gigabytes). "" when usable.
+inline std::string velocityProblem(const common::Vec3& v, double max_speed, const std::string& limit_name) {
+  if (!v.allFinite()) {
+    std::ostringstream why;
+    why << "velocity (" << v.x() << ", " << v.y() << ", " << v.z() << ") is not finite";
+    return why.str();
+  }
+  const double speed = v.stableNorm();  // stableNorm: the square of 1e200 m/s would overflow
+  if (speed <= max_speed) return std::string();
+  std::ostringstream why;
+  why << "speed " << speed << " m/s is above " << limit_name << " (" << max_speed << " m/s)";
+  return why.str();
+}
+
 /// The step from the last odometry position to `p` as flown distance: 0 without a last position, and
 /// nothing when it is longer than `max_step` (a jump: a relocalisation, or a gap in the odometry).
 inline std::optional<double> flownStep(const std::optional<common::Vec3>& last, const common::Vec3& p, double max_step) {

@@ -60,8 +60,9 @@ std::optional<double> firstCollisionTime(const UniformBspline& trajectory, doubl
 
 /// Cubic spline from position p with velocity v that brakes along v at a_max (m/s^2, > 0) and then holds:
 /// it starts at p with velocity v (acceleration -a_max along v), never exceeds a_max, and ends at rest
-/// after |v| / a_max plus at most one knot span (<= 0.05 s), at most |v|^2 / (2 a_max) + a_max dt^2 / 24
-/// from p. A zero velocity gives a spline that holds p. Throws std::invalid_argument unless a_max > 0 and
+/// after |v| / a_max plus at most one knot span dt, at most |v|^2 / (2 a_max) + a_max dt^2 / 24 from p.
+/// dt <= 0.05 s while the braking takes less than 200 s; beyond (a speed no vehicle reaches, from corrupt
+/// odometry) the spline keeps 4000 spans and dt grows, so that its size stays bounded. A zero velocity gives a spline that holds p. Throws std::invalid_argument unless a_max > 0 and
 /// the inputs are finite.
 UniformBspline safeStop(const Vec3& p, const Vec3& v, double a_max);
 
