@@ -245,6 +245,9 @@ TEST_F(MapperTest, ACameraInfoThatCannotBeUsedIsRefusedAndTheLastValidOneStays) 
   nan_fx.K[0] = std::numeric_limits<double>::quiet_NaN();
   sensor_msgs::CameraInfo no_size = *probe.info;
   no_size.width = no_size.height = 0;
+  // Finite and > 0, but every ray NaN: it was taken, and each frame then cast rays of 2^31 steps.
+  sensor_msgs::CameraInfo tiny_fy = *probe.info;
+  tiny_fy.K[4] = 1e-310;
 
   probe.info_pub.publish(zero_k);  // before any valid one: the frame is skipped
   spinUntil([] { return false; }, 0.3);
@@ -252,13 +255,14 @@ TEST_F(MapperTest, ACameraInfoThatCannotBeUsedIsRefusedAndTheLastValidOneStays) 
   EXPECT_EQ(probe.updates, 0u) << "a frame integrated with a zero K";
   probe.info_pub.publish(*probe.info);
   ASSERT_TRUE(probe.sendRealUntilIntegrated()) << "after a valid camera_info";
-  for (const sensor_msgs::CameraInfo& bad : {zero_k, nan_fx, no_size}) {
+  for (const sensor_msgs::CameraInfo& bad : {zero_k, nan_fx, no_size, tiny_fy}) {
     const std::size_t before = probe.updates;
     probe.info_pub.publish(bad);
     spinUntil([] { return false; }, 0.3);
     probe.sendReal();
     EXPECT_TRUE(spinUntil([&] { return probe.updates == before + 1; }, 10.0))
-        << "no frame integrated after a camera_info with K " << bad.K[0] << ", " << bad.width << "x" << bad.height;
+        << "no frame integrated after a camera_info with K " << bad.K[0] << ", " << bad.K[4] << ", " << bad.width << "x"
+        << bad.height;
   }
 }
 
@@ -289,8 +293,15 @@ TEST_F(MapperTest, FramesWithAnUnsetOrForeignPoseOrAnImageShorterThanItsSizeAreS
   probe.send(*probe.depth, foreign);
   probe.send(wrapped, *probe.pose);
   probe.send(odd_step, *probe.pose);
+  // Stamped 0 (a driver before its clock is set): the frame would date its frontiers to the epoch for good.
+  sensor_msgs::Image epoch = *probe.depth;
+  geometry_msgs::PoseStamped epoch_pose = *probe.pose;
+  epoch.header.stamp = epoch_pose.header.stamp = ros::Time(0);
+  probe.pose_pub.publish(epoch_pose);
+  probe.depth_pub.publish(epoch);
   spinUntil([] { return false; }, 1.0);
-  EXPECT_EQ(probe.updates, base) << "a frame with an unset or foreign pose or an unreadable image was integrated";
+  EXPECT_EQ(probe.updates, base)
+      << "a frame with an unset or foreign pose, an unreadable image or the stamp 0 was integrated";
   probe.sendReal();
   EXPECT_TRUE(spinUntil([&] { return probe.updates == base + 1; }, 10.0)) << "the next real frame was not integrated";
 }

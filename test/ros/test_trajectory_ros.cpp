@@ -295,6 +295,36 @@ TEST_F(TrajectoryTargetTest, AnOdometryJumpAwayFromTheReferenceIsPlannedFromTheO
   const go_feap::trajectory::TrajectorySample from = go_feap::trajectory::sampleTrajectory(planned.back(), 0.0);
   ASSERT_TRUE(from.position.allFinite() && from.velocity.allFinite());
   EXPECT_LT((from.position - odometry_pose).norm(), 0.02) << "starts at " << from.position.transpose();
+
+  // Velocities no vehicle flies (1e7 m/s: finite, corrupt) in every command and in every other odometry
+  // message: refused (planner/max_input_speed), so a new target is planned from the good odometry. Taken,
+  // they made a braking plan of 1e8 spans, gigabytes.
+  auto absurd_command = [&] {
+    go_feap::PositionCommand m = command();
+    m.velocity.x = 1e7;
+    return m;
+  };
+  goal = this->target(odometry_pose, 3);  // the fixture's: `target` above is the Every
+  goal.yaws.front() = yaw_ + 1.0;
+  const std::int64_t broken_id = planned.back().id;
+  Every again(0.05), target_again(0.2, ros::Time::now() + ros::Duration(0.5));
+  bool odd = false;
+  ASSERT_TRUE(spinSimUntil(
+      5.5,
+      [&] {
+        if (again.due()) {
+          nav_msgs::Odometry m = odometry();
+          if ((odd = !odd)) m.twist.twist.linear.x = 1e7;
+          odom_pub.publish(m);
+          cmd_pub.publish(absurd_command());
+        }
+        if (target_again.due()) target_pub.publish(goal);
+      },
+      [&] { return planned.back().id != broken_id; }))
+      << "no trajectory to the new target while commands and every other odometry moved at 1e7 m/s";
+  const go_feap::trajectory::TrajectorySample sane = go_feap::trajectory::sampleTrajectory(planned.back(), 0.0);
+  EXPECT_LT((sane.position - odometry_pose).norm(), 0.02) << "starts at " << sane.position.transpose();
+  EXPECT_LT((sane.velocity - velocity).norm(), 0.02) << "starts at " << sane.velocity.transpose() << " m/s";
 }
 
 // A second trajectory server (probe/...) fed only by this test. It holds the first usable odometry pose
