@@ -24,9 +24,11 @@ bool positiveFinite(double v) { return std::isfinite(v) && v > 0.0; }
 }  // namespace
 
 common::Status LoopConfig::validate() const {
-  if (!positiveFinite(control_rate)) return common::Status::Error("loop: control_rate must be finite and > 0");
-  if (!positiveFinite(plan_rate)) return common::Status::Error("loop: plan_rate must be finite and > 0");
-  if (!positiveFinite(sample_rate)) return common::Status::Error("loop: sample_rate must be finite and > 0");
+  // Rates in (0, 1000] Hz, as the nodelets' timers: 1e12 Hz made steps of a picosecond, a run that never ends.
+  auto rate = [](double r) { return positiveFinite(r) && r <= 1000.0; };
+  if (!rate(control_rate)) return common::Status::Error("loop: control_rate must be in (0, 1000] Hz");
+  if (!rate(plan_rate)) return common::Status::Error("loop: plan_rate must be in (0, 1000] Hz");
+  if (!rate(sample_rate)) return common::Status::Error("loop: sample_rate must be in (0, 1000] Hz");
   if (!std::isfinite(collision_distance) || collision_distance < 0.0)
     return common::Status::Error("loop: collision_distance must be finite and >= 0");
   return common::Status::Ok();

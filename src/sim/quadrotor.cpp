@@ -17,7 +17,8 @@ common::Status QuadrotorParams::validate() const {
   if (!(4.0 * motor_max_thrust > mass * gravity)) return bad("motor_max_thrust", "cannot lift the vehicle (4 x max < m g)");
   if (!(linear_drag >= 0.0)) return bad("linear_drag", "must be >= 0");
   if (!(gravity > 0.0)) return bad("gravity", "must be > 0");
-  if (!(dynamics_rate >= 500.0)) return bad("dynamics_rate", "must be >= 500 Hz");
+  // Bounded above too: at 1e15 Hz one simulated step never ended, and the bench could not be stopped.
+  if (!(dynamics_rate >= 500.0 && dynamics_rate <= 100000.0)) return bad("dynamics_rate", "must be in [500, 100000] Hz");
   return common::Status::Ok();
 }
 

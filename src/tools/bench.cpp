@@ -105,10 +105,12 @@ int main(int argc, char** argv) {
   const std::vector<std::string> planners = split(args.count("--planner") ? args["--planner"] : "go_feap");
   unsigned long long seed = 0, runs = 1, jobs = 1;
   if (args.count("--seed") && !tools::parseCount(args["--seed"], seed)) return usage("--seed must be an integer >= 0");
-  if (args.count("--runs") && (!tools::parseCount(args["--runs"], runs) || runs == 0))
-    return usage("--runs must be a positive integer");
-  if (args.count("--jobs") && (!tools::parseCount(args["--jobs"], jobs) || jobs == 0))
-    return usage("--jobs must be a positive integer");
+  // Bounded: 1e12 runs filled memory with the job list, and 1e12 jobs asked for a vector of that size.
+  constexpr unsigned long long kMaxRuns = 100000, kMaxJobs = 256;
+  if (args.count("--runs") && (!tools::parseCount(args["--runs"], runs) || runs == 0 || runs > kMaxRuns))
+    return usage("--runs must be an integer from 1 to 100000");
+  if (args.count("--jobs") && (!tools::parseCount(args["--jobs"], jobs) || jobs == 0 || jobs > kMaxJobs))
+    return usage("--jobs must be an integer from 1 to 256");
   double max_sim_time = 900.0;
   if (args.count("--max-sim-time")) {
     try {
@@ -128,6 +130,17 @@ int main(int argc, char** argv) {
     out_dir = name.str();
   }
   const bool perf = args.count("--perf") > 0;
+  // The results folder first: a file in its place used to end the bench with an uncaught exception once
+  // every run had been flown.
+  {
+    std::error_code ec;
+    std::filesystem::create_directories(out_dir, ec);
+    if (ec || !std::filesystem::is_directory(out_dir)) {
+      std::cerr << "go_feap_bench: --out " << out_dir << ": cannot make it a folder"
+                << (ec ? " (" + ec.message() + ")" : std::string(" (a file of that name is there)")) << "\n";
+      return 1;
+    }
+  }
 
   // Check every configuration and scene before the first run starts.
   std::map<std::string, bench::ExplorationConfig> configs;
@@ -248,7 +261,8 @@ int main(int argc, char** argv) {
               << s.exploration_time_s / std::max(1e-9, s.wall_time_s) << "x real time)\n";
   }
   const auto rows = metrics::aggregate(summaries);
-  std::filesystem::create_directories(out_dir);
+  std::error_code out_ec;  // made at the start; again in case it went meanwhile, without throwing
+  std::filesystem::create_directories(out_dir, out_ec);
   std::ofstream(out_dir + "/table.json") << metrics::tableJson(rows) << "\n";
   const auto comparisons = metrics::compare(summaries);
   if (!comparisons.empty()) std::ofstream(out_dir + "/comparison.json") << metrics::comparisonJson(comparisons) << "\n";

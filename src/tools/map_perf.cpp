@@ -40,10 +40,11 @@ int main(int argc, char** argv) {
   if (help) return usage(nullptr), 0;
   if (!error.empty()) return usage(error.c_str());
   unsigned long long frames = 300, skip = 2;
-  if (args.count("--frames") && (!tools::parseCount(args["--frames"], frames) || frames == 0))
-    return usage("--frames must be a positive integer");
-  if (args.count("--skip-pixel") && (!tools::parseCount(args["--skip-pixel"], skip) || skip == 0))
-    return usage("--skip-pixel must be a positive integer");
+  // Bounded: both are cast to int (2^31 pixels wrapped to a negative step, 2^32 to 0 and a loop for ever).
+  if (args.count("--frames") && (!tools::parseCount(args["--frames"], frames) || frames == 0 || frames > 1000000))
+    return usage("--frames must be an integer from 1 to 1000000");
+  if (args.count("--skip-pixel") && (!tools::parseCount(args["--skip-pixel"], skip) || skip == 0 || skip > 640))
+    return usage("--skip-pixel must be an integer from 1 to 640 (the image's width)");
   const std::string spec = args["--scene"];
   if (spec != "maze" && spec != "powerplant") return usage("--scene must be maze or powerplant");
   auto scene = world::makeScene(spec, 0);

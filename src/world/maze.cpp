@@ -1,9 +1,11 @@
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 #include <random>
 #include <set>
 
 #include "go_feap/world/generators.h"
+#include "go_feap/world/scene.h"
 #include "go_feap/world/shapes.h"
 
 namespace go_feap::world {
@@ -23,6 +25,14 @@ common::Status MazeConfig::validate() const {
     return err("height/start_height", "need 0 < start_height < height");
   if (extra_openings < 0) return err("extra_openings", "must be >= 0");
   if (!(margin >= 0.0)) return err("margin", "must be >= 0");
+  // Bounded like a file scene's grid, and in cells (the generator's dead-end search grows with the square
+  // of the cells: 400 x 400 m did not finish; 1e6 x 1e6 m overflowed the cell count and crashed).
+  if (!(size_x <= 1e4 && size_y <= 1e4 && height <= 1e3)) return err("size_x/size_y/height", "must be at most 10 km x 10 km x 1 km");
+  if (!(std::round(size_x / cell_size) * std::round(size_y / cell_size) <= 2500.0))
+    return err("size_x/size_y", "must hold at most 2500 cells");
+  const double voxels = sceneVoxelCount({Vec3(-0.5 * size_x, -0.5 * size_y, 0.0), Vec3(0.5 * size_x, 0.5 * size_y, height)},
+                                        resolution, margin);
+  if (!(voxels <= kMaxSceneVoxels)) return err("size_x/size_y/height/resolution", "make a grid of more than 2^30 voxels");
   return common::Status::Ok();
 }
 

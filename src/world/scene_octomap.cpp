@@ -2,11 +2,57 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
 
 #include "go_feap/world/scene_files.h"
 
 namespace go_feap::world {
+
+namespace {
+
+// OctoMap's reader recurses once per inner node it is told of, without a limit: garbage that marks every
+// child "inner" made 100,000 nested calls and overflowed the stack. The tree's data is walked here first,
+// without recursion: each node is two bytes of child codes (two bits per child, 11 = a node with children
+// of its own, whose bytes follow depth first), and an OctoMap tree is 16 levels deep. "" when it fits.
+std::string nestingProblem(const std::string& bytes, std::size_t data_start) {
+  constexpr int kTreeDepth = 16;
+  struct Level {
+    int depth;
+    int inner_left;  // children of this node with children, not yet read
+  };
+  std::vector<Level> stack;
+  std::size_t at = data_start;
+  auto read_node = [&](int depth) -> std::string {
+    if (at + 2 > bytes.size()) return "truncated tree data";
+    int inner = 0;
+    for (int b = 0; b < 2; ++b) {
+      const auto codes = static_cast<unsigned char>(bytes[at + b]);
+      for (int i = 0; i < 4; ++i) inner += ((codes >> (2 * i)) & 3u) == 3u;
+    }
+    at += 2;
+    if (inner > 0 && depth + 1 >= kTreeDepth)
+      return "tree data nested deeper than " + std::to_string(kTreeDepth) + " levels";
+    if (inner > 0) stack.push_back({depth + 1, inner});
+    return "";
+  };
+  if (std::string e = read_node(0); !e.empty()) return e;
+  while (!stack.empty()) {
+    Level& top = stack.back();
+    if (top.inner_left == 0) {
+      stack.pop_back();
+      continue;
+    }
+    --top.inner_left;
+    if (std::string e = read_node(top.depth); !e.empty()) return e;
+  }
+  return "";
+}
+
+}  // namespace
 
 common::Result<std::vector<OccupiedCube>> loadOctomap(const std::string& path) {
   using R = common::Result<std::vector<OccupiedCube>>;
@@ -18,11 +64,17 @@ common::Result<std::vector<OccupiedCube>> loadOctomap(const std::string& path) {
   if (first_line.rfind("# Octomap OcTree binary file", 0) != 0)
     return R::Error(path + ": not an OctoMap binary (.bt) file (bad header)");
   in.seekg(0);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (in.bad()) return R::Error(path + ": read error");
+  const std::size_t data_line = bytes.find("\ndata\n");
+  if (data_line == std::string::npos) return R::Error(path + ": corrupt OctoMap file (no 'data' line)");
+  if (const std::string e = nestingProblem(bytes, data_line + 6); !e.empty())
+    return R::Error(path + ": corrupt OctoMap file (" + e + ")");
   // OctoMap's reader reports problems on std::cerr and returns false; read into a tree
   // first and check the stream, so truncated files are caught as well.
+  std::istringstream data(bytes);
   octomap::OcTree tree(0.1);
-  if (!tree.readBinary(in)) return R::Error(path + ": corrupt or truncated OctoMap file");
-  if (in.bad()) return R::Error(path + ": read error");
+  if (!tree.readBinary(data)) return R::Error(path + ": corrupt or truncated OctoMap file");
   std::vector<OccupiedCube> cubes;
   for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
     if (!tree.isNodeOccupied(*it)) continue;

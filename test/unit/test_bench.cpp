@@ -149,6 +149,12 @@ TEST(Bench, ConfigErrorsNameTheModeOrKey) {
   ASSERT_FALSE(bad);
   EXPECT_NE(bad.message().find("coarse_astar: stride"), std::string::npos) << bad.message();
   std::filesystem::remove_all(dir);
+  // A planning rate of 1e12 Hz: steps of a picosecond, a run that never ends.
+  const std::filesystem::path fast_dir = configWithMode("fast", "global:\n  rate: 1.0e12\n");
+  auto fast = bench::loadExplorationConfig(fast_dir.string(), "fast");
+  ASSERT_FALSE(fast);
+  EXPECT_NE(fast.message().find("plan_rate must be in (0, 1000] Hz"), std::string::npos) << fast.message();
+  std::filesystem::remove_all(fast_dir);
 }
 
 // The full maze's start (seed 2) faces a wall: the first view's frontier has about 200 cells. With a

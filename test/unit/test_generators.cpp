@@ -2,11 +2,16 @@
 // dead ends and loops (maze); height span and overhangs (powerplant).
 #include <gtest/gtest.h>
 
+#include <string>
+#include <tuple>
+#include <vector>
+
 #include <set>
 
 #include "go_feap/world/generators.h"
 
 using namespace go_feap::world;
+namespace common = go_feap::common;
 using go_feap::common::Index3;
 
 namespace {
@@ -156,6 +161,22 @@ TEST(Maze, InvalidConfigNamesTheKey) {
   auto s = generateMaze(cfg, 0);
   ASSERT_FALSE(s);
   EXPECT_NE(s.message().find("cell_size"), std::string::npos) << s.message();
+  // Sizes a scene YAML may give: bounded before anything is allocated (1e6 m overflowed the cell count
+  // and crashed, 1e12 m threw bad_alloc, 400 x 400 m did not finish, a 30 km height asked for 6e9 voxels).
+  for (auto [x, y, z, key] : std::vector<std::tuple<double, double, double, std::string>>{
+           {1e6, 1e6, 3.0, "size_x/size_y/height"},
+           {1e12, 10.0, 3.0, "size_x/size_y/height"},
+           {400.0, 400.0, 3.0, "at most 2500 cells"},
+           {100.0, 100.0, 900.0, "more than 2^30 voxels"}}) {
+    MazeConfig big;
+    big.size_x = x, big.size_y = y, big.height = z;
+    const common::Status st = big.validate();
+    ASSERT_FALSE(st.ok()) << x << " x " << y << " x " << z;
+    EXPECT_NE(st.message().find(key), std::string::npos) << st.message();
+  }
+  MazeConfig largest;
+  largest.size_x = largest.size_y = 100.0;  // 2500 cells of 2 m
+  EXPECT_TRUE(largest.validate().ok()) << largest.validate().message();
 }
 
 class PowerplantTest : public ::testing::Test {

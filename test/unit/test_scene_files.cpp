@@ -482,6 +482,34 @@ TEST(BadInput, TruncatedCorruptNanAndEmptyClouds) {
   expectErrorMentions(f.message(), {"trunc.ply"});
 }
 
+// Headers declaring far more points than their files hold: refused before PCL allocates for them (a
+// 154-byte ASCII PCD declaring 3e8 points took 3.6 GB and 20 s; COUNT 1e9 asked for 12 GB).
+TEST(BadInput, CloudHeadersDeclaringMorePointsThanTheFileHolds) {
+  TempDir d;
+  const std::string pcd_head = "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\n";
+  writeText(d.file("many.pcd"), pcd_head + "SIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 300000000\nHEIGHT 1\n"
+                                           "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 300000000\nDATA ascii\n1 1 1\n");
+  writeText(d.file("wide.pcd"), pcd_head + "SIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1000000000\nWIDTH 1\nHEIGHT 1\n"
+                                           "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 1\nDATA binary\n" + std::string(12, '\0'));
+  writeText(d.file("many.ply"), "ply\nformat ascii 1.0\nelement vertex 300000000\nproperty float x\n"
+                                "property float y\nproperty float z\nend_header\n1 1 1\n");
+  for (const char* f : {"many.pcd", "wide.pcd", "many.ply"}) {
+    auto r = loadPointCloud(d.file(f));
+    ASSERT_FALSE(r) << f;
+    expectErrorMentions(r.message(), {f, "header declares", "bytes of data"});
+  }
+  // The same headers with what they declare load.
+  writeText(d.file("one.pcd"), pcd_head + "SIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 1\nHEIGHT 1\n"
+                                          "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 1\nDATA ascii\n1 1 1\n");
+  writeText(d.file("one.ply"), "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n"
+                               "property float y\nproperty float z\nend_header\n1 1 1\n");
+  for (const char* f : {"one.pcd", "one.ply"}) {
+    auto r = loadPointCloud(d.file(f));
+    ASSERT_TRUE(r) << f << ": " << r.message();
+    EXPECT_EQ(r->size(), 1u);
+  }
+}
+
 TEST(BadInput, CorruptAndTruncatedOctomap) {
   TempDir d;
   octomap::OcTree tree(0.1);
@@ -500,6 +528,16 @@ TEST(BadInput, CorruptAndTruncatedOctomap) {
   auto b = loadOctomap(d.file("garbage.bt"));
   ASSERT_FALSE(b);
   expectErrorMentions(b.message(), {"garbage.bt", "OctoMap"});
+  // A valid header and then bytes that make every child a node with children: OctoMap's reader recursed
+  // once per two bytes, and 200,000 of them overflowed the stack (a segfault). The good file still loads.
+  const std::string header = bytes.substr(0, bytes.find("\ndata\n") + 6);
+  writeText(d.file("deep.bt"), header + std::string(200000, '\xff'));
+  auto c = loadOctomap(d.file("deep.bt"));
+  ASSERT_FALSE(c);
+  expectErrorMentions(c.message(), {"deep.bt", "deeper than 16 levels"});
+  auto ok = loadOctomap(d.file("ok.bt"));
+  ASSERT_TRUE(ok) << ok.message();
+  EXPECT_EQ(ok->size(), 20u);
 }
 
 TEST(BadInput, SceneYamlMissingOrWronglyTypedKeys) {

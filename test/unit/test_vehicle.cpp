@@ -198,6 +198,8 @@ TEST(Config, InvalidValuesNameTheKey) {
   p = QuadrotorParams();
   p.dynamics_rate = 100;
   EXPECT_NE(p.validate().message().find("dynamics_rate"), std::string::npos);
+  p.dynamics_rate = 1e15;  // one simulated step never ended
+  EXPECT_NE(p.validate().message().find("dynamics_rate"), std::string::npos);
   So3ControllerConfig c;
   c.kv.y() = -1;
   EXPECT_NE(c.validate().message().find("kv"), std::string::npos);
