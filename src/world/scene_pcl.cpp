@@ -5,6 +5,8 @@
 #include <pcl/point_types.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -19,16 +21,23 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// The least number of bytes a point cloud's data needs by its own header, against the file's size: PCL
-// allocates what a header declares before it reads a byte (a 154-byte ASCII PCD declaring 3e8 points took
-// 3.6 GB and 20 s; COUNT 1e9 asked for 12 GB). ASCII values take at least two characters (a digit and a
-// separator), binary ones their SIZE (PLY: at least one byte), and LZF expands data at most about 100-fold.
-// Returns "" when the header's count fits, and for files this parser does not recognise (PCL judges those).
-std::string declaredSizeProblem(const std::string& path, const std::string& kind) {
+// What a point cloud's header declares, read without PCL (which allocates what a header declares before
+// it reads a byte). `data` is empty for a header this parser does not recognise (PCL judges those).
+struct CloudHeader {
+  double points = 0.0;     ///< declared points (PLY: vertices)
+  double per_point = 0.0;  ///< binary bytes per point (PLY: a lower bound, a byte per property)
+  double values = 0.0;     ///< values per point
+  double room = 0.0;       ///< bytes after the header
+  std::streamoff data_start = -1;  ///< where the data begins (-1: unknown)
+  std::string data;        ///< PCD: ascii, binary, binary_compressed; PLY: ascii, binary_*
+};
+
+CloudHeader readCloudHeader(const std::string& path, const std::string& kind) {
+  CloudHeader h;
   std::ifstream in(path, std::ios::binary);
   const double file_size = static_cast<double>(fs::file_size(path));
-  std::string line, data;
-  double points = 0.0, width = 0.0, height = 1.0, per_point = 0.0, values = 0.0;
+  std::string line;
+  double width = 0.0, height = 1.0;
   std::vector<double> sizes, counts;
   bool in_vertex = false;
   auto numbers = [](std::istringstream& s) {
@@ -47,44 +56,85 @@ std::string declaredSizeProblem(const std::string& path, const std::string& kind
       else if (key == "COUNT") counts = numbers(words);
       else if (key == "WIDTH") words >> width;
       else if (key == "HEIGHT") words >> height;
-      else if (key == "POINTS") words >> points;
+      else if (key == "POINTS") words >> h.points;
       else if (key == "DATA") {
-        words >> data;
+        words >> h.data;
         break;
       }
     } else {
-      if (key == "format") words >> data;
+      if (key == "format") words >> h.data;
       else if (key == "element") {
         std::string name;
         double n = 0.0;
         words >> name >> n;
         in_vertex = name == "vertex";
-        if (in_vertex) points = n;
+        if (in_vertex) h.points = n;
       } else if (key == "property" && in_vertex) {
-        values += 1.0;
-        per_point += 1.0;  // every binary type takes a byte at least
+        h.values += 1.0;
+        h.per_point += 1.0;
       } else if (key == "end_header") break;
     }
   }
   if (kind == "PCD") {
-    points = std::max(points, width * height);
+    h.points = std::max(h.points, width * height);
     for (std::size_t f = 0; f < sizes.size(); ++f) {
       const double count = f < counts.size() ? counts[f] : 1.0;
-      per_point += sizes[f] * count;
-      values += count;
+      h.per_point += sizes[f] * count;
+      h.values += count;
     }
   }
-  if (data.empty() || !(points > 0.0)) return "";
   const double header_end = in ? static_cast<double>(in.tellg()) : file_size;
-  const double room = std::max(0.0, file_size - header_end);
+  h.room = std::max(0.0, file_size - header_end);
+  h.data_start = in ? static_cast<std::streamoff>(in.tellg()) : -1;
+  return h;
+}
+
+// An ASCII PCD's rows, each with the header's number of values, each a whole number. PCL's reader takes
+// rows with too few or too many values and words that are no numbers without a word (a file declaring 4
+// points with "2 2", "3 3 3 3" and "foo bar baz" rows loaded as if whole). "" when every row is right.
+std::string asciiRowsProblem(const std::string& path, const CloudHeader& h) {
+  if (h.data != "ascii" || h.data_start < 0) return "";
+  std::ifstream in(path, std::ios::binary);
+  in.seekg(h.data_start);
+  std::string line, word;
+  std::size_t row = 0;
+  while (std::getline(in, line)) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.find_first_not_of(" \t") == std::string::npos) continue;
+    std::istringstream words(line);
+    double n = 0.0;
+    while (words >> word) {
+      char* end = nullptr;
+      std::strtod(word.c_str(), &end);
+      if (end != word.c_str() + word.size())
+        return path + ": corrupt PCD file (row " + std::to_string(row + 1) + " has '" + word + "', not a number)";
+      n += 1.0;
+    }
+    if (n != h.values)
+      return path + ": corrupt PCD file (row " + std::to_string(row + 1) + " has " + std::to_string(std::llround(n)) +
+             " values, the header " + std::to_string(std::llround(h.values)) + ")";
+    ++row;
+  }
+  if (static_cast<double>(row) != h.points)
+    return path + ": corrupt PCD file (its header declares " + std::to_string(std::llround(h.points)) + " points, it has " +
+           std::to_string(row) + " rows)";
+  return "";
+}
+
+// The least number of bytes the data needs by its header, against the file's size: a 154-byte ASCII PCD
+// declaring 3e8 points took 3.6 GB and 20 s in PCL; COUNT 1e9 asked for 12 GB. ASCII values take at least
+// two characters (a digit and a separator), binary ones their SIZE (PLY: a byte at least), and LZF expands
+// data at most about 100-fold. "" when the declared count fits.
+std::string declaredSizeProblem(const std::string& path, const std::string& kind, const CloudHeader& h) {
+  if (h.data.empty() || !(h.points > 0.0)) return "";
   double least = 0.0;
-  if (data == "ascii") least = points * 2.0 * values;
-  else if (data == "binary_compressed") least = points * per_point / 100.0;
-  else least = points * per_point;
-  if (least <= room) return "";
+  if (h.data == "ascii") least = h.points * 2.0 * h.values;
+  else if (h.data == "binary_compressed") least = h.points * h.per_point / 100.0;
+  else least = h.points * h.per_point;
+  if (least <= h.room) return "";
   std::ostringstream why;
-  why << path << ": corrupt or truncated " << kind << " file (its header declares " << points
-      << " points, which need at least " << least << " bytes of data, but the file holds " << room << ")";
+  why << path << ": corrupt or truncated " << kind << " file (its header declares " << h.points
+      << " points, which need at least " << least << " bytes of data, but the file holds " << h.room << ")";
   return why.str();
 }
 
@@ -137,6 +187,7 @@ common::Result<std::vector<Vec3>> loadPointCloud(const std::string& path) {
   // PCL prints its own diagnostics; we return one message instead.
   pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
   pcl::PCLPointCloud2 blob;
+  CloudHeader header;
   int rc = -1;
   std::string kind;
   try {
@@ -145,13 +196,16 @@ common::Result<std::vector<Vec3>> loadPointCloud(const std::string& path) {
       pcl::PCDReader reader;
       // PCL's binary reader maps the file and trusts the header (a truncated file
       // crashes it), so check the header against the file size first.
-      if (const std::string e = declaredSizeProblem(path, kind); !e.empty()) return R::Error(e);
+      header = readCloudHeader(path, kind);
+      if (const std::string e = declaredSizeProblem(path, kind, header); !e.empty()) return R::Error(e);
+      if (const std::string e = asciiRowsProblem(path, header); !e.empty()) return R::Error(e);
       if (auto st = checkPcdSize(reader, path); !st) return st;
       rc = reader.read(path, blob);
     } else if (ext == ".ply") {
       kind = "PLY";
       pcl::PLYReader reader;
-      if (const std::string e = declaredSizeProblem(path, kind); !e.empty()) return R::Error(e);
+      header = readCloudHeader(path, kind);
+      if (const std::string e = declaredSizeProblem(path, kind, header); !e.empty()) return R::Error(e);
       rc = reader.read(path, blob);
     } else {
       return R::Error(path + ": unknown point cloud extension '" + ext + "' (expected .pcd or .ply)");
@@ -171,6 +225,7 @@ common::Result<std::vector<Vec3>> loadPointCloud(const std::string& path) {
   if (blob.data.size() < declared * blob.point_step)
     return R::Error(path + ": truncated " + kind + " file (header declares " + std::to_string(declared) +
                     " points, data holds fewer)");
+
   pcl::PointCloud<pcl::PointXYZ> cloud;
   try {
     pcl::fromPCLPointCloud2(blob, cloud);

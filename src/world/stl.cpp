@@ -2,6 +2,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 
 #include "go_feap/world/scene_files.h"
 
@@ -41,8 +42,15 @@ R parseAscii(const std::string& path, const std::string& text) {
         return R::Error(path + ": truncated ASCII STL (vertex " + std::to_string(mesh.vertices.size()) +
                         " has fewer than 3 coordinates)");
       Vec3 p;
+      // Whole words only: std::stod alone read "2abc" as 2.
+      auto whole = [](const std::string& s) {
+        std::size_t used = 0;
+        const double v = std::stod(s, &used);
+        if (used != s.size()) throw std::invalid_argument(s);
+        return v;
+      };
       try {
-        p = Vec3(std::stod(xs), std::stod(ys), std::stod(zs));
+        p = Vec3(whole(xs), whole(ys), whole(zs));
       } catch (const std::exception&) {
         return R::Error(path + ": corrupt ASCII STL (vertex " + std::to_string(mesh.vertices.size()) +
                         " has a non-numeric coordinate)");

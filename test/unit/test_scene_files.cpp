@@ -430,6 +430,12 @@ TEST(BadInput, TruncatedAndCorruptStl) {
   auto e = loadStl(d.file("abad.stl"));
   ASSERT_FALSE(e);
   expectErrorMentions(e.message(), {"abad.stl", "non-numeric"});
+  std::string junk = ascii;  // a number with junk after it: std::stod read "0abc" as 0
+  junk.replace(junk.find("vertex 0 0 0") + 7, 1, "0abc");
+  writeText(d.file("ajunk.stl"), junk);
+  auto j = loadStl(d.file("ajunk.stl"));
+  ASSERT_FALSE(j);
+  expectErrorMentions(j.message(), {"ajunk.stl", "non-numeric"});
   auto tri = cubeTriangles(0, 1);
   tri[4].y() = std::numeric_limits<double>::quiet_NaN();
   writeBinaryStl(d.file("nan.stl"), tri);
@@ -508,6 +514,22 @@ TEST(BadInput, CloudHeadersDeclaringMorePointsThanTheFileHolds) {
     ASSERT_TRUE(r) << f << ": " << r.message();
     EXPECT_EQ(r->size(), 1u);
   }
+  // Rows with too few or too many values, or words that are no numbers: PCL loaded them without a word.
+  writeText(d.file("rows.pcd"), pcd_head + "SIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 4\nHEIGHT 1\n"
+                                           "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 4\nDATA ascii\n1 1 1\n2 2\n3 3 3 3\n4 4 4\n");
+  auto rows = loadPointCloud(d.file("rows.pcd"));
+  ASSERT_FALSE(rows) << (rows ? rows->size() : 0) << " points";
+  expectErrorMentions(rows.message(), {"rows.pcd", "row 2 has 2 values, the header 3"});
+  writeText(d.file("words.pcd"), pcd_head + "SIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2\nHEIGHT 1\n"
+                                            "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA ascii\n1 1 1\nfoo bar baz\n");
+  auto words = loadPointCloud(d.file("words.pcd"));
+  ASSERT_FALSE(words);
+  expectErrorMentions(words.message(), {"words.pcd", "row 2 has 'foo', not a number"});
+  writeText(d.file("short.pcd"), pcd_head + "SIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 3\nHEIGHT 1\n"
+                                            "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 3\nDATA ascii\n1.00 1.00 1.00\n2.00 2.00 2.00\n");
+  auto few = loadPointCloud(d.file("short.pcd"));
+  ASSERT_FALSE(few);
+  expectErrorMentions(few.message(), {"short.pcd", "declares 3 points, it has 2 rows"});
 }
 
 TEST(BadInput, CorruptAndTruncatedOctomap) {
