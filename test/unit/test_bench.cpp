@@ -2,11 +2,16 @@
 // explores it to FINISHED(complete) with at least 95 % coverage and no collision, and the same
 // seed and options give the same run.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <atomic>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "go_feap/bench/exploration_run.h"
 #include "go_feap/world/scene_files.h"
@@ -135,6 +140,38 @@ TEST(Bench, ModeOverlaysSetThePlannersDistanceSearchNotTheFlightSearch) {
   EXPECT_EQ(probe->flight_astar.name, "astar");
   EXPECT_EQ(probe->scout_astar.name, "scout_astar");
   EXPECT_EQ(probe->coarse_astar.name, "coarse_astar");
+}
+
+// Runs `command` through the shell: its exit status and what it wrote (stdout and stderr).
+std::pair<int, std::string> runCommand(const std::string& command) {
+  std::string out;
+  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
+  if (!pipe) return {-1, "popen failed"};
+  char buffer[4096];
+  while (std::fgets(buffer, sizeof(buffer), pipe)) out += buffer;
+  const int status = pclose(pipe);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status), out};
+}
+
+// Command-line values the tools refuse up front, naming the argument: 1e12 jobs or runs aborted the
+// bench with bad_alloc, a file in --out's place aborted it after every run had been flown, and a
+// --skip-pixel of 2^32 wrapped to 0 in go_feap_map_perf (a loop for ever).
+TEST(Bench, CommandLineValuesOutOfRangeAreRefusedUpFront) {
+  const std::string bench = GO_FEAP_BENCH_BIN, map_perf = GO_FEAP_MAP_PERF_BIN;
+  const std::filesystem::path file = std::filesystem::temp_directory_path() / ("go_feap_not_a_folder_" + std::to_string(getpid()));
+  std::ofstream(file) << "a file\n";
+  for (const auto& [command, says] : std::vector<std::pair<std::string, std::string>>{
+           {bench + " --jobs 1000000000000", "--jobs must be an integer from 1 to 256"},
+           {bench + " --runs 1000000000000", "--runs must be an integer from 1 to 100000"},
+           {bench + " --max-sim-time 2 --out " + file.string(), "--out " + file.string() + ": cannot make it a folder"},
+           {map_perf + " --scene maze --skip-pixel 4294967296", "--skip-pixel must be an integer from 1 to 640"},
+           {map_perf + " --scene maze --frames 4294967296", "--frames must be an integer from 1 to 1000000"}}) {
+    const auto [rc, out] = runCommand("timeout 60 " + command);
+    EXPECT_TRUE(rc == 1 || rc == 2) << command << ": exit status " << rc << "\n" << out;
+    EXPECT_NE(out.find(says), std::string::npos) << command << ":\n" << out;
+  }
+  EXPECT_TRUE(std::filesystem::is_regular_file(file));  // left as it was
+  std::filesystem::remove(file);
 }
 
 TEST(Bench, ConfigErrorsNameTheModeOrKey) {
