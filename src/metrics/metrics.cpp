@@ -125,7 +125,7 @@ nlohmann::json toJson(const Summary& s) {
   double total = 0.0;
   for (const auto& [name, b] : s.compute) {
     compute[name] = {{"mean", b.mean()}, {"max", b.max_ms}, {"count", b.count}};
-    if (name == "frontier" || name == "global" || name == "local" || name == "trajectory") total += b.mean();
+    if (isPlanningBlock(name)) total += b.mean();
   }
   compute["total"] = {{"mean", total}};
   j["compute_ms"] = compute;
@@ -137,6 +137,11 @@ nlohmann::json toJson(const Summary& s) {
 
 // Strings that are not UTF-8 (a finish reason from outside the chain) are written with U+FFFD in place of
 // their bad bytes: nlohmann would throw, and the run would end without its summary.
+bool isPlanningBlock(const std::string& block) {
+  return block == "frontier" || block == "global" || block == "local" || block == "trajectory";
+}
+bool isComputeBlock(const std::string& block) { return block == "mapping" || isPlanningBlock(block); }
+
 std::string summaryJson(const Summary& summary) {
   return toJson(summary).dump(2, ' ', false, nlohmann::json::error_handler_t::replace);
 }

@@ -24,10 +24,6 @@ Stats stats(const std::vector<double>& values) {
   return s;
 }
 
-namespace {
-const char* const kPlanningBlocks[] = {"frontier", "global", "local", "trajectory"};
-}
-
 std::vector<TableRow> aggregate(const std::vector<Summary>& runs) {
   std::vector<std::pair<std::string, std::string>> keys;
   for (const Summary& s : runs)
@@ -61,8 +57,7 @@ std::vector<TableRow> aggregate(const std::vector<Summary>& runs) {
       // A run that never ran a block counts as 0 ms for it.
       const double mean = std::accumulate(values.begin(), values.end(), 0.0) / row.runs;
       row.compute_ms[name] = mean;
-      if (std::find(std::begin(kPlanningBlocks), std::end(kPlanningBlocks), name) != std::end(kPlanningBlocks))
-        total += mean;
+      if (isPlanningBlock(name)) total += mean;
     }
     row.compute_ms["total"] = total;
     rows.push_back(std::move(row));

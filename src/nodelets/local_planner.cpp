@@ -89,17 +89,17 @@ class LocalPlanner : public nodelet::Nodelet {
     astar_ = std::make_unique<planning::Astar>(shared_->map->occupancy(), shared_->map->esdf(), astar_config_);
   }
   void onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
-    std::string bad = ros_conv::odometryPoseProblem(msg->pose.pose);
-    const auto& p = msg->pose.pose.position;
-    const auto& q = msg->pose.pose.orientation;
     // The velocity prices every leg from the vehicle: one not finite (it used to be taken as rest) or
     // faster than local/max_input_speed refuses the message whole.
-    const common::Vec3 v_world = bad.empty() ? ros_conv::worldVelocity(q, msg->twist.twist.linear) : common::Vec3::Zero();
-    if (bad.empty()) bad = ros_conv::velocityProblem(v_world, max_input_speed_, speed_limit_name_);
+    common::Vec3 v_world;
+    const std::string bad =
+        ros_conv::odometryProblem(msg->pose.pose, msg->twist.twist.linear, max_input_speed_, speed_limit_name_, v_world);
     if (!bad.empty()) {
       NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": odometry refused: " << bad);
       return;
     }
+    const auto& p = msg->pose.pose.position;
+    const auto& q = msg->pose.pose.orientation;
     std::lock_guard<std::mutex> lock(mutex_);
     position_ = common::Vec3(p.x, p.y, p.z);
     yaw_ = ros_conv::yawOf(q);

@@ -17,7 +17,6 @@
 
 #include <iomanip>
 #include <mutex>
-#include <set>
 #include <optional>
 #include <sstream>
 
@@ -117,8 +116,7 @@ class MetricsRecorder : public nodelet::Nodelet {
   void onCompute(const ComputeTime::ConstPtr& msg) {
     // The chain's blocks only: another name (from a tool, or bytes that are not text) would be a key of
     // summary.json of its own, and "total" would clash with the sum.
-    static const std::set<std::string> kBlocks{"mapping", "frontier", "global", "local", "trajectory"};
-    if (!kBlocks.count(msg->block) || !std::isfinite(msg->ms) || msg->ms < 0.0) {
+    if (!metrics::isComputeBlock(msg->block) || !std::isfinite(msg->ms) || msg->ms < 0.0) {
       NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": compute_time refused: block '" << msg->block << "' ("
                                                   << msg->block.size() << " bytes), " << msg->ms
                                                   << " ms; blocks are mapping, frontier, global, local and trajectory, "

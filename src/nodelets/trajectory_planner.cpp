@@ -91,17 +91,17 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     coarse_ = std::make_unique<planning::Astar>(shared_->map->occupancy(), shared_->map->esdf(), coarse_config_);
   }
   void onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
-    std::string bad = ros_conv::odometryPoseProblem(msg->pose.pose);
-    const auto& p = msg->pose.pose.position;
-    const auto& q = msg->pose.pose.orientation;
     // The velocity is the start of every plan from the odometry: one not finite (it used to be taken as
     // rest) or faster than planner/max_input_speed refuses the message whole.
-    const common::Vec3 v = bad.empty() ? ros_conv::worldVelocity(q, msg->twist.twist.linear) : common::Vec3::Zero();
-    if (bad.empty()) bad = ros_conv::velocityProblem(v, max_input_speed_, speed_limit_name_);
+    common::Vec3 v;
+    const std::string bad =
+        ros_conv::odometryProblem(msg->pose.pose, msg->twist.twist.linear, max_input_speed_, speed_limit_name_, v);
     if (!bad.empty()) {
       NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": odometry refused: " << bad);
       return;
     }
+    const auto& p = msg->pose.pose.position;
+    const auto& q = msg->pose.pose.orientation;
     std::lock_guard<std::mutex> lock(mutex_);
     odom_position_ = common::Vec3(p.x, p.y, p.z);
     odom_time_ = ros::Time::now();

@@ -1,8 +1,6 @@
 #include "go_feap/ros/bspline_conversion.h"
 
-#include <algorithm>
 #include <cmath>
-#include <limits>
 #include <sstream>
 
 namespace go_feap::ros_traj {
@@ -60,23 +58,20 @@ std::string motionProblem(const Trajectory& trajectory, double max_speed, double
   const Eigen::MatrixXd& q = s.controlPoints();
   const double dt = s.knotSpan();
   // Velocity points (q_i+1 - q_i) / dt, acceleration points their differences over dt. Values that overflow
-  // (1e308 m control points) come out inf or NaN, and fail the comparisons below: refused too.
-  double speed = 0.0, acceleration = 0.0;
-  for (Eigen::Index i = 0; i + 1 < q.cols(); ++i) {
-    const double v = ((q.col(i + 1) - q.col(i)) / dt).stableNorm();
-    speed = std::isnan(v) || std::isnan(speed) ? std::numeric_limits<double>::quiet_NaN() : std::max(speed, v);
-  }
-  for (Eigen::Index i = 0; i + 2 < q.cols(); ++i) {
-    const double a = ((q.col(i + 2) - 2.0 * q.col(i + 1) + q.col(i)) / (dt * dt)).stableNorm();
-    acceleration = std::isnan(a) || std::isnan(acceleration) ? std::numeric_limits<double>::quiet_NaN()
-                                                             : std::max(acceleration, a);
-  }
+  // (1e308 m control points) come out inf or NaN and fail the comparisons: refused too.
   std::ostringstream why;
-  if (s.degree() >= 1 && !(speed <= max_speed))
-    why << "its control polygon reaches " << speed << " m/s, above " << max_speed << " m/s";
-  else if (s.degree() >= 2 && !(acceleration <= max_acceleration))
-    why << "its control polygon reaches " << acceleration << " m/s^2, above " << max_acceleration << " m/s^2";
-  return why.str();
+  for (Eigen::Index i = 0; i + 1 < q.cols(); ++i)
+    if (const double v = ((q.col(i + 1) - q.col(i)) / dt).stableNorm(); !(v <= max_speed)) {
+      why << "its control polygon reaches " << v << " m/s, above " << max_speed << " m/s";
+      return why.str();
+    }
+  for (Eigen::Index i = 0; s.degree() >= 2 && i + 2 < q.cols(); ++i)
+    if (const double a = ((q.col(i + 2) - 2.0 * q.col(i + 1) + q.col(i)) / (dt * dt)).stableNorm();
+        !(a <= max_acceleration)) {
+      why << "its control polygon reaches " << a << " m/s^2, above " << max_acceleration << " m/s^2";
+      return why.str();
+    }
+  return "";
 }
 
 }  // namespace go_feap::ros_traj

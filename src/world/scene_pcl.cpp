@@ -30,6 +30,7 @@ struct CloudHeader {
   double room = 0.0;       ///< bytes after the header
   std::streamoff data_start = -1;  ///< where the data begins (-1: unknown)
   std::string data;        ///< PCD: ascii, binary, binary_compressed; PLY: ascii, binary_*
+  bool fields = false;     ///< PCD: a FIELDS line came before DATA
 };
 
 CloudHeader readCloudHeader(const std::string& path, const std::string& kind) {
@@ -52,7 +53,8 @@ CloudHeader readCloudHeader(const std::string& path, const std::string& kind) {
     std::string key;
     words >> key;
     if (kind == "PCD") {
-      if (key == "SIZE") sizes = numbers(words);
+      if (key == "FIELDS") h.fields = true;
+      else if (key == "SIZE") sizes = numbers(words);
       else if (key == "COUNT") counts = numbers(words);
       else if (key == "WIDTH") words >> width;
       else if (key == "HEIGHT") words >> height;
@@ -144,27 +146,12 @@ common::Status checkPcdSize(pcl::PCDReader& reader, const std::string& path) {
   Eigen::Quaternionf orientation;
   int version = 0, data_type = 0;
   unsigned int data_idx = 0;
-  // PCL's header parser accepts text that is no PCD header at all; require the keywords.
-  {
-    std::ifstream in(path);
-    std::string line;
-    bool fields = false, data = false;
-    for (int i = 0; i < 64 && std::getline(in, line) && !data; ++i) {
-      fields |= line.rfind("FIELDS ", 0) == 0;
-      data |= line.rfind("DATA ", 0) == 0;
-    }
-    if (!fields || !data) return common::Status::Error(path + ": corrupt PCD file (no FIELDS/DATA header)");
-  }
   if (reader.readHeader(path, header, origin, orientation, version, data_type, data_idx) < 0 ||
       header.fields.empty() || header.point_step == 0)
     return common::Status::Error(path + ": corrupt PCD file (unreadable header)");
+  // Binary data shorter than declared is refused before (declaredSizeProblem()).
   const std::uintmax_t size = fs::file_size(path);
   const std::uintmax_t points = static_cast<std::uintmax_t>(header.width) * header.height;
-  if (data_type == 1 && size < data_idx + points * header.point_step) {
-    return common::Status::Error(path + ": truncated PCD file (header declares " + std::to_string(points) +
-                                 " points, i.e. " + std::to_string(data_idx + points * header.point_step) +
-                                 " bytes, but the file has " + std::to_string(size) + ")");
-  }
   if (data_type == 2) {
     std::uint32_t sizes[2] = {0, 0};
     std::ifstream in(path, std::ios::binary);
@@ -197,6 +184,8 @@ common::Result<std::vector<Vec3>> loadPointCloud(const std::string& path) {
       // PCL's binary reader maps the file and trusts the header (a truncated file
       // crashes it), so check the header against the file size first.
       header = readCloudHeader(path, kind);
+      // PCL's header parser accepts text that is no PCD header at all; require the keywords.
+      if (!header.fields || header.data.empty()) return R::Error(path + ": corrupt PCD file (no FIELDS/DATA header)");
       if (const std::string e = declaredSizeProblem(path, kind, header); !e.empty()) return R::Error(e);
       if (const std::string e = asciiRowsProblem(path, header); !e.empty()) return R::Error(e);
       if (auto st = checkPcdSize(reader, path); !st) return st;

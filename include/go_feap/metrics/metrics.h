@@ -77,6 +77,11 @@ class CoverageTracker {
 };
 
 /// Mean and max of a block's compute times (ms).
+/// The planning blocks, whose means summed make Table IV's "total".
+bool isPlanningBlock(const std::string& block);
+/// The chain's compute blocks: "mapping" and the planning blocks (frontier, global, local, trajectory).
+bool isComputeBlock(const std::string& block);
+
 struct BlockTime {
   double total_ms = 0.0, max_ms = 0.0;
   std::size_t count = 0;

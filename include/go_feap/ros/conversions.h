@@ -89,4 +89,13 @@ inline common::Vec3 worldVelocity(const geometry_msgs::Quaternion& orientation, 
   return q.normalized() * common::Vec3(body.x, body.y, body.z);
 }
 
+/// Why odometry cannot be planned from (odometryPoseProblem(), then velocityProblem() of its velocity in the
+/// world frame, which goes to `v_world`): "" when usable.
+inline std::string odometryProblem(const geometry_msgs::Pose& pose, const geometry_msgs::Vector3& body_velocity,
+                                   double max_speed, const std::string& limit_name, common::Vec3& v_world) {
+  if (std::string bad = odometryPoseProblem(pose); !bad.empty()) return bad;
+  v_world = worldVelocity(pose.orientation, body_velocity);
+  return velocityProblem(v_world, max_speed, limit_name);
+}
+
 }  // namespace go_feap::ros_conv
