@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "go_feap/world/scene_files.h"
@@ -17,10 +18,14 @@ bool triangleOverlapsBox(const Vec3& v0, const Vec3& v1, const Vec3& v2, double 
     const double mn = std::min({v0[a], v1[a], v2[a]}), mx = std::max({v0[a], v1[a], v2[a]});
     if (mn > h || mx < -h) return false;
   }
-  // Triangle normal.
+  // Triangle normal. Skipped for a triangle so thin (sine of its angle under 1e-8) that the computed
+  // normal is mostly rounding error, which would cut away voxels the triangle crosses: the axes left are
+  // those of a segment, the shape such a triangle has.
   const Vec3 n = e[0].cross(e[1]);
-  const double r_n = h * n.cwiseAbs().sum();
-  if (std::abs(n.dot(v0)) > r_n) return false;
+  if (n.squaredNorm() > 1e-16 * e[0].squaredNorm() * e[1].squaredNorm()) {
+    const double r_n = h * n.cwiseAbs().sum();
+    if (std::abs(n.dot(v0)) > r_n) return false;
+  }
   // Cross products of box axes and triangle edges.
   for (const Vec3& edge : e) {
     for (int a = 0; a < 3; ++a) {
@@ -34,24 +39,96 @@ bool triangleOverlapsBox(const Vec3& v0, const Vec3& v1, const Vec3& v2, double 
   return true;
 }
 
+// A convex polygon of at most 7 vertices: a triangle cut by four axis-aligned planes, each of which
+// adds at most one vertex.
+struct Polygon {
+  std::array<Vec3, 8> p;
+  int n = 0;
+};
+
+// The part of `in` on the kept side of the plane x[axis] = bound (Sutherland-Hodgman, one plane).
+Polygon clip(const Polygon& in, int axis, double bound, bool keep_above) {
+  Polygon out;
+  for (int i = 0; i < in.n; ++i) {
+    const Vec3& p = in.p[i];
+    const Vec3& q = in.p[(i + 1) % in.n];
+    const double dp = keep_above ? p[axis] - bound : bound - p[axis];
+    const double dq = keep_above ? q[axis] - bound : bound - q[axis];
+    if (dp >= 0.0) out.p[out.n++] = p;
+    if ((dp >= 0.0) != (dq >= 0.0)) {
+      Vec3& x = out.p[out.n++];
+      x = p + (dp / (dp - dq)) * (q - p);
+      x[axis] = bound;  // exact: with far vertices (1e30 m) the interpolation may miss the plane by metres
+    }
+  }
+  return out;
+}
+
+// Extent of `poly` along `axis`.
+void extent(const Polygon& poly, int axis, double& lo, double& hi) {
+  lo = hi = poly.p[0][axis];
+  for (int i = 1; i < poly.n; ++i) {
+    lo = std::min(lo, poly.p[i][axis]);
+    hi = std::max(hi, poly.p[i][axis]);
+  }
+}
+
 }  // namespace
+
+bool triangleMarksVoxel(const common::GridGeometry& geo, const Index3& idx, const Vec3& a, const Vec3& b,
+                        const Vec3& c) {
+  const double res = geo.resolution();
+  // Voxels are half-open [lo, lo + res): test against a box nudged by -eps so that a
+  // triangle lying exactly on a voxel face marks the voxel on its positive side only.
+  const Vec3 centre = geo.indexToCoord(idx) - Vec3::Constant(1e-6 * res);
+  return triangleOverlapsBox(a - centre, b - centre, c - centre, 0.5 * res);
+}
 
 void voxelizeTriangle(Scene& scene, const Vec3& a, const Vec3& b, const Vec3& c) {
   const auto& geo = scene.geometry();
   const double res = geo.resolution();
-  // Voxels are half-open [lo, lo + res): test against a box nudged by -eps so that a
-  // triangle lying exactly on a voxel face marks the voxel on its positive side only.
-  const double eps = 1e-6 * res;
+  // Candidates are found column by column rather than over the triangle's whole bounding box (a long
+  // diagonal triangle's box holds far more voxels than the triangle touches): the triangle is cut to
+  // each strip along u, then to each column of that strip along v, and only the voxels of the column
+  // within the cut piece's extent along d are tested. Strips and extents are widened by `pad`, more than
+  // the -eps nudge of triangleMarksVoxel, so every voxel it would mark is tested; the test decides.
+  const double pad = 2e-6 * res;
+  const Vec3 n = (b - a).cross(c - a);
+  int d = 0;  // the normal's largest component: each column then crosses the plane over at most ~2 voxels
+  n.cwiseAbs().maxCoeff(&d);
+  const int u = (d + 1) % 3, v = (d + 2) % 3;
+  // Index of the voxel holding `x` along `axis`, clamped to the grid.
+  auto index = [&](double x, int axis) {
+    const double f = std::floor((x - geo.origin()[axis]) / res);
+    return static_cast<int>(std::clamp(f, 0.0, static_cast<double>(geo.dims()[axis] - 1)));
+  };
+  // Nothing to do for a triangle wholly outside the grid (the clamped ranges would still hold one voxel).
   const Vec3 lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
-  const Index3 i0 = geo.clampedIndex(lo - Vec3::Constant(eps)).cwiseMax(Index3::Zero());
-  const Index3 i1 = geo.clampedIndex(hi + Vec3::Constant(eps)).cwiseMin(geo.dims() - Index3::Ones());
-  for (int z = i0.z(); z <= i1.z(); ++z)
-    for (int y = i0.y(); y <= i1.y(); ++y)
-      for (int x = i0.x(); x <= i1.x(); ++x) {
-        const Index3 idx(x, y, z);
-        const Vec3 centre = geo.indexToCoord(idx) - Vec3::Constant(eps);
-        if (triangleOverlapsBox(a - centre, b - centre, c - centre, 0.5 * res)) scene.occupied.at(idx) = 1;
+  const common::Aabb bounds = geo.bounds();
+  for (int k = 0; k < 3; ++k)
+    if (!(hi[k] >= bounds.min[k] - pad && lo[k] <= bounds.max[k] + pad)) return;
+  Polygon tri;
+  tri.p[0] = a, tri.p[1] = b, tri.p[2] = c, tri.n = 3;
+  for (int iu = index(lo[u] - pad, u), iu1 = index(hi[u] + pad, u); iu <= iu1; ++iu) {
+    const double u0 = geo.origin()[u] + iu * res;
+    const Polygon strip = clip(clip(tri, u, u0 - pad, true), u, u0 + res + pad, false);
+    if (strip.n == 0) continue;
+    double v_lo, v_hi;
+    extent(strip, v, v_lo, v_hi);
+    for (int iv = index(v_lo - pad, v), iv1 = index(v_hi + pad, v); iv <= iv1; ++iv) {
+      const double v0 = geo.origin()[v] + iv * res;
+      const Polygon column = clip(clip(strip, v, v0 - pad, true), v, v0 + res + pad, false);
+      if (column.n == 0) continue;
+      double d_lo, d_hi;
+      extent(column, d, d_lo, d_hi);
+      Index3 idx;
+      idx[u] = iu, idx[v] = iv;
+      for (int id = index(d_lo - pad, d), id1 = index(d_hi + pad, d); id <= id1; ++id) {
+        idx[d] = id;
+        if (triangleMarksVoxel(geo, idx, a, b, c)) scene.occupied.at(idx) = 1;
       }
+    }
+  }
 }
 
 }  // namespace go_feap::world

@@ -8,6 +8,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <random>
 
 #include "go_feap/world/generators.h"
 #include "go_feap/world/scene_files.h"
@@ -206,6 +207,69 @@ TEST(Stl, FaceOnAVoxelBoundaryMarksOneLayer) {
   ASSERT_TRUE(s) << s.message();
   EXPECT_TRUE(s->isOccupied(Vec3(0.45, 0.45, 0.55)));
   EXPECT_FALSE(s->isOccupied(Vec3(0.45, 0.45, 0.45)));
+}
+
+// The column-by-column voxeliser marks exactly the voxels an exhaustive test of every grid voxel marks,
+// for triangles of every kind: random, slivers, long and diagonal, degenerate (a segment, a point), on
+// voxel faces, partly or wholly outside the grid. And no point of a triangle lies in an unmarked voxel.
+TEST(Stl, ColumnVoxeliserMarksWhatAnExhaustiveTestMarks) {
+  const Scene empty = makeEmptyScene("t", {Vec3(-0.73, -0.41, 0.17), Vec3(1.31, 1.12, 1.93)}, 0.1, 0.2);
+  const auto& g = empty.geometry();
+  const Vec3 o = g.origin();
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> x(-1.2, 1.8), y(-0.9, 1.6), z(-0.3, 2.4), unit(0.0, 1.0);
+  std::uniform_int_distribution<int> cell(0, 20);
+  auto random = [&] { return Vec3(x(rng), y(rng), z(rng)); };
+  auto onBoundary = [&]() -> Vec3 { return o + 0.1 * Vec3(cell(rng), cell(rng), cell(rng)); };
+  std::vector<std::array<Vec3, 3>> tris;
+  for (int i = 0; i < 300; ++i) tris.push_back({random(), random(), random()});
+  for (int i = 0; i < 60; ++i) {  // slivers: two vertices within 1 mm
+    const Vec3 p = random(), q = random();
+    tris.push_back({p, q, p + 1e-3 * Vec3(unit(rng), unit(rng), unit(rng))});
+  }
+  for (int i = 0; i < 60; ++i) tris.push_back({onBoundary(), onBoundary(), onBoundary()});
+  for (int i = 0; i < 30; ++i) {  // in a voxel-boundary plane of each axis
+    std::array<Vec3, 3> t{onBoundary(), onBoundary(), onBoundary()};
+    for (auto& p : t) p[i % 3] = t[0][i % 3];
+    tris.push_back(t);
+  }
+  for (int i = 0; i < 30; ++i) {  // degenerate: a segment, then a point
+    const Vec3 p = random(), q = random();
+    tris.push_back({p, q, p + 0.3 * (q - p)});
+    tris.push_back({p, p, p});
+  }
+  tris.push_back({Vec3(-0.7, -0.4, 0.2), Vec3(1.3, 1.1, 1.9), Vec3(1.29, 1.1, 1.9)});  // corner to corner
+  tris.push_back({Vec3(5, 5, 5), Vec3(6, 5, 5), Vec3(5, 6, 5)});                          // outside
+  tris.push_back({Vec3(-1e30, 0.5, 1.0), Vec3(1e30, 0.5, 1.0), Vec3(0.0, 0.6, 1.2)});     // far outside
+  std::size_t marked_total = 0;
+  for (std::size_t t = 0; t < tris.size(); ++t) {
+    const auto& [a, b, c] = tris[t];
+    Scene fast = empty;
+    voxelizeTriangle(fast, a, b, c);
+    std::size_t marked = 0;
+    for (int k = 0; k < g.dims().z(); ++k)
+      for (int j = 0; j < g.dims().y(); ++j)
+        for (int i = 0; i < g.dims().x(); ++i) {
+          const Index3 idx(i, j, k);
+          const bool want = triangleMarksVoxel(g, idx, a, b, c);
+          marked += want;
+          ASSERT_EQ(fast.occupied.at(idx) != 0, want)
+              << "triangle " << t << " (" << a.transpose() << " | " << b.transpose() << " | " << c.transpose()
+              << ") voxel " << idx.transpose();
+        }
+    marked_total += marked;
+    // Points of the triangle strictly inside a voxel mark it.
+    for (int s = 0; s < 200; ++s) {
+      double r1 = unit(rng), r2 = unit(rng);
+      if (r1 + r2 > 1.0) r1 = 1.0 - r1, r2 = 1.0 - r2;
+      const Vec3 p = a + r1 * (b - a) + r2 * (c - a);
+      const Index3 idx = g.coordToIndex(p);
+      const Vec3 f = (p - g.indexToCoord(idx)) / 0.1;
+      if (!g.inside(idx) || f.cwiseAbs().maxCoeff() > 0.499) continue;
+      ASSERT_TRUE(fast.occupied.at(idx)) << "triangle " << t << " point " << p.transpose();
+    }
+  }
+  EXPECT_GT(marked_total, 20000u);  // the triangles are not all outside
 }
 
 TEST(Octomap, LoadsOccupiedLeavesIncludingPrunedOnes) {

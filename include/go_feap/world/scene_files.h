@@ -57,7 +57,14 @@ common::Result<Scene> loadSceneFile(const SceneFileSpec& spec);
 /// parseSceneYaml + loadSceneFile.
 common::Result<Scene> loadSceneYaml(const std::string& yaml_path);
 
-/// Marks every voxel of `scene` that triangle (a, b, c) overlaps (world frame).
+/// Whether triangle (a, b, c) marks voxel `idx` of `geo`: it overlaps the voxel's half-open cube
+/// [lo, lo + res) (a face lying exactly on a voxel boundary marks the voxel on its positive side only).
+bool triangleMarksVoxel(const common::GridGeometry& geo, const Index3& idx, const Vec3& a, const Vec3& b,
+                        const Vec3& c);
+
+/// Marks every voxel of `scene` that triangle (a, b, c) marks (world frame), testing only the voxels
+/// of the grid columns the triangle crosses: the cost grows with the triangle's area, not with the
+/// volume of its bounding box.
 void voxelizeTriangle(Scene& scene, const Vec3& a, const Vec3& b, const Vec3& c);
 
 /// Writes the occupied voxel centres as a binary PCD (world frame).
