@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -21,17 +22,40 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// One element of a PLY header (vertex, face, camera ...), in the order the data holds them.
+struct PlyElement {
+  std::string name;
+  double count = 0.0;
+  double bytes = 0.0;      ///< binary bytes of an instance: its scalars and each list's length field
+  double values = 0.0;     ///< properties
+  bool list = false;       ///< a list property: instances vary in length
+  bool known = true;       ///< every property type is one PLY defines
+};
+
 // What a point cloud's header declares, read without PCL (which allocates what a header declares before
 // it reads a byte). `data` is empty for a header this parser does not recognise (PCL judges those).
 struct CloudHeader {
   double points = 0.0;     ///< declared points (PLY: vertices)
-  double per_point = 0.0;  ///< binary bytes per point (PLY: a lower bound, a byte per property)
+  double per_point = 0.0;  ///< binary bytes per point (PLY: of a vertex, list contents not counted)
   double values = 0.0;     ///< values per point
   double room = 0.0;       ///< bytes after the header
   std::streamoff data_start = -1;  ///< where the data begins (-1: unknown)
   std::string data;        ///< PCD: ascii, binary, binary_compressed; PLY: ascii, binary_*
   bool fields = false;     ///< PCD: a FIELDS line came before DATA
+  std::vector<PlyElement> elements;  ///< PLY
 };
+
+// Bytes of a PLY scalar type, 0 for a name PLY does not define.
+double plyTypeBytes(const std::string& type) {
+  for (const char* t : {"char", "uchar", "int8", "uint8"})
+    if (type == t) return 1.0;
+  for (const char* t : {"short", "ushort", "int16", "uint16"})
+    if (type == t) return 2.0;
+  for (const char* t : {"int", "uint", "float", "int32", "uint32", "float32"})
+    if (type == t) return 4.0;
+  if (type == "double" || type == "float64") return 8.0;
+  return 0.0;
+}
 
 CloudHeader readCloudHeader(const std::string& path, const std::string& kind) {
   CloudHeader h;
@@ -40,7 +64,6 @@ CloudHeader readCloudHeader(const std::string& path, const std::string& kind) {
   std::string line;
   double width = 0.0, height = 1.0;
   std::vector<double> sizes, counts;
-  bool in_vertex = false;
   auto numbers = [](std::istringstream& s) {
     std::vector<double> out;
     double v = 0.0;
@@ -66,17 +89,27 @@ CloudHeader readCloudHeader(const std::string& path, const std::string& kind) {
     } else {
       if (key == "format") words >> h.data;
       else if (key == "element") {
-        std::string name;
-        double n = 0.0;
-        words >> name >> n;
-        in_vertex = name == "vertex";
-        if (in_vertex) h.points = n;
-      } else if (key == "property" && in_vertex) {
-        h.values += 1.0;
-        h.per_point += 1.0;
+        PlyElement e;
+        words >> e.name >> e.count;
+        h.elements.push_back(e);
+      } else if (key == "property" && !h.elements.empty()) {
+        PlyElement& e = h.elements.back();
+        std::string type, length_type;
+        words >> type;
+        if (type == "list") {
+          words >> length_type;
+          e.list = true;
+          type = length_type;
+        }
+        const double bytes = plyTypeBytes(type);
+        e.known = e.known && bytes > 0.0;
+        e.bytes += bytes;
+        e.values += 1.0;
       } else if (key == "end_header") break;
     }
   }
+  for (const PlyElement& e : h.elements)
+    if (e.name == "vertex") h.points = e.count, h.values = e.values, h.per_point = e.bytes;
   if (kind == "PCD") {
     h.points = std::max(h.points, width * height);
     for (std::size_t f = 0; f < sizes.size(); ++f) {
@@ -91,35 +124,96 @@ CloudHeader readCloudHeader(const std::string& path, const std::string& kind) {
   return h;
 }
 
-// An ASCII PCD's rows, each with the header's number of values, each a whole number. PCL's reader takes
-// rows with too few or too many values and words that are no numbers without a word (a file declaring 4
-// points with "2 2", "3 3 3 3" and "foo bar baz" rows loaded as if whole). "" when every row is right.
-std::string asciiRowsProblem(const std::string& path, const CloudHeader& h) {
-  if (h.data != "ascii" || h.data_start < 0) return "";
+// Walks the non-blank text rows from `start`, handing `row` each row's index, its number of words and its
+// first word that is no number ("" when all are). Stops at the first problem `row` returns, and returns
+// it; "" when every row passed, with their number in `rows`.
+std::string scanRows(const std::string& path, std::streamoff start, std::size_t& rows,
+                     const std::function<std::string(std::size_t, double, const std::string&)>& row) {
   std::ifstream in(path, std::ios::binary);
-  in.seekg(h.data_start);
+  in.seekg(start);
   std::string line, word;
-  std::size_t row = 0;
+  rows = 0;
   while (std::getline(in, line)) {
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line.find_first_not_of(" \t") == std::string::npos) continue;
     std::istringstream words(line);
     double n = 0.0;
+    std::string bad;
     while (words >> word) {
       char* end = nullptr;
       std::strtod(word.c_str(), &end);
-      if (end != word.c_str() + word.size())
-        return path + ": corrupt PCD file (row " + std::to_string(row + 1) + " has '" + word + "', not a number)";
+      if (bad.empty() && end != word.c_str() + word.size()) bad = word;
       n += 1.0;
     }
-    if (n != h.values)
-      return path + ": corrupt PCD file (row " + std::to_string(row + 1) + " has " + std::to_string(std::llround(n)) +
-             " values, the header " + std::to_string(std::llround(h.values)) + ")";
-    ++row;
+    if (std::string problem = row(rows, n, bad); !problem.empty()) return problem;
+    ++rows;
   }
-  if (static_cast<double>(row) != h.points)
+  return "";
+}
+
+// An ASCII PCD's rows, each with the header's number of values, each a whole number. PCL's reader takes
+// rows with too few or too many values and words that are no numbers without a word (a file declaring 4
+// points with "2 2", "3 3 3 3" and "foo bar baz" rows loaded as if whole). "" when every row is right.
+std::string asciiRowsProblem(const std::string& path, const CloudHeader& h) {
+  if (h.data != "ascii" || h.data_start < 0) return "";
+  const std::string corrupt = path + ": corrupt PCD file (row ";
+  std::size_t rows = 0;
+  const std::string problem = scanRows(path, h.data_start, rows, [&](std::size_t r, double n, const std::string& bad) {
+    if (!bad.empty()) return corrupt + std::to_string(r + 1) + " has '" + bad + "', not a number)";
+    if (n != h.values)
+      return corrupt + std::to_string(r + 1) + " has " + std::to_string(std::llround(n)) + " values, the header " +
+             std::to_string(std::llround(h.values)) + ")";
+    return std::string();
+  });
+  if (!problem.empty()) return problem;
+  if (static_cast<double>(rows) != h.points)
     return path + ": corrupt PCD file (its header declares " + std::to_string(std::llround(h.points)) + " points, it has " +
-           std::to_string(row) + " rows)";
+           std::to_string(rows) + " rows)";
+  return "";
+}
+
+// A PLY's data against its header. ASCII: one row per element instance, as many as declared in all (PCL
+// read the declared vertices and dropped rows beyond them without a word), and every vertex row whole
+// numbers, as many as the vertex has properties. Binary without list properties: exactly the bytes the
+// header declares (more means rows the header does not count). "" when the data matches.
+std::string plyDataProblem(const std::string& path, const CloudHeader& h) {
+  if (h.data_start < 0 || h.elements.empty()) return "";
+  double declared = 0.0, bytes = 0.0;
+  bool exact = true;
+  for (const PlyElement& e : h.elements) {
+    declared += e.count;
+    bytes += e.count * e.bytes;
+    exact = exact && e.known && !e.list;
+  }
+  if (h.data == "ascii") {
+    std::size_t rows = 0;
+    const std::string problem = scanRows(path, h.data_start, rows, [&](std::size_t r, double n, const std::string& bad) {
+      double first = 0.0;  // the element row r belongs to
+      for (const PlyElement& e : h.elements) {
+        if (static_cast<double>(r) < first + e.count) {
+          if (e.name != "vertex" || e.list) return std::string();
+          const std::string where = path + ": corrupt PLY file (vertex " + std::to_string(std::llround(r - first)) + " ";
+          if (!bad.empty()) return where + "has '" + bad + "', not a number)";
+          if (n != e.values)
+            return where + "has " + std::to_string(std::llround(n)) + " values, the header " +
+                   std::to_string(std::llround(e.values)) + ")";
+          return std::string();
+        }
+        first += e.count;
+      }
+      return std::string();
+    });
+    if (!problem.empty()) return problem;
+    if (static_cast<double>(rows) != declared)
+      return path + ": corrupt PLY file (its header declares " + std::to_string(std::llround(declared)) +
+             " rows in all, " + std::to_string(std::llround(h.points)) + " of them vertices; it has " +
+             std::to_string(rows) + ")";
+  } else if (exact && h.room > bytes) {
+    std::ostringstream why;
+    why << path << ": corrupt PLY file (" << h.room - bytes << " bytes after the " << bytes
+        << " its header declares, " << h.points << " vertices)";
+    return why.str();
+  }
   return "";
 }
 
@@ -195,6 +289,7 @@ common::Result<std::vector<Vec3>> loadPointCloud(const std::string& path) {
       pcl::PLYReader reader;
       header = readCloudHeader(path, kind);
       if (const std::string e = declaredSizeProblem(path, kind, header); !e.empty()) return R::Error(e);
+      if (const std::string e = plyDataProblem(path, header); !e.empty()) return R::Error(e);
       rc = reader.read(path, blob);
     } else {
       return R::Error(path + ": unknown point cloud extension '" + ext + "' (expected .pcd or .ply)");

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <octomap/OcTree.h>
 #include <pcl/io/pcd_io.h>
+#include <pcl/io/ply_io.h>
 #include <pcl/point_types.h>
 
 #include <cstring>
@@ -594,6 +595,47 @@ TEST(BadInput, CloudHeadersDeclaringMorePointsThanTheFileHolds) {
   auto few = loadPointCloud(d.file("short.pcd"));
   ASSERT_FALSE(few);
   expectErrorMentions(few.message(), {"short.pcd", "declares 3 points, it has 2 rows"});
+}
+
+// PLY data against its header. PCL read the declared vertices and dropped what followed without a word.
+TEST(BadInput, PlyDataThatDoesNotMatchItsHeader) {
+  TempDir d;
+  const std::string head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                           "property float z\n";
+  auto refused = [&](const std::string& name, const std::string& text, const std::vector<std::string>& words) {
+    writeText(d.file(name), text);
+    auto r = loadPointCloud(d.file(name));
+    ASSERT_FALSE(r) << name << ": " << r->size() << " points";
+    std::vector<std::string> all{name};
+    all.insert(all.end(), words.begin(), words.end());
+    expectErrorMentions(r.message(), all);
+  };
+  refused("long.ply", head + "end_header\n1 1 1\n2 2 2\n3 3 3\n4 4 4\n5 5 5\n",
+          {"declares 3 rows in all, 3 of them vertices; it has 5"});
+  refused("narrow.ply", head + "end_header\n10 10 10\n2 2\n3 3 3\n", {"vertex 1 has 2 values, the header 3"});
+  refused("word.ply", head + "end_header\n1 1 1\n2 2 2\n3 x 3\n", {"vertex 2 has 'x', not a number"});
+  // A mesh: the faces follow the vertices, one row each, and are not vertices; one face too many is refused.
+  const std::string mesh = head + "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                                  "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  writeText(d.file("mesh.ply"), mesh);
+  auto m = loadPointCloud(d.file("mesh.ply"));
+  ASSERT_TRUE(m) << m.message();
+  EXPECT_EQ(m->size(), 3u);
+  refused("faces.ply", mesh + "3 0 2 1\n", {"declares 4 rows in all, 3 of them vertices; it has 5"});
+  // PCL's own binary and ASCII PLYs load (with its camera element); binary with bytes to spare does not.
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  for (int i = 0; i < 20; ++i) cloud.push_back(pcl::PointXYZ(0.1f * i, 0.2f, -0.3f * i));
+  pcl::io::savePLYFileBinary(d.file("bin.ply"), cloud);
+  pcl::io::savePLYFileASCII(d.file("ascii.ply"), cloud);
+  for (const char* f : {"bin.ply", "ascii.ply"}) {
+    auto r = loadPointCloud(d.file(f));
+    ASSERT_TRUE(r) << f << ": " << r.message();
+    ASSERT_EQ(r->size(), cloud.size()) << f;
+    EXPECT_LT(((*r)[19] - Vec3(cloud[19].x, cloud[19].y, cloud[19].z)).norm(), 1e-5) << f;
+  }
+  std::ifstream in(d.file("bin.ply"), std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  refused("spare.ply", bytes + std::string(24, '\0'), {"24 bytes after the"});
 }
 
 TEST(BadInput, CorruptAndTruncatedOctomap) {
