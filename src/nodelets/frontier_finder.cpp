@@ -1,11 +1,13 @@
 // FrontierFinder: keeps the frontier clusters of the shared map up to date.
 // In: map_handle, map_update (from EsdfMapper, same manager), layer (LayerBounds).
 // Out: frontiers (go_feap/FrontierArray), frontier_markers (one colour per cluster, xi as text).
+// State on the parameter server: ~id_reserved, the ids reserved so far (see reserveIds()).
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
 #include <ros/ros.h>
 #include <visualization_msgs/MarkerArray.h>
 
+#include <limits>
 #include <mutex>
 
 #include "go_feap/FrontierArray.h"
@@ -34,6 +36,18 @@ class FrontierFinder : public nodelet::Nodelet {
     for (const common::Status& st : {config_.validate(), omission_.validate()})
       ros_params::requireOrThrow(st.ok(), getName(), st.message());
     ros_params::requireOrThrow(box_.valid(), getName(), "parameter 'exploration_box' needs min < max");
+    // A finder loaded before this one under the same name (the nodelet reloaded into a running system)
+    // reserved the ids below ~id_reserved: this one's begin there.
+    int reserved = 0;
+    if (getPrivateNodeHandle().getParam("id_reserved", reserved)) {
+      if (reserved >= 1) {
+        id_reserved_ = static_cast<std::uint32_t>(reserved);
+        NODELET_INFO_STREAM(getName() << ": frontier ids begin at " << reserved
+                                      << " (~id_reserved: a finder before this one handed out ids below it)");
+      } else {
+        NODELET_WARN_STREAM(getName() << ": ~id_reserved " << reserved << " is no frontier id; ids begin at 1");
+      }
+    }
     compute_pub_ = nh.advertise<ComputeTime>("compute_time", 20);
     frontier_pub_ = nh.advertise<FrontierArray>("frontiers", 2);
     marker_pub_ = nh.advertise<visualization_msgs::MarkerArray>("frontier_markers", 2);
@@ -86,13 +100,19 @@ class FrontierFinder : public nodelet::Nodelet {
         // First update, or updates were missed: the incremental path needs every change.
         if (gap) NODELET_WARN_STREAM(getName() << ": map updates " << last_sequence_ + 1 << ".." << msg->sequence - 1
                                                << " missed; recomputing all frontiers");
-        if (!finder_) finder_ = std::make_unique<frontier::FrontierFinder>(config_, occupancy.geometry(), box_);
+        if (!finder_) {
+          finder_ = std::make_unique<frontier::FrontierFinder>(config_, occupancy.geometry(), box_);
+          finder_->continueIdsFrom(id_reserved_);
+        }
         finder_->setActiveBand(band_.first, band_.second);
+        reserveIds();
         finder_->recomputeAll(occupancy, now);
       } else if (msg->changed_voxels > 0 && shared_->sequence == msg->sequence) {
         // The map is still at this frame: its list of changed voxels is exact and cheap.
+        reserveIds();
         finder_->update(occupancy, shared_->last_changed, now);
       } else if (msg->changed_voxels > 0) {
+        reserveIds();
         const auto& geo = occupancy.geometry();
         const double h = 0.5 * geo.resolution();
         // Clamped to the map first: a box reaching far outside it would not fit a voxel index.
@@ -107,6 +127,23 @@ class FrontierFinder : public nodelet::Nodelet {
     ros_conv::publishComputeTime(compute_pub_, "frontier", t_compute);
     last_sequence_ = msg->sequence;
     publish(msg->header.stamp, now);
+  }
+
+  // Ids are handed out once while the ROS master runs, also across finders: before an update, while
+  // fewer than half of kIdReserve ids are left of the reservation, ~id_reserved moves kIdReserve past the
+  // next id (a write every 50000 ids or so, one update makes a few hundred at most). A finder loaded
+  // later, after this one was unloaded or its manager died, begins at the reservation.
+  void reserveIds() {
+    static constexpr std::uint32_t kIdReserve = 100000;
+    const std::uint32_t next = finder_->nextId();
+    if (next <= id_reserved_ && id_reserved_ - next >= kIdReserve / 2) return;
+    if (next > static_cast<std::uint32_t>(std::numeric_limits<int>::max()) - kIdReserve) {
+      NODELET_WARN_STREAM_ONCE(getName() << ": frontier ids passed " << next
+                                         << ": ~id_reserved can hold no more; a finder loaded later may reuse ids");
+      return;
+    }
+    id_reserved_ = next + kIdReserve;
+    getPrivateNodeHandle().setParam("id_reserved", static_cast<int>(id_reserved_));
   }
 
   void publish(const ros::Time& stamp, double now) {
@@ -177,6 +214,7 @@ class FrontierFinder : public nodelet::Nodelet {
   std::unique_ptr<frontier::FrontierFinder> finder_;
   std::pair<double, double> band_{-1e18, 1e18};
   std::uint64_t last_sequence_ = 0;
+  std::uint32_t id_reserved_ = 1;  ///< ids below it are handed out or reserved (~id_reserved)
   ros::Publisher compute_pub_;
   ros::Publisher frontier_pub_, marker_pub_;
   ros::Subscriber handle_sub_, update_sub_, layer_sub_;

@@ -3,8 +3,11 @@
 // and is reachable from the start through ground-truth free space.
 #include <gtest/gtest.h>
 #include <nav_msgs/Odometry.h>
+#include <nodelet/NodeletLoad.h>
+#include <nodelet/NodeletUnload.h>
 #include <ros/ros.h>
 
+#include <algorithm>
 #include <cmath>
 #include <deque>
 #include <functional>
@@ -44,6 +47,7 @@ class FrontierPlannerTest : public ::testing::Test {
     cmd_pub_ = nh_.advertise<go_feap::PositionCommand>("position_cmd", 10);
   }
   void onFrontiers(const go_feap::FrontierArray::ConstPtr& m) {
+    for (const auto& f : m->frontiers) highest_id_ = std::max(highest_id_, f.id);
     frontiers_ = m;
     recent_frontiers_.push_back(m);
     if (recent_frontiers_.size() > 30) recent_frontiers_.pop_front();
@@ -78,6 +82,7 @@ class FrontierPlannerTest : public ::testing::Test {
   std::deque<go_feap::FrontierArray::ConstPtr> recent_frontiers_;
   go_feap::GlobalTour::ConstPtr tour_;
   nav_msgs::Odometry::ConstPtr odom_;
+  std::uint32_t highest_id_ = 0;  ///< of every frontier received
 };
 
 TEST_F(FrontierPlannerTest, TourStartsAtAReachableFrontier) {
@@ -471,6 +476,40 @@ TEST_F(FrontierPlannerTest, MalformedChainMessagesAreRefusedAndTheNodeletsKeepWo
                                  << band->z_max;
   }
   EXPECT_GT(active, 0u) << "no frontier in the band: the check shows nothing";
+}
+
+// The frontier finder unloaded and loaded again into the running manager (a nodelet restarted): its ids
+// go on from those handed out before (~id_reserved), so that the layer manager's blacklist and the
+// planners' records of old ids name none of the new frontiers. Last: the finder is replaced.
+TEST_F(FrontierPlannerTest, AFinderLoadedAgainHandsOutNoIdTwice) {
+  ASSERT_TRUE(spinUntil([&] { return frontiers_ && !frontiers_->frontiers.empty(); }, 60.0)) << "no frontiers";
+  int reserved = 0;
+  ASSERT_TRUE(ros::param::get("frontier_finder/id_reserved", reserved)) << "the finder reserved no ids";
+  EXPECT_GT(static_cast<std::int64_t>(reserved), static_cast<std::int64_t>(highest_id_));
+  nodelet::NodeletUnload unload;
+  unload.request.name = "/frontier_finder";
+  ASSERT_TRUE(ros::service::call("go_feap_manager/unload_nodelet", unload) && unload.response.success);
+  // Its loader process follows (the bond broke); a message still under way arrives meanwhile.
+  spinUntil(
+      [] {
+        std::vector<std::string> nodes;
+        return ros::master::getNodes(nodes) && std::find(nodes.begin(), nodes.end(), "/frontier_finder") == nodes.end();
+      },
+      10.0);
+  spinUntil([] { return false; }, 1.0);
+  const std::uint32_t before = highest_id_;
+  ASSERT_GT(before, 0u);
+  nodelet::NodeletLoad load;
+  load.request.name = "/frontier_finder";
+  load.request.type = "go_feap/FrontierFinder";
+  const ros::Time loaded = ros::Time::now();
+  ASSERT_TRUE(ros::service::call("go_feap_manager/load_nodelet", load) && load.response.success);
+  ASSERT_TRUE(spinUntil([&] { return frontiers_->header.stamp > loaded && !frontiers_->frontiers.empty(); }, 60.0))
+      << "the finder loaded again sends no frontiers";
+  for (const auto& f : frontiers_->frontiers)
+    EXPECT_GT(f.id, before) << "frontier id " << f.id << " was handed out before the finder was loaded again";
+  ASSERT_TRUE(ros::param::get("frontier_finder/id_reserved", reserved));
+  EXPECT_GT(static_cast<std::int64_t>(reserved), static_cast<std::int64_t>(highest_id_));
 }
 
 }  // namespace

@@ -475,3 +475,25 @@ TEST(FrontierFinder, ReviveFactorBelowOneIsRejected) {
   cfg.revive_factor = std::numeric_limits<double>::quiet_NaN();
   EXPECT_FALSE(cfg.validate().ok());
 }
+
+// A finder told to go on from another's ids hands out none below them, and never lowers its own.
+TEST(FrontierFinder, IdsGoOnFromWhereAnotherFinderStopped) {
+  map::OccupancyMap m(mapConfig(), kBox);
+  paint(m, Vec3(0.2, 0.2, 0.0), Vec3(0.8, 0.8, 1.0), VoxelState::kFree);
+  paint(m, Vec3(2.0, 0.5, 0.0), Vec3(2.8, 1.5, 1.0), VoxelState::kFree);
+  frontier::FrontierConfig cfg;
+  cfg.min_cluster_cells = 1;
+  frontier::FrontierFinder first(cfg, m.geometry(), kBox);
+  first.recomputeAll(m, 0.0);
+  ASSERT_GE(first.frontiers().size(), 2u);
+  std::uint32_t highest = 0;
+  for (const auto& f : first.frontiers()) highest = std::max(highest, f.id);
+  EXPECT_EQ(first.nextId(), highest + 1);
+  frontier::FrontierFinder second(cfg, m.geometry(), kBox);
+  second.continueIdsFrom(first.nextId());
+  second.continueIdsFrom(1);  // no step back
+  second.recomputeAll(m, 0.0);
+  EXPECT_EQ(clusterSets(second, m.geometry()), clusterSets(first, m.geometry()));
+  for (const auto& f : second.frontiers()) EXPECT_GT(f.id, highest);
+  EXPECT_EQ(second.nextId(), first.nextId() + first.frontiers().size());
+}

@@ -98,6 +98,12 @@ class FrontierFinder {
 
   const std::vector<Frontier>& frontiers() const { return frontiers_; }
   const Frontier* find(std::uint32_t id) const;
+  /// New frontiers get ids from `first` on (never lower than any handed out before): a finder that
+  /// replaces another in a running system goes on from the ids the other handed out, so that records
+  /// the planners keep of those ids (failures, the blacklist) name none of its frontiers.
+  void continueIdsFrom(std::uint32_t first) { next_id_ = std::max(next_id_, first); }
+  /// The id the next new frontier gets.
+  std::uint32_t nextId() const { return next_id_; }
   bool isFrontierCell(const Index3& idx) const {
     if (!geo_.inside(idx)) return false;
     const std::size_t l = geo_.linear(idx);
