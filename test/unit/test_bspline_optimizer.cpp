@@ -734,6 +734,53 @@ TEST(TrajectoryPlanner, HopsOfEveryLengthReachTheTargetWithinTheLimits) {
   EXPECT_EQ(plans, 60);
 }
 
+// An optimum that breaks a limit, where the plain fit of the path keeps every one, gives way to the fit
+// (PlanReport::used_fit). With lambda_time 1e6 the optimiser shortens the knot spans until the speed
+// breaks v_max, from whatever timing it starts: no slower refit mends that, and without the fit every
+// plan fails.
+TEST(TrajectoryPlanner, AFitThatPassesTheChecksIsFlownWhereTheOptimumBreaksALimit) {
+  OpenRoom room(Vec3(8, 8, 3));
+  OptimizerConfig optimizer = optimizerConfig();
+  optimizer.lambda_time = 1e6;
+  traj::TrajectoryPlannerConfig planner;
+  planner.profile_acceleration = 0.0;  // no timed fit, no finer optimisation beside, no retry
+  planner.fine_spans = 0;
+  planner.unseen_retry = false;
+  // A fit through samples at even times starts and stops abruptly: from rest it keeps a_max only when
+  // slow enough (here after 3 refits, about 5 times the first timing, more than the shipped 3 allow).
+  planner.max_refits = 8;
+  planner.max_slowdown = 20.0;
+  Rng rng(3);
+  for (int trial = 0; trial < 6; ++trial) {
+    traj::PlanRequest request;
+    request.start = Vec3(4.0 + rng(-0.2, 0.2), 4.0 + rng(-0.2, 0.2), 1.5);
+    const double heading = rng(-kPi, kPi), distance = rng(1.5, 3.0);
+    request.target = request.start + distance * Vec3(std::cos(heading), std::sin(heading), rng(-0.1, 0.1));
+    request.yaw = request.target_yaw = heading;
+    // The optimum of the planner's own first fit breaks a limit.
+    const double duration = distance / (planner.cruise_fraction * optimizer.v_max);
+    const auto samples = UniformBspline::resamplePolyline({request.start, request.target}, planner.path_spacing);
+    const auto optimum = traj::optimize(
+        UniformBspline::fitPath(samples, duration / static_cast<double>(samples.size() - 1), Vec3::Zero(),
+                                Vec3::Zero(), Vec3::Zero()),
+        room.world.esdf(), optimizer);
+    EXPECT_FALSE(optimum) << "trial " << trial << ": the optimum keeps the limits, max speed "
+                          << (optimum ? optimum->maxVelocity() : 0.0);
+    traj::PlanReport report;
+    const auto planned = traj::planTrajectory(request, room.astar, room.world.esdf(), optimizer, planner, &report);
+    ASSERT_TRUE(planned) << "trial " << trial << ": " << planned.message() << " refits " << report.refits
+                         << " left_flyable " << report.left_flyable << " status " << static_cast<int>(report.path_status)
+                         << " length " << report.path_length;
+    EXPECT_TRUE(report.used_fit) << "trial " << trial;
+    double v = 0.0, a = 0.0;
+    finiteDifferenceDynamics(planned->position, 2000, v, a);
+    EXPECT_LE(v, (1.0 + optimizer.limit_tolerance) * optimizer.v_max) << "trial " << trial;
+    EXPECT_LE(a, (1.0 + optimizer.limit_tolerance) * optimizer.a_max) << "trial " << trial;
+    const UniformBspline& p = planned->position;
+    EXPECT_LT((p.position(p.duration()) - request.target).norm(), 0.5 * std::sqrt(3.0) * kRes + 1e-9) << "trial " << trial;
+  }
+}
+
 // Arc length of the trapezoidal speed profile from rest (accelerate at a, cruise at v, brake at a to rest at
 // length L) at time t, in closed form: the oracle for profileSamples().
 double trapezoidArc(double t, double L, double v, double a) {
