@@ -2,8 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <deque>
-#include <limits>
 #include <sstream>
 #include <vector>
 
@@ -79,30 +77,46 @@ ObservableSet computeObservableSet(const Scene& scene) {
   const Index3 start = geo.coordToIndex(scene.start.position);
   if (!in_box(start) || scene.occupied.at(start) != 0) return result;
 
-  // Breadth-first flood fill through free voxels of the box. The queue holds the wave front only (a
-  // deque frees what was taken): it used to keep every free voxel, 4 bytes each, 4 GB in a scene of
-  // 1e9 voxels; a wave front is about a cross-section. 32-bit indices halve it again.
+  // Scan-line flood fill through the free voxels of the box: a seed's row is filled to both sides as far
+  // as it is free (a span), and each of the four rows beside the span (y +- 1, z +- 1) is scanned along it,
+  // marking the occupied voxels met and leaving one seed per run of free ones. Rows are read in memory
+  // order: a voxel-by-voxel breadth-first fill jumped a whole plane between neighbours, which took 215 s
+  // through a 1e9-voxel scene, and its queue once held every free voxel.
   constexpr std::uint8_t kFree = 1, kOccupied = 2;
-  std::deque<std::uint32_t> queue;
-  if (geo.size() > std::numeric_limits<std::uint32_t>::max()) return result;
-  queue.push_back(static_cast<std::uint32_t>(geo.linear(start)));
-  result.mask[queue.front()] = kFree;
-  result.free_count = 1;
-  while (!queue.empty()) {
-    const Index3 cur = geo.unlinear(queue.front());
-    queue.pop_front();
-    for (const Index3& off : common::faceNeighbours()) {
-      const Index3 nb = cur + off;
-      if (!in_box(nb)) continue;
-      const std::size_t l = geo.linear(nb);
-      if (result.mask[l] != 0) continue;
-      if (scene.occupied[l] != 0) {
-        result.mask[l] = kOccupied;
-        ++result.occupied_count;
-      } else {
-        result.mask[l] = kFree;
-        ++result.free_count;
-        queue.push_back(static_cast<std::uint32_t>(l));
+  auto& mask = result.mask;
+  const std::size_t nx = static_cast<std::size_t>(geo.dims().x()), ny = static_cast<std::size_t>(geo.dims().y());
+  auto rowStart = [&](int y, int z) { return (static_cast<std::size_t>(z) * ny + static_cast<std::size_t>(y)) * nx; };
+  auto markOccupied = [&](std::size_t l) {
+    if (mask[l] != 0) return;
+    mask[l] = kOccupied;
+    ++result.occupied_count;
+  };
+  auto open = [&](std::size_t l) { return mask[l] == 0 && scene.occupied[l] == 0; };
+  std::vector<Index3> seeds{start};
+  while (!seeds.empty()) {
+    const Index3 seed = seeds.back();
+    seeds.pop_back();
+    const std::size_t row = rowStart(seed.y(), seed.z());
+    if (!open(row + seed.x())) continue;  // a span from another seed filled it
+    int x0 = seed.x(), x1 = seed.x();
+    while (x0 > lo.x() && open(row + x0 - 1)) --x0;
+    while (x1 + 1 < hi.x() && open(row + x1 + 1)) ++x1;
+    for (int x = x0; x <= x1; ++x) mask[row + x] = kFree;
+    result.free_count += static_cast<std::size_t>(x1 - x0 + 1);
+    if (x0 > lo.x() && scene.occupied[row + x0 - 1] != 0) markOccupied(row + x0 - 1);
+    if (x1 + 1 < hi.x() && scene.occupied[row + x1 + 1] != 0) markOccupied(row + x1 + 1);
+    const int side_y[4] = {seed.y() - 1, seed.y() + 1, seed.y(), seed.y()};
+    const int side_z[4] = {seed.z(), seed.z(), seed.z() - 1, seed.z() + 1};
+    for (int k = 0; k < 4; ++k) {
+      if (side_y[k] < lo.y() || side_y[k] >= hi.y() || side_z[k] < lo.z() || side_z[k] >= hi.z()) continue;
+      const std::size_t side = rowStart(side_y[k], side_z[k]);
+      bool in_run = false;
+      for (int x = x0; x <= x1; ++x) {
+        const std::size_t l = side + x;
+        if (scene.occupied[l] != 0) markOccupied(l);
+        const bool free = open(l);
+        if (free && !in_run) seeds.emplace_back(x, side_y[k], side_z[k]);
+        in_run = free;
       }
     }
   }

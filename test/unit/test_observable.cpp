@@ -1,6 +1,8 @@
 // Observable set and coverage on a hand-built room with a sealed cavity.
 #include <gtest/gtest.h>
 
+#include <random>
+
 #include "go_feap/world/scene.h"
 #include "go_feap/world/shapes.h"
 
@@ -84,4 +86,47 @@ TEST(Shapes, HollowCylinderLeavesTheAxisFree) {
   EXPECT_FALSE(s.isOccupied(Vec3(0.05, 0.05, 1.0)));
   EXPECT_TRUE(s.isOccupied(Vec3(0.85, 0.05, 1.0)));
   EXPECT_FALSE(s.isOccupied(Vec3(1.15, 0.05, 1.0)));
+}
+
+// The scan-line fill against a plain breadth-first fill over face neighbours (the oracle), on random
+// boxes of random clutter, with margins outside the box that must stay out of the set.
+TEST(ObservableSet, ScanLineFillMatchesABreadthFirstFill) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  int compared = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    const Vec3 size(0.5 + 2.0 * unit(rng), 0.5 + 2.0 * unit(rng), 0.3 + 1.5 * unit(rng));
+    Scene s = makeEmptyScene("clutter", {Vec3::Zero(), size}, 0.1, trial % 3 == 0 ? 0.0 : 0.3);
+    const double density = 0.1 + 0.5 * unit(rng);
+    for (std::size_t l = 0; l < s.occupied.size(); ++l) s.occupied[l] = unit(rng) < density;
+    s.start.position = Vec3(unit(rng) * size.x(), unit(rng) * size.y(), unit(rng) * size.z());
+    const auto& g = s.geometry();
+    s.occupied.at(g.coordToIndex(s.start.position)) = 0;
+    const ObservableSet o = computeObservableSet(s);
+    // Oracle.
+    Index3 lo, hi;
+    g.centreRange(s.box, lo, hi);
+    auto in_box = [&](const Index3& i) { return (i.array() >= lo.array()).all() && (i.array() < hi.array()).all(); };
+    std::vector<char> seen(g.size(), 0);
+    std::vector<Index3> queue{g.coordToIndex(s.start.position)};
+    seen[g.linear(queue[0])] = 1;
+    std::size_t free_count = 1, occupied_count = 0;
+    for (std::size_t head = 0; head < queue.size(); ++head)
+      for (const Index3& off : go_feap::common::faceNeighbours()) {
+        const Index3 nb = queue[head] + off;
+        if (!in_box(nb) || seen[g.linear(nb)]) continue;
+        seen[g.linear(nb)] = 1;
+        if (s.occupied.at(nb)) {
+          ++occupied_count;
+        } else {
+          ++free_count;
+          queue.push_back(nb);
+        }
+      }
+    EXPECT_EQ(o.free_count, free_count) << "trial " << trial;
+    EXPECT_EQ(o.occupied_count, occupied_count) << "trial " << trial;
+    for (std::size_t l = 0; l < g.size(); ++l) ASSERT_EQ(o.mask[l] != 0, seen[l] != 0) << "trial " << trial << " voxel " << l;
+    compared += free_count > 10;
+  }
+  EXPECT_GT(compared, 20);  // most starts reach more than their own neighbourhood
 }
