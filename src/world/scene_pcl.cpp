@@ -174,8 +174,9 @@ std::string asciiRowsProblem(const std::string& path, const CloudHeader& h) {
 
 // A PLY's data against its header. ASCII: one row per element instance, as many as declared in all (PCL
 // read the declared vertices and dropped rows beyond them without a word), and every vertex row whole
-// numbers, as many as the vertex has properties. Binary without list properties: exactly the bytes the
-// header declares (more means rows the header does not count). "" when the data matches.
+// numbers, as many as the vertex has properties. Binary without list properties: the bytes the header
+// declares, with less than a vertex's worth after them (a whole vertex more is a row the header does not
+// count; a byte or two of padding is not). "" when the data matches.
 std::string plyDataProblem(const std::string& path, const CloudHeader& h) {
   if (h.data_start < 0 || h.elements.empty()) return "";
   double declared = 0.0, bytes = 0.0;
@@ -208,7 +209,7 @@ std::string plyDataProblem(const std::string& path, const CloudHeader& h) {
       return path + ": corrupt PLY file (its header declares " + std::to_string(std::llround(declared)) +
              " rows in all, " + std::to_string(std::llround(h.points)) + " of them vertices; it has " +
              std::to_string(rows) + ")";
-  } else if (exact && h.room > bytes) {
+  } else if (exact && h.room - bytes >= std::max(1.0, h.per_point)) {  // a trailing newline is no vertex
     std::ostringstream why;
     why << path << ": corrupt PLY file (" << h.room - bytes << " bytes after the " << bytes
         << " its header declares, " << h.points << " vertices)";

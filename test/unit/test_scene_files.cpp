@@ -635,7 +635,11 @@ TEST(BadInput, PlyDataThatDoesNotMatchItsHeader) {
   }
   std::ifstream in(d.file("bin.ply"), std::ios::binary);
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  refused("spare.ply", bytes + std::string(24, '\0'), {"24 bytes after the"});
+  refused("spare.ply", bytes + std::string(12, '\0'), {"12 bytes after the"});  // one more vertex
+  writeText(d.file("newline.ply"), bytes + "\n");
+  auto newline = loadPointCloud(d.file("newline.ply"));
+  ASSERT_TRUE(newline) << newline.message();
+  EXPECT_EQ(newline->size(), cloud.size());
 }
 
 TEST(BadInput, CorruptAndTruncatedOctomap) {
