@@ -4,6 +4,7 @@
 // State on the parameter server: ~id_reserved, the ids reserved so far (see reserveIds()).
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
+#include <ros/master.h>
 #include <ros/ros.h>
 #include <visualization_msgs/MarkerArray.h>
 
@@ -41,7 +42,7 @@ class FrontierFinder : public nodelet::Nodelet {
     int reserved = 0;
     if (getPrivateNodeHandle().getParam("id_reserved", reserved)) {
       if (reserved >= 1) {
-        id_reserved_ = static_cast<std::uint32_t>(reserved);
+        first_id_ = id_reserved_ = static_cast<std::uint32_t>(reserved);
         NODELET_INFO_STREAM(getName() << ": frontier ids begin at " << reserved
                                       << " (~id_reserved: a finder before this one handed out ids below it)");
       } else {
@@ -92,6 +93,7 @@ class FrontierFinder : public nodelet::Nodelet {
     }
     const auto t_compute = ros_conv::WallClock::now();
     const double now = msg->header.stamp.toSec();
+    reserveIds();  // before the ids are handed out, and outside the map lock (it asks the ROS master)
     {
       std::shared_lock<std::shared_mutex> map_lock(shared_->mutex);
       const map::OccupancyMap& occupancy = shared_->map->occupancy();
@@ -102,17 +104,14 @@ class FrontierFinder : public nodelet::Nodelet {
                                                << " missed; recomputing all frontiers");
         if (!finder_) {
           finder_ = std::make_unique<frontier::FrontierFinder>(config_, occupancy.geometry(), box_);
-          finder_->continueIdsFrom(id_reserved_);
+          finder_->continueIdsFrom(first_id_);
         }
         finder_->setActiveBand(band_.first, band_.second);
-        reserveIds();
         finder_->recomputeAll(occupancy, now);
       } else if (msg->changed_voxels > 0 && shared_->sequence == msg->sequence) {
         // The map is still at this frame: its list of changed voxels is exact and cheap.
-        reserveIds();
         finder_->update(occupancy, shared_->last_changed, now);
       } else if (msg->changed_voxels > 0) {
-        reserveIds();
         const auto& geo = occupancy.geometry();
         const double h = 0.5 * geo.resolution();
         // Clamped to the map first: a box reaching far outside it would not fit a voxel index.
@@ -127,23 +126,35 @@ class FrontierFinder : public nodelet::Nodelet {
     ros_conv::publishComputeTime(compute_pub_, "frontier", t_compute);
     last_sequence_ = msg->sequence;
     publish(msg->header.stamp, now);
+    reserveIds();  // an update that used more than the margin (a recomputation of a huge map) is covered now
   }
 
-  // Ids are handed out once while the ROS master runs, also across finders: before an update, while
+  // Ids are handed out once while the ROS master runs, also across finders: around each update, while
   // fewer than half of kIdReserve ids are left of the reservation, ~id_reserved moves kIdReserve past the
-  // next id (a write every 50000 ids or so, one update makes a few hundred at most). A finder loaded
-  // later, after this one was unloaded or its manager died, begins at the reservation.
+  // next id (a write every 50000 ids or so; an update makes a few hundred at most). A finder loaded
+  // later, after this one was unloaded or its manager died, begins at the reservation. The write asks the
+  // master once and never waits for it (ros::param::set retries until it answers): with the master
+  // gone the finder goes on, and tries again at the next update.
   void reserveIds() {
     static constexpr std::uint32_t kIdReserve = 100000;
-    const std::uint32_t next = finder_->nextId();
+    const std::uint32_t next = finder_ ? finder_->nextId() : first_id_;
     if (next <= id_reserved_ && id_reserved_ - next >= kIdReserve / 2) return;
     if (next > static_cast<std::uint32_t>(std::numeric_limits<int>::max()) - kIdReserve) {
       NODELET_WARN_STREAM_ONCE(getName() << ": frontier ids passed " << next
                                          << ": ~id_reserved can hold no more; a finder loaded later may reuse ids");
       return;
     }
-    id_reserved_ = next + kIdReserve;
-    getPrivateNodeHandle().setParam("id_reserved", static_cast<int>(id_reserved_));
+    XmlRpc::XmlRpcValue params, result, payload;
+    params[0] = ros::this_node::getName();
+    params[1] = getPrivateNodeHandle().resolveName("id_reserved");
+    params[2] = static_cast<int>(next + kIdReserve);
+    if (ros::master::execute("setParam", params, result, payload, /*wait_for_master=*/false)) {
+      id_reserved_ = next + kIdReserve;
+    } else {
+      NODELET_WARN_STREAM_THROTTLE(10.0, getName() << ": the ROS master did not take ~id_reserved " << next + kIdReserve
+                                                   << "; a finder loaded after this one may hand out ids from "
+                                                   << id_reserved_ << " again");
+    }
   }
 
   void publish(const ros::Time& stamp, double now) {
@@ -214,6 +225,7 @@ class FrontierFinder : public nodelet::Nodelet {
   std::unique_ptr<frontier::FrontierFinder> finder_;
   std::pair<double, double> band_{-1e18, 1e18};
   std::uint64_t last_sequence_ = 0;
+  std::uint32_t first_id_ = 1;     ///< the first id this finder hands out (~id_reserved when it started)
   std::uint32_t id_reserved_ = 1;  ///< ids below it are handed out or reserved (~id_reserved)
   ros::Publisher compute_pub_;
   ros::Publisher frontier_pub_, marker_pub_;

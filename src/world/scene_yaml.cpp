@@ -137,12 +137,21 @@ common::Result<Scene> loadSceneFile(const SceneFileSpec& spec) {
   if (ext == ".pcd" || ext == ".ply") {
     auto points = loadPointCloud(spec.file);
     if (!points) return points.status();
-    for (const Vec3& p : *points) markOccupied(scene, T * p);
+    for (std::size_t i = 0; i < points->size(); ++i) {
+      const Vec3 p = T * (*points)[i];
+      if (!p.allFinite()) return R::Error(spec.file + ": point " + std::to_string(i) + " is not finite once placed by T_world_file");
+      markOccupied(scene, p);
+    }
   } else if (ext == ".stl") {
     auto mesh = loadStl(spec.file);
     if (!mesh) return mesh.status();
     const auto& v = mesh->vertices;
-    for (std::size_t i = 0; i + 2 < v.size(); i += 3) voxelizeTriangle(scene, T * v[i], T * v[i + 1], T * v[i + 2]);
+    for (std::size_t i = 0; i + 2 < v.size(); i += 3) {
+      const Vec3 a = T * v[i], b = T * v[i + 1], c = T * v[i + 2];
+      if (!(a.allFinite() && b.allFinite() && c.allFinite()))
+        return R::Error(spec.file + ": triangle " + std::to_string(i / 3) + " is not finite once placed by T_world_file");
+      voxelizeTriangle(scene, a, b, c);
+    }
   } else if (ext == ".bt") {
     auto cubes = loadOctomap(spec.file);
     if (!cubes) return cubes.status();

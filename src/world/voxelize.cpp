@@ -18,11 +18,14 @@ bool triangleOverlapsBox(const Vec3& v0, const Vec3& v1, const Vec3& v2, double 
     const double mn = std::min({v0[a], v1[a], v2[a]}), mx = std::max({v0[a], v1[a], v2[a]});
     if (mn > h || mx < -h) return false;
   }
-  // Triangle normal. Skipped for a triangle so thin (sine of its angle under 1e-8) that the computed
-  // normal is mostly rounding error, which would cut away voxels the triangle crosses: the axes left are
-  // those of a segment, the shape such a triangle has.
+  // Triangle normal. Skipped for a triangle thinner than a thousandth of a voxel (twice its area over its
+  // longest edge): for a collinear one the computed normal is rounding noise, which cut away voxels the
+  // triangle's own points lie in. The axes left are those of a segment, the shape such a triangle has,
+  // so at most voxels within that thinness of it are marked besides. (A threshold on the sine of an
+  // angle instead took a 0.8 m wide sliver 3e8 m long for a segment and marked a slab beside it.)
   const Vec3 n = e[0].cross(e[1]);
-  if (n.squaredNorm() > 1e-16 * e[0].squaredNorm() * e[1].squaredNorm()) {
+  const double longest2 = std::max({e[0].squaredNorm(), e[1].squaredNorm(), e[2].squaredNorm()});
+  if (n.squaredNorm() > 4e-6 * h * h * longest2) {
     const double r_n = h * n.cwiseAbs().sum();
     if (std::abs(n.dot(v0)) > r_n) return false;
   }
@@ -102,7 +105,9 @@ void voxelizeTriangle(Scene& scene, const Vec3& a, const Vec3& b, const Vec3& c)
     const double f = std::floor((x - geo.origin()[axis]) / res);
     return static_cast<int>(std::clamp(f, 0.0, static_cast<double>(geo.dims()[axis] - 1)));
   };
-  // Nothing to do for a triangle wholly outside the grid (the clamped ranges would still hold one voxel).
+  // Nothing to do for a triangle wholly outside the grid (the clamped ranges would still hold one voxel),
+  // nor for one with a vertex that is not finite (the loaders refuse those).
+  if (!(a.allFinite() && b.allFinite() && c.allFinite())) return;
   const Vec3 lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
   const common::Aabb bounds = geo.bounds();
   for (int k = 0; k < 3; ++k)
@@ -115,12 +120,14 @@ void voxelizeTriangle(Scene& scene, const Vec3& a, const Vec3& b, const Vec3& c)
     if (strip.n == 0) continue;
     double v_lo, v_hi;
     extent(strip, v, v_lo, v_hi);
+    if (!(std::isfinite(v_lo) && std::isfinite(v_hi))) continue;  // cut points overflowed (vertices ~1e300 m)
     for (int iv = index(v_lo - pad, v), iv1 = index(v_hi + pad, v); iv <= iv1; ++iv) {
       const double v0 = geo.origin()[v] + iv * res;
       const Polygon column = clip(clip(strip, v, v0 - pad, true), v, v0 + res + pad, false);
       if (column.n == 0) continue;
       double d_lo, d_hi;
       extent(column, d, d_lo, d_hi);
+      if (!(std::isfinite(d_lo) && std::isfinite(d_hi))) continue;
       Index3 idx;
       idx[u] = iu, idx[v] = iv;
       for (int id = index(d_lo - pad, d), id1 = index(d_hi + pad, d); id <= id1; ++id) {

@@ -99,13 +99,15 @@ TEST(ObservableSet, ScanLineFillMatchesABreadthFirstFill) {
     Scene s = makeEmptyScene("clutter", {Vec3::Zero(), size}, 0.1, trial % 3 == 0 ? 0.0 : 0.3);
     const double density = 0.1 + 0.5 * unit(rng);
     for (std::size_t l = 0; l < s.occupied.size(); ++l) s.occupied[l] = unit(rng) < density;
-    s.start.position = Vec3(unit(rng) * size.x(), unit(rng) * size.y(), unit(rng) * size.z());
     const auto& g = s.geometry();
-    s.occupied.at(g.coordToIndex(s.start.position)) = 0;
-    const ObservableSet o = computeObservableSet(s);
-    // Oracle.
     Index3 lo, hi;
     g.centreRange(s.box, lo, hi);
+    Index3 start;  // a voxel of the box (a start outside it has an empty set)
+    for (int k = 0; k < 3; ++k) start[k] = lo[k] + static_cast<int>(unit(rng) * (hi[k] - lo[k]) * 0.999);
+    s.start.position = g.indexToCoord(start);
+    s.occupied.at(start) = 0;
+    const ObservableSet o = computeObservableSet(s);
+    // Oracle.
     auto in_box = [&](const Index3& i) { return (i.array() >= lo.array()).all() && (i.array() < hi.array()).all(); };
     std::vector<char> seen(g.size(), 0);
     std::vector<Index3> queue{g.coordToIndex(s.start.position)};

@@ -6,6 +6,7 @@
 #include <pcl/io/ply_io.h>
 #include <pcl/point_types.h>
 
+#include <algorithm>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -210,9 +211,30 @@ TEST(Stl, FaceOnAVoxelBoundaryMarksOneLayer) {
   EXPECT_FALSE(s->isOccupied(Vec3(0.45, 0.45, 0.45)));
 }
 
+// Distance from p to triangle (a, b, c): to its plane where p projects inside it, else to its edges (a
+// collinear triangle has only its edges).
+double pointTriangleDistance(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  auto segment = [&](const Vec3& u, const Vec3& w) {
+    const Vec3 d = w - u;
+    const double t = d.squaredNorm() > 0.0 ? std::clamp((p - u).dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
+    return (p - (u + t * d)).norm();
+  };
+  double best = std::min({segment(a, b), segment(b, c), segment(c, a)});
+  const Vec3 n = (b - a).cross(c - a);
+  if (n.norm() > 1e-9 * (b - a).norm() * (c - a).norm()) {
+    const double off = n.normalized().dot(p - a);
+    const Vec3 q = p - off * n.normalized();
+    if ((b - a).cross(q - a).dot(n) >= 0.0 && (c - b).cross(q - b).dot(n) >= 0.0 && (a - c).cross(q - c).dot(n) >= 0.0)
+      best = std::min(best, std::abs(off));
+  }
+  return best;
+}
+
 // The column-by-column voxeliser marks exactly the voxels an exhaustive test of every grid voxel marks,
 // for triangles of every kind: random, slivers, long and diagonal, degenerate (a segment, a point), on
-// voxel faces, partly or wholly outside the grid. And no point of a triangle lies in an unmarked voxel.
+// voxel faces, partly or wholly outside the grid. No point of a triangle lies in an unmarked voxel, and
+// no marked voxel's centre lies farther from the triangle than half a voxel diagonal (a cube the
+// triangle touches is that close), which the exhaustive test's own rule cannot show.
 TEST(Stl, ColumnVoxeliserMarksWhatAnExhaustiveTestMarks) {
   const Scene empty = makeEmptyScene("t", {Vec3(-0.73, -0.41, 0.17), Vec3(1.31, 1.12, 1.93)}, 0.1, 0.2);
   const auto& g = empty.geometry();
@@ -254,6 +276,9 @@ TEST(Stl, ColumnVoxeliserMarksWhatAnExhaustiveTestMarks) {
           const Index3 idx(i, j, k);
           const bool want = triangleMarksVoxel(g, idx, a, b, c);
           marked += want;
+          if (want && a.cwiseAbs().maxCoeff() < 1e3 && b.cwiseAbs().maxCoeff() < 1e3 && c.cwiseAbs().maxCoeff() < 1e3)
+            ASSERT_LE(pointTriangleDistance(g.indexToCoord(idx), a, b, c), 0.5 * std::sqrt(3.0) * 0.1 + 2e-4)
+                << "triangle " << t << " marks voxel " << idx.transpose() << ", which it does not touch";
           ASSERT_EQ(fast.occupied.at(idx) != 0, want)
               << "triangle " << t << " (" << a.transpose() << " | " << b.transpose() << " | " << c.transpose()
               << ") voxel " << idx.transpose();
@@ -640,6 +665,24 @@ TEST(BadInput, PlyDataThatDoesNotMatchItsHeader) {
   auto newline = loadPointCloud(d.file("newline.ply"));
   ASSERT_TRUE(newline) << newline.message();
   EXPECT_EQ(newline->size(), cloud.size());
+}
+
+// A finite T_world_file can still place a vertex or point at infinity (a scale of 1e300): named, not
+// voxelised (a NaN cut point made a loop bound undefined).
+TEST(BadInput, GeometryPlacedAtInfinity) {
+  TempDir d;
+  writeBinaryStl(d.file("far.stl"), cubeTriangles(0, 1e10));
+  writeText(d.file("ok.pcd"), "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 1\n"
+                              "HEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 1\nDATA ascii\n1e10 1 1\n");
+  for (const char* f : {"far.stl", "ok.pcd"}) {
+    std::string yaml = sceneYaml(f);
+    const std::string identity = "T_world_file: [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]";
+    yaml.replace(yaml.find(identity), identity.size(), "T_world_file: [1e300,0,0,0, 0,1e300,0,0, 0,0,1e300,0, 0,0,0,1]");
+    writeText(d.file("far.yaml"), yaml);
+    auto s = loadSceneYaml(d.file("far.yaml"));
+    ASSERT_FALSE(s) << f;
+    expectErrorMentions(s.message(), {f, "not finite once placed by T_world_file"});
+  }
 }
 
 TEST(BadInput, CorruptAndTruncatedOctomap) {
