@@ -84,8 +84,7 @@ ObservableSet computeObservableSet(const Scene& scene) {
   // through a 1e9-voxel scene, and its queue once held every free voxel.
   constexpr std::uint8_t kFree = 1, kOccupied = 2;
   auto& mask = result.mask;
-  const std::size_t nx = static_cast<std::size_t>(geo.dims().x()), ny = static_cast<std::size_t>(geo.dims().y());
-  auto rowStart = [&](int y, int z) { return (static_cast<std::size_t>(z) * ny + static_cast<std::size_t>(y)) * nx; };
+  auto rowStart = [&](int y, int z) { return geo.linear(Index3(0, y, z)); };
   auto markOccupied = [&](std::size_t l) {
     if (mask[l] != 0) return;
     mask[l] = kOccupied;

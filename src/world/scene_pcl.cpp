@@ -151,19 +151,24 @@ std::string scanRows(const std::string& path, std::streamoff start, std::size_t&
   return "";
 }
 
+// A text row's problem: `bad` (its first word that is no number) or a count `n` of words other than
+// `want`, named as `prefix` + `index`; "" for a good row (the message is built only for a bad one).
+std::string rowProblem(const std::string& prefix, long long index, double n, const std::string& bad, double want) {
+  if (bad.empty() && n == want) return "";
+  const std::string where = prefix + std::to_string(index) + " has ";
+  if (!bad.empty()) return where + "'" + bad + "', not a number)";
+  return where + std::to_string(std::llround(n)) + " values, the header " + std::to_string(std::llround(want)) + ")";
+}
+
 // An ASCII PCD's rows, each with the header's number of values, each a whole number. PCL's reader takes
 // rows with too few or too many values and words that are no numbers without a word (a file declaring 4
 // points with "2 2", "3 3 3 3" and "foo bar baz" rows loaded as if whole). "" when every row is right.
 std::string asciiRowsProblem(const std::string& path, const CloudHeader& h) {
   if (h.data != "ascii" || h.data_start < 0) return "";
-  const std::string corrupt = path + ": corrupt PCD file (row ";
+  const std::string prefix = path + ": corrupt PCD file (row ";
   std::size_t rows = 0;
   const std::string problem = scanRows(path, h.data_start, rows, [&](std::size_t r, double n, const std::string& bad) {
-    if (!bad.empty()) return corrupt + std::to_string(r + 1) + " has '" + bad + "', not a number)";
-    if (n != h.values)
-      return corrupt + std::to_string(r + 1) + " has " + std::to_string(std::llround(n)) + " values, the header " +
-             std::to_string(std::llround(h.values)) + ")";
-    return std::string();
+    return rowProblem(prefix, static_cast<long long>(r) + 1, n, bad, h.values);
   });
   if (!problem.empty()) return problem;
   if (static_cast<double>(rows) != h.points)
@@ -187,18 +192,14 @@ std::string plyDataProblem(const std::string& path, const CloudHeader& h) {
     exact = exact && e.known && !e.list;
   }
   if (h.data == "ascii") {
+    const std::string prefix = path + ": corrupt PLY file (vertex ";
     std::size_t rows = 0;
     const std::string problem = scanRows(path, h.data_start, rows, [&](std::size_t r, double n, const std::string& bad) {
       double first = 0.0;  // the element row r belongs to
       for (const PlyElement& e : h.elements) {
         if (static_cast<double>(r) < first + e.count) {
           if (e.name != "vertex" || e.list) return std::string();
-          const std::string where = path + ": corrupt PLY file (vertex " + std::to_string(std::llround(r - first)) + " ";
-          if (!bad.empty()) return where + "has '" + bad + "', not a number)";
-          if (n != e.values)
-            return where + "has " + std::to_string(std::llround(n)) + " values, the header " +
-                   std::to_string(std::llround(e.values)) + ")";
-          return std::string();
+          return rowProblem(prefix, std::llround(r - first), n, bad, e.values);
         }
         first += e.count;
       }

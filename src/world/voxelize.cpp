@@ -42,10 +42,12 @@ bool triangleOverlapsBox(const Vec3& v0, const Vec3& v1, const Vec3& v2, double 
   return true;
 }
 
-// A convex polygon of at most 7 vertices: a triangle cut by four axis-aligned planes, each of which
-// adds at most one vertex.
+// A triangle cut by up to four axis-aligned planes: 7 vertices at most in exact arithmetic (each cut of a
+// convex polygon adds at most one). Rounding in the cut points can make the piece very slightly
+// non-convex, so that a cut crosses it more than twice: room for 16 keeps every clip() in bounds (a
+// 5-vertex strip gives at most 7 after one column cut and 10 after the other).
 struct Polygon {
-  std::array<Vec3, 8> p;
+  std::array<Vec3, 16> p;
   int n = 0;
 };
 

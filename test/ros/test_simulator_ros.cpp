@@ -71,7 +71,15 @@ class SimulatorTest : public ::testing::Test {
 };
 
 TEST_F(SimulatorTest, CommandMovesOdomCameraStampsMatchNanIsIgnored) {
-  ASSERT_TRUE(spinUntil([&] { return last_odom_ && cloud_; }, 60.0)) << "no odom or scene_cloud";
+  // The camera's topics connected too: it loads beside a second camera and the scene server, and a
+  // window of frames counted before its connection is up counted none (0 frames, once in a full suite).
+  ASSERT_TRUE(spinUntil(
+      [&] {
+        return last_odom_ && cloud_ && depth_sub_.getNumPublishers() > 0 && pose_sub_.getNumPublishers() > 0 &&
+               info_sub_.getNumPublishers() > 0;
+      },
+      60.0))
+      << "no odom or scene_cloud, or the camera's topics are not connected";
   EXPECT_GT(cloud_->width * cloud_->height, 10000u);
   const Eigen::Vector3d start = position();
   // Maze seed 0 starts at the centre of cell (0, 0): (-9, -4, 1); 1 m ahead is free.
