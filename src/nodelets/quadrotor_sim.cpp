@@ -43,7 +43,7 @@ class QuadrotorSim : public nodelet::Nodelet {
     p.get("simulation/rate_factor", rate_factor_).get("simulation/odom_rate", odom_rate_);
     p.get("simulation/command_timeout", command_timeout_).get("simulation/publish_clock", publish_clock_);
     p.get("simulation/max_command_acceleration", max_cmd_acc_).get("simulation/max_command_outside", max_cmd_out_);
-    p.get("simulation/max_command_speed", max_cmd_speed_);
+    p.get("simulation/max_command_speed", max_cmd_speed_).get("simulation/max_command_yaw_rate", max_cmd_yaw_rate_);
     p.get("simulation/world_frame", world_frame_).get("simulation/body_frame", body_frame_);
     bool use_scene_start = true;
     Eigen::Vector3d start;
@@ -58,6 +58,8 @@ class QuadrotorSim : public nodelet::Nodelet {
                                "parameter '" + p.fullName("simulation/max_command_acceleration") + "' must be > 0");
     ros_params::requireOrThrow(std::isfinite(max_cmd_speed_) && max_cmd_speed_ > 0.0, me,
                                "parameter '" + p.fullName("simulation/max_command_speed") + "' must be > 0");
+    ros_params::requireOrThrow(std::isfinite(max_cmd_yaw_rate_) && max_cmd_yaw_rate_ > 0.0, me,
+                               "parameter '" + p.fullName("simulation/max_command_yaw_rate") + "' must be > 0");
     ros_params::requireOrThrow(std::isfinite(max_cmd_out_) && max_cmd_out_ >= 0.0, me,
                                "parameter '" + p.fullName("simulation/max_command_outside") + "' must be >= 0");
     ros_params::requireOrThrow(odom_rate_ >= 10.0 && odom_rate_ <= q.dynamics_rate, me,
@@ -104,7 +106,7 @@ class QuadrotorSim : public nodelet::Nodelet {
     ref.acceleration = Eigen::Vector3d(msg->acceleration.x, msg->acceleration.y, msg->acceleration.z);
     ref.yaw = msg->yaw;
     ref.yaw_dot = msg->yaw_dot;
-    const common::Status st = sim::checkReference(ref, bounds_, max_cmd_acc_, max_cmd_out_, max_cmd_speed_);
+    const common::Status st = sim::checkReference(ref, bounds_, max_cmd_acc_, max_cmd_out_, max_cmd_speed_, max_cmd_yaw_rate_);
     std::lock_guard<std::mutex> lock(mutex_);
     if (!st.ok()) {
       ++refused_;
@@ -206,7 +208,7 @@ class QuadrotorSim : public nodelet::Nodelet {
 
   // Configuration.
   double rate_factor_ = 1.0, odom_rate_ = 100.0, command_timeout_ = 0.5;
-  double max_cmd_acc_ = 50.0, max_cmd_out_ = 10.0, max_cmd_speed_ = 20.0;
+  double max_cmd_acc_ = 50.0, max_cmd_out_ = 10.0, max_cmd_speed_ = 20.0, max_cmd_yaw_rate_ = 20.0;
   bool publish_clock_ = true;
   std::string world_frame_, body_frame_;
   common::Aabb bounds_;

@@ -2,13 +2,15 @@
 // fixed rate. In: bspline, odom. Out: position_cmd (go_feap/PositionCommand). Holds the
 // position where the last trajectory ended, or where the vehicle was, when none is active.
 // When odometry stops for longer than server/odom_timeout the current trajectory is dropped
-// and the reference holds where it was; the next trajectory resumes (the planner replans once
-// odometry is back). A trajectory whose reference, when it is taken (now, or at its start if that is
+// and the reference holds where it was; a trajectory that arrives before odometry is back is refused
+// (its start was checked against nothing but a stale pose), and the next one after resumes (the planner
+// replans once odometry is back). A trajectory whose reference, when it is taken (now, or at its start if that is
 // later), lies farther than server/max_start_offset from the vehicle's odometry is refused: the
 // controller would chase a step that large at once (a stale trajectory from a bag, another planner, a
 // start time long past). So is one whose control polygon moves faster than server/max_speed or
 // accelerates harder than server/max_acceleration (corrupt: control points of 1e308 m, or a knot span so
-// short that the reference would leap to the end at once).
+// short that the reference would leap to the end at once), and one whose heading turns faster than
+// server/max_yaw_rate.
 #include <nav_msgs/Odometry.h>
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
@@ -35,11 +37,14 @@ class TrajectoryServer : public nodelet::Nodelet {
     p.get("server/rate", rate_).get("server/odom_timeout", odom_timeout_).get("world_frame", world_frame_);
     p.get("server/max_start_offset", max_start_offset_);
     p.get("server/max_speed", max_speed_).get("server/max_acceleration", max_acceleration_);
+    p.get("server/max_yaw_rate", max_yaw_rate_);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
     ros_params::requireOrThrow(std::isfinite(max_speed_) && max_speed_ > 0.0, getName(),
                                "parameter '" + p.fullName("server/max_speed") + "' must be > 0");
     ros_params::requireOrThrow(std::isfinite(max_acceleration_) && max_acceleration_ > 0.0, getName(),
                                "parameter '" + p.fullName("server/max_acceleration") + "' must be > 0");
+    ros_params::requireOrThrow(std::isfinite(max_yaw_rate_) && max_yaw_rate_ > 0.0, getName(),
+                               "parameter '" + p.fullName("server/max_yaw_rate") + "' must be > 0");
     ros_params::requireOrThrow(std::isfinite(max_start_offset_) && max_start_offset_ > 0.0, getName(),
                                "parameter '" + p.fullName("server/max_start_offset") + "' must be > 0");
     ros_params::requireOrThrow(rate_ >= 10.0 && rate_ <= 1000.0, getName(),
@@ -59,9 +64,9 @@ class TrajectoryServer : public nodelet::Nodelet {
       NODELET_WARN_STREAM_THROTTLE(1.0, getName() << ": trajectory " << msg->traj_id << " refused: " << t.message());
       return;
     }
-    std::string bad = ros_traj::motionProblem(*t, max_speed_, max_acceleration_);
-    if (!bad.empty()) bad += " (server/max_speed, server/max_acceleration)";
-    if (bad.empty()) bad = startProblem(*t, ros::Time::now().toSec());
+    std::string bad = ros_traj::motionProblem(*t, max_speed_, max_acceleration_, max_yaw_rate_);
+    if (!bad.empty()) bad += " (server/max_speed, server/max_acceleration, server/max_yaw_rate)";
+    if (bad.empty()) bad = startProblem(*t, ros::Time::now());
     if (!bad.empty()) {
       NODELET_WARN_STREAM_THROTTLE(1.0, getName() << ": trajectory " << msg->traj_id << " refused: " << bad
                                                   << "; the reference stays as it was");
@@ -72,9 +77,17 @@ class TrajectoryServer : public nodelet::Nodelet {
 
   // Why a trajectory cannot be taken over at time `now` (s), or "" when it can. In seconds as doubles: a
   // start time is the sender's, and ros::Time arithmetic throws beyond 2^31 s.
-  std::string startProblem(const ros_traj::Trajectory& t, double now) const {
+  std::string startProblem(const ros_traj::Trajectory& t, const ros::Time& now) const {
     if (!odom_position_) return "no odometry yet to check where it starts";
-    const double from = std::max(0.0, now - t.start_time.toSec());
+    // The gap is judged here too, not only by the timer: a trajectory planned just before the odometry
+    // stopped may arrive after the timer dropped the last one, and would be flown blind to its end.
+    const double odom_age = (now - last_odom_).toSec();
+    if (odom_gap_ || odom_age > odom_timeout_) {
+      std::ostringstream why;
+      why << "no odometry for " << odom_age << " s (server/odom_timeout " << odom_timeout_ << " s)";
+      return why.str();
+    }
+    const double from = std::max(0.0, now.toSec() - t.start_time.toSec());
     const Eigen::Vector3d p = trajectory::sampleTrajectory(t, from).position;
     const double offset = (p - *odom_position_).norm();
     if (!(offset <= max_start_offset_)) {
@@ -146,7 +159,8 @@ class TrajectoryServer : public nodelet::Nodelet {
     cmd_pub_.publish(cmd);
   }
 
-  double rate_ = 100.0, odom_timeout_ = 0.5, max_start_offset_ = 1.5, max_speed_ = 30.0, max_acceleration_ = 50.0;
+  double rate_ = 100.0, odom_timeout_ = 0.5, max_start_offset_ = 1.5, max_speed_ = 30.0, max_acceleration_ = 50.0,
+         max_yaw_rate_ = 20.0;
   ros::Time last_odom_;
   std::optional<Eigen::Vector3d> odom_position_;  ///< m, of the latest usable odometry
   bool odom_gap_ = false;

@@ -53,7 +53,8 @@ common::Result<Trajectory> fromMsg(const Bspline& msg) {
   return t;
 }
 
-std::string motionProblem(const Trajectory& trajectory, double max_speed, double max_acceleration) {
+std::string motionProblem(const Trajectory& trajectory, double max_speed, double max_acceleration,
+                          double max_yaw_rate) {
   const trajectory::UniformBspline& s = trajectory.position;
   const Eigen::MatrixXd& q = s.controlPoints();
   const double dt = s.knotSpan();
@@ -69,6 +70,16 @@ std::string motionProblem(const Trajectory& trajectory, double max_speed, double
     if (const double a = ((q.col(i + 2) - 2.0 * q.col(i + 1) + q.col(i)) / (dt * dt)).stableNorm();
         !(a <= max_acceleration)) {
       why << "its control polygon reaches " << a << " m/s^2, above " << max_acceleration << " m/s^2";
+      return why.str();
+    }
+  // The heading likewise: its rate is bounded by the yaw polygon's differences over the yaw knot span (a
+  // rate of 1e7 rad/s would turn the commanded heading arbitrarily between two commands, and 1e308 rad
+  // points make the rate inf - inf = NaN).
+  const Eigen::MatrixXd& y = trajectory.yaw.controlPoints();
+  const double yaw_dt = trajectory.yaw.knotSpan();
+  for (Eigen::Index i = 0; i + 1 < y.cols(); ++i)
+    if (const double r = std::abs((y(0, i + 1) - y(0, i)) / yaw_dt); !(r <= max_yaw_rate)) {
+      why << "its yaw control polygon turns at " << r << " rad/s, above " << max_yaw_rate << " rad/s";
       return why.str();
     }
   return "";

@@ -58,7 +58,7 @@ Wrench So3Controller::compute(const QuadrotorState& s, const PositionReference& 
 }
 
 common::Status checkReference(const PositionReference& ref, const common::Aabb& bounds, double max_acceleration,
-                              double max_outside, double max_speed) {
+                              double max_outside, double max_speed, double max_yaw_rate) {
   if (!ref.position.allFinite() || !ref.velocity.allFinite() || !ref.acceleration.allFinite() ||
       !std::isfinite(ref.yaw) || !std::isfinite(ref.yaw_dot))
     return common::Status::Error("command has NaN or Inf fields");
@@ -71,6 +71,12 @@ common::Status checkReference(const PositionReference& ref, const common::Aabb& 
   if (!(ref.velocity.stableNorm() <= max_speed)) {  // stableNorm: 1e308 m/s squared would overflow
     std::ostringstream os;
     os << "command velocity " << ref.velocity.stableNorm() << " m/s exceeds " << max_speed;
+    return common::Status::Error(os.str());
+  }
+  // A heading rate of 1e7 rad/s became a body-rate error of 1e7 rad/s in the moment: the vehicle spun up.
+  if (!(std::abs(ref.yaw_dot) <= max_yaw_rate)) {
+    std::ostringstream os;
+    os << "command yaw rate " << ref.yaw_dot << " rad/s exceeds " << max_yaw_rate;
     return common::Status::Error(os.str());
   }
   const Eigen::Vector3d outside =

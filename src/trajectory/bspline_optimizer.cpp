@@ -44,6 +44,10 @@ Status OptimizerConfig::validate() const {
   if (!positive(a_max)) return err("a_max", "must be finite and > 0");
   if (!positive(yaw_rate_max)) return err("yaw_rate_max", "must be finite and > 0");
   if (!positive(yaw_acc_max)) return err("yaw_acc_max", "must be finite and > 0");
+  // A half turn takes pi * yaw_acc_max / yaw_rate_max^2 spline spans (yawTurn): 1e-4 rad/s with 10 rad/s^2
+  // was 3e9 spans, past an int.
+  if (!(M_PI * yaw_acc_max / (yaw_rate_max * yaw_rate_max) <= 1000.0))
+    return err("yaw_acc_max", "over yaw_rate_max squared must be at most 318 (a half turn in at most 1000 spline spans)");
   if (!(feasibility_margin > 0.0 && feasibility_margin <= 1.0))
     return err("feasibility_margin", "must be in (0, 1]");
   if (!non_negative(limit_tolerance)) return err("limit_tolerance", "must be finite and >= 0");

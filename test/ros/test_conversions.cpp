@@ -149,25 +149,44 @@ TEST(Conversions, VelocitiesNotFiniteOrFasterThanTheLimitAreNamed) {
   EXPECT_TRUE(says(velocityProblem(Vec3(0, 0, -20.5), 20.0, "x"), "speed 20.5 m/s")) << velocityProblem(Vec3(0, 0, -20.5), 20.0, "x");
 }
 
-// What the trajectory server refuses: a trajectory commanding more than its speed or acceleration limit.
+// What the trajectory server refuses: a trajectory commanding more than its speed, acceleration or heading
+// rate limit.
 TEST(Conversions, TrajectoriesMovingFasterThanTheServerTakesAreNamed) {
   using go_feap::ros_traj::motionProblem;
   go_feap::ros_traj::Trajectory t;
   // A braking plan from 20 m/s (planner/max_input_speed) at 2 m/s^2: its polygon stays within 30 m/s.
   t.position = go_feap::trajectory::safeStop(Vec3(0, 0, 1), Vec3(20, 0, 0), 2.0);
-  EXPECT_EQ(motionProblem(t, 30.0, 50.0), "");
-  EXPECT_TRUE(says(motionProblem(t, 30.0, 1.5), "m/s^2, above 1.5 m/s^2")) << motionProblem(t, 30.0, 1.5);
+  // A heading turn of 3 rad as the planner makes them (1 rad/s, 5 rad/s^2): within 1 rad/s and a little.
+  go_feap::trajectory::OptimizerConfig turn;
+  auto yaw = go_feap::trajectory::yawTurn(0.0, 3.0, 0.0, turn);
+  ASSERT_TRUE(yaw) << yaw.message();
+  t.yaw = *yaw;
+  EXPECT_EQ(motionProblem(t, 30.0, 50.0, 20.0), "");
+  EXPECT_EQ(motionProblem(t, 30.0, 50.0, turn.yaw_rate_max * (1.0 + turn.limit_tolerance)), "");
+  EXPECT_TRUE(says(motionProblem(t, 30.0, 1.5, 20.0), "m/s^2, above 1.5 m/s^2")) << motionProblem(t, 30.0, 1.5, 20.0);
+  EXPECT_TRUE(says(motionProblem(t, 30.0, 50.0, 0.5), "rad/s, above 0.5 rad/s")) << motionProblem(t, 30.0, 50.0, 0.5);
   // The same points 1e-9 s apart: the reference would leap to the end at once.
   Eigen::MatrixXd q = t.position.controlPoints();
   t.position = go_feap::trajectory::UniformBspline(q, 3, 1e-9);
-  EXPECT_TRUE(says(motionProblem(t, 30.0, 50.0), "m/s, above 30 m/s")) << motionProblem(t, 30.0, 50.0);
+  EXPECT_TRUE(says(motionProblem(t, 30.0, 50.0, 20.0), "m/s, above 30 m/s")) << motionProblem(t, 30.0, 50.0, 20.0);
   // Finite control points whose differences overflow.
   q.col(q.cols() - 1) << 1e308, -1e308, 0.0;
   t.position = go_feap::trajectory::UniformBspline(q, 3, 0.1);
-  EXPECT_TRUE(says(motionProblem(t, 30.0, 50.0), "above 30 m/s")) << motionProblem(t, 30.0, 50.0);
+  EXPECT_TRUE(says(motionProblem(t, 30.0, 50.0, 20.0), "above 30 m/s")) << motionProblem(t, 30.0, 50.0, 20.0);
   // Standing still is fine.
   t.position = go_feap::trajectory::UniformBspline(Eigen::MatrixXd::Ones(3, 6), 3, 0.1);
-  EXPECT_EQ(motionProblem(t, 30.0, 50.0), "");
+  EXPECT_EQ(motionProblem(t, 30.0, 50.0, 20.0), "");
+  // A heading that leaps 1e6 rad in one 0.05 s span (1e7 rad/s), and one whose points of +-1e308 rad make
+  // the rate inf - inf (NaN) on the curve.
+  Eigen::MatrixXd leap(1, 4);
+  leap << 0.0, 0.0, 1e6, 1e6;
+  t.yaw = go_feap::trajectory::UniformBspline(leap, 3, 0.05);
+  EXPECT_TRUE(says(motionProblem(t, 30.0, 50.0, 20.0), "yaw control polygon turns at 2e+07 rad/s, above 20 rad/s"))
+      << motionProblem(t, 30.0, 50.0, 20.0);
+  Eigen::MatrixXd huge(1, 8);
+  huge << 1e308, 0.0, 1e308, 0.0, 1e308, 0.0, 1e308, 0.0;
+  t.yaw = go_feap::trajectory::UniformBspline(huge, 3, 0.05);
+  EXPECT_TRUE(says(motionProblem(t, 30.0, 50.0, 20.0), "rad/s, above 20 rad/s")) << motionProblem(t, 30.0, 50.0, 20.0);
 }
 
 TEST(Conversions, FlownStepsCountUpToTheJumpLimit) {

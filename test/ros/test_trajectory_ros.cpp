@@ -12,6 +12,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <string>
 #include <vector>
 
 #include "go_feap/Bspline.h"
@@ -378,45 +379,41 @@ TEST(TrajectoryServerOdometry, UnusableOdometryIsRefusedAndTheFirstGoodPoseIsHel
   }
 }
 
-// The probe server takes over a trajectory only where its reference, when taken (now, or at its start if
-// later), lies within server/max_start_offset of the odometry: one starting 3 m away, and one planned
-// from the vehicle's pose but started at 0 s (its reference now is its end, 3 m away), are refused and
-// the server goes on holding; one starting 0.5 m away (a tracking error) is followed from there.
-TEST(TrajectoryServerStart, TrajectoriesStartingFarFromTheOdometryAreRefused) {
-  ros::NodeHandle nh;
-  double max_offset = 0.0;
-  ASSERT_TRUE(ros::param::get("/probe_trajectory_server/server/max_start_offset", max_offset));
-  auto odom_pub = nh.advertise<nav_msgs::Odometry>("probe/odom", 10);
-  auto bspline_pub = nh.advertise<go_feap::Bspline>("probe/bspline", 10);
-  go_feap::PositionCommand::ConstPtr command;
-  auto cmd_sub = nh.subscribe<go_feap::PositionCommand>(
-      "probe/position_cmd", 200, [&](const go_feap::PositionCommand::ConstPtr& m) { command = m; });
-  ASSERT_TRUE(spinUntil(
-      [&] {
-        return odom_pub.getNumSubscribers() > 0 && bspline_pub.getNumSubscribers() > 0 && cmd_sub.getNumPublishers() > 0;
-      },
-      60.0))
-      << "the probe trajectory server is not connected";
-  const Vec3 vehicle(0.5, 0.5, 1.5);
-  Every send(0.05);
-  // Spins for `seconds` of simulated time, the odometry at `vehicle` at 20 Hz; the latest command then.
-  auto hover = [&](double seconds) {
+// The probe server (probe/...) as the tests below drive it: odometry at `vehicle` at 20 Hz while it hovers,
+// straight-line trajectories, and the latest command it sent.
+class ProbeServer {
+ public:
+  ProbeServer() {
+    odom_pub_ = nh_.advertise<nav_msgs::Odometry>("probe/odom", 10);
+    bspline_pub_ = nh_.advertise<go_feap::Bspline>("probe/bspline", 10);
+    cmd_sub_ = nh_.subscribe<go_feap::PositionCommand>(
+        "probe/position_cmd", 200, [this](const go_feap::PositionCommand::ConstPtr& m) { command = m; });
+  }
+  bool connected() {
+    return spinUntil(
+        [&] {
+          return odom_pub_.getNumSubscribers() > 0 && bspline_pub_.getNumSubscribers() > 0 &&
+                 cmd_sub_.getNumPublishers() > 0;
+        },
+        60.0);
+  }
+  // Spins for `seconds` of simulated time, with the odometry at `vehicle` at 20 Hz unless `silent`; the
+  // latest command then.
+  go_feap::PositionCommand::ConstPtr hover(double seconds, bool silent = false) {
     const auto publish_odometry = [&] {
       nav_msgs::Odometry m;
       m.header.stamp = ros::Time::now();
       m.header.frame_id = "world";
       m.pose.pose.position.x = vehicle.x(), m.pose.pose.position.y = vehicle.y(), m.pose.pose.position.z = vehicle.z();
       m.pose.pose.orientation.w = 1.0;
-      odom_pub.publish(m);
+      odom_pub_.publish(m);
     };
     spinSimUntil(
-        seconds, [&] { if (send.due()) publish_odometry(); }, [] { return false; }, 30.0);
+        seconds, [&] { if (send_.due() && !silent) publish_odometry(); }, [] { return false; }, 30.0);
     return command;
-  };
-  hover(0.5);
-  ASSERT_TRUE(command) << "no command";
+  }
   // A straight flight from a to b over 3 s (7 control points, 0.75 s knot span), heading 0.
-  auto line = [&](const Vec3& a, const Vec3& b, std::int64_t id, const ros::Time& start) {
+  void fly(const Vec3& a, const Vec3& b, std::int64_t id, const ros::Time& start) {
     Eigen::MatrixXd q(3, 7), y = Eigen::MatrixXd::Zero(1, 4);
     for (int i = 0; i < 7; ++i) q.col(i) = a + (b - a) * std::clamp((i - 1) / 4.0, 0.0, 1.0);
     go_feap::ros_traj::Trajectory t;
@@ -424,27 +421,85 @@ TEST(TrajectoryServerStart, TrajectoriesStartingFarFromTheOdometryAreRefused) {
     t.yaw = go_feap::trajectory::UniformBspline(y, 3, 0.75);
     t.id = id;
     t.start_time = start;
-    return go_feap::ros_traj::toMsg(t);
-  };
-  auto commanded = [&] { return Vec3(command->position.x, command->position.y, command->position.z); };
+    bspline_pub_.publish(go_feap::ros_traj::toMsg(t));
+  }
+  Vec3 commanded() const { return Vec3(command->position.x, command->position.y, command->position.z); }
+
+  const Vec3 vehicle = Vec3(0.5, 0.5, 1.5);
+  go_feap::PositionCommand::ConstPtr command;
+
+ private:
+  ros::NodeHandle nh_;
+  ros::Publisher odom_pub_, bspline_pub_;
+  ros::Subscriber cmd_sub_;
+  Every send_{0.05};
+};
+
+// Each test below starts with the probe server connected and holding the vehicle's pose.
+class ProbeServerTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ASSERT_TRUE(probe.connected()) << "the probe trajectory server is not connected";
+    ASSERT_TRUE(probe.hover(0.5)) << "no command";
+  }
+  double param(const std::string& key) const {
+    double value = 0.0;
+    EXPECT_TRUE(ros::param::get("/probe_trajectory_server/" + key, value)) << key;
+    return value;
+  }
+  ProbeServer probe;
+};
+
+// The probe server takes over a trajectory only where its reference, when taken (now, or at its start if
+// later), lies within server/max_start_offset of the odometry: one starting 3 m away, and one planned
+// from the vehicle's pose but started at 0 s (its reference now is its end, 3 m away), are refused and
+// the server goes on holding; one starting 0.5 m away (a tracking error) is followed from there.
+TEST_F(ProbeServerTest, TrajectoriesStartingFarFromTheOdometryAreRefused) {
+  const double max_offset = param("server/max_start_offset");
+  const Vec3 vehicle = probe.vehicle;
   const Vec3 ahead = vehicle + Vec3(3.0, 0.0, 0.0);
   ASSERT_GT(3.0, max_offset);
-  bspline_pub.publish(line(ahead, ahead + Vec3(1.0, 0.0, 0.0), 901, ros::Time::now()));
-  hover(1.0);
-  EXPECT_NE(command->trajectory_id, 901u) << "a trajectory starting 3 m away was taken";
-  EXPECT_GT((commanded() - ahead).norm(), max_offset) << "the reference went towards it";
-  const Vec3 before = commanded();
-  while (ros::ok() && ros::Time::now().toSec() < 5.0) hover(0.5);
-  bspline_pub.publish(line(vehicle, ahead, 902, ros::Time(1e-3)));  // long over: now its end
-  hover(1.0);
-  EXPECT_NE(command->trajectory_id, 902u) << "a trajectory started at 0 s was taken";
-  EXPECT_LT((commanded() - before).norm(), 1e-9) << "the held reference moved";
+  probe.fly(ahead, ahead + Vec3(1.0, 0.0, 0.0), 901, ros::Time::now());
+  probe.hover(1.0);
+  EXPECT_NE(probe.command->trajectory_id, 901u) << "a trajectory starting 3 m away was taken";
+  EXPECT_GT((probe.commanded() - ahead).norm(), max_offset) << "the reference went towards it";
+  const Vec3 before = probe.commanded();
+  while (ros::ok() && ros::Time::now().toSec() < 5.0) probe.hover(0.5);
+  probe.fly(vehicle, ahead, 902, ros::Time(1e-3));  // long over: now its end
+  probe.hover(1.0);
+  EXPECT_NE(probe.command->trajectory_id, 902u) << "a trajectory started at 0 s was taken";
+  EXPECT_LT((probe.commanded() - before).norm(), 1e-9) << "the held reference moved";
   ASSERT_GT(max_offset, 0.5);
   const Vec3 near = vehicle + Vec3(0.0, 0.5, 0.0);
-  bspline_pub.publish(line(near, near + Vec3(1.0, 0.0, 0.0), 903, ros::Time::now()));
-  ASSERT_TRUE(spinUntil([&] { return hover(0.05)->trajectory_id == 903u; }, 20.0)) << "a trajectory 0.5 m away was refused";
-  EXPECT_LT((commanded() - near).norm(), 0.15) << "not followed from its start";
-  EXPECT_EQ(command->trajectory_flag, go_feap::PositionCommand::TRAJECTORY_STATUS_READY);
+  probe.fly(near, near + Vec3(1.0, 0.0, 0.0), 903, ros::Time::now());
+  ASSERT_TRUE(spinUntil([&] { return probe.hover(0.05)->trajectory_id == 903u; }, 20.0))
+      << "a trajectory 0.5 m away was refused";
+  EXPECT_LT((probe.commanded() - near).norm(), 0.15) << "not followed from its start";
+  EXPECT_EQ(probe.command->trajectory_flag, go_feap::PositionCommand::TRAJECTORY_STATUS_READY);
+}
+
+// A trajectory that reaches the server while its odometry is silent (one planned just before the odometry
+// stopped) is refused: it was checked against nothing but the last, stale pose, and the server had
+// already dropped the one before to hold position. It used to be taken and followed to its end, blind.
+// Once odometry is back, the next trajectory is followed.
+TEST_F(ProbeServerTest, ATrajectoryArrivingWhileTheOdometryIsSilentIsRefused) {
+  const double odom_timeout = param("server/odom_timeout");
+  ASSERT_GT(odom_timeout, 0.0);
+  const Vec3 vehicle = probe.vehicle;
+  // Silent for twice the timeout, then a trajectory from where the vehicle was last seen.
+  probe.hover(2.0 * odom_timeout, true);
+  const Vec3 held = probe.commanded();
+  probe.fly(vehicle, vehicle + Vec3(1.0, 0.0, 0.0), 911, ros::Time::now());
+  probe.hover(1.0, true);
+  EXPECT_NE(probe.command->trajectory_id, 911u) << "a trajectory was taken with the odometry silent";
+  EXPECT_EQ(probe.command->trajectory_flag, go_feap::PositionCommand::TRAJECTORY_STATUS_EMPTY);
+  EXPECT_LT((probe.commanded() - held).norm(), 1e-9) << "the held reference moved";
+  // Odometry back: the next one is followed.
+  probe.hover(0.3);
+  probe.fly(vehicle, vehicle + Vec3(1.0, 0.0, 0.0), 912, ros::Time::now());
+  ASSERT_TRUE(spinUntil([&] { return probe.hover(0.05)->trajectory_id == 912u; }, 20.0))
+      << "the trajectory after the odometry came back was refused";
+  EXPECT_EQ(probe.command->trajectory_flag, go_feap::PositionCommand::TRAJECTORY_STATUS_READY);
 }
 
 }  // namespace

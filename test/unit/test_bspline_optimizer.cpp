@@ -534,6 +534,16 @@ TEST(YawSpline, TurnsTheShortWayInNearlyTheLeastTimeWithinTheLimits) {
   EXPECT_FALSE(traj::yawTurn(0.0, 1.0, std::numeric_limits<double>::infinity(), config).ok());
   config.yaw_acc_max = 0.0;
   EXPECT_FALSE(traj::yawTurn(0.0, 1.0, 0.0, config).ok());
+  // A slow turn with a hard start: a half turn would take 3e9 spans (past an int); named instead.
+  config.yaw_rate_max = 1e-4;
+  config.yaw_acc_max = 10.0;
+  const auto slow = traj::yawTurn(0.0, 3.0, 0.0, config);
+  ASSERT_FALSE(slow.ok());
+  EXPECT_NE(slow.message().find("yaw_acc_max"), std::string::npos) << slow.message();
+  config.yaw_rate_max = 0.1, config.yaw_acc_max = 3.18;  // at the limit: 999 spans for a half turn
+  const auto limit = traj::yawTurn(0.0, M_PI, 0.0, config);
+  ASSERT_TRUE(limit.ok()) << limit.message();
+  EXPECT_LE(limit->numControlPoints(), 1005);
 }
 
 // ---------------------------------------------------------------------------------------------------------

@@ -189,6 +189,12 @@ TEST(Reference, BadCommandsAreRefusedWithAReason) {
   EXPECT_NE(checkReference(far, bounds).message().find("outside"), std::string::npos);
   far.position = Eigen::Vector3d(19, 0, 1);  // 9 m outside: still accepted
   EXPECT_TRUE(checkReference(far, bounds));
+  PositionReference spin = ok;
+  spin.yaw_dot = -1e7;  // finite, and the controller's moment spun the vehicle up
+  EXPECT_NE(checkReference(spin, bounds).message().find("yaw rate -1e+07 rad/s exceeds 20"), std::string::npos)
+      << checkReference(spin, bounds).message();
+  spin.yaw_dot = -20.0;  // at the limit: accepted
+  EXPECT_TRUE(checkReference(spin, bounds));
 }
 
 TEST(Config, InvalidValuesNameTheKey) {

@@ -19,10 +19,11 @@ struct Trajectory : trajectory::Trajectory {
 Bspline toMsg(const Trajectory& trajectory);
 /// Checks sizes, spacing and finiteness; the message says what is wrong.
 common::Result<Trajectory> fromMsg(const Bspline& msg);
-/// Why a trajectory would command more than max_speed (m/s) or max_acceleration (m/s^2), or "" when it
-/// cannot: its control polygon's velocity and acceleration points bound the curve's (convex hull). Catches
-/// finite control points that overflow (1e308 m) and knot spans so short that the reference would leap
-/// to the end at once.
-std::string motionProblem(const Trajectory& trajectory, double max_speed, double max_acceleration);
+/// Why a trajectory would command more than max_speed (m/s), max_acceleration (m/s^2) or a heading rate
+/// above max_yaw_rate (rad/s), or "" when it cannot: the control polygons' velocity and acceleration
+/// points bound the curves' (convex hull). Catches finite control points that overflow (1e308 m) and knot
+/// spans so short that the reference would leap to the end at once.
+std::string motionProblem(const Trajectory& trajectory, double max_speed, double max_acceleration,
+                          double max_yaw_rate);
 
 }  // namespace go_feap::ros_traj

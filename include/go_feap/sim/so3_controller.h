@@ -38,9 +38,10 @@ class So3Controller {
   QuadrotorParams vehicle_;
 };
 
-/// Why a reference is refused: NaN/Inf, |acceleration| > max_acceleration, |velocity| > max_speed, or
-/// position more than `max_outside` metres outside `bounds`. Ok when usable.
+/// Why a reference is refused: NaN/Inf, |acceleration| > max_acceleration, |velocity| > max_speed,
+/// |yaw_dot| > max_yaw_rate, or position more than `max_outside` metres outside `bounds`. Ok when usable.
 common::Status checkReference(const PositionReference& ref, const common::Aabb& bounds,
-                              double max_acceleration = 50.0, double max_outside = 10.0, double max_speed = 20.0);
+                              double max_acceleration = 50.0, double max_outside = 10.0, double max_speed = 20.0,
+                              double max_yaw_rate = 20.0);
 
 }  // namespace go_feap::sim
