@@ -172,7 +172,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     // The server dropped the trajectory (an odometry gap it saw and this timer missed): the vehicle holds
     // position, so plan again; counted on, a trajectory ending at its target was never replanned.
     if (current_ && command_ &&
-        trajectory::serverDropped(static_cast<std::uint32_t>(current_->id), current_->start_time.toSec(),
+        trajectory::serverDropped(static_cast<std::uint32_t>(current_->id), sent_time_.toSec(),
                                   command_->trajectory_flag != PositionCommand::TRAJECTORY_STATUS_EMPTY,
                                   command_->trajectory_id, command_->header.stamp.toSec(), drop_grace_)) {
       NODELET_WARN_STREAM(getName() << ": the trajectory server is not following trajectory " << current_->id
@@ -230,25 +230,28 @@ class TrajectoryPlanner : public nodelet::Nodelet {
   }
 
   // Start state: the commanded state when recent (continuity of the reference), else odometry (also
-  // right after the vehicle was found far from the reference).
-  void startState(const ros::Time& now, trajectory::PlanRequest& request) const {
+  // right after the vehicle was found far from the reference). Returns when that state held: the
+  // trajectory starts then, so that the server, which takes it over later, samples it where the
+  // reference is by then instead of a command period or an odometry age behind.
+  ros::Time startState(const ros::Time& now, trajectory::PlanRequest& request) const {
     if (!from_odometry_ && commandRecent(now)) {
       request.start = common::Vec3(command_->position.x, command_->position.y, command_->position.z);
       request.velocity = common::Vec3(command_->velocity.x, command_->velocity.y, command_->velocity.z);
       request.acceleration =
           common::Vec3(command_->acceleration.x, command_->acceleration.y, command_->acceleration.z);
       request.yaw = command_->yaw;
-    } else {
-      request.start = *odom_position_;
-      request.velocity = odom_velocity_;
-      request.acceleration.setZero();
-      request.yaw = odom_yaw_;
+      return std::min(now, command_->header.stamp);
     }
+    request.start = *odom_position_;
+    request.velocity = odom_velocity_;
+    request.acceleration.setZero();
+    request.yaw = odom_yaw_;
+    return std::min(now, odom_time_);
   }
 
   void plan(const ros::Time& now, trajectory::ReplanReason reason) {
     trajectory::PlanRequest request;
-    startState(now, request);
+    const ros::Time start_time = startState(now, request);
     request.target = *target_;
     request.target_yaw = target_yaw_;
     request.time = now.toSec();
@@ -299,7 +302,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
         break;
     }
     if (step.failsTarget()) failFrontier();
-    publish(now, std::move(step.trajectory));
+    publish(now, start_time, std::move(step.trajectory));
   }
 
   // The target's frontier counts a failed attempt (frontier_failed); wait for a new target.
@@ -310,13 +313,14 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     target_.reset();
   }
 
-  void publish(const ros::Time& now, trajectory::Trajectory planned) {
+  void publish(const ros::Time& now, const ros::Time& start_time, trajectory::Trajectory planned) {
     ros_traj::Trajectory t;
     static_cast<trajectory::Trajectory&>(t) = std::move(planned);
     t.id = ++trajectory_id_;
-    t.start_time = now;
+    t.start_time = start_time;
     current_ = t;
     bspline_pub_.publish(ros_traj::toMsg(t));
+    sent_time_ = ros::Time::now();  // after planning: the server's reports are judged from here
     visualization_msgs::Marker line;
     line.header.stamp = now;
     line.header.frame_id = world_frame_;
@@ -357,6 +361,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
   trajectory::SearchMemory search_memory_;  // flight searches that found no path lately
   std::int64_t trajectory_id_ = 0;
   ros::Time last_plan_;
+  ros::Time sent_time_;  ///< when current_ was published
   ros::Publisher compute_pub_;
   ros::Publisher bspline_pub_, marker_pub_, failed_pub_;
   ros::Subscriber handle_sub_, odom_sub_, cmd_sub_, target_sub_;

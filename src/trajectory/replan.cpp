@@ -50,9 +50,9 @@ ReplanReason shouldReplan(const ReplanInputs& inputs, const ReplanConfig& config
   return ReplanReason::kNone;
 }
 
-bool serverDropped(std::uint32_t current_id, double start_time, bool following, std::uint32_t following_id,
+bool serverDropped(std::uint32_t current_id, double sent_time, bool following, std::uint32_t following_id,
                    double report_time, double grace) {
-  if (!(report_time >= start_time + grace)) return false;  // a report from before it could arrive
+  if (!(report_time >= sent_time + grace)) return false;  // a report from before it could arrive
   return !following || following_id != current_id;
 }
 

@@ -41,10 +41,12 @@ ReplanReason shouldReplan(const ReplanInputs& inputs, const ReplanConfig& config
 
 /// The trajectory server's last report (PositionCommand), stamped `report_time` (s): whether it follows a
 /// trajectory and which (`following_id`). True when such a report, stamped at least `grace` s after
-/// trajectory `current_id` started (`start_time`, s), shows the server following another trajectory or
-/// none: it dropped this one (on an odometry gap of its own, say) and holds position. A planner still
-/// counting on a trajectory that ends at its target would wait for the vehicle to arrive for ever.
-bool serverDropped(std::uint32_t current_id, double start_time, bool following, std::uint32_t following_id,
+/// trajectory `current_id` was sent (`sent_time`, s: when it was published, not when its start state was
+/// taken, so that a plan that took long is not judged before it could arrive), shows the server following
+/// another trajectory or none: it dropped this one (on an odometry gap of its own, say) and holds
+/// position. A planner still counting on a trajectory that ends at its target would wait for the vehicle
+/// to arrive for ever.
+bool serverDropped(std::uint32_t current_id, double sent_time, bool following, std::uint32_t following_id,
                    double report_time, double grace);
 
 /// A new target, not the current one moved a little: its position moved more than target_tolerance or its
