@@ -193,16 +193,23 @@ FrontierDelta FrontierFinder::regrow(std::unordered_set<std::uint32_t> affected,
   // A cell of a cluster not marked affected: while the fill is small, that cluster's region is being
   // rebuilt, so it goes too; past max_regrow_cells the cluster is kept and the fill goes around it, so
   // an update costs about the size of the clusters it touches, not of the whole connected region.
+  // A cluster that goes has all its cells seeded: a piece of a split region can hold cells that are
+  // connected to the rest only through a cluster kept later (a U-shaped region cut across its arms), and
+  // those would otherwise be left out of every cluster, however many.
   auto kept = [&](const Index3& idx) {
     const std::uint32_t own = owner_[ownerSlot(idx)];
     if (own == 0 || affected.count(own) > 0) return false;
     if (visited.size() >= static_cast<std::size_t>(config_.max_regrow_cells)) return true;
     affected.insert(own);
     markRemoved(own);
+    if (const Frontier* f = find(own))
+      for (const Index3& c : f->cells)
+        if (isFrontierCell(c)) seeds.push_back(geo_.linear(c));
     return false;
   };
   std::vector<std::pair<std::size_t, Index3>> stack;
-  for (std::size_t s : seeds) {
+  for (std::size_t i = 0; i < seeds.size(); ++i) {  // seeds grows as clusters go (kept)
+    const std::size_t s = seeds[i];
     if (marked(s)) continue;
     const Index3 seed = geo_.unlinear(s);
     if (kept(seed)) continue;

@@ -268,6 +268,22 @@ TEST(FrontierFinder, LocalUpdatesKeepValidClustersOnRandomUpdates) {
   });
 }
 
+// With a limit the fill passes partway (a few cells), clusters the fill reached before the limit are rebuilt,
+// all their cells: a split piece can hold cells the fill does not reach past the limit (a U-shaped region
+// cut across its arms), and those were left out of every cluster, however many.
+TEST(FrontierFinder, CutOffCellsOfRebuiltClustersAreNotLostPastTheRegrowLimit) {
+  for (int limit : {3, 10, 30, 100}) {
+    frontier::FrontierConfig cfg = randomUpdateConfig();
+    cfg.max_regrow_cells = limit;
+    randomUpdates(cfg, [&](const auto& box, const auto& list, const auto& full, const auto& m, const std::string& at) {
+      const std::string where = "limit " + std::to_string(limit) + ", " + at;
+      expectValidLocalClusters(box, full, m, cfg, "box, " + where);
+      expectValidLocalClusters(list, full, m, cfg, "list, " + where);
+    });
+    if (::testing::Test::HasFailure()) return;
+  }
+}
+
 // Past max_regrow_cells, a change at one end of a long frontier ring rebuilds the clusters there and
 // keeps the others (ids and all): the cost of an update is the size of what it touches, not of the
 // connected region.
