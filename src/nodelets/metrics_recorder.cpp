@@ -237,7 +237,10 @@ class MetricsRecorder : public nodelet::Nodelet {
     s.flight_distance_m = distance_;
     s.coverage = last_sample_.coverage;
     s.wall_time_s = (ros::WallTime::now() - wall_start_).toSec();
-    if (shared_) s.extra["map_memory_mb"] = static_cast<double>(shared_->map->memoryBytes()) / (1024.0 * 1024.0);
+    if (shared_) {  // under the map's lock: the mapper grows the map's vectors while it integrates
+      std::shared_lock<std::shared_mutex> map_lock(shared_->mutex);
+      s.extra["map_memory_mb"] = static_cast<double>(shared_->map->memoryBytes()) / (1024.0 * 1024.0);
+    }
     NODELET_INFO_STREAM(getName() << ": finished (" << s.finish_reason << "): " << progressLine());
     if (!output_dir_.empty()) {
       const common::Status st = recorder_.writeAll(output_dir_);
