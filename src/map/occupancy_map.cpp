@@ -67,6 +67,16 @@ common::Status OccupancyConfig::validate() const {
   // One byte per voxel: log-odds * 50 must fit in [-127, 127].
   if (logit(p_max) * OccupancyMap::kScaleLimit() > 127.0 || logit(p_min) * OccupancyMap::kScaleLimit() < -127.0)
     return bad("p_min/p_max", "must lie within [0.08, 0.92] (one byte of log-odds per voxel)");
+  // The byte values the map works with (as the constructor rounds them): a hit step that rounds to 0
+  // (p_hit 0.502) would never mark a return occupied, and a clamp p_max that rounds to the threshold
+  // p_occupied (0.8814 and 0.881) would never let a voxel pass it: both made maps without obstacles.
+  const double scale = OccupancyMap::kScaleLimit();
+  if (std::lround(logit(p_hit) * scale) < 1)
+    return bad("p_hit", "must be at least 0.503: its log-odds step rounds to 0 at one byte per voxel");
+  if (std::lround(logit(p_miss) * scale) > -1)
+    return bad("p_miss", "must be at most 0.497: its log-odds step rounds to 0 at one byte per voxel");
+  if (std::lround(logit(p_max) * scale) <= std::floor(logit(p_occupied) * scale))
+    return bad("p_occupied", "must lie below p_max by more than one byte step of log-odds (0.02): no voxel could pass it");
   return common::Status::Ok();
 }
 
@@ -158,13 +168,17 @@ common::Result<FrameChange> OccupancyMap::integrate(const cv::Mat& depth, const 
     for (int u = 0; u < depth.cols; u += config_.skip_pixel) {
       double d = metric ? static_cast<double>(row_m[u]) : 0.001 * row_mm[u];
       bool hit = true;
-      if (!std::isfinite(d) || d <= 0.0 || d < config_.min_range) {
-        ++change.pixels_invalid;
-        if (!config_.invalid_as_free) continue;
+      // REP 117: +inf is no return within the range (free space to it), -inf a surface nearer than the
+      // range begins, NaN no measurement. A surface too near is never cast free: the ray would pass
+      // through it (a camera overshooting towards a wall cleared the wall in two frames).
+      if (d > config_.max_range) {  // beyond the range, or +inf
         d = config_.max_range;
         hit = false;
-      } else if (d > config_.max_range) {
-        d = config_.max_range;
+      } else if (!(d >= config_.min_range && d > 0.0)) {
+        ++change.pixels_invalid;
+        const bool too_near = d == -std::numeric_limits<double>::infinity() || d > 0.0;
+        if (too_near || !config_.invalid_as_free) continue;
+        d = config_.max_range;  // 0 or NaN (or negative): no measurement
         hit = false;
       }
       ++change.pixels_used;

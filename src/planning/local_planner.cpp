@@ -67,11 +67,14 @@ Result<double> obstacleRatio(const cv::Mat& depth, double max_range) {
   if (!positiveFinite(max_range)) return Result<double>::Error("obstacle ratio: max_range must be > 0");
   std::size_t close = 0;
   if (depth.type() == CV_32FC1) {
-    // NaN fails both comparisons and +inf the second: no separate finiteness test (the loop vectorises).
+    // A return nearer than max_range, or -inf (REP 117: a surface too near to measure). NaN fails every
+    // comparison and +inf the last: no separate finiteness test (the loop vectorises).
     const auto max_m = static_cast<float>(max_range);
+    constexpr float kNear = -std::numeric_limits<float>::infinity();
     for (int v = 0; v < depth.rows; ++v) {
       const float* row = depth.ptr<float>(v);
-      for (int u = 0; u < depth.cols; ++u) close += static_cast<std::size_t>((row[u] > 0.0f) & (row[u] < max_m));
+      for (int u = 0; u < depth.cols; ++u)
+        close += static_cast<std::size_t>(((row[u] > 0.0f) | (row[u] == kNear)) & (row[u] < max_m));
     }
   } else if (depth.type() == CV_16UC1) {
     const double max_mm = max_range * 1000.0;

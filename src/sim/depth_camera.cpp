@@ -141,8 +141,11 @@ void DepthRenderer::render(const Eigen::Isometry3d& T_W_C, cv::Mat& depth) const
   const CameraIntrinsics& K = intrinsics_;
   depth.create(K.height, K.width, CV_32FC1);
   depth.setTo(cv::Scalar(0.0));
-  // A camera inside a cube: every ray starts in it, depth 0 < min_range.
-  if (scene_.isOccupied(Eigen::Vector3d(T_W_C.translation()))) return;
+  // A camera inside a cube: every ray starts in it, too close everywhere.
+  if (scene_.isOccupied(Eigen::Vector3d(T_W_C.translation()))) {
+    depth.setTo(cv::Scalar(-std::numeric_limits<float>::infinity()));
+    return;
+  }
 
   // Work in grid-index units: grid vertex p lies at camera-frame point sum_a E[a] (p_a - q_a).
   const common::GridGeometry& geo = scene_.geometry();
@@ -289,15 +292,17 @@ void DepthRenderer::render(const Eigen::Isometry3d& T_W_C, cv::Mat& depth) const
         }
       }
 
-  // The buffer holds the largest inverse depth per pixel; convert and apply the range.
+  // The buffer holds the largest inverse depth per pixel (0: nothing hit); convert and apply the range
+  // as REP 117 says: +inf no return within max_range, -inf a surface nearer than min_range.
   const float w_far = static_cast<float>(1.0 / config_.max_range);
   const float w_near = config_.min_range > 0.0 ? static_cast<float>(1.0 / config_.min_range)
                                                : std::numeric_limits<float>::infinity();
+  constexpr float kInf = std::numeric_limits<float>::infinity();
   for (int v = 0; v < H; ++v) {
     float* row = depth.ptr<float>(v);
     for (int u = 0; u < W; ++u) {
       const float w = row[u];
-      row[u] = (w >= w_far && w <= w_near) ? 1.0f / w : 0.0f;
+      row[u] = w < w_far ? kInf : (w > w_near ? -kInf : 1.0f / w);
     }
   }
 }
@@ -307,17 +312,18 @@ void DepthRenderer::addNoise(cv::Mat& depth, std::mt19937_64& rng) const {
   if (depth.type() != CV_32FC1 || (sigma_per_m == 0.0 && dropout == 0.0)) return;
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
   std::normal_distribution<double> gaussian(0.0, 1.0);
+  constexpr float kInf = std::numeric_limits<float>::infinity();
   for (int v = 0; v < depth.rows; ++v) {
     float* row = depth.ptr<float>(v);
     for (int u = 0; u < depth.cols; ++u) {
-      if (!(row[u] > 0.0f)) continue;
+      if (!(row[u] > 0.0f && row[u] < kInf)) continue;  // a return only
       if (dropout > 0.0 && uniform(rng) < dropout) {
-        row[u] = 0.0f;
+        row[u] = std::numeric_limits<float>::quiet_NaN();
         continue;
       }
       if (sigma_per_m > 0.0) {
         const double d = row[u] * (1.0 + sigma_per_m * gaussian(rng));
-        row[u] = (d >= config_.min_range && d <= config_.max_range) ? static_cast<float>(d) : 0.0f;
+        row[u] = d < config_.min_range ? -kInf : (d > config_.max_range ? kInf : static_cast<float>(d));
       }
     }
   }

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <limits>
 #include <random>
@@ -62,6 +63,36 @@ double boxEntry(const Vec3& o, const Vec3& d, const Aabb& box) {
   return t0 <= t1 ? t0 : kInf;
 }
 
+/// A measured depth: REP 117's values for no measurement (+inf no return within the range, -inf too
+/// near, NaN) are not.
+bool isReturn(float d) { return d > 0.0f && d < std::numeric_limits<float>::infinity(); }
+int countReturns(const cv::Mat& depth) {
+  int n = 0;
+  for (int v = 0; v < depth.rows; ++v)
+    for (int u = 0; u < depth.cols; ++u) n += isReturn(depth.at<float>(v, u));
+  return n;
+}
+int countEqual(const cv::Mat& depth, float value) {
+  int n = 0;
+  for (int v = 0; v < depth.rows; ++v)
+    for (int u = 0; u < depth.cols; ++u) {
+      const float d = depth.at<float>(v, u);
+      n += std::isnan(value) ? std::isnan(d) : d == value;
+    }
+  return n;
+}
+/// The same pixels bit for bit (NaN included).
+bool sameBits(const cv::Mat& a, const cv::Mat& b) {
+  return a.size() == b.size() && a.type() == b.type() && a.isContinuous() && b.isContinuous() &&
+         std::memcmp(a.data, b.data, a.total() * a.elemSize()) == 0;
+}
+
+/// The renderer's range rules (REP 117) on the depth t of the first surface along a pixel's ray.
+float inRange(double t, const DepthCameraConfig& config) {
+  if (t < config.min_range) return -std::numeric_limits<float>::infinity();
+  return t <= config.max_range ? static_cast<float>(t) : std::numeric_limits<float>::infinity();
+}
+
 /// Analytic depth image of a union of boxes, with the renderer's range rules.
 cv::Mat analyticDepth(const std::vector<Aabb>& boxes, const DepthCameraConfig& config,
                       const Eigen::Isometry3d& T) {
@@ -72,7 +103,7 @@ cv::Mat analyticDepth(const std::vector<Aabb>& boxes, const DepthCameraConfig& c
       const Vec3 d = pixelRay(K, T, u, v);
       double t = kInf;
       for (const Aabb& b : boxes) t = std::min(t, boxEntry(T.translation(), d, b));
-      if (t >= config.min_range && t <= config.max_range) depth.at<float>(v, u) = static_cast<float>(t);
+      depth.at<float>(v, u) = inRange(t, config);
     }
   return depth;
 }
@@ -112,7 +143,7 @@ cv::Mat traversedDepth(const world::Scene& scene, const DepthCameraConfig& confi
   for (int v = 0; v < K.height; ++v)
     for (int u = 0; u < K.width; ++u) {
       const double t = traverseDepth(scene, T.translation(), pixelRay(K, T, u, v), config.max_range + 1.0);
-      if (t >= config.min_range && t <= config.max_range) depth.at<float>(v, u) = static_cast<float>(t);
+      depth.at<float>(v, u) = inRange(t, config);
     }
   return depth;
 }
@@ -127,7 +158,7 @@ struct Comparison {
 /// reference when some 8-neighbour of the reference holds its value (a shifted edge).
 Comparison compare(const cv::Mat& rendered, const cv::Mat& reference) {
   Comparison c;
-  auto close = [](float a, float b) { return (a == 0.0f) == (b == 0.0f) && std::abs(a - b) <= kDepthTol; };
+  auto close = [](float a, float b) { return a == b || (isReturn(a) && isReturn(b) && std::abs(a - b) <= kDepthTol); };
   for (int v = 0; v < rendered.rows; ++v)
     for (int u = 0; u < rendered.cols; ++u) {
       const float r = rendered.at<float>(v, u);
@@ -164,7 +195,7 @@ void expectMatchesBoxes(const std::vector<Aabb>& boxes, double resolution, const
   const DepthRenderer renderer(config, scene);
   cv::Mat depth;
   renderer.render(T, depth);
-  EXPECT_GT(cv::countNonZero(depth), config.width * config.height / 20) << "too little in view to compare";
+  EXPECT_GT(countReturns(depth), config.width * config.height / 20) << "too little in view to compare";
   const Comparison c = compare(depth, analyticDepth(boxes, config, T));
   EXPECT_EQ(c.beyond_one_pixel, 0);
   EXPECT_LE(c.differing, max_differing);
@@ -276,7 +307,7 @@ TEST_P(DepthRendererTest, BoxSilhouetteLandsOnItsProjectedEdges) {
     int first = -1, last = -1;
     for (int u = 0; u < depth.cols; ++u) {
       const float d = depth.at<float>(v, u);
-      if (d == 0.0f) continue;
+      if (!isReturn(d)) continue;
       EXPECT_NEAR(d, 2.0, 1e-4);
       if (first < 0) first = u;
       last = u;
@@ -287,7 +318,7 @@ TEST_P(DepthRendererTest, BoxSilhouetteLandsOnItsProjectedEdges) {
     last_row = v;
     EXPECT_NEAR(first, u_left, 1.0) << "row " << v;
     EXPECT_NEAR(last, u_right, 1.0) << "row " << v;
-    EXPECT_EQ(last - first + 1, cv::countNonZero(depth.row(v))) << "row " << v << " has a hole";
+    EXPECT_EQ(last - first + 1, countReturns(depth.row(v))) << "row " << v << " has a hole";
   }
   EXPECT_NEAR(first_row, v_top, 1.0);
   EXPECT_NEAR(last_row, v_bottom, 1.0);
@@ -300,31 +331,33 @@ TEST_P(DepthRendererTest, BoxSilhouetteLandsOnItsProjectedEdges) {
   expectMatchesBoxes({box}, GetParam(), cfg, cameraPose(Vec3(1.1, 1.37, 0.44), deg(-71.0), deg(-20.0)));
 }
 
-TEST_P(DepthRendererTest, PixelsOutsideTheRangeAreZero) {
+// REP 117: +inf where no surface lies within max_range, -inf where the first one is nearer than min_range.
+TEST_P(DepthRendererTest, PixelsOutsideTheRangeAreInfinite) {
   const DepthCameraConfig config;  // 0.1 .. 4.5 m
   const Vec3 p(0.0, 0.0, 1.0);
+  constexpr float kFar = std::numeric_limits<float>::infinity();
   cv::Mat depth;
   {  // Wall beyond max_range.
     const world::Scene scene = sceneWithBoxes({{Vec3(4.6, -4.0, -2.0), Vec3(5.0, 4.0, 4.0)}}, GetParam());
     DepthRenderer(config, scene).render(cameraPose(p, 0.0), depth);
-    EXPECT_EQ(cv::countNonZero(depth), 0);
+    EXPECT_EQ(countEqual(depth, kFar), 640 * 480);
   }
   {  // The same wall just within range.
     const world::Scene scene = sceneWithBoxes({{Vec3(4.4, -4.0, -2.0), Vec3(5.0, 4.0, 4.0)}}, GetParam());
     DepthRenderer(config, scene).render(cameraPose(p, 0.0), depth);
-    EXPECT_EQ(cv::countNonZero(depth), 640 * 480);
+    EXPECT_EQ(countReturns(depth), 640 * 480);
   }
   {  // Nothing in view.
     const world::Scene scene = sceneWithBoxes({{Vec3(-1.0, -4.0, -2.0), Vec3(-0.6, 4.0, 4.0)}}, GetParam());
     DepthRenderer(config, scene).render(cameraPose(p, 0.0), depth);
-    EXPECT_EQ(cv::countNonZero(depth), 0);
+    EXPECT_EQ(countEqual(depth, kFar), 640 * 480);
   }
   {  // Wall closer than min_range occludes everything behind it.
     const world::Scene scene = sceneWithBoxes(
         {{Vec3(0.0, -4.0, -2.0), Vec3(0.2, 4.0, 4.0)}, {Vec3(2.0, -4.0, -2.0), Vec3(2.2, 4.0, 4.0)}},
         GetParam());
     DepthRenderer(config, scene).render(cameraPose(Vec3(-0.05, 0.0, 1.0), 0.0), depth);
-    EXPECT_EQ(cv::countNonZero(depth), 0);
+    EXPECT_EQ(countEqual(depth, -kFar), 640 * 480);
   }
   // A floor seen from 0.5 m looking down: near rows fall below min_range after pitching,
   // far ones beyond max_range; compared pixel-wise with the analytic floor.
@@ -348,18 +381,20 @@ TEST_P(DepthRendererTest, YawingTheCameraTurnsTheView) {
   renderer.render(cameraPose(p, 0.0), ahead);
   // Yawed 90 deg to the left the wall fills the view at 2 - y.
   renderer.render(cameraPose(p, deg(90.0)), left);
-  EXPECT_EQ(cv::countNonZero(left), 640 * 480);
+  EXPECT_EQ(countReturns(left), 640 * 480);
   for (int v = 0; v < K.height; ++v)
     for (int u = 0; u < K.width; ++u) {
       EXPECT_NEAR(left.at<float>(v, u), 2.0 - p.y(), 1e-4);
       const double slope = (K.cx - u) / K.fx;
-      const double expected = slope > 0.0 ? (2.0 - p.y()) / slope : 0.0;
+      const double expected = slope > 0.0 ? (2.0 - p.y()) / slope : kInf;
       if (std::abs(expected - config.max_range) < 1e-3) continue;  // on the range edge
-      EXPECT_NEAR(ahead.at<float>(v, u), expected <= config.max_range ? expected : 0.0, 1e-3)
-          << "u " << u << " v " << v;
+      if (expected > config.max_range)
+        EXPECT_EQ(ahead.at<float>(v, u), std::numeric_limits<float>::infinity()) << "u " << u << " v " << v;
+      else
+        EXPECT_NEAR(ahead.at<float>(v, u), expected, 1e-3) << "u " << u << " v " << v;
     }
-  EXPECT_GT(cv::countNonZero(ahead), 0);
-  EXPECT_LT(cv::countNonZero(ahead), 640 * 480 / 2);
+  EXPECT_GT(countReturns(ahead), 0);
+  EXPECT_LT(countReturns(ahead), 640 * 480 / 2);
   for (double yaw : {30.0, 45.0, 120.0, 160.0})
     expectMatchesBoxes(wall, GetParam(), config, cameraPose(p, deg(yaw)));
 }
@@ -385,7 +420,7 @@ TEST_P(DepthRendererTest, RollingAboutTheOpticalAxisRotatesTheImage) {
     for (int u = 0; u < 201; ++u)
       differing += std::abs(rolled.at<float>(200 - u, v) - upright.at<float>(v, u)) > 1e-4f;
   EXPECT_EQ(differing, 0);
-  EXPECT_GT(cv::countNonZero(upright), 201 * 100);
+  EXPECT_GT(countReturns(upright), 201 * 100);
   expectMatchesBoxes(boxes, GetParam(), config, cameraPose(p, deg(5.0)));
   expectMatchesBoxes(boxes, GetParam(), config, cameraPose(p, deg(5.0), 0.0, deg(90.0)));
   expectMatchesBoxes(boxes, GetParam(), config, cameraPose(p, deg(-40.0), deg(10.0), deg(33.0)));
@@ -430,7 +465,7 @@ TEST_P(DepthRendererTest, SlantedWallsSeenAtGrazingAnglesHaveNoHoles) {
         if (std::abs(hit.y()) > 3.2 || hit.x() < -1.0 || hit.x() > 8.0) continue;
         if (t == tw && !(hit.x() > 0.0 && hit.x() < 7.0 && hit.z() > -0.3 && hit.z() < 3.0)) continue;
         ++covered;
-        holes += depth.at<float>(v, u) == 0.0f;
+        holes += !isReturn(depth.at<float>(v, u));
       }
     EXPECT_GT(covered, 640 * 480 / 3) << "yaw " << yaw;
     EXPECT_EQ(holes, 0) << "yaw " << yaw;
@@ -483,12 +518,12 @@ TEST(DepthRenderer, CameraOutsideTheGridSeesTheScene) {
   expectMatchesBoxes(boxes, 0.1, config, cameraPose(Vec3(1.3, 0.21, 5.9), deg(-10.0), deg(75.0)));
 }
 
-TEST(DepthRenderer, CameraInsideAnOccupiedVoxelSeesNothing) {
+TEST(DepthRenderer, CameraInsideAnOccupiedVoxelSeesEverythingTooNear) {
   const world::Scene scene = sceneWithBoxes({{Vec3(0.0, -1.0, 0.0), Vec3(3.0, 1.0, 2.0)}}, 0.1);
   const DepthRenderer renderer(DepthCameraConfig(), scene);
   cv::Mat depth;
   renderer.render(cameraPose(Vec3(1.0, 0.0, 1.0), 0.0), depth);
-  EXPECT_EQ(cv::countNonZero(depth), 0);
+  EXPECT_EQ(countEqual(depth, -std::numeric_limits<float>::infinity()), 640 * 480);
 }
 
 TEST(DepthRendererNoise, ZeroConfigChangesNothing) {
@@ -499,21 +534,22 @@ TEST(DepthRendererNoise, ZeroConfigChangesNothing) {
   noisy = clean.clone();
   std::mt19937_64 rng(1), untouched(1);
   renderer.addNoise(noisy, rng);
-  EXPECT_EQ(cv::norm(noisy, clean, cv::NORM_INF), 0.0);
+  EXPECT_TRUE(sameBits(noisy, clean));
+  EXPECT_GT(countEqual(clean, std::numeric_limits<float>::infinity()), 0);  // beyond the wall's edge: kept
   EXPECT_EQ(rng(), untouched());
 }
 
-TEST(DepthRendererNoise, FullDropoutZeroesEverything) {
+TEST(DepthRendererNoise, FullDropoutLeavesNoMeasurement) {
   const world::Scene scene = sceneWithBoxes({{Vec3(2.0, -4.0, -2.0), Vec3(2.2, 4.0, 4.0)}}, 0.1);
   DepthCameraConfig config;
   config.dropout_probability = 1.0;
   const DepthRenderer renderer(config, scene);
   cv::Mat depth;
   renderer.render(cameraPose(Vec3(0.0, 0.0, 1.0), 0.0), depth);
-  ASSERT_EQ(cv::countNonZero(depth), 640 * 480);
+  ASSERT_EQ(countReturns(depth), 640 * 480);
   std::mt19937_64 rng(3);
   renderer.addNoise(depth, rng);
-  EXPECT_EQ(cv::countNonZero(depth), 0);
+  EXPECT_EQ(countEqual(depth, std::numeric_limits<float>::quiet_NaN()), 640 * 480);  // REP 117: no measurement
 }
 
 TEST(DepthRendererNoise, StatisticsMatchTheModelOnAFlatWall) {
@@ -531,7 +567,7 @@ TEST(DepthRendererNoise, StatisticsMatchTheModelOnAFlatWall) {
   int valid = 0;
   for (int v = 0; v < noisy.rows; ++v)
     for (int u = 0; u < noisy.cols; ++u) {
-      if (noisy.at<float>(v, u) == 0.0f) continue;
+      if (!isReturn(noisy.at<float>(v, u))) continue;
       const double e = noisy.at<float>(v, u) - clean.at<float>(v, u);
       sum += e;
       sum_sq += e * e;
@@ -547,5 +583,5 @@ TEST(DepthRendererNoise, StatisticsMatchTheModelOnAFlatWall) {
   cv::Mat again = clean.clone();
   std::mt19937_64 rng2(42);
   renderer.addNoise(again, rng2);
-  EXPECT_EQ(cv::norm(again, noisy, cv::NORM_INF), 0.0);
+  EXPECT_TRUE(sameBits(again, noisy));
 }

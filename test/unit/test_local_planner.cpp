@@ -84,9 +84,10 @@ TEST(ObstacleRatio, SyntheticImages) {
   m.at<float>(16, 3) = -1.0f;  // invalid
   m.at<float>(17, 3) = 4.5f;   // at the range: not closer
   m.at<float>(18, 3) = 4.49f;  // closer
+  m.at<float>(19, 3) = -std::numeric_limits<float>::infinity();  // REP 117: too near to measure, an obstacle
   auto r = obstacleRatio(m, 4.5);
   ASSERT_TRUE(r.ok()) << r.message();
-  EXPECT_DOUBLE_EQ(*r, 301.0 / 1200.0);
+  EXPECT_DOUBLE_EQ(*r, 302.0 / 1200.0);
 
   cv::Mat mm(10, 10, CV_16UC1, cv::Scalar(0));
   mm.rowRange(0, 3).setTo(2000);   // 2 m

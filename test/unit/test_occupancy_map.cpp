@@ -12,6 +12,7 @@
 
 #include "go_feap/map/voxel_map.h"
 #include "go_feap/sim/depth_camera.h"
+#include "go_feap/world/shapes.h"
 #include "go_feap/world/generators.h"
 
 using namespace go_feap;
@@ -68,7 +69,7 @@ std::set<std::size_t> visibleSurface(const Fixture& f, const sim::DepthRenderer&
     for (int v = 0; v < depth.rows; ++v)
       for (int u = 0; u < depth.cols; ++u) {
         const double d = depth.at<float>(v, u);
-        if (d <= 0) continue;
+        if (!(d > 0 && std::isfinite(d))) continue;  // a return only (REP 117: +-inf, NaN are none)
         const Vec3 ray = T.linear() * Vec3((u - K.cx) / K.fx, (v - K.cy) / K.fy, 1.0);
         const Vec3 p = T.translation() + ray * d + ray.normalized() * 1e-4;
         const Index3 idx = geo.coordToIndex(p);
@@ -137,6 +138,9 @@ TEST(OccupancyMap, MillimetreAndMetreEncodingsGiveTheSameMap) {
   cv::Mat depth, mm, metres;
   for (std::size_t i = 0; i < f.poses.size(); i += 3) {
     renderer.render(f.poses[i], depth);
+    for (int v = 0; v < depth.rows; ++v)  // no millimetres for REP 117's +-inf and NaN: 0, as a D435i sends
+      for (int u = 0; u < depth.cols; ++u)
+        if (!std::isfinite(depth.at<float>(v, u))) depth.at<float>(v, u) = 0.0f;
     depth.convertTo(mm, CV_16UC1, 1000.0);  // rounds to the millimetre, as a D435i does
     mm.convertTo(metres, CV_32FC1, 0.001);
     ASSERT_TRUE(a.integrate(mm, intrinsicsOf(f.camera.intrinsics()), f.poses[i]));
@@ -176,6 +180,102 @@ TEST(OccupancyMap, InvalidPixelsAreFreeOrSkippedByParameter) {
   EXPECT_TRUE(info->frame.became_occupied.empty());
   EXPECT_EQ(m.occupancy().state(Vec3(4.3, 0.0, 1.0)), VoxelState::kFree);
   EXPECT_EQ(m.occupancy().state(Vec3(4.8, 0.0, 1.0)), VoxelState::kUnknown);
+}
+
+// The probabilities become byte steps of log-odds (1/50 each). A configuration whose hit or miss step
+// rounds to 0, or whose clamp p_max rounds to no more than the threshold p_occupied, is refused with the key
+// named; every configuration that is accepted must map a surface seen again and again as occupied and the
+// same voxel, then seen through again and again, as free (which those refused ones never did).
+TEST(OccupancyMap, ConfigsWhoseByteStepsVanishAreRefusedAndAcceptedOnesMapObstacles) {
+  const map::DepthIntrinsics K{8, 6, 8.0, 8.0, 4.0, 3.0};
+  world::Scene empty = world::makeEmptyScene("empty", {Vec3(-1, -3, 0), Vec3(5, 3, 3)}, 0.1, 0.0);
+  const auto T = cameraPose(Vec3(0, 0, 1.5), 0.0);
+  const cv::Mat wall(K.height, K.width, CV_32FC1, cv::Scalar(2.05f)), through(K.height, K.width, CV_32FC1, cv::Scalar(9.0f));
+  const Vec3 surface(2.052, 0.0, 1.5);  // where the return on the optical axis is marked, just behind the face
+  int accepted = 0, refused = 0;
+  for (double p_hit : {0.5005, 0.502, 0.503, 0.51, 0.65})
+    for (double p_miss : {0.4995, 0.498, 0.497, 0.35})
+      for (auto [p_occupied, p_max] : {std::pair{0.8, 0.9}, std::pair{0.881, 0.8814}, std::pair{0.87, 0.8814}}) {
+        map::MapConfig c = mapConfig();
+        c.occupancy.skip_pixel = 1;
+        c.occupancy.p_hit = p_hit, c.occupancy.p_miss = p_miss;
+        c.occupancy.p_occupied = p_occupied, c.occupancy.p_max = p_max;
+        const std::string what = "p_hit " + std::to_string(p_hit) + ", p_miss " + std::to_string(p_miss) +
+                                 ", p_occupied " + std::to_string(p_occupied) + ", p_max " + std::to_string(p_max);
+        const common::Status st = c.occupancy.validate();
+        if (!st.ok()) {
+          ++refused;
+          const bool named = (p_hit < 0.503 && st.message().find("p_hit") != std::string::npos) ||
+                             (p_miss > 0.497 && st.message().find("p_miss") != std::string::npos) ||
+                             (p_occupied == 0.881 && st.message().find("p_occupied") != std::string::npos);
+          EXPECT_TRUE(named) << what << ": " << st.message();
+          continue;
+        }
+        ++accepted;
+        map::VoxelMap m(c, empty.box);
+        auto seeUntil = [&](const cv::Mat& depth, VoxelState wanted) {
+          for (int i = 0; i < 300; ++i) {
+            EXPECT_TRUE(m.integrate(depth, K, T)) << what;
+            if (m.occupancy().state(surface) == wanted) return true;
+          }
+          return false;
+        };
+        EXPECT_TRUE(seeUntil(wall, VoxelState::kOccupied)) << what << ": a surface seen 300 times is not occupied";
+        EXPECT_TRUE(seeUntil(through, VoxelState::kFree)) << what << ": seen through 300 times, still not free";
+        EXPECT_TRUE(seeUntil(wall, VoxelState::kOccupied)) << what << ": seen again 300 times, not occupied";
+      }
+  EXPECT_EQ(accepted, 3 * 2 * 2);  // p_hit 0.503 and up, p_miss 0.497 and down, the two real margins
+  EXPECT_EQ(refused, 5 * 4 * 3 - accepted);
+}
+
+// REP 117's values: +inf (no return within the range) is free space to max_range whatever
+// invalid_as_free says; -inf and a depth below min_range (a surface too near to measure) are never cast
+// free, with invalid_as_free or without: the ray would pass through that surface. The rendered frames of a
+// wall: mapped from 2 m, then with the camera against it (its frame all -inf), the wall stays occupied; it
+// used to be cleared in two frames (0 too near, taken as free to max_range).
+TEST(OccupancyMap, ASurfaceTooNearIsNeverCastFreeAndNoReturnIsFree) {
+  world::Scene empty = world::makeEmptyScene("empty", {Vec3(-6, -6, -2), Vec3(6, 6, 4)}, 0.1, 0.0);
+  sim::DepthCameraConfig cam;
+  const auto K = intrinsicsOf(cam.intrinsics());
+  const auto T = cameraPose(Vec3(0, 0, 1), 0.0);
+  const float inf = std::numeric_limits<float>::infinity();
+  for (bool as_free : {true, false}) {
+    map::MapConfig c = mapConfig();
+    c.occupancy.invalid_as_free = as_free;
+    for (float near : {-inf, 0.05f}) {
+      map::VoxelMap m(c, empty.box);
+      auto info = m.integrate(cv::Mat(cam.height, cam.width, CV_32FC1, cv::Scalar(near)), K, T);
+      ASSERT_TRUE(info) << info.message();
+      EXPECT_EQ(m.occupancy().knownCount(), 0u) << "a frame too near changed the map (invalid_as_free " << as_free << ")";
+      EXPECT_EQ(info->frame.pixels_invalid, (cam.width / 2) * (cam.height / 2));
+    }
+    map::VoxelMap m(c, empty.box);
+    auto info = m.integrate(cv::Mat(cam.height, cam.width, CV_32FC1, cv::Scalar(inf)), K, T);
+    ASSERT_TRUE(info) << info.message();
+    EXPECT_EQ(info->frame.pixels_invalid, 0u);
+    EXPECT_EQ(m.occupancy().state(Vec3(4.3, 0.0, 1.0)), VoxelState::kFree) << "invalid_as_free " << as_free;
+    EXPECT_EQ(m.occupancy().state(Vec3(4.8, 0.0, 1.0)), VoxelState::kUnknown);
+    EXPECT_TRUE(info->frame.became_occupied.empty());
+  }
+
+  // A wall face at x = 2.0, seen by the simulated camera from 2 m, then from 0.05 m in front of it.
+  world::Scene scene = world::makeEmptyScene("wall", {Vec3(-1, -3, 0), Vec3(3, 3, 2.5)}, 0.1, 0.0);
+  world::fillBox(scene, {Vec3(2.0, -3.0, 0.0), Vec3(2.4, 3.0, 2.5)});
+  const sim::DepthRenderer renderer(cam, scene);
+  map::VoxelMap m(mapConfig(), scene.box);
+  cv::Mat depth;
+  renderer.render(cameraPose(Vec3(0.0, 0.0, 1.2), 0.0), depth);
+  for (int i = 0; i < 3; ++i) ASSERT_TRUE(m.integrate(depth, K, cameraPose(Vec3(0.0, 0.0, 1.2), 0.0)));
+  std::vector<Vec3> face;
+  for (double y = -0.55; y <= 0.55; y += 0.1)
+    for (double z = 0.75; z <= 1.65; z += 0.1) face.emplace_back(2.05, y, z);
+  for (const Vec3& p : face) ASSERT_EQ(m.occupancy().state(p), VoxelState::kOccupied) << p.transpose();
+  const auto against = cameraPose(Vec3(1.95, 0.0, 1.2), 0.0);
+  renderer.render(against, depth);
+  ASSERT_EQ(cv::countNonZero(depth == -inf), cam.width * cam.height) << "the frame is not all too near";
+  for (int i = 0; i < 5; ++i) ASSERT_TRUE(m.integrate(depth, K, against));
+  for (const Vec3& p : face) EXPECT_EQ(m.occupancy().state(p), VoxelState::kOccupied) << p.transpose();
+  EXPECT_EQ(m.occupancy().state(Vec3(2.55, 0.0, 1.2)), VoxelState::kUnknown) << "space behind the wall was cast free";
 }
 
 TEST(OccupancyMap, BadFramesAreRefusedAndChangeNothing) {

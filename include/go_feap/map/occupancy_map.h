@@ -27,8 +27,8 @@ struct OccupancyConfig {
   double p_min = 0.12;       ///< clamp
   double p_max = 0.90;       ///< clamp
   double p_occupied = 0.80;  ///< occupied above this probability
-  double min_range = 0.1;    ///< m, depth below: invalid
-  double max_range = 4.5;    ///< m, depth beyond: free up to max_range, no return
+  double min_range = 0.1;    ///< m, depth below (and -inf): a surface too near to measure, skipped
+  double max_range = 4.5;    ///< m, depth beyond (and +inf): free up to max_range, no return
   int skip_pixel = 2;        ///< integrate every skip_pixel-th pixel in u and v
   bool invalid_as_free = true;  ///< 0/NaN pixels: free up to max_range (simulation) or skipped (real sensor)
 
@@ -48,7 +48,7 @@ struct DepthIntrinsics {
 struct FrameChange {
   std::size_t rays = 0;              ///< rays cast (after merging pixels that end in the same voxel)
   std::size_t pixels_used = 0;       ///< sampled pixels that were integrated
-  std::size_t pixels_invalid = 0;    ///< sampled pixels that were 0, NaN, Inf or negative
+  std::size_t pixels_invalid = 0;    ///< sampled pixels that were 0, NaN, negative, -inf or below min_range
   std::size_t changed_voxels = 0;    ///< voxels whose state (unknown/free/occupied) changed
   bool any_change = false;
   Index3 changed_min = Index3::Zero(), changed_max = Index3::Zero();  ///< inclusive, when any_change

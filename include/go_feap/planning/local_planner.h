@@ -79,8 +79,8 @@ struct LocalPlannerConfig {
 };
 
 /// flag_i of a depth frame: the share of all its pixels that hold a valid return (finite, > 0) closer
-/// than max_range (m). CV_32FC1 in metres or CV_16UC1 in millimetres. Errors: an empty image, another
-/// type, or max_range not > 0.
+/// than max_range (m), or -inf (REP 117: a surface too near to measure). CV_32FC1 in metres or CV_16UC1
+/// in millimetres. Errors: an empty image, another type, or max_range not > 0.
 common::Result<double> obstacleRatio(const cv::Mat& depth, double max_range);
 
 /// The sliding window flag_que of the last window_size obstacle ratios.

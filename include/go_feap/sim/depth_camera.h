@@ -57,17 +57,18 @@ class DepthRenderer {
   DepthRenderer(const DepthCameraConfig& config, const world::Scene& scene);
 
   /// Renders a CV_32FC1 depth image in metres (optical-frame z of the first occupied voxel
-  /// surface hit by the ray through each pixel centre), 0 where that surface is nearer than
-  /// min_range (it occludes the view), farther than max_range, or absent. A camera inside
-  /// an occupied voxel sees 0 everywhere. `depth` is (re)allocated to height x width.
+  /// surface hit by the ray through each pixel centre), with REP 117's values where there is no
+  /// measurement: -inf where that surface is nearer than min_range (it occludes the view), +inf where
+  /// it is farther than max_range or absent. A camera inside an occupied voxel sees -inf everywhere.
+  /// `depth` is (re)allocated to height x width.
   /// T_W_C maps camera optical-frame coordinates (z forward, x right, y down) to world.
   void render(const Eigen::Isometry3d& T_W_C, cv::Mat& depth) const;
 
   /// Applies the configured noise and dropout in place to a CV_32FC1 image from render():
-  /// a valid pixel is dropped (set to 0) with probability dropout_probability, otherwise
-  /// gets Gaussian noise of sigma noise_stddev_per_m * depth; a noisy value that leaves
-  /// [min_range, max_range] becomes 0. Invalid (0) pixels stay 0. Deterministic for a given
-  /// rng state; draws nothing when both settings are 0.
+  /// a return is dropped (set to NaN, REP 117's "no measurement") with probability
+  /// dropout_probability, otherwise gets Gaussian noise of sigma noise_stddev_per_m * depth; a noisy
+  /// value below min_range becomes -inf, above max_range +inf. Pixels without a return stay as they
+  /// are. Deterministic for a given rng state; draws nothing when both settings are 0.
   void addNoise(cv::Mat& depth, std::mt19937_64& rng) const;
 
   const DepthCameraConfig& config() const { return config_; }
