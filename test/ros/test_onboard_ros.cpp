@@ -13,6 +13,9 @@
 #include <tf2_eigen/tf2_eigen.h>
 #include <tf2_ros/transform_listener.h>
 
+#include <cmath>
+#include <cstring>
+
 #include "go_feap/ExplorationStatus.h"
 #include "go_feap/MapUpdate.h"
 #include "go_feap/PositionCommand.h"
@@ -44,6 +47,22 @@ TEST(Onboard, RunsTheChainOnD435iDepthAndVioOdometry) {
 
   ASSERT_TRUE(spinUntil([&] { return depth && odom && status; }, 60.0)) << "no depth, odometry or status";
   EXPECT_EQ(depth->encoding, "16UC1");
+  {  // Millimetres in the camera's range, or 0 for no measurement (the renderer's +-inf and NaN, REP 117:
+     // converted unpatched, +inf saturated to 65535 mm, a wall 65 m away)
+    double min_range = 0.0, max_range = 0.0;
+    ASSERT_TRUE(ros::param::get("/vehicle/depth_camera/depth_camera/min_range", min_range));
+    ASSERT_TRUE(ros::param::get("/vehicle/depth_camera/depth_camera/max_range", max_range));
+    ASSERT_EQ(depth->step, depth->width * 2);
+    std::size_t in_range = 0, none = 0;
+    for (std::size_t i = 0; i + 1 < depth->data.size(); i += 2) {
+      std::uint16_t mm;
+      std::memcpy(&mm, &depth->data[i], 2);
+      in_range += mm >= std::floor(1000.0 * min_range) && mm <= std::ceil(1000.0 * max_range);
+      none += mm == 0;
+    }
+    EXPECT_EQ(in_range + none, std::size_t{depth->width} * depth->height) << "millimetres out of range";
+    EXPECT_GT(in_range, 0u);
+  }
   ASSERT_TRUE(spinUntil([&] { return changed > 1000; }, 60.0)) << "the mapper integrated no 16UC1 frame via TF";
   EXPECT_EQ(status->state, go_feap::ExplorationStatus::WAIT_TRIGGER) << "onboard waits for a trigger";
 
