@@ -187,10 +187,12 @@ TEST_F(TrajectoryTargetTest, AnOdometryJumpAwayFromTheReferenceIsPlannedFromTheO
   auto cmd_pub = nh_.advertise<go_feap::PositionCommand>("probe/jump/position_cmd", 10);
   auto target_pub = nh_.advertise<go_feap::ViewpointPath>("probe/jump/local_target", 5);
   std::vector<go_feap::ros_traj::Trajectory> planned;
+  std::vector<double> received;  // when each arrived (simulated time)
   auto bspline_sub = nh_.subscribe<go_feap::Bspline>("probe/jump/bspline", 20, [&](const go_feap::Bspline::ConstPtr& m) {
     auto t = go_feap::ros_traj::fromMsg(*m);
     ASSERT_TRUE(t) << t.message();
     planned.push_back(*t);
+    received.push_back(ros::Time::now().toSec());
   });
   // The probe planner saying it has had no odometry (this test held up past the timeout).
   bool gap = false;
@@ -326,6 +328,33 @@ TEST_F(TrajectoryTargetTest, AnOdometryJumpAwayFromTheReferenceIsPlannedFromTheO
   const go_feap::trajectory::TrajectorySample sane = go_feap::trajectory::sampleTrajectory(planned.back(), 0.0);
   EXPECT_LT((sane.position - odometry_pose).norm(), 0.02) << "starts at " << sane.position.transpose();
   EXPECT_LT((sane.velocity - velocity).norm(), 0.02) << "starts at " << sane.velocity.transpose() << " m/s";
+
+  // A plan from the commanded state starts when that state held: at the stamp of the command it was
+  // planned from (sent here 0.06 s old, at 100 Hz: within the 0.1 s a command counts as recent), not
+  // when the planner got to it, so that the server takes it over where the reference is by then.
+  std::vector<double> stamps;
+  goal = this->target(odometry_pose, 4);
+  goal.yaws.front() = yaw_ - 1.0;
+  const std::int64_t sane_id = planned.back().id;
+  Every late(0.01), odometry_rate(0.05), target_late(0.2, ros::Time::now() + ros::Duration(0.3));
+  ASSERT_TRUE(spinSimUntil(
+      5.5,
+      [&] {
+        if (odometry_rate.due()) odom_pub.publish(odometry());
+        if (late.due()) {
+          go_feap::PositionCommand m = command();
+          m.header.stamp = ros::Time::now() - ros::Duration(0.06);
+          stamps.push_back(m.header.stamp.toSec());
+          cmd_pub.publish(m);
+        }
+        if (target_late.due()) target_pub.publish(goal);
+      },
+      [&] { return planned.back().id != sane_id; }))
+      << "no trajectory to the target planned from late commands";
+  const double start = planned.back().start_time.toSec();
+  EXPECT_TRUE(std::find(stamps.begin(), stamps.end(), start) != stamps.end())
+      << "starts at " << start << " s, the stamp of no command (it arrived at " << received.back() << " s)";
+  EXPECT_LE(start, received.back() - 0.05) << "starts when it was planned, not when its start state held";
 }
 
 // A second trajectory server (probe/...) fed only by this test. It holds the first usable odometry pose
