@@ -1,5 +1,6 @@
 // DepthCamera: renders the ground-truth scene from the vehicle's pose. odom in; depth
-// (32FC1 metres, 0 = no return), camera_info, camera_pose (same stamp as the image) and
+// (32FC1 metres, REP 117's +inf / -inf / NaN where there is no return; or 16UC1 millimetres, 0 where
+// there is none), camera_info, camera_pose (same stamp as the image) and
 // the static TF body->camera out, at `rate` Hz of simulated time.
 #include <cv_bridge/cv_bridge.h>
 #include <geometry_msgs/PoseStamped.h>

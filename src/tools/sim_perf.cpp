@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -69,7 +70,12 @@ int main(int argc, char** argv) {
     const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
     total_ms += ms;
     max_ms = std::max(max_ms, ms);
-    valid += static_cast<double>(cv::countNonZero(depth)) / static_cast<double>(depth.total());
+    int returns = 0;  // REP 117's +inf (nothing in range), -inf (too near) and NaN are no return
+    for (int v = 0; v < depth.rows; ++v) {
+      const float* row = depth.ptr<float>(v);
+      for (int u = 0; u < depth.cols; ++u) returns += row[u] > 0.0f && row[u] < std::numeric_limits<float>::infinity();
+    }
+    valid += static_cast<double>(returns) / static_cast<double>(depth.total());
   }
   const Index3 n = scene->geometry().dims();
   std::cout << "scene " << scene_spec << ": grid " << n.x() << " x " << n.y() << " x " << n.z() << " at "

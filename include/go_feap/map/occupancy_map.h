@@ -30,7 +30,7 @@ struct OccupancyConfig {
   double min_range = 0.1;    ///< m, depth below (and -inf): a surface too near to measure, skipped
   double max_range = 4.5;    ///< m, depth beyond (and +inf): free up to max_range, no return
   int skip_pixel = 2;        ///< integrate every skip_pixel-th pixel in u and v
-  bool invalid_as_free = true;  ///< 0/NaN pixels: free up to max_range (simulation) or skipped (real sensor)
+  bool invalid_as_free = false;  ///< 0/NaN pixels: skipped (REP 117: no measurement), or free up to max_range (a 16UC1 source whose 0 also means nothing in range)
 
   common::Status validate() const;
 };

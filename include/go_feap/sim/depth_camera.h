@@ -32,7 +32,7 @@ struct DepthCameraConfig {
   double min_range = 0.1;                         ///< m, on the depth (optical z) value
   double max_range = 4.5;                         ///< m, on the depth (optical z) value
   double noise_stddev_per_m = 0.0;                ///< Gaussian depth noise sigma = this * depth
-  double dropout_probability = 0.0;               ///< probability that a valid pixel becomes 0
+  double dropout_probability = 0.0;               ///< probability that a return becomes NaN (no measurement)
 
   /// Checks every key; the message names the bad one, e.g.
   /// "depth_camera: max_range must be > min_range".
