@@ -51,6 +51,26 @@ class TrajectoryServer : public nodelet::Nodelet {
                                "parameter '" + p.fullName("server/rate") + "' must be in [10, 1000] Hz");
     ros_params::requireOrThrow(std::isfinite(odom_timeout_) && odom_timeout_ > 0.0, getName(),
                                "parameter '" + p.fullName("server/odom_timeout") + "' must be > 0");
+    // The planner's own limits, where its config is loaded here too (trajectory.yaml): a server limit
+    // below one of them would refuse every plan that uses it, and the vehicle would hold for good.
+    double tolerance = 0.0;
+    getPrivateNodeHandle().param("optimizer/limit_tolerance", tolerance, 0.0);
+    const struct {
+      double limit;
+      const char *key, *planner_key;
+    } pairs[] = {{max_speed_, "server/max_speed", "optimizer/v_max"},
+                 {max_acceleration_, "server/max_acceleration", "optimizer/a_max"},
+                 {max_yaw_rate_, "server/max_yaw_rate", "optimizer/yaw_rate_max"}};
+    for (const auto& pair : pairs) {
+      double planner_limit = 0.0;
+      if (!getPrivateNodeHandle().getParam(pair.planner_key, planner_limit) || !std::isfinite(planner_limit)) continue;
+      const double needed = planner_limit * (1.0 + std::max(0.0, tolerance));
+      std::ostringstream why;
+      why << "parameter '" << p.fullName(pair.key) << "' (" << pair.limit << ") is below the planner's '"
+          << p.fullName(pair.planner_key) << "' (" << planner_limit << ", " << needed
+          << " with optimizer/limit_tolerance): every plan that reaches it would be refused";
+      ros_params::requireOrThrow(pair.limit >= needed, getName(), why.str());
+    }
     cmd_pub_ = nh.advertise<PositionCommand>("position_cmd", 10);
     bspline_sub_ = ros_guard::subscribe(nh, getName(), "bspline", 5, &TrajectoryServer::onBspline, this);
     odom_sub_ = ros_guard::subscribe(nh, getName(), "odom", 5, &TrajectoryServer::onOdom, this);
