@@ -110,10 +110,6 @@ FrontierDelta FrontierFinder::update(const map::OccupancyMap& map, const std::ve
     }
     common::clearBit(scratch_, l);
   }
-  for (std::uint32_t id : affected)
-    if (const Frontier* f = find(id))
-      for (const Index3& c : f->cells)
-        if (isFrontierCell(c)) seeds.push_back(geo_.linear(c));
   return regrow(std::move(affected), std::move(seeds), now);
 }
 
@@ -155,30 +151,31 @@ FrontierDelta FrontierFinder::rebuild(const map::OccupancyMap& map, const Index3
         else
           common::clearBit(is_frontier_, l);
       }
-  // 3. Seeds: frontier cells near the change and the cells of affected clusters.
+  // 3. Seeds: frontier cells near the change (regrow adds the cells of the affected clusters).
   std::vector<std::size_t> seeds;
   for (int z = n_lo.z(); z <= n_hi.z(); ++z)
     for (int y = n_lo.y(); y <= n_hi.y(); ++y)
       for (int x = n_lo.x(); x <= n_hi.x(); ++x)
         if (isFrontierCell(Index3(x, y, z))) seeds.push_back(geo_.linear(Index3(x, y, z)));
-  for (std::uint32_t id : affected)
-    if (const Frontier* f = find(id))
-      for (const Index3& c : f->cells)
-        if (isFrontierCell(c)) seeds.push_back(geo_.linear(c));
   return regrow(std::move(affected), std::move(seeds), now);
 }
 
-// Rebuilds the removed (affected) clusters from the seeds: flood fill over frontier cells not held
-// by a kept cluster, then drop / split / age as a full recomputation does.
+// Rebuilds the removed (affected) clusters from the seeds and their own cells: flood fill over frontier
+// cells not held by a kept cluster, then drop / split / age as a full recomputation does.
 FrontierDelta FrontierFinder::regrow(std::unordered_set<std::uint32_t> affected, std::vector<std::size_t> seeds,
                                      double now) {
   FrontierDelta delta;
   std::unordered_map<std::uint32_t, double> first_seen;  // of removed clusters
-  auto markRemoved = [&](std::uint32_t id) {
+  // A removed cluster: its age is kept for its successors, and every cell of it still a frontier seeds
+  // the fill.
+  auto remove = [&](std::uint32_t id) {
     const Frontier* f = find(id);
-    if (f) first_seen[id] = f->first_seen;
+    if (!f) return;
+    first_seen[id] = f->first_seen;
+    for (const Index3& c : f->cells)
+      if (isFrontierCell(c)) seeds.push_back(geo_.linear(c));
   };
-  for (std::uint32_t id : affected) markRemoved(id);
+  for (std::uint32_t id : affected) remove(id);
 
   // 4. Flood fill (26-connected) over frontier cells from the seeds: whole regions. Visited cells are
   // marked in scratch_ (all clear between updates) and cleared again afterwards.
@@ -193,18 +190,15 @@ FrontierDelta FrontierFinder::regrow(std::unordered_set<std::uint32_t> affected,
   // A cell of a cluster not marked affected: while the fill is small, that cluster's region is being
   // rebuilt, so it goes too; past max_regrow_cells the cluster is kept and the fill goes around it, so
   // an update costs about the size of the clusters it touches, not of the whole connected region.
-  // A cluster that goes has all its cells seeded: a piece of a split region can hold cells that are
-  // connected to the rest only through a cluster kept later (a U-shaped region cut across its arms), and
-  // those would otherwise be left out of every cluster, however many.
+  // A cluster that goes has all its cells seeded (remove): a piece of a split region can hold cells that
+  // are connected to the rest only through a cluster kept later (a U-shaped region cut across its arms),
+  // and those would otherwise be left out of every cluster, however many.
   auto kept = [&](const Index3& idx) {
     const std::uint32_t own = owner_[ownerSlot(idx)];
     if (own == 0 || affected.count(own) > 0) return false;
     if (visited.size() >= static_cast<std::size_t>(config_.max_regrow_cells)) return true;
     affected.insert(own);
-    markRemoved(own);
-    if (const Frontier* f = find(own))
-      for (const Index3& c : f->cells)
-        if (isFrontierCell(c)) seeds.push_back(geo_.linear(c));
+    remove(own);
     return false;
   };
   std::vector<std::pair<std::size_t, Index3>> stack;

@@ -118,12 +118,7 @@ class DepthCamera : public nodelet::Nodelet {
     if (config_.noise_stddev_per_m > 0.0 || config_.dropout_probability > 0.0) renderer_->addNoise(image.image, rng_);
     if (encoding_ == "16UC1") {  // as a RealSense publishes it: millimetres, 0 = no return (near or far)
       cv::Mat mm;
-      for (int v = 0; v < image.image.rows; ++v) {  // +-inf and NaN (REP 117's values) have no millimetres
-        float* row = image.image.ptr<float>(v);
-        for (int u = 0; u < image.image.cols; ++u)
-          if (!std::isfinite(row[u])) row[u] = 0.0f;
-      }
-      image.image.convertTo(mm, CV_16UC1, 1000.0);
+      sim::toMillimetres(image.image, mm);
       image.image = mm;
       image.encoding = sensor_msgs::image_encodings::TYPE_16UC1;
     }

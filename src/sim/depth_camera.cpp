@@ -307,6 +307,15 @@ void DepthRenderer::render(const Eigen::Isometry3d& T_W_C, cv::Mat& depth) const
   }
 }
 
+void toMillimetres(cv::Mat& metres, cv::Mat& mm) {
+  for (int v = 0; v < metres.rows; ++v) {  // REP 117's +-inf and NaN have no millimetres
+    float* row = metres.ptr<float>(v);
+    for (int u = 0; u < metres.cols; ++u)
+      if (!isReturn(row[u])) row[u] = 0.0f;
+  }
+  metres.convertTo(mm, CV_16UC1, 1000.0);
+}
+
 void DepthRenderer::addNoise(cv::Mat& depth, std::mt19937_64& rng) const {
   const double sigma_per_m = config_.noise_stddev_per_m, dropout = config_.dropout_probability;
   if (depth.type() != CV_32FC1 || (sigma_per_m == 0.0 && dropout == 0.0)) return;
@@ -316,7 +325,7 @@ void DepthRenderer::addNoise(cv::Mat& depth, std::mt19937_64& rng) const {
   for (int v = 0; v < depth.rows; ++v) {
     float* row = depth.ptr<float>(v);
     for (int u = 0; u < depth.cols; ++u) {
-      if (!(row[u] > 0.0f && row[u] < kInf)) continue;  // a return only
+      if (!isReturn(row[u])) continue;
       if (dropout > 0.0 && uniform(rng) < dropout) {
         row[u] = std::numeric_limits<float>::quiet_NaN();
         continue;

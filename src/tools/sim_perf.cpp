@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cmath>
 #include <iostream>
-#include <limits>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -70,10 +69,10 @@ int main(int argc, char** argv) {
     const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
     total_ms += ms;
     max_ms = std::max(max_ms, ms);
-    int returns = 0;  // REP 117's +inf (nothing in range), -inf (too near) and NaN are no return
+    int returns = 0;
     for (int v = 0; v < depth.rows; ++v) {
       const float* row = depth.ptr<float>(v);
-      for (int u = 0; u < depth.cols; ++u) returns += row[u] > 0.0f && row[u] < std::numeric_limits<float>::infinity();
+      for (int u = 0; u < depth.cols; ++u) returns += sim::isReturn(row[u]);
     }
     valid += static_cast<double>(returns) / static_cast<double>(depth.total());
   }

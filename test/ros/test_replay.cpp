@@ -50,6 +50,29 @@ class Replay : public ::testing::Test {
   fs::path dir_;
 };
 
+// The simulated camera's depth encoding decides what its 0 means: in 32FC1 nothing in range is +inf
+// (REP 117) and 0/NaN is no measurement, skipped; in 16UC1 (record_flight.launch, as a D435i) 0 is also
+// nothing in range, cast free, or the recording would map no free space beyond the walls' reach.
+TEST_F(Replay, TheMapperCastsZeroDepthFreeOnlyForSixteenBitSimulation) {
+  auto dumped = [&](const std::string& args) {
+    const fs::path out = dir_ / "params.out";
+    const std::string command = "bash -c 'roslaunch --dump-params go_feap " + args + "' > " + out.string() + " 2>&1";
+    EXPECT_EQ(std::system(command.c_str()), 0) << args;
+    std::ifstream file(out);
+    std::stringstream text;
+    text << file.rdbuf();
+    return text.str();
+  };
+  const std::string key = "/esdf_mapper/occupancy/invalid_as_free: ";
+  const std::string recording = dumped("record_flight.launch bag:=" + (dir_ / "x.bag").string());
+  EXPECT_NE(recording.find(key + "true"), std::string::npos) << recording;
+  for (const std::string& args : {std::string("sim_exploration.launch"), std::string("maze.launch"),
+                                  std::string("onboard.launch")}) {
+    const std::string params = dumped(args);
+    EXPECT_NE(params.find(key + "false"), std::string::npos) << args << ":\n" << params;
+  }
+}
+
 TEST_F(Replay, RecordedFlightRebuildsTheWallsItSaw) {
   const std::string bag = (dir_ / "flight.bag").string(), bt = (dir_ / "replay.bt").string();
   const std::string rec = launch(11821, "record_flight.launch bag:=" + bag + " duration:=12", 240);

@@ -21,6 +21,7 @@ using common::Vec3;
 using sim::CameraIntrinsics;
 using sim::DepthCameraConfig;
 using sim::DepthRenderer;
+using sim::isReturn;
 
 namespace {
 
@@ -63,9 +64,6 @@ double boxEntry(const Vec3& o, const Vec3& d, const Aabb& box) {
   return t0 <= t1 ? t0 : kInf;
 }
 
-/// A measured depth: REP 117's values for no measurement (+inf no return within the range, -inf too
-/// near, NaN) are not.
-bool isReturn(float d) { return d > 0.0f && d < std::numeric_limits<float>::infinity(); }
 int countReturns(const cv::Mat& depth) {
   int n = 0;
   for (int v = 0; v < depth.rows; ++v)
@@ -524,6 +522,18 @@ TEST(DepthRenderer, CameraInsideAnOccupiedVoxelSeesEverythingTooNear) {
   cv::Mat depth;
   renderer.render(cameraPose(Vec3(1.0, 0.0, 1.0), 0.0), depth);
   EXPECT_EQ(countEqual(depth, -std::numeric_limits<float>::infinity()), 640 * 480);
+}
+
+// As a RealSense sends depth: millimetres, 0 where there is no return (REP 117's +-inf and NaN, 0 and
+// negative values alike; converted as they are, +inf saturated to 65535 mm, a wall 65 m away).
+TEST(DepthRenderer, MillimetresAreZeroWithoutAReturn) {
+  const float inf = std::numeric_limits<float>::infinity();
+  cv::Mat metres = (cv::Mat_<float>(1, 7) << inf, -inf, std::numeric_limits<float>::quiet_NaN(), 0.0f, -1.0f, 1.25f, 4.5f);
+  cv::Mat mm;
+  sim::toMillimetres(metres, mm);
+  ASSERT_EQ(mm.type(), CV_16UC1);
+  const std::vector<std::uint16_t> expected{0, 0, 0, 0, 0, 1250, 4500};
+  for (int u = 0; u < 7; ++u) EXPECT_EQ(mm.at<std::uint16_t>(0, u), expected[u]) << "pixel " << u;
 }
 
 TEST(DepthRendererNoise, ZeroConfigChangesNothing) {

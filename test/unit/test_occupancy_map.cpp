@@ -69,7 +69,7 @@ std::set<std::size_t> visibleSurface(const Fixture& f, const sim::DepthRenderer&
     for (int v = 0; v < depth.rows; ++v)
       for (int u = 0; u < depth.cols; ++u) {
         const double d = depth.at<float>(v, u);
-        if (!(d > 0 && std::isfinite(d))) continue;  // a return only (REP 117: +-inf, NaN are none)
+        if (!sim::isReturn(static_cast<float>(d))) continue;
         const Vec3 ray = T.linear() * Vec3((u - K.cx) / K.fx, (v - K.cy) / K.fy, 1.0);
         const Vec3 p = T.translation() + ray * d + ray.normalized() * 1e-4;
         const Index3 idx = geo.coordToIndex(p);
@@ -138,10 +138,7 @@ TEST(OccupancyMap, MillimetreAndMetreEncodingsGiveTheSameMap) {
   cv::Mat depth, mm, metres;
   for (std::size_t i = 0; i < f.poses.size(); i += 3) {
     renderer.render(f.poses[i], depth);
-    for (int v = 0; v < depth.rows; ++v)  // no millimetres for REP 117's +-inf and NaN: 0, as a D435i sends
-      for (int u = 0; u < depth.cols; ++u)
-        if (!std::isfinite(depth.at<float>(v, u))) depth.at<float>(v, u) = 0.0f;
-    depth.convertTo(mm, CV_16UC1, 1000.0);  // rounds to the millimetre, as a D435i does
+    sim::toMillimetres(depth, mm);  // rounds to the millimetre, 0 without a return, as a D435i does
     mm.convertTo(metres, CV_32FC1, 0.001);
     ASSERT_TRUE(a.integrate(mm, intrinsicsOf(f.camera.intrinsics()), f.poses[i]));
     ASSERT_TRUE(b.integrate(metres, intrinsicsOf(f.camera.intrinsics()), f.poses[i]));

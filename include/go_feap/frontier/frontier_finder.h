@@ -117,6 +117,8 @@ class FrontierFinder {
   bool keepRegion(const std::vector<std::size_t>& region);
   bool computeFrontierCell(const map::OccupancyMap& map, const Index3& idx) const;
   FrontierDelta rebuild(const map::OccupancyMap& map, const Index3& lo, const Index3& hi, double now);
+  /// Removes the `affected` clusters and regrows from `seeds` and their cells (and the cells of every
+  /// cluster the fill takes in before max_regrow_cells).
   FrontierDelta regrow(std::unordered_set<std::uint32_t> affected, std::vector<std::size_t> seeds, double now);
   struct Cell {
     Index3 index;

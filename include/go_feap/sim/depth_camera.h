@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <limits>
 #include <opencv2/core.hpp>
 #include <random>
 #include <vector>
@@ -99,5 +100,13 @@ class DepthRenderer {
   std::vector<std::uint32_t> group_begin_;
   std::vector<Rect> rects_;
 };
+
+/// A measured depth (m): REP 117's values for none (+inf nothing in range, -inf too near, NaN), 0 and
+/// negative values are no return.
+inline bool isReturn(float depth) { return depth > 0.0f && depth < std::numeric_limits<float>::infinity(); }
+
+/// A CV_32FC1 image in metres as a RealSense sends it, CV_16UC1 millimetres with 0 where there is no
+/// return (near or far alike): `metres` has its pixels without a return set to 0 on the way.
+void toMillimetres(cv::Mat& metres, cv::Mat& mm);
 
 }  // namespace go_feap::sim
