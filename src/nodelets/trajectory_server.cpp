@@ -11,6 +11,9 @@
 // accelerates harder than server/max_acceleration (corrupt: control points of 1e308 m, or a knot span so
 // short that the reference would leap to the end at once), and one whose heading turns faster than
 // server/max_yaw_rate.
+// A trajectory whose start time lies ahead waits: the running one is followed until then (not a hold
+// in place at speed), and its start is checked again against the odometry when it is taken over. A
+// later trajectory replaces a waiting one; one that starts at once replaces both.
 #include <nav_msgs/Odometry.h>
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
@@ -92,7 +95,26 @@ class TrajectoryServer : public nodelet::Nodelet {
                                                   << "; the reference stays as it was");
       return;
     }
-    current_ = std::move(t).value();
+    if (t->start_time > ros::Time::now()) {
+      pending_ = std::move(t).value();  // the running one goes on until it starts
+    } else {
+      current_ = std::move(t).value();
+      pending_.reset();
+    }
+  }
+
+  // The waiting trajectory, once its start time has come: it becomes the running one if its start still
+  // lies near the odometry (the vehicle went on along the running one meanwhile).
+  void takeOverPending(const ros::Time& now) {
+    if (!pending_ || now < pending_->start_time) return;
+    const std::string bad = startProblem(*pending_, now);
+    if (bad.empty()) {
+      current_ = std::move(pending_);
+    } else {
+      NODELET_WARN_STREAM_THROTTLE(1.0, getName() << ": trajectory " << pending_->id << " refused at its start: "
+                                                  << bad << "; the reference stays as it was");
+    }
+    pending_.reset();
   }
 
   // Why a trajectory cannot be taken over at time `now` (s), or "" when it can. In seconds as doubles: a
@@ -147,9 +169,11 @@ class TrajectoryServer : public nodelet::Nodelet {
     if (!last_odom_.isZero() && !odom_gap_ && (now - last_odom_).toSec() > odom_timeout_) {
       odom_gap_ = true;
       current_.reset();  // hold_position_ is where the reference was
+      pending_.reset();
       NODELET_WARN_STREAM(getName() << ": no odometry for " << (now - last_odom_).toSec()
                                     << " s: trajectory dropped, holding position");
     }
+    takeOverPending(now);
     PositionCommand cmd;
     cmd.header.stamp = now;
     cmd.header.frame_id = world_frame_;
@@ -187,6 +211,7 @@ class TrajectoryServer : public nodelet::Nodelet {
   std::string world_frame_;
   std::mutex mutex_;
   std::optional<ros_traj::Trajectory> current_;
+  std::optional<ros_traj::Trajectory> pending_;  ///< received, its start time still ahead
   bool hold_ = false;
   Eigen::Vector3d hold_position_ = Eigen::Vector3d::Zero();
   double hold_yaw_ = 0.0;

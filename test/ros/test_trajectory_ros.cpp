@@ -531,6 +531,35 @@ TEST_F(ProbeServerTest, ATrajectoryArrivingWhileTheOdometryIsSilentIsRefused) {
   EXPECT_EQ(probe.command->trajectory_flag, go_feap::PositionCommand::TRAJECTORY_STATUS_READY);
 }
 
+// A trajectory whose start time lies ahead waits while the running one is followed (the server used to
+// replace the running one at once and hold the reference still, at speed, until the new one started); it
+// is taken over at its start time.
+TEST_F(ProbeServerTest, ATrajectoryStartingLaterWaitsWhileTheRunningOneIsFollowed) {
+  const Vec3 vehicle = probe.vehicle;
+  probe.fly(vehicle, vehicle + Vec3(1.0, 0.0, 0.0), 921, ros::Time::now());
+  ASSERT_TRUE(spinUntil([&] { return probe.hover(0.05)->trajectory_id == 921u; }, 20.0))
+      << "the first trajectory was refused";
+  const ros::Time later = ros::Time::now() + ros::Duration(1.0);
+  const Vec3 side = vehicle + Vec3(0.0, 0.3, 0.0);
+  probe.fly(side, side + Vec3(0.0, 1.0, 0.0), 922, later);
+  // Until it starts: the first one, moving on.
+  Vec3 last = probe.commanded();
+  int moved = 0;
+  while (ros::ok() && ros::Time::now() + ros::Duration(0.15) < later) {
+    probe.hover(0.05);
+    ASSERT_EQ(probe.command->trajectory_id, 921u) << "the running trajectory was left before the next one started";
+    ASSERT_EQ(probe.command->trajectory_flag, go_feap::PositionCommand::TRAJECTORY_STATUS_READY);
+    moved += (probe.commanded() - last).norm() > 1e-6;
+    last = probe.commanded();
+  }
+  EXPECT_GT(moved, 5) << "the reference did not move along the running trajectory";
+  // From its start: the second one, from its start point.
+  ASSERT_TRUE(spinUntil([&] { return probe.hover(0.05)->trajectory_id == 922u; }, 20.0))
+      << "the trajectory starting later was never taken over";
+  EXPECT_GE(probe.command->header.stamp, later);
+  EXPECT_LT((probe.commanded() - side).norm(), 0.15) << "not followed from its start";
+}
+
 }  // namespace
 
 GO_FEAP_ROSTEST_MAIN("test_trajectory_ros")
