@@ -6,7 +6,8 @@
 // (the fuel mode's cadence, as go_feap_bench skips both planners then); when a tour is wanted again,
 // it is planned at once from the last frontiers, as go_feap_bench plans it in the same tick.
 // The planning step itself is the core's TourPlanner (A* path lengths on the shared map,
-// cached per frontier pair).
+// cached per frontier pair). Nothing is planned except while the layer manager's status says the
+// exploration is under way (EXPLORE, FINAL_PASS): not before the trigger, not once FINISHED.
 #include <nav_msgs/Odometry.h>
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
@@ -20,6 +21,7 @@
 #include <std_msgs/Bool.h>
 #include <std_msgs/UInt32MultiArray.h>
 
+#include "go_feap/ExplorationStatus.h"
 #include "go_feap/FrontierArray.h"
 #include "go_feap/GlobalTour.h"
 #include "go_feap/ros/conversions.h"
@@ -55,6 +57,12 @@ class GlobalPlanner : public nodelet::Nodelet {
     frontier_sub_ = ros_guard::subscribe(nh, getName(), "frontiers", 2, &GlobalPlanner::onFrontiers, this);
     blacklist_sub_ = ros_guard::subscribe(nh, getName(), "blacklist", 1, &GlobalPlanner::onBlacklist, this);
     wanted_sub_ = ros_guard::subscribe(nh, getName(), "tour_wanted", 2, &GlobalPlanner::onWanted, this);
+    status_sub_ = ros_guard::subscribe(nh, getName(), "status", 2, &GlobalPlanner::onStatus, this);
+  }
+
+  void onStatus(const ExplorationStatus::ConstPtr& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (gate_.update(*msg, getName())) last_tour_.reset();  // not to be sent again once it starts anew
   }
 
   void onWanted(const std_msgs::Bool::ConstPtr& msg) {
@@ -63,7 +71,7 @@ class GlobalPlanner : public nodelet::Nodelet {
     wanted_ = msg->data;
     // Wanted again (the target was reached, seen out or is due for its periodic replan): plan now rather
     // than at the next frontier message past global/rate, which would hold the vehicle up to a period.
-    if (again && last_frontiers_ && shared_ && uav_) {
+    if (again && last_frontiers_ && shared_ && uav_ && gate_.open()) {
       last_plan_ = ros::Time::now();
       plan(*last_frontiers_);
     }
@@ -108,6 +116,7 @@ class GlobalPlanner : public nodelet::Nodelet {
     }
     std::lock_guard<std::mutex> lock(mutex_);
     last_frontiers_ = msg;
+    if (!gate_.open()) return;  // before the trigger, or FINISHED
     if (!shared_ || !uav_) {
       NODELET_WARN_THROTTLE(5.0, "%s: waiting for %s", getName().c_str(), !shared_ ? "map_handle" : "odom");
       return;
@@ -194,6 +203,7 @@ class GlobalPlanner : public nodelet::Nodelet {
   planning::AstarConfig astar_config_;
   std::string world_frame_;
   std::mutex mutex_;
+  ros_check::ExplorationGate gate_{"planning tours", "no tours planned"};  ///< from the status
   std::shared_ptr<ros_map::SharedMap> shared_;
   std::unique_ptr<planning::Astar> astar_;
   std::optional<common::Vec3> uav_;
@@ -206,7 +216,7 @@ class GlobalPlanner : public nodelet::Nodelet {
   ros::Time last_plan_;
   ros::Publisher compute_pub_;
   ros::Publisher tour_pub_, marker_pub_;
-  ros::Subscriber handle_sub_, odom_sub_, frontier_sub_, blacklist_sub_, wanted_sub_;
+  ros::Subscriber handle_sub_, odom_sub_, frontier_sub_, blacklist_sub_, wanted_sub_, status_sub_;
 };
 
 }  // namespace go_feap

@@ -6,7 +6,10 @@
 // frontier_failed, viewpoint_markers, tour_wanted (std_msgs/Bool, with each tour: planning::planDue() for
 // the state that tour leaves, so after a plan for the target it chose or kept; the global planner sends
 // its last tour again, `repeated`, instead of planning while it is false, and plans at once when it turns
-// true; a repeated tour is never planned against).
+// true; a repeated tour is never planned against). Targets are chosen and sent only while the layer
+// manager's status says the exploration is under way (EXPLORE, FINAL_PASS): before the trigger nothing
+// flies, and once FINISHED no new target is sent (the trajectory planner ends the flight it is on).
+// An empty tour (nothing to visit: a band just changed and settling) sends nothing, as go_feap_bench.
 #include <cv_bridge/cv_bridge.h>
 #include <nav_msgs/Odometry.h>
 #include <nodelet/nodelet.h>
@@ -23,6 +26,7 @@
 #include <std_msgs/UInt32.h>
 #include <optional>
 
+#include "go_feap/ExplorationStatus.h"
 #include "go_feap/FrontierArray.h"
 #include "go_feap/GlobalTour.h"
 #include "go_feap/LayerBounds.h"
@@ -73,6 +77,15 @@ class LocalPlanner : public nodelet::Nodelet {
     failed_pub_ = nh.advertise<std_msgs::UInt32>("frontier_failed", 100);
     wanted_pub_ = nh.advertise<std_msgs::Bool>("tour_wanted", 2);
     failed_sub_ = ros_guard::subscribe(nh, getName(), "frontier_failed", 100, &LocalPlanner::onFailed, this);
+    status_sub_ = ros_guard::subscribe(nh, getName(), "status", 2, &LocalPlanner::onStatus, this);
+  }
+
+  void onStatus(const ExplorationStatus::ConstPtr& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!gate_.update(*msg, getName())) return;
+    target_.reset();  // nothing in hand is repeated
+    last_out_.reset();
+    target_quicker_ = false;
   }
 
   void onHandle(const boost::shared_ptr<const ros_map::MapHandle>& msg) {
@@ -140,7 +153,7 @@ class LocalPlanner : public nodelet::Nodelet {
     // place, unless already flying somewhere or turning. The target in hand is repeated, with its number:
     // no tour comes while nothing is a frontier, and a target published before the trajectory planner
     // had subscribed (a start under load) was otherwise lost, and the vehicle never turned.
-    if (!msg->look_around || !position_) return;
+    if (!msg->look_around || !position_ || !gate_.open()) return;
     if (idle()) {
       NODELET_INFO_STREAM_THROTTLE(2.0, getName() << ": no frontier in view before a look round: turning in place");
       turnInPlace(msg->header.stamp);
@@ -213,7 +226,7 @@ class LocalPlanner : public nodelet::Nodelet {
       return;
     }
     std::lock_guard<std::mutex> lock(mutex_);
-    if (!shared_ || !position_ || !frontiers_) return;
+    if (!gate_.open() || !shared_ || !position_ || !frontiers_) return;
     const std::string outside = ros_check::frontierOutside(*frontiers_, shared_->map->geometry().bounds());
     if (!outside.empty()) {
       NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": frontiers refused: " << outside);
@@ -262,6 +275,10 @@ class LocalPlanner : public nodelet::Nodelet {
       std::function<void()> run;
       ~OnExit() { run(); }
     } wanted_after{[&] { publishWanted(wantedAfterPlan(now)); }};
+    // Nothing to visit (every frontier blacklisted, or none in reach): no look round and no failed
+    // attempt, as go_feap_bench; the layer manager decides what comes next. It used to turn the vehicle
+    // in place again after every turn, for ever once FINISHED(complete).
+    if (tour->frontier_ids.empty()) return;
     std::vector<std::uint32_t> ids;
     for (const auto& f : frontiers_->frontiers) ids.push_back(f.id);
     cache_.retain(ids);
@@ -378,10 +395,11 @@ class LocalPlanner : public nodelet::Nodelet {
   std::uint32_t target_frontier_ = 0;
   std::uint32_t target_seq_ = 0;  ///< ViewpointPath::target_seq of the last new target
   bool target_quicker_ = false;  ///< the target won on cost (planning::CurrentTarget::quicker)
+  ros_check::ExplorationGate gate_{"choosing targets", "no targets sent"};  ///< from the status
   double committed_at_ = 0.0, speed_ = 0.0, frontier_extent_ = 2.0, max_input_speed_ = 20.0;
   std::string speed_limit_name_;  ///< local/max_input_speed's full name, for the messages
   double last_plan_ = -1e9;  ///< s (ROS time), when a tour was last planned against (planning::planDue())
-  ros::Subscriber handle_sub_, odom_sub_, depth_sub_, layer_sub_, frontier_sub_, tour_sub_, failed_sub_;
+  ros::Subscriber handle_sub_, odom_sub_, depth_sub_, layer_sub_, frontier_sub_, tour_sub_, failed_sub_, status_sub_;
 };
 
 }  // namespace go_feap

@@ -1,5 +1,6 @@
 #include "go_feap/ros/message_checks.h"
 
+#include <ros/console.h>
 #include <sensor_msgs/image_encodings.h>
 
 #include <cmath>
@@ -143,6 +144,19 @@ std::string explorationStatusProblem(const ExplorationStatus& msg) {
     return "distance " + std::to_string(msg.distance) + " m is not finite and >= 0";
   if (!std::isfinite(msg.coverage)) return "coverage is not finite";
   return std::string();
+}
+
+bool ExplorationGate::update(const ExplorationStatus& msg, const std::string& node) {
+  const std::string bad = explorationStatusProblem(msg);
+  if (!bad.empty()) {
+    ROS_WARN_STREAM_THROTTLE(2.0, node << ": status refused: " << bad);
+    return false;
+  }
+  const bool open = msg.state == ExplorationStatus::EXPLORE || msg.state == ExplorationStatus::FINAL_PASS;
+  if (open == open_) return false;
+  open_ = open;
+  ROS_INFO_STREAM(node << ": exploration " << msg.state_name << ": " << (open ? open_says_ : closed_says_));
+  return !open;
 }
 
 std::string positionCommandProblem(const PositionCommand& msg) {

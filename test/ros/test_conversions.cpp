@@ -362,6 +362,38 @@ struct ThrowsOnZero {
 // Depth images: what the check passes, cv_bridge reads as a cv::Mat whose rows all lie in the data; what
 // it names is each way of getting that wrong, including a step whose height x step wraps round 2^32 and
 // so matches a tiny buffer in cv_bridge's own 32-bit check.
+// The planners' gate opens with EXPLORE, stays open through FINAL_PASS and closes with FINISHED (the
+// only update that says so); a refused status changes nothing.
+TEST(MessageChecks, TheExplorationGateIsOpenOnlyWhileExploring) {
+  ros::Time::init();  // its refusals are logged throttled, by the clock
+  go_feap::ros_check::ExplorationGate gate("open", "closed");
+  go_feap::ExplorationStatus status;
+  EXPECT_FALSE(gate.open());  // nothing heard yet: waiting
+  const std::pair<std::uint8_t, bool> steps[] = {{go_feap::ExplorationStatus::WAIT_TRIGGER, false},
+                                                 {go_feap::ExplorationStatus::EXPLORE, true},
+                                                 {go_feap::ExplorationStatus::EXPLORE, true},
+                                                 {go_feap::ExplorationStatus::FINAL_PASS, true},
+                                                 {go_feap::ExplorationStatus::FINISHED, false},
+                                                 {go_feap::ExplorationStatus::FINISHED, false}};
+  bool was_open = false;
+  for (const auto& [state, open] : steps) {
+    status.state = state;
+    EXPECT_EQ(gate.update(status, "test"), was_open && !open) << int(state);
+    EXPECT_EQ(gate.open(), open) << int(state);
+    was_open = open;
+  }
+  status.state = go_feap::ExplorationStatus::EXPLORE;
+  status.elapsed = std::numeric_limits<double>::quiet_NaN();  // refused: still closed
+  EXPECT_FALSE(gate.update(status, "test"));
+  EXPECT_FALSE(gate.open());
+  status.elapsed = 1.0;
+  EXPECT_FALSE(gate.update(status, "test"));
+  EXPECT_TRUE(gate.open());
+  status.state = 9;  // refused: still open
+  EXPECT_FALSE(gate.update(status, "test"));
+  EXPECT_TRUE(gate.open());
+}
+
 TEST(MessageChecks, DepthImagesThatCannotBeReadWholeAreNamed) {
   sensor_msgs::Image img;
   img.encoding = sensor_msgs::image_encodings::TYPE_32FC1;

@@ -1,6 +1,6 @@
-// rostest: simulator + EsdfMapper + FrontierFinder + GlobalPlanner. After the vehicle turns
-// in place at the maze start, a non-empty tour must come out whose first frontier exists
-// and is reachable from the start through ground-truth free space.
+// rostest: simulator + EsdfMapper + FrontierFinder + GlobalPlanner + LocalPlanner + LayerManager. Before
+// the trigger nothing is planned; after it and a turn in place at the maze start, a non-empty tour must
+// come out whose first frontier exists and is reachable from the start through ground-truth free space.
 #include <gtest/gtest.h>
 #include <nav_msgs/Odometry.h>
 #include <nodelet/NodeletLoad.h>
@@ -85,11 +85,66 @@ class FrontierPlannerTest : public ::testing::Test {
   std::uint32_t highest_id_ = 0;  ///< of every frontier received
 };
 
+// First: before the trigger, with frontiers in view, neither mode's planners send a tour or a target (they
+// used to plan and send targets at once: only the layer manager waited for the trigger). Then the trigger
+// starts the start band, once.
+TEST_F(FrontierPlannerTest, NothingIsPlannedBeforeTheTriggerWhichStartsTheStartBandOnce) {
+  auto scene = go_feap::test::sceneFromParams();
+  ASSERT_TRUE(scene) << scene.message();
+  ASSERT_TRUE(spinUntil([&] { return status_ && layer_ && odom_; }, 60.0)) << "no status, layer or odometry";
+  EXPECT_EQ(status_->state, go_feap::ExplorationStatus::WAIT_TRIGGER);
+  int sent = 0;
+  const auto tour_seen = [&](const go_feap::GlobalTour::ConstPtr&) { ++sent; };
+  const auto target_seen = [&](const go_feap::ViewpointPath::ConstPtr&) { ++sent; };
+  const ros::Subscriber counted[] = {nh_.subscribe<go_feap::GlobalTour>("global_tour", 10, tour_seen),
+                                     nh_.subscribe<go_feap::GlobalTour>("fuel/global_tour", 10, tour_seen),
+                                     nh_.subscribe<go_feap::ViewpointPath>("local_target", 10, target_seen),
+                                     nh_.subscribe<go_feap::ViewpointPath>("fuel/local_target", 10, target_seen)};
+  ASSERT_TRUE(spinUntil(
+      [&] {
+        return std::all_of(std::begin(counted), std::end(counted),
+                           [](const ros::Subscriber& c) { return c.getNumPublishers() > 0; });
+      },
+      30.0))
+      << "the planners' outputs are not connected";
+  // A turn in place until active frontiers are in view, then 3 s more (30 global planner periods).
+  ASSERT_TRUE(go_feap::test::turnInPlace(
+      cmd_pub_, scene->start.position,
+      [&] {
+        return frontiers_ && std::any_of(frontiers_->frontiers.begin(), frontiers_->frontiers.end(),
+                                          [](const go_feap::Frontier& f) { return f.active; });
+      },
+      150.0))
+      << "no active frontier in view";
+  spinUntil([] { return false; }, 3.0);
+  EXPECT_EQ(status_->state, go_feap::ExplorationStatus::WAIT_TRIGGER);
+  EXPECT_EQ(sent, 0) << "tours or targets before the trigger";
+  std_srvs::Trigger trigger;
+  ASSERT_TRUE(ros::service::waitForService("trigger", ros::Duration(10.0)));
+  ASSERT_TRUE(ros::service::call("trigger", trigger));
+  EXPECT_TRUE(trigger.response.success) << trigger.response.message;
+  ASSERT_TRUE(spinUntil([&] { return status_->state == go_feap::ExplorationStatus::EXPLORE; }, 30.0));
+  // The maze start is at z = 1.0: band 1 of 1 m bands, [1, 2].
+  ASSERT_TRUE(spinUntil([&] { return layer_->index == 1; }, 10.0));
+  EXPECT_DOUBLE_EQ(layer_->z_min, 1.0);
+  EXPECT_DOUBLE_EQ(layer_->z_max, 2.0);
+  EXPECT_EQ(layer_->count, 3u);
+  ASSERT_TRUE(ros::service::call("trigger", trigger));
+  EXPECT_FALSE(trigger.response.success) << "a second trigger must be ignored";
+  // Frontiers published after the band change carry the band's active flags.
+  const ros::Time after = ros::Time::now() + ros::Duration(0.5);
+  ASSERT_TRUE(spinUntil([&] { return frontiers_->header.stamp > after && !frontiers_->frontiers.empty(); }, 60.0));
+  for (const auto& f : frontiers_->frontiers)
+    EXPECT_EQ(f.active, f.average.z >= 1.0 && f.average.z <= 2.0) << "frontier " << f.id << " z " << f.average.z;
+}
+
+// Runs after the trigger test (EXPLORE), as every test below.
 TEST_F(FrontierPlannerTest, TourStartsAtAReachableFrontier) {
   auto scene = go_feap::test::sceneFromParams();
   ASSERT_TRUE(scene) << scene.message();
   const auto observable = go_feap::world::computeObservableSet(*scene);
-  ASSERT_TRUE(spinUntil([&] { return odom_ != nullptr; }, 60.0));
+  ASSERT_TRUE(spinUntil([&] { return odom_ != nullptr && status_ != nullptr; }, 60.0));
+  ASSERT_EQ(status_->state, go_feap::ExplorationStatus::EXPLORE);
 
   ASSERT_TRUE(go_feap::test::turnInPlace(cmd_pub_, scene->start.position, [&] { return tour_ != nullptr; }, 150.0))
       << "no non-empty global_tour";
@@ -139,28 +194,6 @@ TEST_F(FrontierPlannerTest, LocalTargetIsAFreeViewpointOfATourFrontier) {
           ASSERT_FALSE(scene->isOccupied(Vec3(v + Vec3(dx, dy, dz)))) << "viewpoint " << v.transpose();
     EXPECT_TRUE(scene->box.contains(v));
   }
-}
-
-TEST_F(FrontierPlannerTest, TriggerStartsTheStartBandOnceAndFrontiersFollowIt) {
-  ASSERT_TRUE(spinUntil([&] { return status_ && layer_ && frontiers_; }, 60.0)) << "no status, layer or frontiers";
-  EXPECT_EQ(status_->state, go_feap::ExplorationStatus::WAIT_TRIGGER);
-  std_srvs::Trigger trigger;
-  ASSERT_TRUE(ros::service::waitForService("trigger", ros::Duration(10.0)));
-  ASSERT_TRUE(ros::service::call("trigger", trigger));
-  EXPECT_TRUE(trigger.response.success) << trigger.response.message;
-  ASSERT_TRUE(spinUntil([&] { return status_->state == go_feap::ExplorationStatus::EXPLORE; }, 30.0));
-  // The maze start is at z = 1.0: band 1 of 1 m bands, [1, 2].
-  ASSERT_TRUE(spinUntil([&] { return layer_->index == 1; }, 10.0));
-  EXPECT_DOUBLE_EQ(layer_->z_min, 1.0);
-  EXPECT_DOUBLE_EQ(layer_->z_max, 2.0);
-  EXPECT_EQ(layer_->count, 3u);
-  ASSERT_TRUE(ros::service::call("trigger", trigger));
-  EXPECT_FALSE(trigger.response.success) << "a second trigger must be ignored";
-  // Frontiers published after the band change carry the band's active flags.
-  const ros::Time after = ros::Time::now() + ros::Duration(0.5);
-  ASSERT_TRUE(spinUntil([&] { return frontiers_->header.stamp > after && !frontiers_->frontiers.empty(); }, 60.0));
-  for (const auto& f : frontiers_->frontiers)
-    EXPECT_EQ(f.active, f.average.z >= 1.0 && f.average.z <= 2.0) << "frontier " << f.id << " z " << f.average.z;
 }
 
 // A failed attempt reported on frontier_failed for the local target's frontier (the trajectory planner

@@ -41,6 +41,16 @@ TEST(LookRound, NoFrontierInViewTurnsRoundBeforeEndingComplete) {
       << "not finished: " << (status ? status->state_name : std::string("no status"));
   std::cout << status->finish_reason << " after " << status->elapsed << " s simulated, " << status->distance
             << " m, turned " << turned << " rad\n";
+  // FINISHED: no target after it (the local planner used to turn the vehicle in place again after every
+  // turn, for ever, on the empty tours that followed). One already on its way may arrive within 1 s.
+  int targets = 0;
+  auto target_sub = nh.subscribe<go_feap::ViewpointPath>("local_target", 10,
+                                                         [&](const go_feap::ViewpointPath::ConstPtr&) { ++targets; });
+  spinUntil([] { return false; }, 1.0);
+  targets = 0;
+  spinUntil([] { return false; }, 4.0);
+  EXPECT_EQ(targets, 0) << "local targets sent after FINISHED";
+  EXPECT_EQ(status->state, go_feap::ExplorationStatus::FINISHED);
   EXPECT_EQ(status->finish_reason, "complete");
   EXPECT_TRUE(look_around) << "no look round asked";
   // Every octant of heading: at least six whole octants turned (3/4 of a turn), in place.
@@ -61,6 +71,11 @@ TEST(LookRound, AnUnreachedTurnInPlaceIsRepeatedWhileALookRoundIsAsked) {
       "probe/local_target", 20, [&](const go_feap::ViewpointPath::ConstPtr& m) { targets.push_back(m); });
   auto odom_pub = nh.advertise<nav_msgs::Odometry>("probe/odom", 5);
   auto layer_pub = nh.advertise<go_feap::LayerBounds>("probe/layer", 1);
+  auto status_pub = nh.advertise<go_feap::ExplorationStatus>("probe/status", 1, /*latch=*/true);
+  go_feap::ExplorationStatus exploring;  // the probe acts only while the exploration is under way
+  exploring.state = go_feap::ExplorationStatus::EXPLORE;
+  exploring.state_name = "EXPLORE";
+  status_pub.publish(exploring);
   double yaw = 0.0;
   ros::WallTime last_odom, last_layer;
   // Spins, publishing the hover odometry at 20 Hz and the look round request at 5 Hz, until pred().

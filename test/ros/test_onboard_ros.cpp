@@ -1,7 +1,8 @@
 // rostest: onboard.launch (D435i + VIO configuration) starts and runs on simulated inputs: the
 // depth arrives as 16UC1 millimetres and is integrated through TF lookups (sync_mode tf); the
 // OdometryTf nodelet turns odometry into world -> body_vio and adds the D435i extrinsic from
-// config/d435i.yaml; exploration waits for the trigger, then position commands flow and the metrics
+// config/d435i.yaml; exploration waits for the trigger (nothing is planned, targeted or flown before it,
+// frontiers in view or not), then position commands flow and the metrics
 // recorder publishes the flown path. The simulator's topics are under /vehicle, which onboard.test names
 // in onboard.launch's arguments.
 #include <gtest/gtest.h>
@@ -13,12 +14,17 @@
 #include <tf2_eigen/tf2_eigen.h>
 #include <tf2_ros/transform_listener.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
+#include "go_feap/Bspline.h"
 #include "go_feap/ExplorationStatus.h"
+#include "go_feap/FrontierArray.h"
+#include "go_feap/GlobalTour.h"
 #include "go_feap/MapUpdate.h"
 #include "go_feap/PositionCommand.h"
+#include "go_feap/ViewpointPath.h"
 #include "ros_test_util.h"
 
 namespace {
@@ -33,15 +39,30 @@ TEST(Onboard, RunsTheChainOnD435iDepthAndVioOdometry) {
   std::size_t changed = 0, commands = 0;
   auto depth_sub = nh.subscribe<sensor_msgs::Image>("vehicle/depth", 2, [&](const sensor_msgs::Image::ConstPtr& m) { depth = m; });
   auto odom_sub = nh.subscribe<nav_msgs::Odometry>("vehicle/odom", 10, [&](const nav_msgs::Odometry::ConstPtr& m) { odom = m; });
-  auto update_sub = nh.subscribe<go_feap::MapUpdate>(
-      "map_update", 10, [&](const go_feap::MapUpdate::ConstPtr& m) { changed += m->changed_voxels; });
+  std::size_t integrated = 0;  // frames (a still vehicle changes voxels only in the first frames, which
+                              // may come before this subscription connects)
+  auto update_sub = nh.subscribe<go_feap::MapUpdate>("map_update", 10, [&](const go_feap::MapUpdate::ConstPtr& m) {
+    changed += m->changed_voxels;
+    ++integrated;
+  });
   auto status_sub = nh.subscribe<go_feap::ExplorationStatus>(
       "status", 5, [&](const go_feap::ExplorationStatus::ConstPtr& m) { status = m; });
   nav_msgs::Path::ConstPtr path;
   auto path_sub = nh.subscribe<nav_msgs::Path>("flown_path", 2, [&](const nav_msgs::Path::ConstPtr& m) { path = m; });
-  auto cmd_sub = nh.subscribe<go_feap::PositionCommand>("vehicle/position_cmd", 10, [&](const go_feap::PositionCommand::ConstPtr&) {
+  std::size_t following = 0;  // commands that follow a trajectory (not a hold)
+  auto cmd_sub = nh.subscribe<go_feap::PositionCommand>("vehicle/position_cmd", 10, [&](const go_feap::PositionCommand::ConstPtr& m) {
     ++commands;
+    following += m->trajectory_flag != go_feap::PositionCommand::TRAJECTORY_STATUS_EMPTY;
   });
+  // What the planners send: nothing of it before the trigger.
+  std::size_t tours = 0, targets = 0, trajectories = 0, frontiers = 0;
+  auto tour_sub = nh.subscribe<go_feap::GlobalTour>("global_tour", 10, [&](const go_feap::GlobalTour::ConstPtr&) { ++tours; });
+  auto target_sub =
+      nh.subscribe<go_feap::ViewpointPath>("local_target", 10, [&](const go_feap::ViewpointPath::ConstPtr&) { ++targets; });
+  auto bspline_sub =
+      nh.subscribe<go_feap::Bspline>("bspline", 10, [&](const go_feap::Bspline::ConstPtr&) { ++trajectories; });
+  auto frontier_sub = nh.subscribe<go_feap::FrontierArray>(
+      "frontiers", 10, [&](const go_feap::FrontierArray::ConstPtr& m) { frontiers = std::max(frontiers, m->frontiers.size()); });
   tf2_ros::Buffer buffer;
   tf2_ros::TransformListener listener(buffer);
 
@@ -63,8 +84,23 @@ TEST(Onboard, RunsTheChainOnD435iDepthAndVioOdometry) {
     EXPECT_EQ(in_range + none, std::size_t{depth->width} * depth->height) << "millimetres out of range";
     EXPECT_GT(in_range, 0u);
   }
-  ASSERT_TRUE(spinUntil([&] { return changed > 1000; }, 60.0)) << "the mapper integrated no 16UC1 frame via TF";
+  // Frames integrated, and frontiers found in them (the finder publishes after each frame).
+  ASSERT_TRUE(spinUntil([&] { return integrated >= 5 && frontiers > 0; }, 60.0))
+      << "the mapper integrated " << integrated << " 16UC1 frame(s) via TF (" << changed
+      << " voxels changed seen), with " << frontiers << " frontiers";
   EXPECT_EQ(status->state, go_feap::ExplorationStatus::WAIT_TRIGGER) << "onboard waits for a trigger";
+  // Frontiers in view, and 3 s more (30 global planner periods): still nothing planned, targeted or flown,
+  // and the vehicle where it was (the planners used to act before the trigger: only the layer manager
+  // waited for it).
+  const nav_msgs::Odometry::ConstPtr waiting = odom;
+  spinUntil([] { return false; }, 3.0);
+  EXPECT_EQ(status->state, go_feap::ExplorationStatus::WAIT_TRIGGER);
+  EXPECT_EQ(tours + targets + trajectories, 0u)
+      << tours << " global_tour, " << targets << " local_target and " << trajectories << " bspline before the trigger";
+  EXPECT_EQ(following, 0u) << "position commands following a trajectory before the trigger";
+  const auto& a = waiting->pose.pose.position;
+  const auto& b = odom->pose.pose.position;
+  EXPECT_LT(std::hypot(a.x - b.x, a.y - b.y, a.z - b.z), 0.05) << "the vehicle moved before the trigger";
 
   // world -> body_vio follows odometry; body_vio -> camera_depth_optical_frame is the D435i extrinsic.
   // Looked up at the stamp of an odometry message (OdometryTf stamps the TF with it), so the
@@ -102,7 +138,10 @@ TEST(Onboard, RunsTheChainOnD435iDepthAndVioOdometry) {
   EXPECT_TRUE(trigger.response.success) << trigger.response.message;
   ASSERT_TRUE(spinUntil([&] { return status->state == go_feap::ExplorationStatus::EXPLORE; }, 20.0));
   const std::size_t before = commands;
-  EXPECT_TRUE(spinUntil([&] { return commands > before + 50; }, 20.0)) << "no position commands";
+  EXPECT_TRUE(spinUntil([&] { return commands > before + 50 && following > 0; }, 20.0))
+      << "no position commands following a trajectory";
+  EXPECT_GT(tours, 0u);
+  EXPECT_GT(targets, 0u);
   // The metrics recorder (sensor_view.launch) records the flight in the world frame.
   EXPECT_TRUE(spinUntil([&] { return path && !path->poses.empty(); }, 20.0)) << "no flown_path from the recorder";
   if (path) EXPECT_EQ(path->header.frame_id, "world");

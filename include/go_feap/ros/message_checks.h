@@ -9,6 +9,7 @@
 #include <sensor_msgs/Image.h>
 
 #include <string>
+#include <utility>
 
 #include "go_feap/ExplorationStatus.h"
 #include "go_feap/FrontierArray.h"
@@ -47,6 +48,24 @@ std::string mapUpdateProblem(const MapUpdate& msg);
 /// A known state (WAIT_TRIGGER .. FINISHED); elapsed and distance finite and >= 0, elapsed under a
 /// year (it becomes a ros::Duration, which throws beyond 2^31 s); coverage finite.
 std::string explorationStatusProblem(const ExplorationStatus& msg);
+
+/// Whether a planner may act, following the layer manager's status: open only while the exploration is
+/// under way (EXPLORE or FINAL_PASS). Before the trigger and once FINISHED the planners plan nothing and
+/// send no target. A status that explorationStatusProblem() refuses changes nothing; refusals, openings
+/// and closings are logged under the node's name ("<node>: exploration FINISHED: <closed_says>").
+class ExplorationGate {
+ public:
+  ExplorationGate(std::string open_says, std::string closed_says)
+      : open_says_(std::move(open_says)), closed_says_(std::move(closed_says)) {}
+  /// Takes a status message for the nodelet `node`; true when it closed the gate (the caller drops what
+  /// it holds).
+  bool update(const ExplorationStatus& msg, const std::string& node);
+  bool open() const { return open_; }
+
+ private:
+  std::string open_says_, closed_says_;
+  bool open_ = false;
+};
 
 /// Position, velocity, acceleration, yaw and yaw rate all finite (the trajectory planner starts its next
 /// plan from the command).
