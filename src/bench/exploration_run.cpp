@@ -1,5 +1,6 @@
 #include "go_feap/bench/exploration_run.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -26,11 +27,12 @@ bool positiveFinite(double v) { return std::isfinite(v) && v > 0.0; }
 common::Status LoopConfig::validate() const {
   // Rates in (0, 1000] Hz, as the nodelets' timers: 1e12 Hz made steps of a picosecond, a run that never ends.
   auto rate = [](double r) { return positiveFinite(r) && r <= 1000.0; };
+  // Named by the keys they are read from (bench.yaml, exploration.yaml).
   if (!rate(control_rate)) return common::Status::Error("loop: control_rate must be in (0, 1000] Hz");
-  if (!rate(plan_rate)) return common::Status::Error("loop: plan_rate must be in (0, 1000] Hz");
-  if (!rate(sample_rate)) return common::Status::Error("loop: sample_rate must be in (0, 1000] Hz");
+  if (!rate(plan_rate)) return common::Status::Error("global: rate must be in (0, 1000] Hz");
+  if (!rate(sample_rate)) return common::Status::Error("metrics: sample_rate must be in (0, 1000] Hz");
   if (!std::isfinite(collision_distance) || collision_distance < 0.0)
-    return common::Status::Error("loop: collision_distance must be finite and >= 0");
+    return common::Status::Error("metrics: collision_distance must be finite and >= 0");
   return common::Status::Ok();
 }
 
@@ -44,11 +46,16 @@ common::Status ExplorationConfig::validate() const {
     if (!st.ok()) return st;
   if (!positiveFinite(camera_rate) || camera_rate > 100.0)
     return common::Status::Error("depth_camera: rate must be in (0, 100] Hz");
-  if (!positiveFinite(layer_rate)) return common::Status::Error("layers: rate must be finite and > 0");
-  if (!positiveFinite(planner_rate)) return common::Status::Error("planner: rate must be finite and > 0");
+  // (0, 1000] Hz as the nodelets' timers: at 0.02 Hz the run's end guard, two layer steps past
+  // max_sim_time, let a 2 s run fly 50 s.
+  if (!positiveFinite(layer_rate) || layer_rate > 1000.0)
+    return common::Status::Error("layers: rate must be in (0, 1000] Hz");
+  if (!positiveFinite(planner_rate) || planner_rate > 1000.0)
+    return common::Status::Error("planner: rate must be in (0, 1000] Hz");
   const Eigen::Matrix3d R = T_B_C.linear();
-  if (!(R.transpose() * R).isApprox(Eigen::Matrix3d::Identity(), 1e-6) || R.determinant() <= 0.0)
-    return common::Status::Error("depth_camera: T_B_C must be a rigid transform");
+  if (!T_B_C.matrix().allFinite() || !(R.transpose() * R).isApprox(Eigen::Matrix3d::Identity(), 1e-6) ||
+      R.determinant() <= 0.0)
+    return common::Status::Error("depth_camera: T_B_C must be a finite rigid transform");
   return common::Status::Ok();
 }
 
@@ -435,6 +442,11 @@ bool ExplorationRun::step() {
   vehicle_.advance(dt, ref);
   ++tick_;
   t_ = static_cast<double>(tick_) * dt;
+  if (!vehicle_.state().finite()) {  // the run ends here, not the process (it rendered from a NaN pose)
+    log("the simulated vehicle's state is not finite: the dynamics diverged");
+    finish("diverged");
+    return false;
+  }
   const common::Vec3 p = vehicle_.state().position;
   distance_ += (p - last_position_).norm();
   last_position_ = p;
@@ -447,8 +459,9 @@ bool ExplorationRun::step() {
   s.collisions = collisions_.collisions();
   s.min_obstacle_distance_m = collisions_.closestApproach();
   // The layer manager ends the run at its time limit (max_sim_time) on its next step; this only guards
-  // against a state machine that would not.
-  if (t_ >= max_sim_time_ + 2.0 / config_.layer_rate) finish("max_sim_time");
+  // against a state machine that would not, or one stepped so seldom that its next step is far off
+  // (at layers/rate 0.02 Hz a 2 s run flew 50 s).
+  if (t_ >= max_sim_time_ + std::min(1.0, 2.0 / config_.layer_rate)) finish("max_sim_time");
   return !ended_;
 }
 

@@ -19,8 +19,10 @@ namespace go_feap::metrics {
 double obstacleDistance(const world::Scene& scene, const common::Vec3& p, double radius) {
   const common::GridGeometry& geo = scene.geometry();
   const double res = geo.resolution();
-  const common::Index3 lo = geo.coordToIndex(p - common::Vec3::Constant(radius));
-  const common::Index3 hi = geo.coordToIndex(p + common::Vec3::Constant(radius));
+  // Clamped to the grid's rim: a position 2e8 m away (finite odometry, however wrong) overflowed the int
+  // loop bound and crashed the metrics recorder.
+  const common::Index3 lo = geo.clampedIndex(p - common::Vec3::Constant(radius));
+  const common::Index3 hi = geo.clampedIndex(p + common::Vec3::Constant(radius));
   double best = radius;
   for (int z = lo.z(); z <= hi.z(); ++z)
     for (int y = lo.y(); y <= hi.y(); ++y)

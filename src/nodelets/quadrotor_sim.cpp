@@ -144,6 +144,12 @@ class QuadrotorSim : public nodelet::Nodelet {
         ref = (!have_command_ || timed_out_) ? hold_ : command_;
       }
       vehicle_->advance(period, ref);
+      if (!vehicle_->state().finite()) {  // nothing to publish from; the rest of the chain holds what it has
+        NODELET_ERROR_STREAM(getName() << ": the simulated vehicle's state is not finite after " << t
+                                       << " s: the dynamics diverged (quadrotor/inertia, controller gains and "
+                                          "quadrotor/dynamics_rate); the simulation stops");
+        return;
+      }
       t += period;
       {
         std::lock_guard<std::mutex> lock(mutex_);

@@ -140,12 +140,23 @@ void DepthRenderer::buildSurface() {
 void DepthRenderer::render(const Eigen::Isometry3d& T_W_C, cv::Mat& depth) const {
   const CameraIntrinsics& K = intrinsics_;
   depth.create(K.height, K.width, CV_32FC1);
-  depth.setTo(cv::Scalar(0.0));
-  // A camera inside a cube: every ray starts in it, too close everywhere.
-  if (scene_.isOccupied(Eigen::Vector3d(T_W_C.translation()))) {
-    depth.setTo(cv::Scalar(-std::numeric_limits<float>::infinity()));
+  // A pose that is not finite (a diverged state) measures nothing; its index arithmetic below was undefined.
+  if (!T_W_C.matrix().allFinite()) {
+    depth.setTo(cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
     return;
   }
+  // A camera inside a cube, or touching one: every ray starts in it, too close everywhere. Touching
+  // counts: the faces through the camera are skipped as edge-on below, and the wall looked transparent.
+  const Eigen::Vector3d t = T_W_C.translation();
+  for (int corner = 0; corner < 8; ++corner) {
+    const Eigen::Vector3d touch(corner & 1 ? kTouch : -kTouch, corner & 2 ? kTouch : -kTouch,
+                                corner & 4 ? kTouch : -kTouch);
+    if (scene_.isOccupied(Eigen::Vector3d(t + touch))) {
+      depth.setTo(cv::Scalar(-std::numeric_limits<float>::infinity()));
+      return;
+    }
+  }
+  depth.setTo(cv::Scalar(0.0));
 
   // Work in grid-index units: grid vertex p lies at camera-frame point sum_a E[a] (p_a - q_a).
   const common::GridGeometry& geo = scene_.geometry();
@@ -178,12 +189,16 @@ void DepthRenderer::render(const Eigen::Isometry3d& T_W_C, cv::Mat& depth) const
     const double hi = std::clamp(std::floor(fmax[a]) + 1.0, 0.0, n[a] - 1.0);
     b_lo[a] = static_cast<int>(lo) / kBlock;
     b_hi[a] = static_cast<int>(hi) / kBlock;
-    if (fmax[a] < -1.0 || fmin[a] > n[a] + 1.0) return;  // the frustum misses the grid
+    if (fmax[a] < -1.0 || fmin[a] > n[a] + 1.0) {  // the frustum misses the grid: nothing in range
+      depth.setTo(cv::Scalar(std::numeric_limits<float>::infinity()));
+      return;
+    }
   }
 
   // A face whose plane passes within this distance (index units) of the camera is seen
-  // edge-on: it covers no pixel, and its plane depth would be ill-conditioned.
-  const double kEdgeOn = 1e-6 / res;
+  // edge-on: it covers no pixel, and its plane depth would be ill-conditioned. (A camera that near
+  // a face's rectangle touches its cube, rendered too near above.)
+  const double kEdgeOn = kTouch / 2.0 / res;
   // Inclusive tolerance of the edge tests (normalised edge-plane units, ~radians): closes
   // rounding gaps between faces that share an edge, far below a pixel.
   const double kEdgeTol = 1e-9;

@@ -1,5 +1,6 @@
 #include "go_feap/sim/quadrotor.h"
 
+#include <cmath>
 #include <string>
 
 namespace go_feap::sim {
@@ -8,17 +9,26 @@ common::Status QuadrotorParams::validate() const {
   auto bad = [](const std::string& key, const std::string& why) {
     return common::Status::Error("quadrotor: " + key + " " + why);
   };
-  if (!(mass > 0.0)) return bad("mass", "must be > 0");
+  // Every value finite: an infinite arm length or torque coefficient made the rotor allocation singular,
+  // and an infinite drag the state NaN at the first step.
+  const auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
+  if (!positive(mass)) return bad("mass", "must be finite and > 0");
   if (!(inertia.array() > 0.0).all() || !inertia.allFinite()) return bad("inertia", "must be three values > 0");
-  if (!(arm_length > 0.0)) return bad("arm_length", "must be > 0");
-  if (!(torque_coefficient > 0.0)) return bad("torque_coefficient", "must be > 0");
-  if (!(motor_min_thrust >= 0.0)) return bad("motor_min_thrust", "must be >= 0");
-  if (!(motor_max_thrust > motor_min_thrust)) return bad("motor_max_thrust", "must be > motor_min_thrust");
+  if (!positive(arm_length)) return bad("arm_length", "must be finite and > 0");
+  if (!positive(torque_coefficient)) return bad("torque_coefficient", "must be finite and > 0");
+  if (!positive(gravity)) return bad("gravity", "must be finite and > 0");
+  if (!(motor_min_thrust >= 0.0 && std::isfinite(motor_min_thrust))) return bad("motor_min_thrust", "must be finite and >= 0");
+  if (!(motor_max_thrust > motor_min_thrust && std::isfinite(motor_max_thrust)))
+    return bad("motor_max_thrust", "must be finite and > motor_min_thrust");
   if (!(4.0 * motor_max_thrust > mass * gravity)) return bad("motor_max_thrust", "cannot lift the vehicle (4 x max < m g)");
-  if (!(linear_drag >= 0.0)) return bad("linear_drag", "must be >= 0");
-  if (!(gravity > 0.0)) return bad("gravity", "must be > 0");
+  // At 4 x min >= m g the vehicle cannot hover or descend: it climbs for good.
+  if (!(4.0 * motor_min_thrust < mass * gravity)) return bad("motor_min_thrust", "leaves no hover (4 x min >= m g)");
   // Bounded above too: at 1e15 Hz one simulated step never ended, and the bench could not be stopped.
   if (!(dynamics_rate >= 500.0 && dynamics_rate <= 100000.0)) return bad("dynamics_rate", "must be in [500, 100000] Hz");
+  // The drag's decay rate linear_drag / mass within one step's worth of dynamics_rate: RK4 diverges past
+  // about 2.8 steps' worth (5000 N s/m on 0.98 kg at 500 Hz made the state NaN).
+  if (!(linear_drag >= 0.0 && linear_drag <= mass * dynamics_rate))
+    return bad("linear_drag", "must be >= 0 and <= mass x dynamics_rate (the RK4 step would diverge)");
   return common::Status::Ok();
 }
 

@@ -524,6 +524,45 @@ TEST(DepthRenderer, CameraInsideAnOccupiedVoxelSeesEverythingTooNear) {
   EXPECT_EQ(countEqual(depth, -std::numeric_limits<float>::infinity()), 640 * 480);
 }
 
+// A camera on a voxel's face, outside it (touching a wall: a collision) sees -inf everywhere, as one
+// inside it. The faces through the camera are skipped as edge-on, and the wall used to look transparent:
+// +inf over the whole image, which the mapper casts free to its range, through the wall.
+TEST(DepthRenderer, CameraTouchingAWallSeesEverythingTooNear) {
+  const world::Scene scene = sceneWithBoxes({{Vec3(2.0, -4.0, -2.0), Vec3(2.2, 4.0, 4.0)}}, 0.1);
+  const DepthRenderer renderer(DepthCameraConfig(), scene);
+  cv::Mat depth;
+  const float inf = std::numeric_limits<float>::infinity();
+  // On the wall's near face (x = 2.0), looking away from it and along it.
+  for (const double yaw : {M_PI, 0.5 * M_PI}) {
+    renderer.render(cameraPose(Vec3(2.0, 0.33, 1.07), yaw), depth);
+    EXPECT_EQ(countEqual(depth, -inf), 640 * 480) << "yaw " << yaw;
+  }
+  // A hair off the face (5 microns): the wall ahead at that depth, nothing else in view.
+  renderer.render(cameraPose(Vec3(2.0 - 5e-6, 0.33, 1.07), 0.0), depth);
+  EXPECT_EQ(countEqual(depth, -inf), 640 * 480);  // nearer than min_range
+  renderer.render(cameraPose(Vec3(2.0 - 5e-6, 0.33, 1.07), M_PI), depth);
+  EXPECT_EQ(countEqual(depth, -inf), 0) << "a camera 5 microns from a wall, looking away from it";
+}
+
+// A view that misses the grid has no return anywhere: +inf (REP 117: nothing in range), not 0 (no
+// measurement). A pose that is not finite (a diverged simulation) measures nothing: NaN everywhere; its
+// index arithmetic was undefined, and the bench crashed in it.
+TEST(DepthRenderer, AViewMissingTheGridIsInfiniteAndAPoseNotFiniteMeasuresNothing) {
+  const world::Scene scene = sceneWithBoxes({{Vec3(2.0, -4.0, -2.0), Vec3(2.2, 4.0, 4.0)}}, 0.1);
+  const DepthRenderer renderer(DepthCameraConfig(), scene);
+  cv::Mat depth;
+  const float inf = std::numeric_limits<float>::infinity();
+  renderer.render(cameraPose(Vec3(-30.0, 0.0, 1.0), M_PI), depth);  // 29 m outside, looking away
+  EXPECT_EQ(countEqual(depth, inf), 640 * 480);
+  renderer.render(cameraPose(Vec3(1.0, 0.0, 1e12), 0.0), depth);  // far above, finite
+  EXPECT_EQ(countEqual(depth, inf), 640 * 480);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (const Eigen::Isometry3d& pose : {cameraPose(Vec3(nan, 1.0, 1.0), 0.0), cameraPose(Vec3(1.0, 0.0, 1.0), nan)}) {
+    renderer.render(pose, depth);
+    EXPECT_EQ(countEqual(depth, std::numeric_limits<float>::quiet_NaN()), 640 * 480);
+  }
+}
+
 // As a RealSense sends depth: millimetres, 0 where there is no return (REP 117's +-inf and NaN, 0 and
 // negative values alike; converted as they are, +inf saturated to 65535 mm, a wall 65 m away).
 TEST(DepthRenderer, MillimetresAreZeroWithoutAReturn) {

@@ -175,6 +175,12 @@ TEST(Metrics, ObstacleDistanceMatchesBruteForceOverVoxelCubes) {
     }
     EXPECT_NEAR(metrics::obstacleDistance(*scene, p, 0.6), brute, 1e-12) << p.transpose();
   }
+  // Far outside the grid (a wrong odometry, finite): the horizon. 2e8 m made an int loop bound overflow
+  // and crashed the metrics recorder.
+  const Vec3 corner = geo.bounds().max;
+  for (const Vec3& far : {Vec3(214748353.75, 0.0, 1.0), Vec3(-2.2e9, 0.0, 1.0), Vec3(0.0, 1e30, -1e30),
+                          Vec3(corner + Vec3::Constant(0.7)), Vec3(std::nan(""), 0.0, 1.0)})
+    EXPECT_EQ(metrics::obstacleDistance(*scene, far, 0.6), 0.6) << far.transpose();
 }
 
 TEST(Metrics, CollisionMonitorCountsEachEntryAndKeepsTheClosestApproach) {

@@ -3,6 +3,8 @@
 
 #include <cmath>
 #include <functional>
+#include <limits>
+#include <utility>
 
 #include "go_feap/sim/vehicle.h"
 
@@ -209,4 +211,39 @@ TEST(Config, InvalidValuesNameTheKey) {
   So3ControllerConfig c;
   c.kv.y() = -1;
   EXPECT_NE(c.validate().message().find("kv"), std::string::npos);
+}
+
+// Values that cannot fly are refused by name: infinite ones (an infinite arm length or torque coefficient
+// made the rotor allocation singular, an infinite drag the state NaN), a drag too stiff for the RK4 step,
+// and a minimum thrust that leaves no hover. A drag at the bound flies towards a reference, finite
+// (slowly: 500 1/s of decay against the controller's gains).
+TEST(Config, ValuesThatCannotFlyAreRefusedByName) {
+  const double inf = std::numeric_limits<double>::infinity();
+  const std::pair<const char*, std::function<void(QuadrotorParams&)>> bad[] = {
+      {"mass", [&](QuadrotorParams& p) { p.mass = inf; }},
+      {"arm_length", [&](QuadrotorParams& p) { p.arm_length = inf; }},
+      {"torque_coefficient", [&](QuadrotorParams& p) { p.torque_coefficient = inf; }},
+      {"gravity", [&](QuadrotorParams& p) { p.gravity = inf; }},
+      {"motor_max_thrust", [&](QuadrotorParams& p) { p.motor_max_thrust = inf; }},
+      {"motor_min_thrust", [&](QuadrotorParams& p) { p.motor_min_thrust = inf; }},
+      {"motor_min_thrust", [&](QuadrotorParams& p) { p.motor_min_thrust = 3.0; }},  // 4 x 3 N > 0.98 kg g
+      {"linear_drag", [&](QuadrotorParams& p) { p.linear_drag = inf; }},
+      {"linear_drag", [&](QuadrotorParams& p) { p.linear_drag = 5000.0; }}};
+  for (const auto& [key, spoil] : bad) {
+    QuadrotorParams p;
+    spoil(p);
+    const auto st = p.validate();
+    EXPECT_FALSE(st.ok()) << key;
+    EXPECT_NE(st.message().find(key), std::string::npos) << key << ": " << st.message();
+  }
+  QuadrotorParams p;
+  p.linear_drag = p.mass * p.dynamics_rate;
+  ASSERT_TRUE(p.validate()) << p.validate().message();
+  SimulatedVehicle v{p, So3ControllerConfig()};
+  v.reset(Eigen::Vector3d(0, 0, 1), 0.0);
+  PositionReference ref;
+  ref.position = Eigen::Vector3d(0.5, 0, 1);
+  const Flight r = fly(v, 5.0, [&](double) { return ref; });
+  for (const Eigen::Vector3d& x : r.p) ASSERT_TRUE(x.allFinite());
+  EXPECT_LT((r.p.back() - ref.position).norm(), 0.49) << "no headway against the drag (about 4 cm in 5 s)";
 }

@@ -60,7 +60,8 @@ class DepthRenderer {
   /// Renders a CV_32FC1 depth image in metres (optical-frame z of the first occupied voxel
   /// surface hit by the ray through each pixel centre), with REP 117's values where there is no
   /// measurement: -inf where that surface is nearer than min_range (it occludes the view), +inf where
-  /// it is farther than max_range or absent. A camera inside an occupied voxel sees -inf everywhere.
+  /// it is farther than max_range or absent. A camera inside an occupied voxel, or within kTouch of
+  /// one, sees -inf everywhere; a pose that is not finite gives NaN everywhere (no measurement).
   /// `depth` is (re)allocated to height x width.
   /// T_W_C maps camera optical-frame coordinates (z forward, x right, y down) to world.
   void render(const Eigen::Isometry3d& T_W_C, cv::Mat& depth) const;
@@ -85,6 +86,8 @@ class DepthRenderer {
     std::int32_t plane, u0, u1, v0, v1;
   };
   static constexpr int kBlock = 8;  ///< block edge (voxels) of the culling grid
+  /// m: a camera this near an occupied voxel touches it (see render()).
+  static constexpr double kTouch = 2e-6;
 
   void buildSurface();
   std::size_t blockIndex(int bx, int by, int bz) const {

@@ -30,6 +30,12 @@ struct QuadrotorState {
   Eigen::Quaterniond attitude = Eigen::Quaterniond::Identity();  ///< body -> world
   Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();  ///< rad/s, body
   Eigen::Vector3d acceleration = Eigen::Vector3d::Zero();      ///< m/s^2, world (last step)
+  /// False once the dynamics diverged (a stiff configuration: gains too high for the inertia at
+  /// dynamics_rate); nothing should be measured or published from such a state.
+  bool finite() const {
+    return position.allFinite() && velocity.allFinite() && attitude.coeffs().allFinite() &&
+           angular_velocity.allFinite();
+  }
 };
 
 /// Collective thrust and body moments asked of the vehicle.

@@ -32,7 +32,8 @@ struct Scene {
   double resolution() const { return occupied.geometry().resolution(); }
   const common::GridGeometry& geometry() const { return occupied.geometry(); }
   /// Occupancy of the voxel containing `p`; outside the grid counts as free.
-  bool isOccupied(const Vec3& p) const { return isOccupied(geometry().coordToIndex(p)); }
+  /// Any point: one however far outside the grid, or NaN, is free (clampedIndex).
+  bool isOccupied(const Vec3& p) const { return isOccupied(geometry().clampedIndex(p)); }
   bool isOccupied(const Index3& idx) const {
     return geometry().inside(idx) && occupied.at(idx) != 0;
   }
