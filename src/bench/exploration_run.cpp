@@ -39,7 +39,7 @@ common::Status LoopConfig::validate() const {
 common::Status ExplorationConfig::validate() const {
   for (const common::Status& st :
        {quadrotor.validate(), controller.validate(), camera.validate(), map.validate(), frontier.validate(),
-        global.validate(), distance_astar.validate(map.esdf), layers.validate(), viewpoints.validate(),
+        global.validate(), distance_astar.validate(map.esdf), layers.validate(), viewpoints.validate(map.esdf),
         local.validate(), optimizer.validate(map.esdf), replan.validate(), planner.validate(),
         flight_astar.validate(map.esdf), scout_astar.validate(map.esdf), coarse_astar.validate(map.esdf),
         loop.validate()})

@@ -92,7 +92,9 @@ class LocalPlanner : public nodelet::Nodelet {
     std::lock_guard<std::mutex> lock(mutex_);
     if (shared_) return;
     auto map = ros_map::acceptHandle(*msg, [&](const map::EsdfConfig& esdf) {
-      return astar_config_.validate(esdf);  // Astar's constructor throws otherwise
+      // Astar's constructor throws otherwise; a viewpoint clearance past max_distance passes no viewpoint.
+      const common::Status st = astar_config_.validate(esdf);
+      return st ? viewpoint_config_.validate(esdf) : st;
     });
     if (!map) {
       NODELET_ERROR_STREAM_THROTTLE(10.0, getName() << ": " << map.message());

@@ -87,6 +87,19 @@ Result<GlobalTour> planTour(const std::vector<FrontierSummary>& frontiers, const
     }
   }
   const std::vector<std::size_t> candidates = selectCandidates(frontiers, from_uav, config);
+  // Candidates topped up from beyond s_near were ordered by an estimate: their legs from the UAV are
+  // priced by path (from_uav stays as it was for the rest, which it only orders).
+  std::vector<double> leg_from_uav(frontiers.size(), kUnreachable);
+  for (std::size_t j : candidates) {
+    leg_from_uav[j] = from_uav[j];
+    if (!distances.from_uav_path || from_uav[j] < config.s_near) continue;
+    const double path = distances.from_uav_path(j);
+    if (!(path >= 0.0 && std::isfinite(path)))
+      return Result<GlobalTour>::Error("global planner: path distance from the UAV to frontier " +
+                                       std::to_string(frontiers[j].id) + " must be finite and >= 0, got " +
+                                       std::to_string(path));
+    leg_from_uav[j] = path;
+  }
 
   // The rest: the reachable active frontiers outside the candidates, nearest the UAV first.
   std::vector<std::size_t> rest;
@@ -106,7 +119,7 @@ Result<GlobalTour> planTour(const std::vector<FrontierSummary>& frontiers, const
   std::vector<double> xi_of(nodes, 0.0);
   for (int a = 0; a < n; ++a) {
     const FrontierSummary& f = frontiers[candidates[a]];
-    cost(0, a + 1) = from_uav[candidates[a]] / config.v_max;
+    cost(0, a + 1) = leg_from_uav[candidates[a]] / config.v_max;
     xi_of[a] = xi(config.omission, f.cell_count, f.duration, f.n_near);
     for (int b = 0; b < n; ++b) {
       if (a == b) continue;

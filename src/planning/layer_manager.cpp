@@ -11,7 +11,9 @@ common::Status LayerManagerConfig::validate() const {
   auto bad = [](const std::string& key, const std::string& why) {
     return common::Status::Error("layers: " + key + " " + why);
   };
-  if (!(layer_height > 0.0) || !std::isfinite(layer_height)) return bad("layer_height", "must be finite and > 0");
+  // At least half a metre: a band thinner than the viewpoints' clearance holds no viewpoint, and 1e-12 m
+  // overflowed the band count.
+  if (!(layer_height >= 0.5) || !std::isfinite(layer_height)) return bad("layer_height", "must be finite and >= 0.5 m");
   if (!(settle_time >= 0.0) || !std::isfinite(settle_time)) return bad("settle_time", "must be finite and >= 0");
   if (max_retries < 1) return bad("max_retries", "must be >= 1");
   if (!(time_limit > 0.0)) return bad("time_limit", "must be > 0");
@@ -41,11 +43,14 @@ const char* toString(FinishReason r) {
 
 LayerManager::LayerManager(const LayerManagerConfig& config, const common::Aabb& box, double start_z)
     : config_(config), box_(box) {
+  // Equal bands of at most layer_height: a remainder band (0.1 m on a 6.6 m box at 3.25 m) was thinner than
+  // the viewpoints' clearance, held no viewpoint, and its frontiers were blacklisted unexplored.
   const double height = box.max.z() - box.min.z();
-  count_ = std::max(1, static_cast<int>(std::ceil(height / config.layer_height - 1e-9)));
+  count_ = static_cast<int>(std::clamp(std::ceil(height / config.layer_height - 1e-9), 1.0, 1e6));
+  band_height_ = height / count_;
   // Clamped as a double first: a start far outside the box (1e300 m, or NaN, from odometry gone wrong) would
   // not fit an int, and the cast would be undefined. A NaN start takes the lowest band.
-  const double band_of_start = std::floor((start_z - box.min.z()) / config.layer_height);
+  const double band_of_start = std::floor((start_z - box.min.z()) / band_height_);
   const int start = std::isnan(band_of_start) ? 0 : static_cast<int>(std::clamp(band_of_start, 0.0, count_ - 1.0));
   for (int k = start; k < count_; ++k) order_.push_back(k);
   for (int k = start - 1; k >= 0; --k) order_.push_back(k);
@@ -55,8 +60,8 @@ Band LayerManager::band(int index) const {
   Band b;
   b.index = index;
   b.count = count_;
-  b.z_min = box_.min.z() + index * config_.layer_height;
-  b.z_max = std::min(box_.max.z(), b.z_min + config_.layer_height);
+  b.z_min = box_.min.z() + index * band_height_;
+  b.z_max = index + 1 == count_ ? box_.max.z() : box_.min.z() + (index + 1) * band_height_;
   return b;
 }
 

@@ -50,12 +50,16 @@ common::Result<GlobalTour> TourPlanner::plan(const std::vector<FrontierSummary>&
     it = ids.count(it->first.first) && ids.count(it->first.second) ? std::next(it) : cache_.erase(it);
   std::size_t local_fallbacks = 0;
   PathDistances d;
-  d.from_uav = [&](std::size_t j) {
-    const double e = (frontiers[j].average - uav).norm();
-    if (e >= config_.s_near) return e;
+  std::vector<double> path_from_uav(frontiers.size(), -1.0);  // searched in this call (-1: not yet)
+  d.from_uav_path = [&](std::size_t j) {
+    if (path_from_uav[j] >= 0.0) return path_from_uav[j];
     const PathDistance pd = search(uav, frontiers[j].average, now);
     local_fallbacks += pd.euclidean_fallback;
-    return pd.metres;
+    return path_from_uav[j] = pd.metres;
+  };
+  d.from_uav = [&](std::size_t j) {
+    const double e = (frontiers[j].average - uav).norm();
+    return e >= config_.s_near ? e : d.from_uav_path(j);
   };
   d.from_uav_lower_bound = [&](std::size_t j) { return (frontiers[j].average - uav).norm(); };
   // A path is as long one way as the other: one search per unordered pair, from the frontier with

@@ -196,7 +196,10 @@ class OpenPath {
     pb_.assign(n + 1, 0.0);
     for (int q = 1; q <= n; ++q) {
       const double fwd = d(p_[q - 1], p_[q]);
-      const double back = d(p_[q], p_[q - 1]);
+      // Column 0 is ignored (the API's word): the reversed first leg, back to the start, is never used
+      // (only differences pa_[j] - pa_[i] with i >= 1 are), and an infinite value there made every 2-opt
+      // delta inf - inf = NaN, switching 2-opt off.
+      const double back = p_[q - 1] == 0 ? 0.0 : d(p_[q], p_[q - 1]);
       pd_[q] = pd_[q - 1] + fwd;
       pc_[q] = pc_[q - 1] + fwd * legWeight(r_[q]);
       pa_[q] = pa_[q - 1] + back;

@@ -41,6 +41,15 @@ Status ViewpointConfig::validate() const {
   return Status::Ok();
 }
 
+Status ViewpointConfig::validate(const map::EsdfConfig& esdf) const {
+  if (Status s = validate(); !s) return s;
+  if (clearance > esdf.max_distance)
+    return Status::Error("viewpoints: clearance must be <= the ESDF's max_distance (" +
+                         std::to_string(esdf.max_distance) + " m, where distances are truncated: no viewpoint " +
+                         "would pass), got " + std::to_string(clearance));
+  return Status::Ok();
+}
+
 double wrapAngle(double a) {
   a = std::remainder(a, 2.0 * kPi);  // [-pi, pi]
   return a <= -kPi ? a + 2.0 * kPi : a;

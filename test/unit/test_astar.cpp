@@ -1094,6 +1094,36 @@ TEST(TourPlanner, SearchesEachPairOnceAndFindsTheShortestOpenTour) {
   EXPECT_EQ(planner.cacheSize(), (n - 1) * (n - 2) / 2);
 }
 
+// Candidates topped up from beyond s_near are chosen by straight-line distance, but their legs from the
+// UAV are priced by path: a frontier 2 m away behind the wall (about 6 m by path through the gap) used to
+// be priced at 2 m and visited first, ahead of one 2.9 m away on the UAV's side.
+TEST(TourPlanner, CandidatesBeyondSNearArePricedByPathFromTheUav) {
+  World world(Index3(60, 40, 10));
+  splitByWallWithGap(world);
+  const Astar astar(world.occupancy(), world.esdf(), astarConfig(0.2, true));
+  go_feap::planning::GlobalPlannerConfig config;
+  config.lambda = 0.0;  // travel time only: the brute force below is the whole objective
+  config.s_near = 1.0;  // both beyond: topped up (n_min_tsp 2)
+  config.n_min_tsp = 2;
+  config.rest_weight = 0.0;
+  const Vec3 uav(2.0, 0.5, 0.5);
+  std::vector<go_feap::planning::FrontierSummary> frontiers(2);
+  frontiers[0].id = 1, frontiers[0].average = Vec3(4.0, 0.5, 0.5);  // behind the wall
+  frontiers[1].id = 2, frontiers[1].average = Vec3(0.5, 3.0, 0.5);  // the UAV's side
+  for (auto& f : frontiers) f.cell_count = 100;
+  const double behind = pathDistance(astar, uav, frontiers[0].average).metres;
+  const double beside = pathDistance(astar, uav, frontiers[1].average).metres;
+  const double between = pathDistance(astar, frontiers[0].average, frontiers[1].average).metres;
+  ASSERT_GT(behind, beside + 2.0);  // the test's premise: behind the wall is far by path
+  ASSERT_LT((frontiers[0].average - uav).norm(), (frontiers[1].average - uav).norm());  // near in line
+  go_feap::planning::TourPlanner planner(config, astar);
+  const auto tour = planner.plan(frontiers, uav, 0.0);
+  ASSERT_TRUE(tour) << tour.message();
+  ASSERT_EQ(tour->frontier_ids.size(), 2u);
+  EXPECT_EQ(tour->frontier_ids.front(), 2u) << "the frontier behind the wall was visited first";
+  EXPECT_NEAR(tour->cost, (std::min(behind, beside) + between) / config.v_max, 1e-9);
+}
+
 // Regrown clusters (new ids, averages moved a little) and a UAV that moved a little reuse the lengths
 // searched between the same reuse_cell cells for reuse_time s, either way round; after that, or with
 // reuse_cell 0, they are searched again.

@@ -11,7 +11,7 @@ using go_feap::common::Vec3;
 
 namespace {
 
-const Aabb kBox{Vec3(0, 0, 0), Vec3(10, 10, 5.5)};  // 6 bands of 1 m (the top one 0.5 m)
+const Aabb kBox{Vec3(0, 0, 0), Vec3(10, 10, 5.5)};  // 6 equal bands of at most 1 m: 0.917 m
 
 LayerManagerConfig config() {
   LayerManagerConfig c;
@@ -46,8 +46,13 @@ void lookRound(LayerManager& m, double t) {
 TEST(LayerManager, BandsGoUpFromTheStartBandThenDown) {
   LayerManager m(config(), kBox, 2.3);
   EXPECT_EQ(m.bandOrder(), (std::vector<int>{2, 3, 4, 5, 1, 0}));
-  EXPECT_DOUBLE_EQ(m.band(5).z_min, 5.0);
-  EXPECT_DOUBLE_EQ(m.band(5).z_max, 5.5);
+  // Equal bands, the box's height over their count: no thin remainder on top (it was 0.5 m here, and at
+  // 0.1 m under the viewpoints' clearance it held no viewpoint).
+  for (int k = 0; k < 6; ++k) {
+    EXPECT_NEAR(m.band(k).z_min, k * 5.5 / 6.0, 1e-12) << k;
+    EXPECT_NEAR(m.band(k).z_max - m.band(k).z_min, 5.5 / 6.0, 1e-12) << k;
+  }
+  EXPECT_EQ(m.band(5).z_max, 5.5);  // exactly the box's top
   EXPECT_EQ(m.band(0).count, 6);
   LayerManager low(config(), kBox, 0.0), high(config(), kBox, 5.5);
   EXPECT_EQ(low.bandOrder(), (std::vector<int>{0, 1, 2, 3, 4, 5}));
@@ -232,6 +237,10 @@ TEST(LayerManager, ValidateNamesKeys) {
   // One band over everything is a large finite height: an infinite one makes NaN band bounds.
   c.layer_height = std::numeric_limits<double>::infinity();
   EXPECT_NE(c.validate().message().find("layer_height"), std::string::npos);
+  c.layer_height = 1e-12;  // 2.6e13 bands on a 26 m box overflowed the int count
+  EXPECT_NE(c.validate().message().find("layer_height"), std::string::npos);
+  c.layer_height = 0.5;
+  EXPECT_TRUE(c.validate()) << c.validate().message();
   c.layer_height = 1000.0;
   EXPECT_TRUE(c.validate().ok());
   c.settle_time = std::numeric_limits<double>::infinity();

@@ -266,6 +266,25 @@ TEST(SolveHeuristic, WithinFivePercentOfExactAtTwelveFrontiers) {
   }
 }
 
+// The heuristic ignores column 0 as the exact solver does: an infinite value there (which the problem
+// check allows) made its reversed-leg sums infinite and every 2-opt delta NaN, silently switching 2-opt
+// off (tours 2.8 % worse at 300 frontiers).
+TEST(SolveHeuristic, ColumnZeroIsIgnored) {
+  for (const int n : {30, 150}) {
+    Problem p = randomProblem(n, 900 + n, Kind::kEuclidean, 0.2);
+    p.cost.col(0).setZero();
+    const TourResult open = solveHeuristic(p.cost, p.xi, p.lambda);
+    for (const double value : {std::numeric_limits<double>::infinity(), -1e6, 1e9}) {
+      p.cost.col(0).setConstant(value);
+      p.cost(0, 0) = 0.0;
+      const TourResult r = solveHeuristic(p.cost, p.xi, p.lambda);
+      ASSERT_TRUE(r.status.ok()) << r.status.message();
+      EXPECT_EQ(r.order, open.order) << n << " frontiers, column 0 = " << value;
+      EXPECT_DOUBLE_EQ(r.cost, open.cost) << n << " frontiers, column 0 = " << value;
+    }
+  }
+}
+
 TEST(SolveHeuristic, ThreeHundredFrontiersGiveAValidImprovedTour) {
   const Problem p = randomProblem(300, 42, Kind::kEuclidean, 0.2);
   const TourResult r = solveHeuristic(p.cost, p.xi, p.lambda);

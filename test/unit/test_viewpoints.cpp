@@ -239,6 +239,15 @@ TEST(ViewpointConfig, ValidateNamesTheBadKey) {
   expectBad("vfov", [](ViewpointConfig& c) { c.vfov = 0.0; });
   expectBad("min_visible", [](ViewpointConfig& c) { c.min_visible = -1; });
   expectBad("yaw_samples", [](ViewpointConfig& c) { c.yaw_samples = 0; });
+  // Against the ESDF: a clearance past max_distance (where distances are truncated) passes no viewpoint.
+  EsdfConfig esdf;
+  esdf.max_distance = 2.0;
+  ViewpointConfig c;
+  c.clearance = 2.0;
+  EXPECT_TRUE(c.validate(esdf)) << c.validate(esdf).message();
+  c.clearance = 2.5;
+  ASSERT_TRUE(c.validate());
+  EXPECT_NE(c.validate(esdf).message().find("viewpoints: clearance"), std::string::npos) << c.validate(esdf).message();
 }
 
 TEST(Viewpoints, WrapAngleAndCandidateYaws) {

@@ -59,6 +59,11 @@ struct PathDistances {
   /// asked about in increasing bound, and from_uav is not called for one whose bound is no smaller
   /// than the n_max_tsp-th smallest distance found so far: it could not be a candidate.
   std::function<double(std::size_t j)> from_uav_lower_bound;
+  /// Optional: the path length UAV -> frontier j where from_uav(j) is only an estimate (a frontier at
+  /// or beyond s_near, whose straight-line distance orders the top-up). When given, it prices the leg
+  /// from the UAV of every candidate that from_uav put at s_near or beyond: a frontier 3 m away behind a
+  /// wall (12 m by path) was otherwise priced at 3 m and visited first.
+  std::function<double(std::size_t j)> from_uav_path;
 };
 
 /// NearCur_IDs: indices of the active frontiers whose distance from the UAV is below s_near,
@@ -90,7 +95,8 @@ struct GlobalTour {
 /// UAV of between(last, r) / v_max (one more node, always last, which the solver's exact limit
 /// counts on top of max_exact). between is then also called for each candidate and those frontiers.
 /// from_uav is called once per active frontier (fewer with from_uav_lower_bound; the candidates are the
-/// same, distance ties aside), between once per ordered pair of candidates.
+/// same, distance ties aside), from_uav_path (when given) once per candidate at s_near or beyond, between
+/// once per ordered pair of candidates.
 /// `hint` (frontier ids, typically the last tour's order) warm-starts the heuristic solver when
 /// the candidates are too many to solve exactly (solveHeuristic()); ids that are not candidates now
 /// are skipped. Exact solutions ignore it.

@@ -16,7 +16,7 @@
 namespace go_feap::planning {
 
 struct LayerManagerConfig {
-  double layer_height = 1.0;      ///< m, height of an altitude band
+  double layer_height = 1.0;      ///< m, most height of an altitude band (>= 0.5): the box is cut into equal ones
   double settle_time = 1.0;       ///< s a band must stay without frontiers before it counts as explored
   int max_retries = 3;            ///< failed attempts on a frontier before it is blacklisted
   double time_limit = 600.0;      ///< s after the trigger: FINISHED(time_limit)
@@ -69,8 +69,8 @@ struct LayerOutputs {
 
 class LayerManager {
  public:
-  /// Bands cover box.min.z .. box.max.z from the band holding start_z: that band first,
-  /// then the bands above it (upwards), then those below it (downwards).
+  /// Bands cover box.min.z .. box.max.z in ceil(height / layer_height) equal bands, from the band holding
+  /// start_z: that band first, then the bands above it (upwards), then those below it (downwards).
   LayerManager(const LayerManagerConfig& config, const common::Aabb& box, double start_z);
 
   LayerOutputs step(const LayerInputs& in, double t);
@@ -96,6 +96,7 @@ class LayerManager {
   LayerManagerConfig config_;
   common::Aabb box_;
   int count_ = 1;
+  double band_height_ = 1.0;  ///< m, the box's height over count_
   std::vector<int> order_;
   std::size_t position_ = 0;  ///< index into order_
   ExplorationState state_ = ExplorationState::kWaitTrigger;

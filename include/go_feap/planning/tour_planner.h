@@ -25,8 +25,9 @@ class TourPlanner {
   TourPlanner(const GlobalPlannerConfig& config, const Astar& astar) : config_(config), astar_(astar) {}
 
   /// planTour() over `frontiers` from `uav` at time `now` (s). Beyond s_near (Euclidean, a lower bound of
-  /// the path) a frontier cannot be near: its Euclidean distance only orders the top-up, so no search is
-  /// spent on it. Lengths between frontiers are searched once per unordered pair (from the lower id) and
+  /// the path) a frontier cannot be near: its Euclidean distance orders the top-up, so no search is spent
+  /// on it until it is chosen; a chosen one's leg from the UAV is searched (PathDistances::from_uav_path).
+  /// Lengths between frontiers are searched once per unordered pair (from the lower id) and
   /// cached by id pair; cached lengths of frontiers no longer listed are dropped first. A length to
   /// search is first looked up among those searched in the last reuse_time s between the same two
   /// reuse_cell cells (either way round). `fallbacks` (when not null) counts the distances that fell

@@ -35,6 +35,9 @@ struct ViewpointConfig {
 
   /// Checks every key; the message names the bad one, e.g. "viewpoints: hfov must be in (0, pi)".
   common::Status validate() const;
+  /// validate() plus clearance <= esdf.max_distance (distances are truncated there: a larger clearance
+  /// passes no viewpoint, and every frontier would be blacklisted).
+  common::Status validate(const map::EsdfConfig& esdf) const;
 };
 
 /// `a` wrapped to (-pi, pi].
