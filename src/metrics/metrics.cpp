@@ -152,6 +152,7 @@ common::Status Recorder::writeSummary(const std::string& path) const {
   std::ofstream out(path);
   if (!out) return common::Status::Error(path + ": cannot be written");
   out << summaryJson(summary_) << "\n";
+  out.close();  // flushed here: a full disk fails now, not silently in the destructor
   return out ? common::Status::Ok() : common::Status::Error(path + ": write failed");
 }
 
@@ -163,6 +164,7 @@ common::Status Recorder::writeCsv(const std::string& path) const {
     out << std::setprecision(2) << s.t << "," << std::setprecision(5) << s.coverage << "," << std::setprecision(3)
         << s.explored_m3 << "," << s.distance << "," << s.layer << "," << s.frontiers << "," << s.position.x() << ","
         << s.position.y() << "," << s.position.z() << "\n";
+  out.close();
   return out ? common::Status::Ok() : common::Status::Error(path + ": write failed");
 }
 
@@ -170,32 +172,45 @@ common::Status Recorder::writePlot(const std::string& path, const std::string& t
   return plotCoverage({{summary_.planner, samples_}}, title, path);
 }
 
+common::Status writeWhole(const std::string& path, const std::function<common::Status(const std::string&)>& write) {
+  const std::filesystem::path final_path(path);
+  const std::filesystem::path partial = final_path.parent_path() / (".partial-" + final_path.filename().string());
+  std::error_code ec;
+  if (const common::Status st = write(partial.string()); !st.ok()) {
+    std::filesystem::remove(partial, ec);
+    return st;
+  }
+  std::filesystem::rename(partial, final_path, ec);
+  if (ec) {
+    std::filesystem::remove(partial, ec);
+    return common::Status::Error(path + ": cannot be written (" + ec.message() + ")");
+  }
+  return common::Status::Ok();
+}
+
+common::Status writeTextWhole(const std::string& path, const std::string& text) {
+  return writeWhole(path, [&](const std::string& partial) {
+    std::ofstream out(partial);
+    if (!out) return common::Status::Error(path + ": cannot be written");
+    out << text;
+    out.close();
+    return out ? common::Status::Ok() : common::Status::Error(path + ": write failed");
+  });
+}
+
 common::Status Recorder::writeAll(const std::string& dir) const {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) return common::Status::Error(dir + ": cannot be created (" + ec.message() + ")");
-  // Each file is written under a temporary name (keeping its extension, which tells OpenCV the format)
-  // and renamed into place, summary.json last: whoever sees a file sees it whole, and summary.json's
-  // presence means all three are there.
+  // Each file whole (writeWhole), summary.json last: its presence means all three are there.
   const std::string title = summary_.scene + " (seed " + std::to_string(summary_.seed) + ")";
   const std::vector<std::pair<std::string, std::function<common::Status(const std::string&)>>> files = {
       {"metrics.csv", [&](const std::string& path) { return writeCsv(path); }},
       {"coverage.png", [&](const std::string& path) { return writePlot(path, title); }},
       {"summary.json", [&](const std::string& path) { return writeSummary(path); }},
   };
-  for (const auto& [name, write] : files) {
-    const std::filesystem::path final_path = std::filesystem::path(dir) / name;
-    const std::filesystem::path partial = std::filesystem::path(dir) / (".partial-" + name);
-    if (const common::Status st = write(partial.string()); !st.ok()) {
-      std::filesystem::remove(partial, ec);
-      return st;
-    }
-    std::filesystem::rename(partial, final_path, ec);
-    if (ec) {
-      std::filesystem::remove(partial, ec);
-      return common::Status::Error(final_path.string() + ": cannot be written (" + ec.message() + ")");
-    }
-  }
+  for (const auto& [name, write] : files)
+    if (const common::Status st = writeWhole((std::filesystem::path(dir) / name).string(), write); !st.ok()) return st;
   return common::Status::Ok();
 }
 

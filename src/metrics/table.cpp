@@ -125,7 +125,7 @@ std::string comparisonJson(const std::vector<Comparison>& comparisons) {
                    {"distance_ratio", c.distance_ratio},
                    {"time_diff_s", {{"avg", c.time_diff_avg}, {"se", c.time_diff_se}}},
                    {"faster", c.faster}});
-  return out.dump(2);
+  return out.dump(2, ' ', false, nlohmann::json::error_handler_t::replace);  // as summaryJson
 }
 
 std::string tableJson(const std::vector<TableRow>& rows) {
@@ -145,7 +145,7 @@ std::string tableJson(const std::vector<TableRow>& rows) {
     j["compute_ms"] = r.compute_ms;
     out.push_back(j);
   }
-  return out.dump(2);
+  return out.dump(2, ' ', false, nlohmann::json::error_handler_t::replace);  // as summaryJson
 }
 
 std::string tableMarkdown(const std::vector<TableRow>& rows, const std::vector<Comparison>& comparisons) {

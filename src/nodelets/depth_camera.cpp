@@ -39,8 +39,8 @@ class DepthCamera : public nodelet::Nodelet {
     Eigen::Matrix4d T_B_C;
     p.get("depth_camera/noise_seed", seed).get("depth_camera/rate", rate_);
     p.get("depth_camera/encoding", encoding_);
-    p.get("depth_camera/camera_frame", camera_frame_).getMatrix4("depth_camera/T_B_C", T_B_C);
-    p.get("simulation/world_frame", world_frame_).get("simulation/body_frame", body_frame_);
+    p.getFrame("depth_camera/camera_frame", camera_frame_).getMatrix4("depth_camera/T_B_C", T_B_C);
+    p.getFrame("simulation/world_frame", world_frame_).getFrame("simulation/body_frame", body_frame_);
     ros_params::requireOrThrow(p.ok(), me, p.error());
     ros_params::requireOrThrow(encoding_ == "32FC1" || encoding_ == "16UC1", me,
                                "parameter '" + p.fullName("depth_camera/encoding") + "' must be 32FC1 or 16UC1");

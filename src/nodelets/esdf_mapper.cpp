@@ -54,7 +54,7 @@ class EsdfMapper : public nodelet::Nodelet {
     map::MapConfig c;
     config::readMap(p, c);
     p.get("mapper/sync_mode", sync_mode_).get("mapper/pose_tolerance", pose_tolerance_);
-    p.get("mapper/max_pose_jump", max_pose_jump_).get("mapper/world_frame", world_frame_);
+    p.get("mapper/max_pose_jump", max_pose_jump_).getFrame("mapper/world_frame", world_frame_);
     p.get("mapper/cloud_period", cloud_period_).get("mapper/esdf_slice_height", slice_height_);
     p.get("mapper/warn_period", warn_period_);
     common::Aabb box;

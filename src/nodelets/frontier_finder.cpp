@@ -32,7 +32,7 @@ class FrontierFinder : public nodelet::Nodelet {
     config::readFrontier(p, config_);
     config::readOmission(p, omission_);
     config::readBox(p, box_);
-    p.get("world_frame", world_frame_);
+    p.getFrame("world_frame", world_frame_);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
     for (const common::Status& st : {config_.validate(), omission_.validate()})
       ros_params::requireOrThrow(st.ok(), getName(), st.message());

@@ -43,7 +43,7 @@ class GlobalPlanner : public nodelet::Nodelet {
     config::readGlobalPlanner(p, config_);
     p.get("global/rate", rate_);
     config::readAstar(p, astar_config_, "distance_astar");
-    p.get("world_frame", world_frame_);
+    p.getFrame("world_frame", world_frame_);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
     ros_params::requireOrThrow(rate_ > 0.0 && rate_ <= 1000.0, getName(),
                                "parameter '" + p.fullName("global/rate") + "' must be in (0, 1000] Hz");

@@ -41,7 +41,7 @@ class LayerManager : public nodelet::Nodelet {
     ros_params::ParamReader p(getPrivateNodeHandle());
     config::readLayers(p, config_);
     p.get("layers/rate", rate_).get("metrics/max_odom_step", max_odom_step_);
-    p.get("layers/auto_start", auto_start_).get("world_frame", world_frame_);
+    p.get("layers/auto_start", auto_start_).getFrame("world_frame", world_frame_);
     config::readBox(p, box_);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
     ros_params::requireOrThrow(config_.validate().ok(), getName(), config_.validate().message());

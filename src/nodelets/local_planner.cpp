@@ -54,7 +54,7 @@ class LocalPlanner : public nodelet::Nodelet {
     config::readLocal(p, l);
     p.get("frontier/max_cluster_extent", frontier_extent_).get("local/max_input_speed", max_input_speed_);
     config::readAstar(p, astar_config_, "distance_astar");
-    p.get("world_frame", world_frame_);
+    p.getFrame("world_frame", world_frame_);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
     for (const common::Status& st : {v.validate(), l.validate(), astar_config_.validate()})
       ros_params::requireOrThrow(st.ok(), getName(), st.message());

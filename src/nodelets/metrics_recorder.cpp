@@ -43,7 +43,7 @@ class MetricsRecorder : public nodelet::Nodelet {
     p.get("metrics/collision_distance", collision_distance_).get("metrics/output_dir", output_dir_);
     p.get("metrics/max_odom_step", max_odom_step_);
     p.get("metrics/planner", planner_).get("metrics/shutdown_on_finish", shutdown_on_finish_);
-    p.get("metrics/progress_period", progress_period_).get("world_frame", world_frame_);
+    p.get("metrics/progress_period", progress_period_).getFrame("world_frame", world_frame_);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
     ros_params::requireOrThrow(sample_rate_ > 0.0 && sample_rate_ <= 1000.0, getName(),
                                "parameter '" + p.fullName("metrics/sample_rate") + "' must be in (0, 1000] Hz");
@@ -139,7 +139,10 @@ class MetricsRecorder : public nodelet::Nodelet {
     // Only whether the run has begun: its time is the layer manager's elapsed. (This was the clock minus
     // elapsed as a ros::Time, which threw, ending the whole nodelet manager, for an elapsed beyond the
     // clock: a status from a tool or another run early in a simulation.)
-    if (msg->state != ExplorationStatus::WAIT_TRIGGER) started_ = true;
+    if (msg->state != ExplorationStatus::WAIT_TRIGGER && !started_) {
+      started_ = true;
+      wall_start_ = ros::WallTime::now();  // the run's wall time counts from the trigger, as the bench's
+    }
   }
 
   bool started() const { return started_; }
@@ -268,7 +271,7 @@ class MetricsRecorder : public nodelet::Nodelet {
   double distance_ = 0.0, next_progress_ = 0.0;
   std::unique_ptr<metrics::CollisionMonitor> collisions_;
   bool finished_ = false;
-  ros::WallTime wall_start_ = ros::WallTime::now();
+  ros::WallTime wall_start_ = ros::WallTime::now();  ///< reset when the run starts
   ros::Publisher text_pub_, coverage_pub_, path_pub_;
   nav_msgs::Path path_;
   ros::Subscriber handle_sub_, odom_sub_, status_sub_, compute_sub_;

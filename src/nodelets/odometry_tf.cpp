@@ -28,8 +28,8 @@ class OdometryTf : public nodelet::Nodelet {
     ros_params::ParamReader p(getPrivateNodeHandle());
     std::string camera_frame;
     Eigen::Matrix4d T_B_C;
-    p.get("world_frame", world_frame_).get("body_frame", body_frame_).get("warn_period", warn_period_);
-    p.get("camera_frame", camera_frame).getMatrix4("T_B_C", T_B_C);
+    p.getFrame("world_frame", world_frame_).getFrame("body_frame", body_frame_).get("warn_period", warn_period_);
+    p.getFrame("camera_frame", camera_frame).getMatrix4("T_B_C", T_B_C);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
     const Eigen::Matrix3d R = T_B_C.topLeftCorner<3, 3>();
     ros_params::requireOrThrow(T_B_C.allFinite() && T_B_C.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1)) &&

@@ -44,13 +44,16 @@ class QuadrotorSim : public nodelet::Nodelet {
     p.get("simulation/command_timeout", command_timeout_).get("simulation/publish_clock", publish_clock_);
     p.get("simulation/max_command_acceleration", max_cmd_acc_).get("simulation/max_command_outside", max_cmd_out_);
     p.get("simulation/max_command_speed", max_cmd_speed_).get("simulation/max_command_yaw_rate", max_cmd_yaw_rate_);
-    p.get("simulation/world_frame", world_frame_).get("simulation/body_frame", body_frame_);
+    p.getFrame("simulation/world_frame", world_frame_).getFrame("simulation/body_frame", body_frame_);
     bool use_scene_start = true;
     Eigen::Vector3d start;
     double start_yaw = 0.0;
     p.get("use_scene_start", use_scene_start).getVec3("start", start).get("start_yaw", start_yaw);
     ros_params::requireOrThrow(p.ok(), me, p.error());
     for (const common::Status& st : {q.validate(), c.validate()}) ros_params::requireOrThrow(st.ok(), me, st.message());
+    ros_params::requireOrThrow(world_frame_ != body_frame_, me,
+                               "parameter '" + p.fullName("simulation/body_frame") + "' must differ from '" +
+                                   p.fullName("simulation/world_frame") + "' (a TF from a frame to itself)");
     ros_params::requireOrThrow(rate_factor_ > 0.0 && rate_factor_ <= 1000.0, me,
                                "parameter '" + p.fullName("simulation/rate_factor") + "' must be in (0, 1000]");
     // NaN would switch the command checks off (no norm is > NaN).

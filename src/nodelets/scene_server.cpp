@@ -18,7 +18,7 @@ class SceneServer : public nodelet::Nodelet {
     ros::NodeHandle& pnh = getPrivateNodeHandle();
     ros_params::ParamReader p(pnh);
     std::string frame;
-    p.get("simulation/world_frame", frame);
+    p.getFrame("simulation/world_frame", frame);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
     const world::Scene scene = ros_params::loadScene(pnh, getName());
 

@@ -43,7 +43,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     config::readAstar(p, astar_config_);
     config::readAstar(p, scout_config_, "scout_astar");
     config::readAstar(p, coarse_config_, "coarse_astar");
-    p.get("world_frame", world_frame_);
+    p.getFrame("world_frame", world_frame_);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
     for (const common::Status& st :
          {o.validate(), replan_.validate(), astar_config_.validate(), scout_config_.validate(), coarse_config_.validate(),

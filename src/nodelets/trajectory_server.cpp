@@ -37,7 +37,7 @@ class TrajectoryServer : public nodelet::Nodelet {
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
     ros_params::ParamReader p(getPrivateNodeHandle());
-    p.get("server/rate", rate_).get("server/odom_timeout", odom_timeout_).get("world_frame", world_frame_);
+    p.get("server/rate", rate_).get("server/odom_timeout", odom_timeout_).getFrame("world_frame", world_frame_);
     p.get("server/max_start_offset", max_start_offset_);
     p.get("server/max_speed", max_speed_).get("server/max_acceleration", max_acceleration_);
     p.get("server/max_yaw_rate", max_yaw_rate_);

@@ -24,6 +24,19 @@ bool readNumbers(const ros::NodeHandle& nh, const std::string& key, std::size_t 
 }
 }  // namespace
 
+ParamReader& ParamReader::getFrame(const std::string& key, std::string& out) {
+  std::string value;
+  if (!nh_.hasParam(key))
+    fail(key, "is missing");
+  else if (!nh_.getParam(key, value))
+    fail(key, "has the wrong type");
+  else if (value.empty() || value.front() == '/')
+    fail(key, "must be a TF frame id: not empty, no leading '/' (got '" + value + "')");
+  else
+    out = value;
+  return *this;
+}
+
 ParamReader& ParamReader::getVec3(const std::string& key, Eigen::Vector3d& out) {
   std::vector<double> v;
   if (!nh_.hasParam(key)) {

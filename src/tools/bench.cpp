@@ -4,6 +4,7 @@
 #include <pthread.h>
 #include <sys/resource.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -14,6 +15,7 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <sstream>
@@ -111,16 +113,19 @@ int main(int argc, char** argv) {
     return usage("--runs must be an integer from 1 to 100000");
   if (args.count("--jobs") && (!tools::parseCount(args["--jobs"], jobs) || jobs == 0 || jobs > kMaxJobs))
     return usage("--jobs must be an integer from 1 to 256");
-  double max_sim_time = 900.0;
-  if (args.count("--max-sim-time")) {
-    try {
-      max_sim_time = std::stod(args["--max-sim-time"]);
-    } catch (const std::exception&) {
-      max_sim_time = -1.0;
-    }
-    if (!(max_sim_time > 0.0) || !std::isfinite(max_sim_time)) return usage("--max-sim-time must be a number > 0");
-  }
+  // The runs' seeds S .. S+N-1 as given: 2^64 - 1 with two runs wrapped round to 0.
+  if (runs - 1 > std::numeric_limits<unsigned long long>::max() - seed)
+    return usage("--seed + --runs - 1 must fit in 64 bits");
+  double max_sim_time = 900.0;  // a whole number: "3abc" and "0x4" were taken as 3 and 4
+  if (args.count("--max-sim-time") && !(tools::parseNumber(args["--max-sim-time"], max_sim_time) && max_sim_time > 0.0))
+    return usage("--max-sim-time must be a number > 0");
   if (scenes.empty() || planners.empty()) return usage("--scene and --planner need at least one name");
+  // Each once: a scene or planner named twice flew its runs twice, into the same folder, and the table
+  // counted them twice.
+  for (const std::vector<std::string>* names : {&scenes, &planners})
+    for (std::size_t i = 0; i < names->size(); ++i)
+      if (std::find(names->begin(), names->begin() + i, (*names)[i]) != names->begin() + i)
+        return usage(("'" + (*names)[i] + "' is named twice in " + (names == &scenes ? "--scene" : "--planner")).c_str());
   const std::string config_dir = args.count("--config") ? args["--config"] : GO_FEAP_CONFIG_DIR;
   std::string out_dir = args["--out"];
   if (out_dir.empty()) {
@@ -153,14 +158,33 @@ int main(int argc, char** argv) {
     configs.emplace(p, *c);
   }
   std::vector<Job> queue;
+  std::map<std::string, std::uint64_t> first_seed;  // per scene spec: the seed its coverage plot shows
+  std::map<std::string, std::string> folder_of, name_of;  // results folder and scene name -> spec
   for (const std::string& s : scenes) {
     auto scene = world::makeScene(s, seed);
     if (!scene) {
       std::cerr << "go_feap_bench: scene '" << s << "': " << scene.message() << "\n";
       return 1;
     }
+    // Two scenes must not share a results folder (named by the spec's stem) nor a name (the tables group
+    // runs by it): maze and another maze.yaml wrote over each other's runs.
+    for (const auto& [key, owners] : {std::make_pair(sceneName(s), &folder_of), std::make_pair(scene->name, &name_of)}) {
+      const auto [it, fresh] = owners->emplace(key, s);
+      if (!fresh) {
+        std::cerr << "go_feap_bench: scenes '" << it->second << "' and '" << s << "' share the "
+                  << (owners == &folder_of ? "results folder " + out_dir + "/" + key : "scene name '" + key + "'")
+                  << ": run them in separate calls\n";
+        return 1;
+      }
+    }
+    // A scene read from a file takes no seed: every run of it would be the same run (lock-step runs are
+    // deterministic), and the table would show N copies as N runs. It is run once, as seed 0.
+    const unsigned long long scene_runs = scene->seeded ? runs : 1;
+    first_seed[s] = scene->seeded ? seed : 0;
+    if (!scene->seeded && runs > 1)
+      std::cerr << "go_feap_bench: scene '" << s << "' is read from a file and takes no seed: run once per planner\n";
     for (const std::string& p : planners)
-      for (unsigned long long r = 0; r < runs; ++r) queue.push_back({s, p, seed + r});
+      for (unsigned long long r = 0; r < scene_runs; ++r) queue.push_back({s, p, first_seed[s] + r});
   }
 
   std::vector<Outcome> outcomes(queue.size());
@@ -219,10 +243,14 @@ int main(int argc, char** argv) {
         out.samples = run.recorder().samples();
         std::ostringstream dir;
         dir << out_dir << "/" << sceneName(job.scene_spec) << "/" << job.planner << "/seed" << job.seed;
-        const common::Status st = run.recorder().writeAll(dir.str());
-        if (!st.ok()) throw std::runtime_error(st.message());
-        std::ofstream events(dir.str() + "/events.log");
-        for (const std::string& e : run.events()) events << e << "\n";
+        // events.log first, then the recorder's files with summary.json last: its presence means all are there.
+        std::string events;
+        for (const std::string& e : run.events()) events += e + "\n";
+        std::error_code dir_ec;
+        std::filesystem::create_directories(dir.str(), dir_ec);
+        for (const common::Status& st :
+             {metrics::writeTextWhole(dir.str() + "/events.log", events), run.recorder().writeAll(dir.str())})
+          if (!st.ok()) throw std::runtime_error(st.message());
         out.ok = true;
       } catch (const std::exception& e) {
         out.error = e.what();
@@ -263,25 +291,36 @@ int main(int argc, char** argv) {
   const auto rows = metrics::aggregate(summaries);
   std::error_code out_ec;  // made at the start; again in case it went meanwhile, without throwing
   std::filesystem::create_directories(out_dir, out_ec);
-  std::ofstream(out_dir + "/table.json") << metrics::tableJson(rows) << "\n";
   const auto comparisons = metrics::compare(summaries);
-  if (!comparisons.empty()) std::ofstream(out_dir + "/comparison.json") << metrics::comparisonJson(comparisons) << "\n";
   // Compute times depend on how many runs shared the cores (a powerplant seed 0 replan: 26.0 ms
   // alone on a core, 33.3 ms two at a time on two): say so beside them.
   const std::string md = metrics::tableMarkdown(rows, comparisons) + "\nCompute times measured with " +
                          std::to_string(jobs) + " run(s) at a time on " +
                          std::to_string(std::thread::hardware_concurrency()) + " hardware thread(s).\n";
-  std::ofstream(out_dir + "/table.md") << md;
+  // Each table whole or not at all, checked; a comparison.json left from an earlier call into the same
+  // folder goes when this one compares nothing.
+  std::vector<common::Status> written = {metrics::writeTextWhole(out_dir + "/table.json", metrics::tableJson(rows) + "\n"),
+                                         metrics::writeTextWhole(out_dir + "/table.md", md)};
+  if (!comparisons.empty())
+    written.push_back(metrics::writeTextWhole(out_dir + "/comparison.json", metrics::comparisonJson(comparisons) + "\n"));
+  else
+    std::filesystem::remove(out_dir + "/comparison.json", out_ec);
   // Side-by-side coverage curves per scene (first seed of each planner).
   for (const std::string& s : scenes) {
     std::vector<std::pair<std::string, std::vector<metrics::Sample>>> series;
     for (std::size_t i = 0; i < queue.size(); ++i)
-      if (outcomes[i].ok && queue[i].scene_spec == s && queue[i].seed == seed)
+      if (outcomes[i].ok && queue[i].scene_spec == s && queue[i].seed == first_seed[s])
         series.emplace_back(queue[i].planner, outcomes[i].samples);
     if (!series.empty())
-      metrics::plotCoverage(series, sceneName(s) + " (seed " + std::to_string(seed) + ")",
-                            out_dir + "/" + sceneName(s) + "_coverage.png");
+      written.push_back(metrics::writeWhole(out_dir + "/" + sceneName(s) + "_coverage.png", [&](const std::string& path) {
+        return metrics::plotCoverage(series, sceneName(s) + " (seed " + std::to_string(first_seed[s]) + ")", path);
+      }));
   }
+  for (const common::Status& st : written)
+    if (!st.ok()) {
+      ++failures;
+      std::cerr << "go_feap_bench: " << st.message() << "\n";
+    }
   std::cout << "\n" << md << "\nresults: " << out_dir << "\n";
   if (perf) {
     std::cout << "\nperf (mean / max ms per call, over all runs):\n";

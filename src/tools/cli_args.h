@@ -1,6 +1,8 @@
 // Minimal "--key value" command-line parsing shared by the tools.
 #pragma once
 
+#include <cmath>
+#include <cstdlib>
 #include <map>
 #include <string>
 
@@ -37,6 +39,16 @@ inline bool parseCount(const std::string& text, unsigned long long& out) {
   } catch (const std::exception&) {
     return false;
   }
+  return true;
+}
+
+/// Parses a whole finite decimal number (no trailing text, no hex, no inf or nan); false on anything else.
+inline bool parseNumber(const std::string& text, double& out) {
+  if (text.empty() || text.find_first_not_of("0123456789+-.eE") != std::string::npos) return false;
+  char* end = nullptr;
+  const double value = std::strtod(text.c_str(), &end);
+  if (end != text.c_str() + text.size() || !std::isfinite(value)) return false;
+  out = value;
   return true;
 }
 

@@ -116,6 +116,7 @@ common::Result<Scene> generateMaze(const MazeConfig& config, std::uint64_t seed,
                  Vec3(0.5 * config.size_x, 0.5 * config.size_y, config.height)};
   Scene scene = makeEmptyScene("maze", box, config.resolution, config.margin);
   scene.seed = seed;
+  scene.seeded = true;
   const double t = config.wall_thickness, h = config.height, r = config.resolution;
   const double px = config.size_x / nx, py = config.size_y / ny;
   fillBox(scene, {Vec3(box.min.x(), box.min.y(), 0.0), Vec3(box.max.x(), box.max.y(), 0.5 * r)});

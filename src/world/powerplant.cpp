@@ -113,6 +113,7 @@ common::Result<Scene> generatePowerplant(const PowerplantConfig& config, std::ui
   const Aabb box{Vec3(-hx, -hy, 0.0), Vec3(hx, hy, H)};
   Scene s = makeEmptyScene("powerplant", box, config.resolution, config.margin);
   s.seed = seed;
+  s.seeded = true;
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   const double r = config.resolution;

@@ -42,6 +42,7 @@ TEST(Parameters, ANodeletWithAnInvalidOrMissingParameterDoesNotStartAndNamesIt) 
 
   ASSERT_TRUE(load("good_layer_manager", "go_feap/LayerManager")) << "the shipped config does not start";
   const std::vector<Case> cases = {
+      {"bad_world_frame", "go_feap/GlobalPlanner", "world_frame"},              // '/world': tf2 refuses it
       {"bad_layers_rate", "go_feap/LayerManager", "layers/rate"},                // 1e9 Hz: a timer that never sleeps
       {"bad_layer_height", "go_feap/LayerManager", "layers: layer_height"},     // infinite: NaN bands
       {"bad_max_odom_step", "go_feap/LayerManager", "metrics/max_odom_step"},   // -1 m

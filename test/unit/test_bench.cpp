@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 #include <utility>
 #include <vector>
@@ -164,6 +165,11 @@ TEST(Bench, CommandLineValuesOutOfRangeAreRefusedUpFront) {
            {bench + " --jobs 1000000000000", "--jobs must be an integer from 1 to 256"},
            {bench + " --runs 1000000000000", "--runs must be an integer from 1 to 100000"},
            {bench + " --max-sim-time 2 --out " + file.string(), "--out " + file.string() + ": cannot make it a folder"},
+           {bench + " --max-sim-time 3abc", "--max-sim-time must be a number > 0"},  // was taken as 3
+           {bench + " --max-sim-time 0x4", "--max-sim-time must be a number > 0"},   // was taken as 4
+           {bench + " --seed 18446744073709551615 --runs 2", "--seed + --runs - 1 must fit in 64 bits"},  // wrapped to 0
+           {bench + " --scene maze,maze", "'maze' is named twice in --scene"},
+           {bench + " --planner go_feap,fuel,go_feap", "'go_feap' is named twice in --planner"},
            {map_perf + " --scene maze --skip-pixel 4294967296", "--skip-pixel must be an integer from 1 to 640"},
            {map_perf + " --scene maze --frames 4294967296", "--frames must be an integer from 1 to 1000000"}}) {
     const auto [rc, out] = runCommand("timeout 60 " + command);
@@ -172,6 +178,62 @@ TEST(Bench, CommandLineValuesOutOfRangeAreRefusedUpFront) {
   }
   EXPECT_TRUE(std::filesystem::is_regular_file(file));  // left as it was
   std::filesystem::remove(file);
+}
+
+// Results as a user reads them, in one folder: a scene read from a file (it takes no seed) is run once per
+// planner, as seed 0, however many runs are asked (each run of it is the same run: the table showed N
+// copies as N runs, labelled seed 0 in folders seed1...); a scene whose name is not UTF-8 still gets its
+// tables (the table dump threw, leaving table.json empty and no table.md); a comparison.json left by an
+// earlier call goes when the next compares nothing; two scenes bound for one results folder are refused.
+TEST(Bench, ResultsFoldersHoldEachRunOnceAndTheTablesWhole) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("go_feap_bench_results_" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  auto maze = go_feap::world::makeScene(kSmallMaze, 0);
+  ASSERT_TRUE(maze) << maze.message();
+  ASSERT_TRUE(go_feap::world::saveScenePcd(*maze, (dir / "small.pcd").string()));
+  const go_feap::common::Vec3 s = maze->start.position;
+  std::ofstream(dir / "from_file.yaml") << "scene:\n  name: from_file\n  file: small.pcd\n"
+                                           "  T_world_file: [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]\n  resolution: 0.1\n"
+                                           "  box: {min: [-5, -3, 0], max: [5, 3, 3]}\n"
+                                           "  start: {position: [" << s.x() << ", " << s.y() << ", " << s.z()
+                                        << "], yaw: 0}\n  ground_plane: false\n";
+  std::ofstream(dir / "named.yaml") << "scene:\n  name: caf\xe9\n  generator: maze\n"
+                                       "  maze: {size_x: 10.0, size_y: 6.0, height: 3.0, cell_size: 2.0}\n";
+  const std::string bench = GO_FEAP_BENCH_BIN, out = (dir / "out").string();
+  const auto [rc, said] = runCommand("timeout 300 " + bench + " --scene " + (dir / "from_file.yaml").string() + "," +
+                                     (dir / "named.yaml").string() + " --planner go_feap,fuel --runs 2 --seed 3 "
+                                     "--max-sim-time 2 --out " + out);
+  ASSERT_EQ(rc, 0) << said;
+  EXPECT_NE(said.find("takes no seed: run once per planner"), std::string::npos) << said;
+  for (const char* planner : {"go_feap", "fuel"}) {
+    EXPECT_TRUE(fs::is_regular_file(fs::path(out) / "from_file" / planner / "seed0" / "summary.json")) << planner;
+    EXPECT_FALSE(fs::exists(fs::path(out) / "from_file" / planner / "seed3")) << planner;
+    EXPECT_FALSE(fs::exists(fs::path(out) / "from_file" / planner / "seed4")) << planner;
+    for (const char* file : {"seed3/summary.json", "seed4/summary.json", "seed3/events.log"})
+      EXPECT_TRUE(fs::is_regular_file(fs::path(out) / "named" / planner / file)) << planner << " " << file;
+  }
+  std::ifstream table_in(fs::path(out) / "table.json");
+  const std::string table((std::istreambuf_iterator<char>(table_in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(table.find("\"scene\": \"from_file\""), std::string::npos) << table;
+  EXPECT_NE(table.find("\"runs\": 1"), std::string::npos) << table;
+  EXPECT_NE(table.find("\"runs\": 2"), std::string::npos) << table;
+  EXPECT_NE(table.find("caf\xef\xbf\xbd"), std::string::npos) << "the bad byte replaced by U+FFFD";
+  EXPECT_TRUE(fs::is_regular_file(fs::path(out) / "table.md"));
+  EXPECT_TRUE(fs::is_regular_file(fs::path(out) / "comparison.json"));
+  // Into the same folder with one planner: nothing compared, no comparison.json left over.
+  const auto [rc2, said2] = runCommand("timeout 300 " + bench + " --scene " + (dir / "named.yaml").string() +
+                                       " --max-sim-time 2 --out " + out);
+  ASSERT_EQ(rc2, 0) << said2;
+  EXPECT_FALSE(fs::exists(fs::path(out) / "comparison.json"));
+  // Two scenes bound for one results folder (the spec's stem names it): refused before any run.
+  fs::copy_file(kSmallMaze, dir / "maze.yaml");
+  const auto [rc3, said3] = runCommand("timeout 60 " + bench + " --scene maze," + (dir / "maze.yaml").string() +
+                                       " --max-sim-time 2 --out " + out);
+  EXPECT_EQ(rc3, 1) << said3;
+  EXPECT_NE(said3.find("share the results folder"), std::string::npos) << said3;
+  fs::remove_all(dir);
 }
 
 TEST(Bench, ConfigErrorsNameTheModeOrKey) {

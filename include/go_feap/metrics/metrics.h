@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <map>
+#include <functional>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -146,6 +147,13 @@ class Recorder {
   Summary summary_;
   std::vector<Sample> samples_;
 };
+
+/// Writes `path` whole or not at all: `write` fills a temporary file beside it (.partial-NAME, keeping
+/// the extension, which tells OpenCV the format), which is then renamed into place. A reader sees the
+/// old file or the whole new one; on failure the message names `path`.
+common::Status writeWhole(const std::string& path, const std::function<common::Status(const std::string&)>& write);
+/// writeWhole() of `text` (checked: a full disk is an error, not a short file).
+common::Status writeTextWhole(const std::string& path, const std::string& text);
 
 /// Plots coverage (%) against time (s) for one or more named series into a PNG (OpenCV).
 common::Status plotCoverage(const std::vector<std::pair<std::string, std::vector<Sample>>>& series,

@@ -27,6 +27,9 @@ class ParamReader {
     }
     return *this;
   }
+  /// Reads a TF frame id: one that is empty or starts with '/' (tf2 refuses such ids, and every message
+  /// stamped with it would be dropped downstream) is recorded as an error.
+  ParamReader& getFrame(const std::string& key, std::string& out);
   ParamReader& getVec3(const std::string& key, Eigen::Vector3d& out);
   ParamReader& getMatrix4(const std::string& key, Eigen::Matrix4d& out);
 

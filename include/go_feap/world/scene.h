@@ -25,6 +25,7 @@ struct StartPose {
 struct Scene {
   std::string name;
   std::uint64_t seed = 0;
+  bool seeded = false;  ///< generated from `seed` (maze, powerplant); a scene read from a file takes none
   Aabb box;
   StartPose start;
   common::DenseGrid<std::uint8_t> occupied;
