@@ -75,13 +75,8 @@ int main(int argc, char** argv) {
   if (!error.empty()) return usage(error.c_str());
   EsdfConfig config;
   unsigned long long repeats = 5;
-  if (args.count("--max-distance")) {
-    try {
-      config.max_distance = std::stod(args["--max-distance"]);
-    } catch (const std::exception&) {
-      return usage("--max-distance must be a number");
-    }
-  }
+  if (args.count("--max-distance") && !go_feap::tools::parseNumber(args["--max-distance"], config.max_distance))
+    return usage("--max-distance must be a number");
   if (args.count("--repeats") && (!go_feap::tools::parseCount(args["--repeats"], repeats) || repeats == 0))
     return usage("--repeats must be a positive integer");
 
