@@ -158,7 +158,7 @@ std::pair<int, std::string> runCommand(const std::string& command) {
 // bench with bad_alloc, a file in --out's place aborted it after every run had been flown, and a
 // --skip-pixel of 2^32 wrapped to 0 in go_feap_map_perf (a loop for ever).
 TEST(Bench, CommandLineValuesOutOfRangeAreRefusedUpFront) {
-  const std::string bench = GO_FEAP_BENCH_BIN, map_perf = GO_FEAP_MAP_PERF_BIN;
+  const std::string bench = GO_FEAP_BENCH_BIN, map_perf = GO_FEAP_MAP_PERF_BIN, esdf_perf = GO_FEAP_ESDF_PERF_BIN;
   const std::filesystem::path file = std::filesystem::temp_directory_path() / ("go_feap_not_a_folder_" + std::to_string(getpid()));
   std::ofstream(file) << "a file\n";
   for (const auto& [command, says] : std::vector<std::pair<std::string, std::string>>{
@@ -171,7 +171,8 @@ TEST(Bench, CommandLineValuesOutOfRangeAreRefusedUpFront) {
            {bench + " --scene maze,maze", "'maze' is named twice in --scene"},
            {bench + " --planner go_feap,fuel,go_feap", "'go_feap' is named twice in --planner"},
            {map_perf + " --scene maze --skip-pixel 4294967296", "--skip-pixel must be an integer from 1 to 640"},
-           {map_perf + " --scene maze --frames 4294967296", "--frames must be an integer from 1 to 1000000"}}) {
+           {map_perf + " --scene maze --frames 4294967296", "--frames must be an integer from 1 to 1000000"},
+           {esdf_perf + " --max-distance 2abc", "--max-distance must be a number"}}) {  // was taken as 2
     const auto [rc, out] = runCommand("timeout 60 " + command);
     EXPECT_TRUE(rc == 1 || rc == 2) << command << ": exit status " << rc << "\n" << out;
     EXPECT_NE(out.find(says), std::string::npos) << command << ":\n" << out;
