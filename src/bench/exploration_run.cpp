@@ -381,6 +381,7 @@ void ExplorationRun::trajectoryStep() {
 
 void ExplorationRun::sample() {
   coverage_now_ = coverage_->current();
+  if (!vehicle_.state().finite()) return;  // diverged: the series ends at the last state that was
   metrics::Sample s;
   s.t = t_;
   s.coverage = coverage_now_;

@@ -42,6 +42,9 @@ class DepthCamera : public nodelet::Nodelet {
     p.getFrame("depth_camera/camera_frame", camera_frame_).getMatrix4("depth_camera/T_B_C", T_B_C);
     p.getFrame("simulation/world_frame", world_frame_).getFrame("simulation/body_frame", body_frame_);
     ros_params::requireOrThrow(p.ok(), me, p.error());
+    ros_params::requireOrThrow(camera_frame_ != body_frame_ && camera_frame_ != world_frame_, me,
+                               "parameter '" + p.fullName("depth_camera/camera_frame") +
+                                   "' must differ from the body and world frames (its TF hangs off the body)");
     ros_params::requireOrThrow(encoding_ == "32FC1" || encoding_ == "16UC1", me,
                                "parameter '" + p.fullName("depth_camera/encoding") + "' must be 32FC1 or 16UC1");
     ros_params::requireOrThrow(c.validate().ok(), me, c.validate().message());

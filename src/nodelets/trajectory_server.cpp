@@ -89,13 +89,17 @@ class TrajectoryServer : public nodelet::Nodelet {
     }
     std::string bad = ros_traj::motionProblem(*t, max_speed_, max_acceleration_, max_yaw_rate_);
     if (!bad.empty()) bad += " (server/max_speed, server/max_acceleration, server/max_yaw_rate)";
-    if (bad.empty()) bad = startProblem(*t, ros::Time::now());
+    const ros::Time now = ros::Time::now();
+    const bool later = t->start_time > now;
+    // One starting later is checked for where it starts when it is taken over (the vehicle goes on
+    // along the running one until then: 1 s ahead at 2 m/s is 2 m from where it is now).
+    if (bad.empty()) bad = startProblem(*t, now, /*where=*/!later);
     if (!bad.empty()) {
       NODELET_WARN_STREAM_THROTTLE(1.0, getName() << ": trajectory " << msg->traj_id << " refused: " << bad
                                                   << "; the reference stays as it was");
       return;
     }
-    if (t->start_time > ros::Time::now()) {
+    if (later) {
       pending_ = std::move(t).value();  // the running one goes on until it starts
     } else {
       current_ = std::move(t).value();
@@ -117,9 +121,10 @@ class TrajectoryServer : public nodelet::Nodelet {
     pending_.reset();
   }
 
-  // Why a trajectory cannot be taken over at time `now` (s), or "" when it can. In seconds as doubles: a
-  // start time is the sender's, and ros::Time arithmetic throws beyond 2^31 s.
-  std::string startProblem(const ros_traj::Trajectory& t, const ros::Time& now) const {
+  // Why a trajectory cannot be taken over at time `now` (s), or "" when it can: the odometry silent, or
+  // (with `where`) its reference then too far from the odometry. In seconds as doubles: a start time is
+  // the sender's, and ros::Time arithmetic throws beyond 2^31 s.
+  std::string startProblem(const ros_traj::Trajectory& t, const ros::Time& now, bool where = true) const {
     if (!odom_position_) return "no odometry yet to check where it starts";
     // The gap is judged here too, not only by the timer: a trajectory planned just before the odometry
     // stopped may arrive after the timer dropped the last one, and would be flown blind to its end.
@@ -129,6 +134,7 @@ class TrajectoryServer : public nodelet::Nodelet {
       why << "no odometry for " << odom_age << " s (server/odom_timeout " << odom_timeout_ << " s)";
       return why.str();
     }
+    if (!where) return "";
     const double from = std::max(0.0, now.toSec() - t.start_time.toSec());
     const Eigen::Vector3d p = trajectory::sampleTrajectory(t, from).position;
     const double offset = (p - *odom_position_).norm();

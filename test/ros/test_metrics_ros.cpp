@@ -382,6 +382,16 @@ TEST(LayerManager, BlacklistFollowsTheFrontiersListed) {
     for (std::uint32_t id : l) EXPECT_TRUE(id == 5 || id == 6) << "blacklisted " << id;
 }
 
+// A latched EXPLORE status on `topic`: the probe planners act only while the exploration is under way.
+ros::Publisher exploring(ros::NodeHandle& nh, const std::string& topic) {
+  ros::Publisher pub = nh.advertise<go_feap::ExplorationStatus>(topic, 1, /*latch=*/true);
+  go_feap::ExplorationStatus status;
+  status.state = go_feap::ExplorationStatus::EXPLORE;
+  status.state_name = "EXPLORE";
+  pub.publish(status);
+  return pub;
+}
+
 // A global planner (probe/gp/... in metrics.test) plans at global/rate (10 Hz) from the test's frontier
 // messages. The clock then goes back 80 s (a bag played again): it plans again at once, where it used
 // to wait until the clock had caught up with its last plan.
@@ -390,12 +400,13 @@ TEST(GlobalPlanner, PlansAgainAtOnceWhenTheClockGoesBack) {
   auto clock_pub = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
   auto odom_pub = nh.advertise<nav_msgs::Odometry>("probe/gp/odom", 10);
   auto frontier_pub = nh.advertise<go_feap::FrontierArray>("probe/gp/frontiers", 10);
+  auto status_pub = exploring(nh, "probe/gp/status");
   std::vector<go_feap::GlobalTour> tours;
   auto tour_sub = nh.subscribe<go_feap::GlobalTour>(
       "probe/gp/global_tour", 50, [&](const go_feap::GlobalTour::ConstPtr& m) { tours.push_back(*m); });
   ASSERT_TRUE(spinUntil([&] {
     return tour_sub.getNumPublishers() > 0 && clock_pub.getNumSubscribers() > 0 && odom_pub.getNumSubscribers() > 0 &&
-           frontier_pub.getNumSubscribers() > 0;
+           frontier_pub.getNumSubscribers() > 0 && status_pub.getNumSubscribers() > 0;
   }, 30.0)) << "the probe global planner is not connected";
   double now = 100.0;
   ASSERT_TRUE(feedProbeMapper(nh, now)) << "the probe mapper integrated none of 10 frames";
@@ -430,6 +441,7 @@ TEST(LocalPlanner, PlansAgainWhenTheClockGoesBack) {
   auto odom_pub = nh.advertise<nav_msgs::Odometry>("probe/lp/odom", 10);
   auto frontier_pub = nh.advertise<go_feap::FrontierArray>("probe/lp/frontiers", 10);
   auto tour_pub = nh.advertise<go_feap::GlobalTour>("probe/lp/global_tour", 10);
+  auto status_pub = exploring(nh, "probe/lp/status");
   std::size_t plans = 0;  // compute_time messages of the local block: one per plan
   auto compute_sub = nh.subscribe<go_feap::ComputeTime>("probe/lp/compute_time", 50, [&](const go_feap::ComputeTime::ConstPtr& m) {
     if (m->block == "local") ++plans;
@@ -439,7 +451,8 @@ TEST(LocalPlanner, PlansAgainWhenTheClockGoesBack) {
       "probe/lp/local_target", 50, [&](const go_feap::ViewpointPath::ConstPtr& m) { targets.push_back(*m); });
   ASSERT_TRUE(spinUntil([&] {
     return compute_sub.getNumPublishers() > 0 && target_sub.getNumPublishers() > 0 && clock_pub.getNumSubscribers() > 0 &&
-           odom_pub.getNumSubscribers() > 0 && frontier_pub.getNumSubscribers() > 0 && tour_pub.getNumSubscribers() > 0;
+           odom_pub.getNumSubscribers() > 0 && frontier_pub.getNumSubscribers() > 0 && tour_pub.getNumSubscribers() > 0 &&
+           status_pub.getNumSubscribers() > 0;
   }, 30.0)) << "the probe local planner is not connected";
   double now = 200.0;
   ASSERT_TRUE(feedProbeMapper(nh, now)) << "the probe mapper integrated none of 10 frames";

@@ -454,7 +454,7 @@ class ProbeServer {
   }
   Vec3 commanded() const { return Vec3(command->position.x, command->position.y, command->position.z); }
 
-  const Vec3 vehicle = Vec3(0.5, 0.5, 1.5);
+  Vec3 vehicle = Vec3(0.5, 0.5, 1.5);  ///< where the odometry puts it (a test may move it)
   go_feap::PositionCommand::ConstPtr command;
 
  private:
@@ -558,6 +558,21 @@ TEST_F(ProbeServerTest, ATrajectoryStartingLaterWaitsWhileTheRunningOneIsFollowe
       << "the trajectory starting later was never taken over";
   EXPECT_GE(probe.command->header.stamp, later);
   EXPECT_LT((probe.commanded() - side).norm(), 0.15) << "not followed from its start";
+  // One starting later 2 m from the vehicle (more than server/max_start_offset) is judged where it starts
+  // when it is taken over, not on arrival: the vehicle goes on meanwhile. Taken once the vehicle is there;
+  // one whose start the vehicle did not reach is refused then, and the running one goes on.
+  const double max_offset = param("server/max_start_offset");
+  const Vec3 far = probe.vehicle + Vec3(2.0, 0.0, 0.0);
+  ASSERT_GT(2.0, max_offset);
+  probe.fly(far, far + Vec3(1.0, 0.0, 0.0), 923, ros::Time::now() + ros::Duration(1.0));
+  EXPECT_EQ(probe.hover(0.3)->trajectory_id, 922u);
+  probe.vehicle = far;  // it got there
+  ASSERT_TRUE(spinUntil([&] { return probe.hover(0.05)->trajectory_id == 923u; }, 20.0))
+      << "a trajectory starting later where the vehicle then was was refused";
+  probe.fly(far + Vec3(0.0, 3.0, 0.0), far + Vec3(1.0, 3.0, 0.0), 924, ros::Time::now() + ros::Duration(0.5));
+  probe.hover(1.5);
+  EXPECT_EQ(probe.command->trajectory_id, 923u) << "a trajectory starting 3 m from the vehicle was taken";
+  EXPECT_EQ(probe.command->trajectory_flag, go_feap::PositionCommand::TRAJECTORY_STATUS_READY);
 }
 
 }  // namespace
