@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "go_feap/common/config_groups.h"
+#include "go_feap/common/transform.h"
 #include "go_feap/common/yaml_reader.h"
 
 namespace go_feap::bench {
@@ -52,9 +53,7 @@ common::Status ExplorationConfig::validate() const {
     return common::Status::Error("layers: rate must be in (0, 1000] Hz");
   if (!positiveFinite(planner_rate) || planner_rate > 1000.0)
     return common::Status::Error("planner: rate must be in (0, 1000] Hz");
-  const Eigen::Matrix3d R = T_B_C.linear();
-  if (!T_B_C.matrix().allFinite() || !(R.transpose() * R).isApprox(Eigen::Matrix3d::Identity(), 1e-6) ||
-      R.determinant() <= 0.0)
+  if (!common::isRigidTransform(T_B_C.matrix()))
     return common::Status::Error("depth_camera: T_B_C must be a finite rigid transform");
   return common::Status::Ok();
 }

@@ -18,6 +18,7 @@
 #include <random>
 
 #include "go_feap/common/config_groups.h"
+#include "go_feap/common/transform.h"
 #include "go_feap/ros/conversions.h"
 #include "go_feap/ros/guarded.h"
 #include "go_feap/ros/params.h"
@@ -50,11 +51,7 @@ class DepthCamera : public nodelet::Nodelet {
     ros_params::requireOrThrow(c.validate().ok(), me, c.validate().message());
     ros_params::requireOrThrow(rate_ > 0.0 && rate_ <= 100.0, me,
                                "parameter '" + p.fullName("depth_camera/rate") + "' must be in (0, 100] Hz");
-    const Eigen::Matrix3d R = T_B_C.topLeftCorner<3, 3>();
-    ros_params::requireOrThrow(T_B_C.allFinite() && T_B_C.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1)) &&
-                                   (R.transpose() * R).isApprox(Eigen::Matrix3d::Identity(), 1e-6) &&
-                                   R.determinant() > 0.0,
-                               me, "parameter '" + p.fullName("depth_camera/T_B_C") + "' must be a rigid transform");
+    ros_params::requireOrThrow(common::isRigidTransform(T_B_C), me, "parameter '" + p.fullName("depth_camera/T_B_C") + "' must be a rigid transform");
     T_B_C_.matrix() = T_B_C;
     rng_.seed(static_cast<std::uint64_t>(seed));
     config_ = c;

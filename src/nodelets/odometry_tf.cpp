@@ -16,6 +16,7 @@
 
 #include <cmath>
 
+#include "go_feap/common/transform.h"
 #include "go_feap/ros/conversions.h"
 #include "go_feap/ros/guarded.h"
 #include "go_feap/ros/params.h"
@@ -31,12 +32,8 @@ class OdometryTf : public nodelet::Nodelet {
     p.getFrame("world_frame", world_frame_).getFrame("body_frame", body_frame_).get("warn_period", warn_period_);
     p.getFrame("camera_frame", camera_frame).getMatrix4("T_B_C", T_B_C);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
-    const Eigen::Matrix3d R = T_B_C.topLeftCorner<3, 3>();
-    ros_params::requireOrThrow(T_B_C.allFinite() && T_B_C.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1)) &&
-                                   (R.transpose() * R).isApprox(Eigen::Matrix3d::Identity(), 1e-6) &&
-                                   R.determinant() > 0.0,
-                               getName(), "parameter '" + p.fullName("T_B_C") + "' must be a rigid transform");
-    ros_params::requireOrThrow(!camera_frame.empty() && camera_frame != body_frame_, getName(),
+    ros_params::requireOrThrow(common::isRigidTransform(T_B_C), getName(), "parameter '" + p.fullName("T_B_C") + "' must be a rigid transform");
+    ros_params::requireOrThrow(camera_frame != body_frame_, getName(),  // getFrame refused empty ones
                                "parameter '" + p.fullName("camera_frame") + "' must name a frame other than the body");
     Eigen::Isometry3d extrinsic;
     extrinsic.matrix() = T_B_C;
@@ -45,7 +42,7 @@ class OdometryTf : public nodelet::Nodelet {
     camera.header.frame_id = body_frame_;
     camera.child_frame_id = camera_frame;
     static_broadcaster_.sendTransform(camera);
-    ros_params::requireOrThrow(!world_frame_.empty() && !body_frame_.empty() && world_frame_ != body_frame_, getName(),
+    ros_params::requireOrThrow(world_frame_ != body_frame_, getName(),
                                "parameters 'world_frame' and 'body_frame' must name two different frames");
     ros_params::requireOrThrow(std::isfinite(warn_period_) && warn_period_ > 0.0, getName(),
                                "parameter '" + p.fullName("warn_period") + "' must be > 0");

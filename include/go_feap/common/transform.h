@@ -1,0 +1,17 @@
+// Checks on rigid transforms read from configuration (camera extrinsics).
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/LU>
+
+namespace go_feap::common {
+
+/// A finite homogeneous rigid transform: last row 0 0 0 1, a rotation (orthonormal within 1e-6,
+/// determinant > 0) and a finite translation.
+inline bool isRigidTransform(const Eigen::Matrix4d& T) {
+  const Eigen::Matrix3d R = T.topLeftCorner<3, 3>();
+  return T.allFinite() && T.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1)) &&
+         (R.transpose() * R).isApprox(Eigen::Matrix3d::Identity(), 1e-6) && R.determinant() > 0.0;
+}
+
+}  // namespace go_feap::common
