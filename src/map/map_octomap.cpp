@@ -39,7 +39,12 @@ common::Status VoxelMap::loadBt(const std::string& path) {
   octomap::OcTree tree(0.1);
   if (!tree.readBinary(in)) return common::Status::Error(path + ": corrupt or truncated OctoMap file");
   const auto& geo = occupancy_.geometry();
-  std::vector<std::size_t> inserted, removed;
+  // A voxel centre on the face between two leaves lies in both (centreRange is closed), as when
+  // the file's resolution is half the grid's: occupied wins there. The ESDF gets the voxels whose
+  // occupancy differs once the whole file is read, so none is both inserted and removed.
+  std::vector<bool> touched(geo.size(), false);
+  std::vector<std::size_t> order;
+  std::vector<bool> was_occupied;
   for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
     const VoxelState s = tree.isNodeOccupied(*it) ? VoxelState::kOccupied : VoxelState::kFree;
     const double size = it.getSize();
@@ -50,12 +55,23 @@ common::Status VoxelMap::loadBt(const std::string& path) {
       for (int y = i0.y(); y < i1.y(); ++y)
         for (int x = i0.x(); x < i1.x(); ++x) {
           const Index3 idx(x, y, z);
-          const bool was = occupancy_.state(idx) == VoxelState::kOccupied;
+          const std::size_t l = geo.linear(idx);
+          const bool occupied = occupancy_.state(idx) == VoxelState::kOccupied;
+          if (!touched[l]) {
+            touched[l] = true;
+            order.push_back(l);
+            was_occupied.push_back(occupied);
+          } else if (occupied) {
+            continue;
+          }
           occupancy_.setState(idx, s);
-          const bool is = s == VoxelState::kOccupied;
-          if (is && !was) inserted.push_back(geo.linear(idx));
-          if (was && !is) removed.push_back(geo.linear(idx));
         }
+  }
+  std::vector<std::size_t> inserted, removed;
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    const bool is = occupancy_.stateAt(order[k]) == VoxelState::kOccupied;
+    if (is && !was_occupied[k]) inserted.push_back(order[k]);
+    if (was_occupied[k] && !is) removed.push_back(order[k]);
   }
   esdf_.update(inserted, removed);
   return common::Status::Ok();

@@ -4,11 +4,14 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <set>
 #include <string>
 #include <utility>
 #include <vector>
+
+#include <octomap/OcTree.h>
 
 #include "go_feap/map/voxel_map.h"
 #include "go_feap/sim/depth_camera.h"
@@ -339,6 +342,45 @@ TEST(OccupancyMap, OctomapRoundTripKeepsStates) {
   }
   EXPECT_GT(known, 10000u);
   EXPECT_FALSE(back.loadBt(path));
+}
+
+// A .bt at half the grid's resolution puts every grid centre on the corner of eight leaves, all of
+// which cover it. A checkerboard of occupied and free leaves makes each voxel both: occupied wins, and
+// the ESDF must agree with the occupancy (a voxel set occupied and then free by a later leaf went to
+// the ESDF both inserted and removed, and stayed an obstacle there).
+TEST(OccupancyMap, OctomapLeavesSharingAVoxelCentre) {
+  map::MapConfig c = mapConfig();
+  c.occupancy.resolution = 0.5;
+  c.occupancy.margin = 0.0;
+  ASSERT_TRUE(c.validate()) << c.validate().message();
+  map::VoxelMap m(c, {Vec3(0, 0, 0), Vec3(2, 2, 1)});
+  const auto& geo = m.geometry();
+  ASSERT_TRUE(geo.origin().isZero()) << geo.origin().transpose();
+  octomap::OcTree tree(0.25);
+  const float occ = tree.getClampingThresMaxLog(), fre = tree.getClampingThresMinLog();
+  for (int z = 0; z < 4; ++z)
+    for (int y = 0; y < 8; ++y)
+      for (int x = 0; x < 8; ++x)
+        tree.setNodeValue(octomap::point3d(0.125f + 0.25f * x, 0.125f + 0.25f * y, 0.125f + 0.25f * z),
+                          (x + y + z) % 2 == 0 ? occ : fre, /*lazy_eval=*/true);
+  tree.updateInnerOccupancy();
+  const std::string path =
+      (std::filesystem::temp_directory_path() / ("go_feap_half_" + std::to_string(::getpid()) + ".bt")).string();
+  {
+    std::ofstream out(path, std::ios::binary);
+    ASSERT_TRUE(tree.writeBinary(out));
+  }
+  ASSERT_TRUE(m.loadBt(path));
+  std::filesystem::remove(path);
+  std::size_t occupied = 0;
+  for (std::size_t l = 0; l < geo.size(); ++l) {
+    const Index3 i = geo.unlinear(l);
+    const VoxelState s = m.occupancy().stateAt(l);
+    occupied += s == VoxelState::kOccupied;
+    EXPECT_NE(s, VoxelState::kUnknown) << i.transpose();
+    EXPECT_EQ(m.esdf().isObstacle(i), s == VoxelState::kOccupied) << i.transpose();
+  }
+  EXPECT_EQ(occupied, geo.size());
 }
 
 TEST(OccupancyMap, LineVisibility) {
