@@ -54,7 +54,8 @@ void UniformBspline::basisWeights(int degree, double s, int order, double* weigh
 
 void UniformBspline::locate(double t, int& span, double& s) const {
   const int segments = numControlPoints() - degree_;
-  const double f = std::clamp(t / dt_, 0.0, static_cast<double>(segments));
+  // NaN reads as the start (clamping passes it through, and the cast below would be undefined).
+  const double f = std::isnan(t) ? 0.0 : std::clamp(t / dt_, 0.0, static_cast<double>(segments));
   int k = static_cast<int>(std::floor(f));
   if (k >= segments) k = segments - 1;
   s = f - k;
@@ -133,6 +134,10 @@ UniformBspline UniformBspline::fitPath(const Eigen::MatrixXd& points, double dt,
   const int n = k_points + degree - 1;
   const int interior = k_points - 2;
   const int constraints = with_acc ? 6 : 4;
+  if (n < constraints)
+    throw std::invalid_argument("UniformBspline::fitPath: " + std::to_string(k_points) + " points give " +
+                                std::to_string(n) + " control points of degree " + std::to_string(degree) +
+                                ", fewer than its " + std::to_string(constraints) + " end conditions");
   Eigen::MatrixXd a = Eigen::MatrixXd::Zero(interior, n), b(interior, dim);
   Eigen::MatrixXd c = Eigen::MatrixXd::Zero(constraints, n), d(constraints, dim);
   double w[kMaxDegree + 1];

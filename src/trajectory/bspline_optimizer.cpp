@@ -218,6 +218,22 @@ double BsplineCost::evaluate(const double* x, double* grad, unsigned terms) cons
 // ---------------------------------------------------------------------------------------------------------
 // Checks and optimisation.
 
+ClearanceRule::ClearanceRule(double min_clearance, double start_distance, double resolution)
+    : min_clearance_(min_clearance),
+      leave_floor_(start_distance - 0.1 * resolution),
+      leaving_(start_distance < min_clearance && start_distance >= 0.5 * resolution) {}
+
+bool ClearanceRule::accept(double distance) {
+  if (leaving_) {
+    if (distance >= min_clearance_) {
+      leaving_ = false;
+      return true;
+    }
+    return distance >= leave_floor_;
+  }
+  return distance >= min_clearance_;
+}
+
 Status checkTrajectory(const UniformBspline& spline, const map::Esdf& esdf, const OptimizerConfig& config,
                        OptimizeStats* stats) {
   if (spline.empty() || spline.dimension() != 3) return Status::Error("trajectory check: not a 3-D spline");
@@ -240,10 +256,20 @@ Status checkTrajectory(const UniformBspline& spline, const map::Esdf& esdf, cons
   Eigen::MatrixXd weights(p + 1, samples + 1);
   for (int i = 0; i <= samples; ++i)
     UniformBspline::basisWeights(p, static_cast<double>(i) / samples, 0, weights.col(i).data());
+  const double start_distance = esdf.distance(spline.position(0.0));
+  ClearanceRule rule(config.min_clearance, start_distance, esdf.geometry().resolution());
+  bool too_close = false, came_nearer = false;  // a sample broke the rule; while leaving a near start
   for (int span = p; span < spline.numControlPoints(); ++span) {
     const Eigen::MatrixXd points = q.middleCols(span - p, p + 1) * weights;
-    for (int i = 0; i <= samples; ++i)
-      min_distance = std::min(min_distance, esdf.distance(Vec3(points.col(i))));
+    for (int i = 0; i <= samples; ++i) {
+      const double d = esdf.distance(Vec3(points.col(i)));
+      min_distance = std::min(min_distance, d);
+      const bool leaving = rule.leaving();
+      if (!too_close && !rule.accept(d)) {
+        too_close = true;
+        came_nearer = leaving;
+      }
+    }
   }
   if (stats) {
     stats->max_velocity = v;
@@ -256,9 +282,14 @@ Status checkTrajectory(const UniformBspline& spline, const map::Esdf& esdf, cons
   if (!(a <= config.a_max * scale))
     return Status::Error("trajectory check: acceleration " + num(a) + " m/s^2 exceeds a_max " +
                          num(config.a_max));
-  if (!(min_distance >= config.min_clearance))
+  if (too_close) {
+    if (came_nearer)
+      return Status::Error("trajectory check: starts " + num(start_distance) +
+                           " m from an obstacle, below min_clearance " + num(config.min_clearance) +
+                           ", and comes nearer (" + num(min_distance) + " m) before it is that far away");
     return Status::Error("trajectory check: passes " + num(min_distance) +
                          " m from an obstacle, below min_clearance " + num(config.min_clearance));
+  }
   return Status::Ok();
 }
 

@@ -5,6 +5,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "go_feap/trajectory/bspline_optimizer.h"
+
 namespace go_feap::trajectory {
 
 using common::Status;
@@ -59,17 +61,24 @@ bool serverDropped(std::uint32_t current_id, double sent_time, bool following, s
 std::optional<double> firstCollisionTime(const UniformBspline& trajectory, double t_now,
                                          const map::Esdf& esdf, double min_clearance, double horizon) {
   if (trajectory.empty() || trajectory.dimension() != 3) return std::nullopt;
+  if (std::isnan(t_now)) t_now = 0.0;  // as UniformBspline::evaluate() reads it
   const double t0 = std::clamp(t_now, 0.0, trajectory.duration());
   const double t1 = std::clamp(t_now + std::max(0.0, horizon), t0, trajectory.duration());
   const Eigen::MatrixXd& q = trajectory.controlPoints();
   double speed_bound = 0.0;  // the velocity curve lies in the hull of the polygon's velocities
   for (int i = 0; i + 1 < trajectory.numControlPoints(); ++i)
     speed_bound = std::max(speed_bound, (q.col(i + 1) - q.col(i)).norm() / trajectory.knotSpan());
-  const double max_step = 0.5 * esdf.geometry().resolution();
-  const int steps = std::max(1, static_cast<int>(std::ceil((t1 - t0) * speed_bound / max_step)));
+  const double resolution = esdf.geometry().resolution();
+  // Clamped as a double before the cast: a corrupt trajectory's speed bound must not overflow it, nor
+  // make the check take seconds (past kMaxSteps the samples are farther apart than half a voxel).
+  constexpr double kMaxSteps = 100000.0;
+  const int steps = static_cast<int>(std::clamp(std::ceil((t1 - t0) * speed_bound / (0.5 * resolution)), 1.0, kMaxSteps));
+  // From where the vehicle is now: one that is already too close (a wall mapped late beside it) is in no
+  // more danger on a trajectory that takes it away than standing still.
+  ClearanceRule rule(min_clearance, esdf.distance(trajectory.position(t0)), resolution);
   for (int i = 0; i <= steps; ++i) {
     const double t = t0 + (t1 - t0) * i / steps;
-    if (esdf.distance(trajectory.position(t)) < min_clearance) return t;
+    if (!rule.accept(esdf.distance(trajectory.position(t)))) return t;
   }
   return std::nullopt;
 }

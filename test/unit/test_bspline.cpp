@@ -310,6 +310,22 @@ TEST(Bspline, RejectsBadArguments) {
                                        Eigen::VectorXd::Zero(2)),
                std::invalid_argument);
   EXPECT_THROW(UniformBspline(Eigen::MatrixXd::Zero(3, 5), 0, 0.1).derivative(), std::invalid_argument);
+  // Fewer control points (K + degree - 1) than end conditions: they could not all be met.
+  const std::vector<Vec3> three = {Vec3::Zero(), Vec3(1, 0, 0), Vec3(2, 1, 0)};
+  EXPECT_THROW(UniformBspline::fitPath(three, 0.1, Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()),
+               std::invalid_argument);
+  EXPECT_THROW(UniformBspline::fitPath(Eigen::MatrixXd::Zero(2, 3), 0.1, Eigen::VectorXd::Zero(2),
+                                       Eigen::VectorXd::Zero(2), 1),
+               std::invalid_argument);
+  EXPECT_NO_THROW(UniformBspline::fitPath(Eigen::MatrixXd::Zero(2, 4), 0.1, Eigen::VectorXd::Zero(2),
+                                          Eigen::VectorXd::Zero(2), 1));
+  // Times out of range are clamped; NaN reads as the start (its cast to a span index was undefined).
+  const UniformBspline line = UniformBspline::fitPath({Vec3::Zero(), Vec3(1, 0, 0), Vec3(2, 1, 0), Vec3(3, 1, 0)},
+                                                     0.1, Vec3::Zero(), Vec3::Zero());
+  EXPECT_EQ(line.value(std::nan("")), line.value(0.0));
+  EXPECT_EQ(line.evaluate(std::nan(""), 1), line.evaluate(0.0, 1));
+  EXPECT_EQ(line.value(INFINITY), line.value(line.duration()));
+  EXPECT_EQ(line.value(-INFINITY), line.value(0.0));
   const UniformBspline empty;
   EXPECT_TRUE(empty.empty());
   EXPECT_EQ(empty.duration(), 0.0);

@@ -471,6 +471,46 @@ TEST(CheckTrajectory, SamplesLongSpansDenselyEnoughToFindTheClosestApproach) {
   std::printf("[ check    ] worst closest-approach error %.4f m\n", worst);
 }
 
+// A spline starting closer than min_clearance (a wall mapped late beside the vehicle) may leave, moving
+// away or along, but not come nearer before it is min_clearance away; once there, the usual rule holds. A
+// start inside an obstacle voxel has no way out. Wall voxels at x in [1.0, 1.1] (centres 1.05).
+TEST(CheckTrajectory, AStartTooNearAnObstacleMayLeaveButNotComeNearer) {
+  World world(Vec3(4.0, 4.0, 2.0));
+  world.addBox(Index3(10, 0, 0), Index3(10, 39, 19));
+  world.sync();
+  const OptimizerConfig config = optimizerConfig();  // min_clearance 0.2
+  auto line = [](std::vector<Vec3> corners) {  // 0.2 m/s: well within the limits
+    return UniformBspline::fitPath(UniformBspline::resamplePolyline(corners, 0.1), 0.5, Vec3::Zero(), Vec3::Zero());
+  };
+  auto check = [&](std::vector<Vec3> corners) { return traj::checkTrajectory(line(corners), world.esdf(), config); };
+  const Vec3 near(1.2, 2.0, 1.0);  // 0.15 m from the wall's centres
+  ASSERT_NEAR(world.esdf().distance(near), 0.15, 1e-9);
+  const go_feap::common::Status away = check({near, Vec3(3.0, 2.0, 1.0)});
+  EXPECT_TRUE(away) << away.message();
+  const go_feap::common::Status along = check({near, Vec3(1.2, 3.0, 1.0), Vec3(3.0, 3.0, 1.0)});
+  EXPECT_TRUE(along) << along.message();
+  const go_feap::common::Status nearer = check({near, Vec3(1.17, 2.5, 1.0), Vec3(3.0, 2.5, 1.0)});
+  ASSERT_FALSE(nearer);
+  EXPECT_NE(nearer.message().find("comes nearer"), std::string::npos) << nearer.message();
+  // Away and back: past min_clearance the usual rule holds.
+  EXPECT_FALSE(check({near, Vec3(2.0, 2.0, 1.0), Vec3(1.22, 2.5, 1.0)}));
+  // In a wall voxel (0.03 m from its centre): no way out.
+  const Vec3 inside(1.08, 2.0, 1.0);
+  const go_feap::common::Status stuck = check({inside, Vec3(3.0, 2.0, 1.0)});
+  ASSERT_FALSE(stuck);
+  EXPECT_NE(stuck.message().find("below min_clearance"), std::string::npos) << stuck.message();
+  // The flown trajectory's check from where the vehicle is: leaving is no collision, coming nearer is.
+  const UniformBspline leaving = line({near, Vec3(3.0, 2.0, 1.0)});
+  EXPECT_FALSE(traj::firstCollisionTime(leaving, 0.0, world.esdf(), config.min_clearance, 100.0).has_value());
+  const UniformBspline back = line({near, Vec3(1.17, 2.5, 1.0), Vec3(3.0, 2.5, 1.0)});
+  const std::optional<double> t = traj::firstCollisionTime(back, 0.0, world.esdf(), config.min_clearance, 100.0);
+  ASSERT_TRUE(t.has_value());
+  EXPECT_LT(world.esdf().distance(back.position(*t)), 0.15 - 0.1 * kRes);
+  EXPECT_TRUE(traj::firstCollisionTime(line({inside, Vec3(3.0, 2.0, 1.0)}), 0.0, world.esdf(), config.min_clearance, 100.0));
+  // A NaN time reads as the start.
+  EXPECT_EQ(traj::firstCollisionTime(back, std::nan(""), world.esdf(), config.min_clearance, 100.0), t);
+}
+
 TEST(BsplineOptimizer, KeepsMovingBoundaryStates) {
   World world(Vec3(6.0, 4.0, 2.0));
   world.sync();
@@ -742,6 +782,31 @@ TEST(TrajectoryPlanner, HopsOfEveryLengthReachTheTargetWithinTheLimits) {
     }
   }
   EXPECT_EQ(plans, 60);
+}
+
+// A vehicle left closer to a wall than min_clearance (mapped late beside it) is planned away from it:
+// every spline from there used to fail the clearance check at its own start, and the vehicle held there.
+TEST(TrajectoryPlanner, AStartTooNearAWallIsPlannedAway) {
+  OpenRoom room(Vec3(6, 4, 3));
+  World& world = room.world;
+  world.addBox(Index3(10, 0, 0), Index3(10, 39, 29));  // wall voxels at x in [1.0, 1.1]
+  world.sync();
+  const OptimizerConfig optimizer = optimizerConfig();
+  const traj::TrajectoryPlannerConfig planner;
+  for (double gap : {0.19, 0.15, 0.1}) {
+    traj::PlanRequest request;
+    request.start = Vec3(1.05 + gap, 2.0, 1.5);
+    request.target = Vec3(4.5, 2.0, 1.5);
+    const auto planned = traj::planTrajectory(request, room.astar, world.esdf(), optimizer, planner);
+    ASSERT_TRUE(planned) << "gap " << gap << ": " << planned.message();
+    bool left = false;
+    for (int k = 0; k <= 2000; ++k) {
+      const double d = world.esdf().distance(planned->position.position(planned->duration() * k / 2000));
+      if (!left) EXPECT_GE(d, gap - 0.1 * kRes) << "gap " << gap << " sample " << k;
+      left = left || d >= optimizer.min_clearance;
+    }
+    EXPECT_TRUE(left) << "gap " << gap;
+  }
 }
 
 // An optimum that breaks a limit, where the plain fit of the path keeps every one, gives way to the fit

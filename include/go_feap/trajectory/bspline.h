@@ -36,7 +36,8 @@ class UniformBspline {
   /// acceleration conditions that leaves no freedom and the curve interpolates every point; with them, it
   /// is the closest curve that starts and ends in the given states (the planner's case: a path's
   /// constant-speed samples cannot be followed exactly from rest). Throws std::invalid_argument on fewer
-  /// than 2 points, mismatched dimensions, degree < 1 (< 2 with accelerations) or dt <= 0.
+  /// than 2 points, mismatched dimensions, degree < 1 (< 2 with accelerations), dt <= 0, or fewer control
+  /// points than end conditions (4, or 6 with accelerations: a cubic then needs K >= 4).
   static UniformBspline fitPath(const Eigen::MatrixXd& points, double dt, const Eigen::VectorXd& start_vel,
                                 const Eigen::VectorXd& end_vel, int degree = 3,
                                 const Eigen::VectorXd& start_acc = Eigen::VectorXd(),
@@ -69,9 +70,9 @@ class UniformBspline {
   /// s; 0 for an empty spline.
   double duration() const { return empty() ? 0.0 : (numControlPoints() - degree_) * dt_; }
 
-  /// Value at time t (clamped to [0, duration]).
+  /// Value at time t (clamped to [0, duration]; NaN reads as 0).
   Eigen::VectorXd value(double t) const { return evaluate(t, 0); }
-  /// The order-th time derivative at t (clamped to [0, duration]); zero when order > degree.
+  /// The order-th time derivative at t (clamped to [0, duration]; NaN reads as 0); zero when order > degree.
   Eigen::VectorXd evaluate(double t, int order) const;
   /// 3-D value; the spline must have dimension 3.
   Vec3 position(double t) const { return value(t); }

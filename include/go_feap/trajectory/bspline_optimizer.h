@@ -109,8 +109,28 @@ struct OptimizeStats {
   double min_distance = 0.0;      ///< m, smallest ESDF distance along the sampled curve
 };
 
+/// The clearance a curve keeps, judged sample by sample in time order from where it starts: min_clearance,
+/// except that a curve starting closer (a wall mapped late beside the vehicle, a braking stop) may leave.
+/// Until it first reaches min_clearance, no sample may come closer than its start less a tenth of a voxel:
+/// it moves away or along, never nearer. A start within half a voxel of an obstacle voxel's centre (in
+/// it) has no such way out: every sample below min_clearance fails.
+class ClearanceRule {
+ public:
+  ClearanceRule(double min_clearance, double start_distance, double resolution);
+  /// Whether a sample at `distance` from the nearest obstacle passes; the samples come in time order.
+  bool accept(double distance);
+  /// Whether the curve started closer than min_clearance and has not yet reached it.
+  bool leaving() const { return leaving_; }
+
+ private:
+  double min_clearance_;
+  double leave_floor_;
+  bool leaving_;
+};
+
 /// Samples the spline densely (every half voxel or finer) and checks speed and acceleration against
-/// v_max, a_max (times 1 + limit_tolerance), the ESDF distance against min_clearance, and that every
+/// v_max, a_max (times 1 + limit_tolerance), the ESDF distance against min_clearance (a ClearanceRule:
+/// a spline starting closer must leave without coming nearer), and that every
 /// control point is finite. The message says which check failed and by how much. Fills `stats`' three
 /// sampled fields when not null.
 common::Status checkTrajectory(const UniformBspline& spline, const map::Esdf& esdf,

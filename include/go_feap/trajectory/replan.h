@@ -54,9 +54,11 @@ bool serverDropped(std::uint32_t current_id, double sent_time, bool following, s
 bool targetMoved(const Vec3& old_position, double old_yaw, const Vec3& new_position, double new_yaw,
                  const ReplanConfig& config);
 /// First time in [t_now, min(t_now + horizon, duration)] at which `trajectory` (3-D) comes closer than
-/// min_clearance to an obstacle of the ESDF, sampled at most half a voxel apart (the step comes from a
-/// bound on the speed: the largest control-polygon velocity). Points outside the ESDF's grid count as
-/// free (the ESDF reports max_distance there). nullopt when none does, or for an empty trajectory.
+/// min_clearance to an obstacle of the ESDF (a ClearanceRule from its position at t_now: one already
+/// closer may leave, but not come nearer), sampled at most half a voxel apart (the step comes from a
+/// bound on the speed: the largest control-polygon velocity; at most 100000 samples). Points outside the
+/// ESDF's grid count as free (the ESDF reports max_distance there). nullopt when none does, or for an
+/// empty trajectory. A NaN t_now reads as 0.
 std::optional<double> firstCollisionTime(const UniformBspline& trajectory, double t_now,
                                          const map::Esdf& esdf, double min_clearance, double horizon);
 
