@@ -18,6 +18,7 @@
 #include <sensor_msgs/point_cloud2_iterator.h>
 #include <tf2_eigen/tf2_eigen.h>
 #include <tf2_ros/buffer.h>
+#include <tf2_ros/message_filter.h>
 #include <tf2_ros/transform_listener.h>
 
 #include <algorithm>
@@ -56,7 +57,7 @@ class EsdfMapper : public nodelet::Nodelet {
     p.get("mapper/sync_mode", sync_mode_).get("mapper/pose_tolerance", pose_tolerance_);
     p.get("mapper/max_pose_jump", max_pose_jump_).getFrame("mapper/world_frame", world_frame_);
     p.get("mapper/cloud_period", cloud_period_).get("mapper/esdf_slice_height", slice_height_);
-    p.get("mapper/warn_period", warn_period_);
+    p.get("mapper/warn_period", warn_period_).get("mapper/tf_queue", tf_queue_);
     common::Aabb box;
     config::readBox(p, box);
     ros_params::requireOrThrow(p.ok(), me, p.error());
@@ -70,6 +71,8 @@ class EsdfMapper : public nodelet::Nodelet {
                                "parameter '" + p.fullName("mapper/max_pose_jump") + "' must be finite and > 0");
     ros_params::requireOrThrow(std::isfinite(cloud_period_) && cloud_period_ >= 0.0, me,
                                "parameter '" + p.fullName("mapper/cloud_period") + "' must be finite and >= 0");
+    ros_params::requireOrThrow(tf_queue_ >= 1 && tf_queue_ <= 1000, me,
+                               "parameter '" + p.fullName("mapper/tf_queue") + "' must be in [1, 1000] frames");
     ros_params::requireOrThrow(std::isfinite(warn_period_) && warn_period_ > 0.0, me,
                                "parameter '" + p.fullName("mapper/warn_period") + "' must be finite and > 0");
     ros_params::requireOrThrow(std::isfinite(slice_height_), me,
@@ -83,18 +86,32 @@ class EsdfMapper : public nodelet::Nodelet {
     slice_pub_ = nh.advertise<sensor_msgs::PointCloud2>("esdf_slice", 1);
     save_srv_ = ros_guard::service(nh, getName(), "save_map", &EsdfMapper::onSave, this);
     info_sub_ = ros_guard::subscribe(nh, getName(), "camera_info", 1, &EsdfMapper::onInfo, this);
+    depth_sub_.subscribe(nh, "depth", 5);
     if (sync_mode_ == "tf") {
+      // The listener fills the buffer on its own thread. A frame waits in the filter, never blocking this
+      // nodelet's queue, until its transform has come (VIO lags the camera) or tf_queue newer frames push
+      // it out; a wait inside the callback stalled it, and save_map, for ever once the clock stopped.
       tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
       tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, nh);
-      depth_only_sub_ = ros_guard::subscribe(nh, getName(), "depth", 5, &EsdfMapper::onDepthTf, this);
+      tf_filter_ = std::make_unique<tf2_ros::MessageFilter<sensor_msgs::Image>>(
+          depth_sub_, *tf_buffer_, world_frame_, static_cast<std::uint32_t>(tf_queue_), nh);
+      tf_filter_->registerCallback(&EsdfMapper::onDepthTransformable, this);
+      tf_filter_->registerFailureCallback(
+          [this](const sensor_msgs::Image::ConstPtr& depth, tf2_ros::filter_failure_reasons::FilterFailureReason why) {
+            ros_guard::run(getName(), "the TF filter's drop callback", [&] { onDepthDropped(depth, why); });
+          });
     } else {
-      depth_sub_.subscribe(nh, "depth", 5);
       pose_sub_.subscribe(nh, "camera_pose", 20);
+      // A pair is the only callback: count the images, so that frames that never pair (poses stamped
+      // otherwise, or none) are said, not dropped in silence.
+      depth_sub_.registerCallback([this](const sensor_msgs::Image::ConstPtr&) {
+        ros_guard::run(getName(), "the depth counter", [&] { onDepthArrived(); });
+      });
       if (sync_mode_ == "exact") {
-        exact_sync_ = std::make_unique<message_filters::Synchronizer<ExactPolicy>>(ExactPolicy(20), depth_sub_, pose_sub_);
+        exact_sync_ = std::make_unique<message_filters::Synchronizer<ExactPolicy>>(ExactPolicy(kSyncQueue), depth_sub_, pose_sub_);
         exact_sync_->registerCallback(&EsdfMapper::onDepthPair, this);
       } else {
-        approx_sync_ = std::make_unique<message_filters::Synchronizer<ApproxPolicy>>(ApproxPolicy(20), depth_sub_, pose_sub_);
+        approx_sync_ = std::make_unique<message_filters::Synchronizer<ApproxPolicy>>(ApproxPolicy(kSyncQueue), depth_sub_, pose_sub_);
         approx_sync_->registerCallback(&EsdfMapper::onDepthPair, this);
       }
     }
@@ -127,7 +144,17 @@ class EsdfMapper : public nodelet::Nodelet {
     ros_guard::run(getName(), "the depth and camera_pose callback", [&] { onDepthPose(depth, pose); });
   }
 
+  // More images than the synchroniser keeps since the last pair: none of them found its camera_pose.
+  void onDepthArrived() {
+    if (++unpaired_ <= kSyncQueue) return;
+    skip("pose_sync", std::to_string(unpaired_ - 1) + " depth images in a row found no camera_pose " +
+                          (sync_mode_ == "exact" ? "stamped alike (mapper/sync_mode exact)"
+                                                 : "to pair with (mapper/sync_mode approximate)") +
+                          ": is camera_pose published, and stamped with the image's stamp?");
+  }
+
   void onDepthPose(const sensor_msgs::Image::ConstPtr& depth, const geometry_msgs::PoseStamped::ConstPtr& pose) {
+    unpaired_ = 0;
     // Stamps are the map's clock (a frontier's age counts from the frame that found it): a frame stamped 0
     // would date its frontiers to the epoch for good.
     if (depth->header.stamp.isZero()) return skip("stamp", "depth image stamped 0");
@@ -146,13 +173,28 @@ class EsdfMapper : public nodelet::Nodelet {
     integrate(depth, T_W_C);
   }
 
+  // The TF filter's callback, under ros_guard like every other.
+  void onDepthTransformable(const sensor_msgs::Image::ConstPtr& depth) {
+    ros_guard::run(getName(), "the depth callback (TF)", [&] { onDepthTf(depth); });
+  }
+
+  void onDepthDropped(const sensor_msgs::Image::ConstPtr& depth, tf2_ros::filter_failure_reasons::FilterFailureReason why) {
+    namespace reasons = tf2_ros::filter_failure_reasons;
+    const std::string pair = world_frame_ + " <- '" + depth->header.frame_id + "'";
+    if (why == reasons::EmptyFrameID) return skip("tf", "depth image without a frame_id: its camera pose cannot be looked up");
+    if (why == reasons::OutTheBack)
+      return skip("tf", "depth image stamped " + std::to_string(depth->header.stamp.toSec()) +
+                            " s, older than the TF buffer holds for " + pair);
+    skip("tf", "no transform " + pair + " at the image's stamp " + std::to_string(depth->header.stamp.toSec()) +
+                   " s came before " + std::to_string(tf_queue_) + " newer frames (mapper/tf_queue)");
+  }
+
   void onDepthTf(const sensor_msgs::Image::ConstPtr& depth) {
     // Time 0 asks tf2 for the latest transform, which is not the image's pose.
     if (depth->header.stamp.isZero()) return skip("stamp", "depth image stamped 0: its camera pose cannot be looked up");
     geometry_msgs::TransformStamped tf;
-    try {
-      tf = tf_buffer_->lookupTransform(world_frame_, depth->header.frame_id, depth->header.stamp,
-                                       ros::Duration(pose_tolerance_));
+    try {  // the filter passed it: no waiting
+      tf = tf_buffer_->lookupTransform(world_frame_, depth->header.frame_id, depth->header.stamp);
     } catch (const tf2::TransformException& e) {
       return skip("tf", std::string("no transform ") + world_frame_ + " <- " + depth->header.frame_id + ": " + e.what());
     }
@@ -309,6 +351,9 @@ class EsdfMapper : public nodelet::Nodelet {
   std::shared_ptr<ros_map::SharedMap> shared_;
   std::string sync_mode_, world_frame_;
   double pose_tolerance_ = 0.02, max_pose_jump_ = 1.0, cloud_period_ = 1.0, slice_height_ = 1.0, warn_period_ = 2.0;
+  int tf_queue_ = 10;
+  static constexpr int kSyncQueue = 20;  // frames the synchroniser keeps waiting for their pair
+  int unpaired_ = 0;                     // depth images since the last pair
   std::mutex input_mutex_;
   std::optional<map::DepthIntrinsics> intrinsics_;
   std::map<std::string, std::size_t> skipped_;
@@ -318,13 +363,14 @@ class EsdfMapper : public nodelet::Nodelet {
   ros::Publisher compute_pub_;
   ros::Publisher update_pub_, handle_pub_, cloud_pub_, slice_pub_;
   ros::ServiceServer save_srv_;
-  ros::Subscriber info_sub_, depth_only_sub_;
+  ros::Subscriber info_sub_;
   message_filters::Subscriber<sensor_msgs::Image> depth_sub_;
   message_filters::Subscriber<geometry_msgs::PoseStamped> pose_sub_;
   std::unique_ptr<message_filters::Synchronizer<ExactPolicy>> exact_sync_;
   std::unique_ptr<message_filters::Synchronizer<ApproxPolicy>> approx_sync_;
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
+  std::unique_ptr<tf2_ros::MessageFilter<sensor_msgs::Image>> tf_filter_;
 };
 
 }  // namespace go_feap

@@ -10,6 +10,7 @@
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
+#include <tf2_ros/transform_broadcaster.h>
 
 #include <algorithm>
 #include <cstdint>
@@ -304,6 +305,72 @@ TEST_F(MapperTest, FramesWithAnUnsetOrForeignPoseOrAnImageShorterThanItsSizeAreS
       << "a frame with an unset or foreign pose, an unreadable image or the stamp 0 was integrated";
   probe.sendReal();
   EXPECT_TRUE(spinUntil([&] { return probe.updates == base + 1; }, 10.0)) << "the next real frame was not integrated";
+}
+
+// sync_mode tf: a depth frame waits, without blocking the mapper, for a transform that comes late (VIO
+// lags the camera; the mapper used to wait pose_tolerance, 20 ms, inside its callback and skip the frame,
+// and with the clock stopped it waited for ever, save_map too). A frame whose transform never comes is
+// pushed out by tf_queue (3) newer ones, which are integrated.
+TEST_F(MapperTest, InTfModeAFrameWaitsForALateTransformAndOneWithoutNeverBlocksTheNext) {
+  Probe probe;  // for a real frame, its pose and the camera_info
+  ASSERT_TRUE(probe.connect());
+  ros::Publisher info_pub = nh_.advertise<sensor_msgs::CameraInfo>("tf_probe/camera_info", 5, /*latch=*/true);
+  ros::Publisher depth_pub = nh_.advertise<sensor_msgs::Image>("tf_probe/depth", 10);
+  std::size_t updates = 0;
+  ros::Subscriber update_sub = nh_.subscribe<go_feap::MapUpdate>(
+      "tf_probe/map_update", 10, [&](const go_feap::MapUpdate::ConstPtr&) { ++updates; });
+  ros::ServiceClient save = nh_.serviceClient<go_feap::SaveMap>("tf_probe/save_map");
+  ASSERT_TRUE(spinUntil([&] { return depth_pub.getNumSubscribers() > 0 && update_sub.getNumPublishers() > 0; }, 30.0));
+  ASSERT_TRUE(save.waitForExistence(ros::Duration(30.0)));
+  info_pub.publish(*probe.info);
+  spinUntil([] { return false; }, 0.5);
+  tf2_ros::TransformBroadcaster tf_pub;
+  auto transformAt = [&](const ros::Time& stamp, const std::string& frame) {
+    geometry_msgs::TransformStamped tf;
+    tf.header.stamp = stamp;
+    tf.header.frame_id = probe.pose->header.frame_id;
+    tf.child_frame_id = frame;
+    tf.transform.translation.x = probe.pose->pose.position.x;
+    tf.transform.translation.y = probe.pose->pose.position.y;
+    tf.transform.translation.z = probe.pose->pose.position.z;
+    tf.transform.rotation = probe.pose->pose.orientation;
+    return tf;
+  };
+  auto frameAt = [&](const ros::Time& stamp, const std::string& frame) {
+    sensor_msgs::Image d = *probe.depth;
+    d.header.stamp = stamp;
+    d.header.frame_id = frame;
+    return d;
+  };
+
+  // The transform 0.5 s (wall) after the image.
+  const ros::Time s0 = ros::Time::now();
+  depth_pub.publish(frameAt(s0, "tf_probe_camera"));
+  spinUntil([] { return false; }, 0.5);
+  EXPECT_EQ(updates, 0u) << "integrated with no transform";
+  tf_pub.sendTransform(transformAt(s0, "tf_probe_camera"));
+  EXPECT_TRUE(spinUntil([&] { return updates == 1; }, 10.0)) << "the frame was not integrated once its transform came";
+
+  // A frame in a camera frame nobody publishes waits; save_map answers meanwhile. Three newer frames, whose
+  // transforms come after all three, push it out of the queue (3) and are integrated.
+  depth_pub.publish(frameAt(s0 + ros::Duration(0.1), "tf_probe_nowhere"));
+  spinUntil([] { return false; }, 0.2);
+  go_feap::SaveMap srv;
+  srv.request.path = (std::filesystem::temp_directory_path() / ("go_feap_tf_probe_" + std::to_string(::getpid()) + ".bt")).string();
+  ASSERT_TRUE(save.call(srv)) << "save_map did not answer while a frame waited for its transform";
+  EXPECT_TRUE(srv.response.success) << srv.response.message;
+  std::filesystem::remove(srv.request.path);
+  std::vector<ros::Time> stamps;
+  for (int k = 1; k <= 3; ++k) {
+    stamps.push_back(s0 + ros::Duration(0.1 + 0.05 * k));
+    depth_pub.publish(frameAt(stamps.back(), "tf_probe_camera"));
+    spinUntil([] { return false; }, 0.2);
+  }
+  EXPECT_EQ(updates, 1u);
+  for (const ros::Time& stamp : stamps) tf_pub.sendTransform(transformAt(stamp, "tf_probe_camera"));
+  EXPECT_TRUE(spinUntil([&] { return updates == 4; }, 10.0)) << updates - 1 << " of the 3 frames after it integrated";
+  spinUntil([] { return false; }, 0.5);
+  EXPECT_EQ(updates, 4u);
 }
 
 }  // namespace
