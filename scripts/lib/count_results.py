@@ -1,13 +1,18 @@
 #!/usr/bin/env python3
 """Counts gtest/rostest JUnit XML results under a folder; prints failures and a final
-'N passed, N failed[, N skipped]' line; exits 1 on any failure or when nothing ran."""
+'N passed, N failed[, N skipped]' line; exits 1 on any failure or when nothing ran. An optional
+second argument is make run_tests' exit status: non-zero (make stopped before every test ran)
+counts one failure more."""
 import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
 
-def main(root: Path) -> int:
+def main(root: Path, make_status: int = 0) -> int:
     passed, failed, skipped, failures = 0, 0, 0, []
+    if make_status != 0:
+        failed += 1
+        failures.append(f"make run_tests exited {make_status}: the tests it had not reached left no result")
     files = sorted(root.rglob("*.xml")) if root.is_dir() else []
     for f in files:
         try:
@@ -38,4 +43,4 @@ def main(root: Path) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main(Path(sys.argv[1])))
+    sys.exit(main(Path(sys.argv[1]), int(sys.argv[2]) if len(sys.argv) > 2 else 0))
