@@ -101,7 +101,7 @@ class DepthCamera : public nodelet::Nodelet {
     // back until that time): the frames start again from this stamp. In seconds as a double: a
     // ros::Time one period past a stamp near 2^32 s would throw.
     next_frame_ = (std::isnan(next_frame_) || ahead < -period || ahead > period) ? now + period : next_frame_ + period;
-    const std::string bad = ros_conv::odometryPoseProblem(odom->pose.pose);
+    const std::string bad = ros_conv::odometryPoseProblem(*odom, world_frame_);
     if (!bad.empty()) {
       NODELET_WARN_STREAM_THROTTLE(1.0, getName() << ": odometry refused: " << bad << "; frame skipped");
       return;

@@ -66,7 +66,7 @@ class LayerManager : public nodelet::Nodelet {
   }
 
   void onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
-    const std::string bad = ros_conv::odometryPoseProblem(msg->pose.pose);
+    const std::string bad = ros_conv::odometryPoseProblem(*msg, world_frame_);
     if (!bad.empty()) {
       NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": odometry refused: " << bad);
       return;

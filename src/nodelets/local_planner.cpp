@@ -108,7 +108,7 @@ class LocalPlanner : public nodelet::Nodelet {
     // faster than local/max_input_speed refuses the message whole.
     common::Vec3 v_world;
     const std::string bad =
-        ros_conv::odometryProblem(msg->pose.pose, msg->twist.twist.linear, max_input_speed_, speed_limit_name_, v_world);
+        ros_conv::odometryProblem(*msg, world_frame_, max_input_speed_, speed_limit_name_, v_world);
     if (!bad.empty()) {
       NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": odometry refused: " << bad);
       return;

@@ -51,7 +51,7 @@ class OdometryTf : public nodelet::Nodelet {
   }
 
   void onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
-    const std::string bad = ros_conv::odometryPoseProblem(msg->pose.pose);
+    const std::string bad = ros_conv::odometryPoseProblem(*msg, world_frame_);
     if (!bad.empty()) {
       ++refused_;
       NODELET_WARN_STREAM_THROTTLE(warn_period_, getName() << ": odometry refused: " << bad << " (" << refused_

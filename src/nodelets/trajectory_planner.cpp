@@ -95,7 +95,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     // rest) or faster than planner/max_input_speed refuses the message whole.
     common::Vec3 v;
     const std::string bad =
-        ros_conv::odometryProblem(msg->pose.pose, msg->twist.twist.linear, max_input_speed_, speed_limit_name_, v);
+        ros_conv::odometryProblem(*msg, world_frame_, max_input_speed_, speed_limit_name_, v);
     if (!bad.empty()) {
       NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": odometry refused: " << bad);
       return;

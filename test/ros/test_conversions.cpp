@@ -24,6 +24,8 @@ namespace {
 
 using go_feap::common::Vec3;
 using go_feap::ros_conv::odometryPoseProblem;
+using go_feap::ros_conv::odometryProblem;
+using go_feap::ros_conv::odometryVelocity;
 using go_feap::ros_conv::worldVelocity;
 using go_feap::ros_conv::yawOf;
 using go_feap::ros_check::frontierArrayProblem;
@@ -73,6 +75,38 @@ TEST(Conversions, WorldVelocityTurnsTheBodyTwistIntoTheWorld) {
   const Vec3 body = q.inverse() * world;
   EXPECT_TRUE(worldVelocity(quat(q.w(), q.x(), q.y(), q.z()), vec(body.x(), body.y(), body.z()))
                   .isApprox(world, 1e-12));
+}
+
+// nav_msgs/Odometry's twist is in child_frame_id: the body (turned into the world), or the header's own
+// frame when the two are the same (VINS writes "world" for both): then it is taken as it is. It used to be
+// turned by the heading whatever the frames said: VINS odometry at yaw 90 deg flying +x planned from +y.
+// Odometry in another frame than the map's is refused, naming both.
+TEST(Conversions, OdometryVelocityFollowsTheChildFrameAndTheFrameMustBeTheMaps) {
+  const double h = std::sqrt(0.5);
+  nav_msgs::Odometry odom;
+  odom.header.frame_id = "world";
+  odom.pose.pose.orientation = quat(h, 0, 0, h);  // heading +y
+  odom.twist.twist.linear = vec(2, 0, 0.5);
+  odom.child_frame_id = "body";
+  EXPECT_TRUE(odometryVelocity(odom).isApprox(Vec3(0, 2, 0.5), 1e-12));
+  odom.child_frame_id = "";  // unnamed: still the child frame, as the message defines
+  EXPECT_TRUE(odometryVelocity(odom).isApprox(Vec3(0, 2, 0.5), 1e-12));
+  odom.child_frame_id = "world";
+  EXPECT_TRUE(odometryVelocity(odom).isApprox(Vec3(2, 0, 0.5), 1e-12));
+  Vec3 v;
+  EXPECT_EQ(odometryProblem(odom, "world", 20.0, "planner/max_input_speed", v), "");
+  EXPECT_TRUE(v.isApprox(Vec3(2, 0, 0.5), 1e-12));
+  EXPECT_EQ(odometryPoseProblem(odom, "world"), "");
+  odom.header.frame_id = "odom";
+  odom.child_frame_id = "body";
+  for (const std::string& bad : {odometryPoseProblem(odom, "world"), odometryProblem(odom, "world", 20.0, "x", v)}) {
+    EXPECT_NE(bad.find("'odom'"), std::string::npos) << bad;
+    EXPECT_NE(bad.find("'world'"), std::string::npos) << bad;
+  }
+  odom.header.frame_id = "world";
+  odom.twist.twist.linear = vec(30, 0, 0);
+  EXPECT_NE(odometryProblem(odom, "world", 20.0, "planner/max_input_speed", v).find("planner/max_input_speed"),
+            std::string::npos);
 }
 
 TEST(Conversions, YawOfAnyScaledQuaternionIsItsRotationsHeading) {

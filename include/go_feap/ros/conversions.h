@@ -5,6 +5,7 @@
 #include <geometry_msgs/Pose.h>
 #include <geometry_msgs/Quaternion.h>
 #include <geometry_msgs/Vector3.h>
+#include <nav_msgs/Odometry.h>
 
 #include <Eigen/Geometry>
 
@@ -89,12 +90,31 @@ inline common::Vec3 worldVelocity(const geometry_msgs::Quaternion& orientation, 
   return q.normalized() * common::Vec3(body.x, body.y, body.z);
 }
 
-/// Why odometry cannot be planned from (odometryPoseProblem(), then velocityProblem() of its velocity in the
-/// world frame, which goes to `v_world`): "" when usable.
-inline std::string odometryProblem(const geometry_msgs::Pose& pose, const geometry_msgs::Vector3& body_velocity,
-                                   double max_speed, const std::string& limit_name, common::Vec3& v_world) {
-  if (std::string bad = odometryPoseProblem(pose); !bad.empty()) return bad;
-  v_world = worldVelocity(pose.orientation, body_velocity);
+/// Why odometry cannot be used in the map's `world_frame`: its header names another frame (an odom or
+/// VIO frame the map is not in: the pose would land elsewhere in the map), or its pose is unusable
+/// (odometryPoseProblem()). "" when usable.
+inline std::string odometryPoseProblem(const nav_msgs::Odometry& odom, const std::string& world_frame) {
+  if (odom.header.frame_id != world_frame)
+    return "odometry is in frame '" + odom.header.frame_id + "', not the map's '" + world_frame + "' (world_frame)";
+  return odometryPoseProblem(odom.pose.pose);
+}
+
+/// The odometry's linear velocity in its header's (world) frame. nav_msgs/Odometry gives the twist in
+/// child_frame_id, the body (the simulator, most flight stacks): it is turned by the orientation. A
+/// child_frame_id equal to the header's frame (VINS-Mono and VINS-Fusion write "world" for both) means the
+/// twist is in the world frame already, and is taken as it is.
+inline common::Vec3 odometryVelocity(const nav_msgs::Odometry& odom) {
+  const geometry_msgs::Vector3& v = odom.twist.twist.linear;
+  if (odom.child_frame_id == odom.header.frame_id) return common::Vec3(v.x, v.y, v.z);
+  return worldVelocity(odom.pose.pose.orientation, v);
+}
+
+/// Why odometry cannot be planned from (odometryPoseProblem() in `world_frame`, then velocityProblem() of
+/// odometryVelocity(), which goes to `v_world`): "" when usable.
+inline std::string odometryProblem(const nav_msgs::Odometry& odom, const std::string& world_frame, double max_speed,
+                                   const std::string& limit_name, common::Vec3& v_world) {
+  if (std::string bad = odometryPoseProblem(odom, world_frame); !bad.empty()) return bad;
+  v_world = odometryVelocity(odom);
   return velocityProblem(v_world, max_speed, limit_name);
 }
 
