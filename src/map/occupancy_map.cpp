@@ -54,15 +54,15 @@ common::Status OccupancyConfig::validate() const {
   auto bad = [](const std::string& key, const std::string& why) {
     return common::Status::Error("occupancy: " + key + " " + why);
   };
-  if (!(resolution > 0.0)) return bad("resolution", "must be > 0");
-  if (!(margin >= 0.0)) return bad("margin", "must be >= 0");
+  if (!(resolution > 0.0 && std::isfinite(resolution))) return bad("resolution", "must be finite and > 0");
+  if (!(margin >= 0.0 && std::isfinite(margin))) return bad("margin", "must be finite and >= 0");
   if (!(p_min > 0.0 && p_min < 0.5)) return bad("p_min", "must be in (0, 0.5)");
   if (!(p_max > 0.5 && p_max < 1.0)) return bad("p_max", "must be in (0.5, 1)");
   if (!(p_hit > 0.5 && p_hit < 1.0)) return bad("p_hit", "must be in (0.5, 1)");
   if (!(p_miss > 0.0 && p_miss < 0.5)) return bad("p_miss", "must be in (0, 0.5)");
   if (!(p_occupied > 0.5 && p_occupied < p_max)) return bad("p_occupied", "must be in (0.5, p_max)");
   if (!(min_range >= 0.0)) return bad("min_range", "must be >= 0");
-  if (!(max_range > min_range)) return bad("max_range", "must be > min_range");
+  if (!(max_range > min_range && std::isfinite(max_range))) return bad("max_range", "must be finite and > min_range");
   if (skip_pixel < 1) return bad("skip_pixel", "must be >= 1");
   // One byte per voxel: log-odds * 50 must fit in [-127, 127].
   if (logit(p_max) * OccupancyMap::kScaleLimit() > 127.0 || logit(p_min) * OccupancyMap::kScaleLimit() < -127.0)

@@ -1,5 +1,11 @@
 #include "go_feap/map/voxel_map.h"
 
+#include <cmath>
+#include <cstdint>
+#include <iomanip>
+#include <limits>
+#include <sstream>
+
 namespace go_feap::map {
 
 common::Status MapConfig::validate() const {
@@ -7,6 +13,24 @@ common::Status MapConfig::validate() const {
   // The ESDF's limits depend on the voxel size only, not on the grid's extent.
   if (auto st = esdf.validate(common::GridGeometry(Vec3::Zero(), occupancy.resolution, Index3::Ones())); !st)
     return st;
+  return common::Status::Ok();
+}
+
+common::Status MapConfig::validate(const Aabb& box) const {
+  if (auto st = validate(); !st) return st;
+  if (!box.min.allFinite() || !box.max.allFinite() || !box.valid())
+    return common::Status::Error("exploration_box: min and max must be finite, with min < max on every axis");
+  // Counted as a double: an int per axis, or their product, could overflow before any check.
+  const Vec3 size = box.expanded(occupancy.margin).size();
+  double voxels = 1.0;
+  for (int a = 0; a < 3; ++a) voxels *= std::ceil(size[a] / occupancy.resolution) + 1.0;
+  if (voxels > static_cast<double>(std::numeric_limits<std::uint32_t>::max())) {
+    std::ostringstream why;
+    why << std::setprecision(3) << "exploration_box with occupancy/resolution " << occupancy.resolution
+        << " m and margin " << occupancy.margin << " m needs about " << voxels
+        << " voxels, more than the map's 2^32 - 1";
+    return common::Status::Error(why.str());
+  }
   return common::Status::Ok();
 }
 

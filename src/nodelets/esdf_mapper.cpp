@@ -61,8 +61,8 @@ class EsdfMapper : public nodelet::Nodelet {
     common::Aabb box;
     config::readBox(p, box);
     ros_params::requireOrThrow(p.ok(), me, p.error());
-    ros_params::requireOrThrow(c.validate().ok(), me, c.validate().message());
-    ros_params::requireOrThrow(box.valid(), me, "parameter '" + p.fullName("exploration_box") + "' needs min < max");
+    const common::Status map_ok = c.validate(box);
+    ros_params::requireOrThrow(map_ok.ok(), me, map_ok.message());
     ros_params::requireOrThrow(sync_mode_ == "exact" || sync_mode_ == "approximate" || sync_mode_ == "tf", me,
                                "parameter '" + p.fullName("mapper/sync_mode") + "' must be exact, approximate or tf");
     ros_params::requireOrThrow(pose_tolerance_ >= 0.0 && pose_tolerance_ <= 1.0, me,

@@ -35,6 +35,13 @@ class OdometryTf : public nodelet::Nodelet {
     ros_params::requireOrThrow(common::isRigidTransform(T_B_C), getName(), "parameter '" + p.fullName("T_B_C") + "' must be a rigid transform");
     ros_params::requireOrThrow(camera_frame != body_frame_, getName(),  // getFrame refused empty ones
                                "parameter '" + p.fullName("camera_frame") + "' must name a frame other than the body");
+    ros_params::requireOrThrow(camera_frame != world_frame_, getName(),  // world -> body -> world: a loop
+                               "parameter '" + p.fullName("camera_frame") + "' must name a frame other than the world");
+    ros_params::requireOrThrow(world_frame_ != body_frame_, getName(),
+                               "parameters 'world_frame' and 'body_frame' must name two different frames");
+    ros_params::requireOrThrow(std::isfinite(warn_period_) && warn_period_ > 0.0, getName(),
+                               "parameter '" + p.fullName("warn_period") + "' must be > 0");
+    // Sent once every parameter has passed: a nodelet that does not start leaves no TF behind.
     Eigen::Isometry3d extrinsic;
     extrinsic.matrix() = T_B_C;
     geometry_msgs::TransformStamped camera = tf2::eigenToTransform(extrinsic);
@@ -42,10 +49,6 @@ class OdometryTf : public nodelet::Nodelet {
     camera.header.frame_id = body_frame_;
     camera.child_frame_id = camera_frame;
     static_broadcaster_.sendTransform(camera);
-    ros_params::requireOrThrow(world_frame_ != body_frame_, getName(),
-                               "parameters 'world_frame' and 'body_frame' must name two different frames");
-    ros_params::requireOrThrow(std::isfinite(warn_period_) && warn_period_ > 0.0, getName(),
-                               "parameter '" + p.fullName("warn_period") + "' must be > 0");
     broadcaster_ = std::make_unique<tf2_ros::TransformBroadcaster>();
     odom_sub_ = ros_guard::subscribe(getNodeHandle(), getName(), "odom", 20, &OdometryTf::onOdom, this);
   }

@@ -54,23 +54,27 @@ class TrajectoryServer : public nodelet::Nodelet {
                                "parameter '" + p.fullName("server/rate") + "' must be in [10, 1000] Hz");
     ros_params::requireOrThrow(std::isfinite(odom_timeout_) && odom_timeout_ > 0.0, getName(),
                                "parameter '" + p.fullName("server/odom_timeout") + "' must be > 0");
-    // The planner's own limits, where its config is loaded here too (trajectory.yaml): a server limit
-    // below one of them would refuse every plan that uses it, and the vehicle would hold for good.
-    double tolerance = 0.0;
-    getPrivateNodeHandle().param("optimizer/limit_tolerance", tolerance, 0.0);
+    // The planner's own limits, from the same trajectory.yaml: a server limit below one of them would
+    // refuse every plan that uses it, and the vehicle would hold for good.
+    double tolerance = 0.0, v_max = 0.0, a_max = 0.0, yaw_rate_max = 0.0;
+    p.get("optimizer/limit_tolerance", tolerance).get("optimizer/v_max", v_max).get("optimizer/a_max", a_max);
+    p.get("optimizer/yaw_rate_max", yaw_rate_max);
+    ros_params::requireOrThrow(p.ok(), getName(), p.error());
+    ros_params::requireOrThrow(std::isfinite(tolerance) && tolerance >= 0.0, getName(),
+                               "parameter '" + p.fullName("optimizer/limit_tolerance") + "' must be finite and >= 0");
     const struct {
-      double limit;
+      double limit, planner_limit;
       const char *key, *planner_key;
-    } pairs[] = {{max_speed_, "server/max_speed", "optimizer/v_max"},
-                 {max_acceleration_, "server/max_acceleration", "optimizer/a_max"},
-                 {max_yaw_rate_, "server/max_yaw_rate", "optimizer/yaw_rate_max"}};
+    } pairs[] = {{max_speed_, v_max, "server/max_speed", "optimizer/v_max"},
+                 {max_acceleration_, a_max, "server/max_acceleration", "optimizer/a_max"},
+                 {max_yaw_rate_, yaw_rate_max, "server/max_yaw_rate", "optimizer/yaw_rate_max"}};
     for (const auto& pair : pairs) {
-      double planner_limit = 0.0;
-      if (!getPrivateNodeHandle().getParam(pair.planner_key, planner_limit) || !std::isfinite(planner_limit)) continue;
-      const double needed = planner_limit * (1.0 + std::max(0.0, tolerance));
+      ros_params::requireOrThrow(std::isfinite(pair.planner_limit) && pair.planner_limit > 0.0, getName(),
+                                 "parameter '" + p.fullName(pair.planner_key) + "' must be finite and > 0");
+      const double needed = pair.planner_limit * (1.0 + tolerance);
       std::ostringstream why;
       why << "parameter '" << p.fullName(pair.key) << "' (" << pair.limit << ") is below the planner's '"
-          << p.fullName(pair.planner_key) << "' (" << planner_limit << ", " << needed
+          << p.fullName(pair.planner_key) << "' (" << pair.planner_limit << ", " << needed
           << " with optimizer/limit_tolerance): every plan that reaches it would be refused";
       ros_params::requireOrThrow(pair.limit >= needed, getName(), why.str());
     }

@@ -48,11 +48,13 @@ TEST(Parameters, ANodeletWithAnInvalidOrMissingParameterDoesNotStartAndNamesIt) 
       {"bad_max_odom_step", "go_feap/LayerManager", "metrics/max_odom_step"},   // -1 m
       {"missing_layers", "go_feap/LayerManager", "layers/"},                    // no exploration.yaml at all
       {"bad_pose_tolerance", "go_feap/EsdfMapper", "mapper/pose_tolerance"},    // 5 s
+      {"bad_map_size", "go_feap/EsdfMapper", "exploration_box"},                // 1e6 m long: 2.9e10 voxels
       {"bad_cluster_extent", "go_feap/LocalPlanner", "frontier/max_cluster_extent"},  // NaN
       {"bad_camera_extrinsic", "go_feap/DepthCamera", "depth_camera/T_B_C"},    // a NaN translation
       {"bad_command_limit", "go_feap/QuadrotorSim", "simulation/max_command_acceleration"},  // NaN
       {"bad_input_speed", "go_feap/TrajectoryPlanner", "planner/max_input_speed"},  // NaN: no speed refused
       {"bad_server_yaw_rate", "go_feap/TrajectoryServer", "server/max_yaw_rate"},  // below optimizer/yaw_rate_max
+      {"bad_server_tolerance", "go_feap/TrajectoryServer", "optimizer/limit_tolerance"},  // NaN: read as 0 in silence
       {"bad_start", "go_feap/QuadrotorSim", "start"},                           // 100 m outside the maze
   };
   for (const Case& c : cases) {

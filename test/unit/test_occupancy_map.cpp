@@ -19,6 +19,7 @@
 #include "go_feap/world/generators.h"
 
 using namespace go_feap;
+using common::Aabb;
 using common::Index3;
 using common::Vec3;
 using map::VoxelState;
@@ -381,6 +382,36 @@ TEST(OccupancyMap, OctomapLeavesSharingAVoxelCentre) {
     EXPECT_EQ(m.esdf().isObstacle(i), s == VoxelState::kOccupied) << i.transpose();
   }
   EXPECT_EQ(occupied, geo.size());
+}
+
+// The map's size is checked before anything is allocated: finite values, and at most 2^32 - 1 voxels
+// (an infinite margin or resolution made a 1x1x1 map at a NaN origin; a huge box threw from an allocation
+// or from the ESDF, naming no parameter).
+TEST(OccupancyMap, MapSizeAndInfiniteValuesAreRefusedBeforeAllocating) {
+  const Aabb box{Vec3(-5, -3, 0), Vec3(5, 3, 3)};
+  map::MapConfig c = mapConfig();
+  ASSERT_TRUE(c.validate(box)) << c.validate(box).message();
+  for (const auto& [field, broken] : std::vector<std::pair<std::string, std::function<void(map::MapConfig&)>>>{
+           {"margin", [](map::MapConfig& m) { m.occupancy.margin = INFINITY; }},
+           {"resolution", [](map::MapConfig& m) { m.occupancy.resolution = INFINITY; }},
+           {"max_range", [](map::MapConfig& m) { m.occupancy.max_range = INFINITY; }}}) {
+    map::MapConfig bad = c;
+    broken(bad);
+    const common::Status st = bad.validate(box);
+    ASSERT_FALSE(st) << field;
+    EXPECT_NE(st.message().find(field), std::string::npos) << st.message();
+  }
+  for (const Aabb& bad : {Aabb{Vec3(-5, -3, 0), Vec3(INFINITY, 3, 3)}, Aabb{Vec3(-5, -3, 0), Vec3(-6, 3, 3)},
+                          Aabb{Vec3(-5, -3, 0), Vec3(1e6, 3, 3)}, Aabb{Vec3(-1e6, -1e6, 0), Vec3(1e6, 1e6, 3)}}) {
+    const common::Status st = c.validate(bad);
+    ASSERT_FALSE(st) << bad.max.transpose();
+    EXPECT_NE(st.message().find("exploration_box"), std::string::npos) << st.message();
+  }
+  // 2^32 - 1 voxels is the ESDF's own limit: a large box below it (3010 x 3010 x 310 voxels with the
+  // margin, 2.8e9) passes both.
+  const Aabb large{Vec3(0, 0, 0), Vec3(300, 300, 30)};
+  ASSERT_TRUE(c.validate(large)) << c.validate(large).message();
+  EXPECT_TRUE(c.esdf.validate(common::GridGeometry::covering(large.expanded(c.occupancy.margin), c.occupancy.resolution)));
 }
 
 TEST(OccupancyMap, LineVisibility) {

@@ -12,6 +12,9 @@ struct MapConfig {
   OccupancyConfig occupancy;
   EsdfConfig esdf;
   common::Status validate() const;
+  /// validate(), and a box that is finite with min < max whose map (box and margin at the resolution)
+  /// has at most 2^32 - 1 voxels (the ESDF indexes them in 32 bits).
+  common::Status validate(const Aabb& box) const;
 };
 
 /// What one integrated frame changed, in world terms.
