@@ -87,7 +87,9 @@ class LayerManager : public nodelet::Nodelet {
     yaw_ = ros_conv::yawOf(msg->pose.pose.orientation);
     if (!manager_) {
       manager_ = std::make_unique<planning::LayerManager>(config_, box_, z);
-      publish(ros::Time::now(), manager_->step({}, ros::Time::now().toSec()));
+      const ros::Time now = ros::Time::now();
+      const double t = coreTime(now);
+      publish(now, t, manager_->step({}, t));
     }
   }
   void onFrontiers(const FrontierArray::ConstPtr& msg) {
@@ -149,10 +151,27 @@ class LayerManager : public nodelet::Nodelet {
         if (f.average.z >= band.z_min && f.average.z <= band.z_max) in.band_frontiers.push_back(f.id);
       }
     }
-    publish(now, manager_->step(in, now.toSec()));
+    const double t = coreTime(now);
+    publish(now, t, manager_->step(in, t));
   }
 
-  void publish(const ros::Time& now, const planning::LayerOutputs& out) {
+  // The exploration's own clock, which never goes back: a ROS clock that does (a bag played again, a
+  // simulator restarted) pauses it by as much. The core's settle, stuck and time-limit timers, and the
+  // elapsed time, count from times before the jump: read against the clock itself they went negative
+  // (a finished band could not settle, stuck detection was off and the time limit moved back for as long).
+  double coreTime(const ros::Time& now) {
+    const double t = now.toSec();
+    if (last_clock_ && t < *last_clock_) {
+      NODELET_WARN_STREAM(getName() << ": the clock went back " << *last_clock_ - t
+                                    << " s: the exploration's timers pause for as long");
+      clock_offset_ += *last_clock_ - t;
+    }
+    last_clock_ = t;
+    return t + clock_offset_;
+  }
+
+  // `t` is coreTime(now).
+  void publish(const ros::Time& now, double t, const planning::LayerOutputs& out) {
     for (const planning::Transition& tr : out.transitions) {
       NODELET_INFO_STREAM(getName() << ": " << planning::toString(tr.from)
                                     << (tr.band_from >= 0 ? "(band " + std::to_string(tr.band_from) + ")" : "")
@@ -164,7 +183,7 @@ class LayerManager : public nodelet::Nodelet {
                                             : ""));
     }
     if (out.trigger_ignored) NODELET_INFO_STREAM(getName() << ": trigger received while exploring: ignored");
-    if (!t_start_ && out.state != planning::ExplorationState::kWaitTrigger) t_start_ = now;
+    if (!t_start_ && out.state != planning::ExplorationState::kWaitTrigger) t_start_ = t;
     current_band_ = out.band;
     LayerBounds layer;
     layer.header.stamp = now;
@@ -217,9 +236,9 @@ class LayerManager : public nodelet::Nodelet {
     status.state = static_cast<std::uint8_t>(out.state);
     status.state_name = planning::toString(out.state);
     status.layer = layer.index;
-    // Never below 0: a clock that went back (a bag played again) would make every status one that
-    // MetricsRecorder refuses, the finishing one too.
-    status.elapsed = t_start_ ? std::max(0.0, now.toSec() - t_start_->toSec()) : 0.0;
+    // On the exploration's clock, which never goes back: against the ROS clock, a clock that went back (a
+    // bag played again) made every status one that MetricsRecorder refuses, the finishing one too.
+    status.elapsed = t_start_ ? t - *t_start_ : 0.0;
     status.distance = distance_;
     status.coverage = -1.0;  // unknown here: the metrics recorder compares with ground truth
     status.frontier_count = frontiers_ ? static_cast<std::uint32_t>(frontiers_->frontiers.size()) : 0;
@@ -241,7 +260,9 @@ class LayerManager : public nodelet::Nodelet {
   std::vector<std::uint32_t> failed_;
   std::uint64_t progress_ = 0;
   bool pending_trigger_ = false, published_ = false;
-  std::optional<ros::Time> t_start_;
+  std::optional<double> t_start_;     ///< coreTime() when the exploration started
+  std::optional<double> last_clock_;  ///< s, the ROS clock at the last step
+  double clock_offset_ = 0.0;         ///< s the ROS clock went back in all
   std::optional<common::Vec3> last_position_;
   std::optional<double> yaw_;
   bool look_around_ = false;

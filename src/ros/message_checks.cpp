@@ -124,6 +124,11 @@ std::string depthImageProblem(const sensor_msgs::Image& msg) {
   if (msg.data.size() != expected)
     return std::to_string(msg.data.size()) + " bytes of data, where " + size + " with step " +
            std::to_string(msg.step) + " needs " + std::to_string(expected);
+  // cv_bridge reads any other byte order as the wrong type (CV_8UC4 for 32FC1) instead of swapping it.
+  constexpr bool kHostBigEndian = __BYTE_ORDER__ == __ORDER_BIG_ENDIAN__;
+  if ((msg.is_bigendian != 0) != kHostBigEndian)
+    return std::string("is_bigendian ") + (msg.is_bigendian ? "1 (big-endian)" : "0 (little-endian)") +
+           ": not this machine's byte order, which the depth image is read in";
   return std::string();
 }
 

@@ -471,6 +471,10 @@ TEST(MessageChecks, DepthImagesThatCannotBeReadWholeAreNamed) {
   bad.step = 8947852;
   bad.data.assign(1664, 0);
   EXPECT_TRUE(says(depthImageProblem(bad), "needs 4294968960")) << depthImageProblem(bad);
+  // The other byte order: cv_bridge read a big-endian 32FC1 image as CV_8UC4 (refused as a wrong encoding).
+  bad = img;
+  bad.is_bigendian = 1;
+  EXPECT_TRUE(says(depthImageProblem(bad), "is_bigendian 1")) << depthImageProblem(bad);
 }
 
 TEST(Guarded, AnExceptionFromACallbackStaysInItAndTheNextMessageIsTaken) {
