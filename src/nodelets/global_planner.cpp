@@ -79,7 +79,11 @@ class GlobalPlanner : public nodelet::Nodelet {
 
   void onHandle(const boost::shared_ptr<const ros_map::MapHandle>& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (shared_) return;
+    if (shared_) {
+      if (const std::string other = ros_map::otherMapProblem(*msg, shared_); !other.empty())
+        NODELET_ERROR_STREAM_THROTTLE(10.0, getName() << ": " << other);
+      return;
+    }
     auto map =
         ros_map::acceptHandle(*msg, [&](const map::EsdfConfig& esdf) { return astar_config_.validate(esdf); });
     if (!map) {

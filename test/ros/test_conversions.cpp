@@ -19,6 +19,7 @@
 #include "go_feap/trajectory/replan.h"
 #include "go_feap/ros/guarded.h"
 #include "go_feap/ros/message_checks.h"
+#include "go_feap/ros/shared_map.h"
 
 namespace {
 
@@ -475,6 +476,18 @@ TEST(MessageChecks, DepthImagesThatCannotBeReadWholeAreNamed) {
   bad = img;
   bad.is_bigendian = 1;
   EXPECT_TRUE(says(depthImageProblem(bad), "is_bigendian 1")) << depthImageProblem(bad);
+}
+
+// A reader holds the map it got first; a handle to another one (the mapper reloaded) is named, not taken in
+// silence, and an error of acceptHandle (no map) stays acceptHandle's.
+TEST(SharedMap, AHandleToAnotherMapIsNamed) {
+  namespace rm = go_feap::ros_map;
+  const go_feap::common::Aabb box{Vec3(0, 0, 0), Vec3(1, 1, 1)};
+  auto first = std::make_shared<rm::SharedMap>(std::make_unique<go_feap::map::VoxelMap>(go_feap::map::MapConfig(), box));
+  auto second = std::make_shared<rm::SharedMap>(std::make_unique<go_feap::map::VoxelMap>(go_feap::map::MapConfig(), box));
+  EXPECT_EQ(rm::otherMapProblem(rm::MapHandle{first}, first), "");
+  EXPECT_EQ(rm::otherMapProblem(rm::MapHandle{}, first), "");
+  EXPECT_NE(rm::otherMapProblem(rm::MapHandle{second}, first).find("another map"), std::string::npos);
 }
 
 TEST(Guarded, AnExceptionFromACallbackStaysInItAndTheNextMessageIsTaken) {

@@ -14,6 +14,7 @@
 #include <functional>
 #include <memory>
 #include <shared_mutex>
+#include <string>
 
 #include "go_feap/map/voxel_map.h"
 
@@ -43,6 +44,15 @@ inline common::Result<std::shared_ptr<SharedMap>> acceptHandle(
     if (!st.ok()) return R::Error(st.message());
   }
   return handle.shared;
+}
+
+/// What to log when a handle to another map than the one `held` comes (the mapper was reloaded into the
+/// manager): a reader keeps the map it planned on, whose state it holds; "" for the same map (the mapper
+/// sends its handle with every update).
+inline std::string otherMapProblem(const MapHandle& handle, const std::shared_ptr<SharedMap>& held) {
+  if (!handle.shared || handle.shared == held) return std::string();
+  return "map_handle points to another map (the mapper was restarted?): this nodelet keeps planning on the "
+         "first one; restart it too";
 }
 
 }  // namespace go_feap::ros_map
