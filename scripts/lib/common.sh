@@ -23,6 +23,16 @@ log() { printf '[go_feap] %s\n' "$*" >&2; }
 # usage_of SCRIPT: prints the comment block at the top of SCRIPT (after its #! line), without the "# ".
 usage_of() { awk 'NR == 1 { next } /^#/ { sub(/^# ?/, ""); print; next } { exit }' "$1"; }
 
+# needs_value ARGS_LEFT OPTION: an option given last, without its value, is refused by name (the
+# script's own usage() is printed after).
+needs_value() { [ "$1" -ge 2 ] || { log "$2 needs a value"; usage; exit 2; }; }
+
+# check_seed S: a whole number that fits the ROS parameter it travels as (a 32-bit XML-RPC integer).
+check_seed() {
+  case "$1" in ''|*[!0-9]*) log "--seed must be a whole number in [0, 2147483647]"; exit 2 ;; esac
+  [ "${#1}" -le 10 ] && [ "$1" -le 2147483647 ] || { log "--seed must be a whole number in [0, 2147483647]"; exit 2; }
+}
+
 # Installs the Debian packages that are missing; a second run installs nothing.
 install_dependencies() {
   local missing=() p

@@ -1,6 +1,5 @@
 #include "go_feap/map/voxel_map.h"
 
-#include <cmath>
 #include <cstdint>
 #include <iomanip>
 #include <limits>
@@ -20,10 +19,7 @@ common::Status MapConfig::validate(const Aabb& box) const {
   if (auto st = validate(); !st) return st;
   if (!box.min.allFinite() || !box.max.allFinite() || !box.valid())
     return common::Status::Error("exploration_box: min and max must be finite, with min < max on every axis");
-  // Counted as a double: an int per axis, or their product, could overflow before any check.
-  const Vec3 size = box.expanded(occupancy.margin).size();
-  double voxels = 1.0;
-  for (int a = 0; a < 3; ++a) voxels *= std::ceil(size[a] / occupancy.resolution) + 1.0;
+  const double voxels = common::GridGeometry::coveringCount(box.expanded(occupancy.margin), occupancy.resolution);
   if (voxels > static_cast<double>(std::numeric_limits<std::uint32_t>::max())) {
     std::ostringstream why;
     why << std::setprecision(3) << "exploration_box with occupancy/resolution " << occupancy.resolution

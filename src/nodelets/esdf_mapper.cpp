@@ -185,8 +185,11 @@ class EsdfMapper : public nodelet::Nodelet {
     if (why == reasons::OutTheBack)
       return skip("tf", "depth image stamped " + std::to_string(depth->header.stamp.toSec()) +
                             " s, older than the TF buffer holds for " + pair);
+    // Unknown: pushed out of the queue by newer frames, or left behind by a TF buffer that moved on (a
+    // time jump clears it) while the frame waited.
     skip("tf", "no transform " + pair + " at the image's stamp " + std::to_string(depth->header.stamp.toSec()) +
-                   " s came before " + std::to_string(tf_queue_) + " newer frames (mapper/tf_queue)");
+                   " s while it waited (" + std::to_string(tf_queue_) +
+                   " newer frames came, mapper/tf_queue, or the TF buffer moved on)");
   }
 
   void onDepthTf(const sensor_msgs::Image::ConstPtr& depth) {

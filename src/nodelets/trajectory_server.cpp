@@ -25,8 +25,9 @@
 #include <sstream>
 
 #include "go_feap/PositionCommand.h"
-#include "go_feap/ros/conversions.h"
+#include "go_feap/common/config_groups.h"
 #include "go_feap/ros/bspline_conversion.h"
+#include "go_feap/ros/conversions.h"
 #include "go_feap/ros/guarded.h"
 #include "go_feap/ros/params.h"
 
@@ -56,27 +57,24 @@ class TrajectoryServer : public nodelet::Nodelet {
                                "parameter '" + p.fullName("server/odom_timeout") + "' must be > 0");
     // The planner's own limits, from the same trajectory.yaml: a server limit below one of them would
     // refuse every plan that uses it, and the vehicle would hold for good.
-    double tolerance = 0.0, v_max = 0.0, a_max = 0.0, yaw_rate_max = 0.0;
-    p.get("optimizer/limit_tolerance", tolerance).get("optimizer/v_max", v_max).get("optimizer/a_max", a_max);
-    p.get("optimizer/yaw_rate_max", yaw_rate_max);
+    trajectory::OptimizerConfig planner;
+    config::readOptimizer(p, planner);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
-    ros_params::requireOrThrow(std::isfinite(tolerance) && tolerance >= 0.0, getName(),
-                               "parameter '" + p.fullName("optimizer/limit_tolerance") + "' must be finite and >= 0");
+    const common::Status planner_ok = planner.validate();
+    ros_params::requireOrThrow(planner_ok.ok(), getName(), planner_ok.message());
+    const double scale = 1.0 + planner.limit_tolerance;
     const struct {
       double limit, planner_limit;
       const char *key, *planner_key;
-    } pairs[] = {{max_speed_, v_max, "server/max_speed", "optimizer/v_max"},
-                 {max_acceleration_, a_max, "server/max_acceleration", "optimizer/a_max"},
-                 {max_yaw_rate_, yaw_rate_max, "server/max_yaw_rate", "optimizer/yaw_rate_max"}};
+    } pairs[] = {{max_speed_, planner.v_max, "server/max_speed", "optimizer/v_max"},
+                 {max_acceleration_, planner.a_max, "server/max_acceleration", "optimizer/a_max"},
+                 {max_yaw_rate_, planner.yaw_rate_max, "server/max_yaw_rate", "optimizer/yaw_rate_max"}};
     for (const auto& pair : pairs) {
-      ros_params::requireOrThrow(std::isfinite(pair.planner_limit) && pair.planner_limit > 0.0, getName(),
-                                 "parameter '" + p.fullName(pair.planner_key) + "' must be finite and > 0");
-      const double needed = pair.planner_limit * (1.0 + tolerance);
       std::ostringstream why;
       why << "parameter '" << p.fullName(pair.key) << "' (" << pair.limit << ") is below the planner's '"
-          << p.fullName(pair.planner_key) << "' (" << pair.planner_limit << ", " << needed
+          << p.fullName(pair.planner_key) << "' (" << pair.planner_limit << ", " << pair.planner_limit * scale
           << " with optimizer/limit_tolerance): every plan that reaches it would be refused";
-      ros_params::requireOrThrow(pair.limit >= needed, getName(), why.str());
+      ros_params::requireOrThrow(pair.limit >= pair.planner_limit * scale, getName(), why.str());
     }
     cmd_pub_ = nh.advertise<PositionCommand>("position_cmd", 10);
     bspline_sub_ = ros_guard::subscribe(nh, getName(), "bspline", 5, &TrajectoryServer::onBspline, this);

@@ -38,6 +38,7 @@ Status OptimizerConfig::validate() const {
   if (!non_negative(lambda_feasibility)) return err("lambda_feasibility", "must be finite and >= 0");
   if (!non_negative(lambda_time)) return err("lambda_time", "must be finite and >= 0");
   if (!non_negative(min_clearance)) return err("min_clearance", "must be finite and >= 0");
+  if (!non_negative(leave_distance)) return err("leave_distance", "must be finite and >= 0");
   if (!(std::isfinite(clearance) && clearance >= min_clearance))
     return err("clearance", "must be finite and >= min_clearance");
   if (!positive(v_max)) return err("v_max", "must be finite and > 0");
@@ -218,20 +219,18 @@ double BsplineCost::evaluate(const double* x, double* grad, unsigned terms) cons
 // ---------------------------------------------------------------------------------------------------------
 // Checks and optimisation.
 
-ClearanceRule::ClearanceRule(double min_clearance, double start_distance, double resolution)
-    : min_clearance_(min_clearance),
-      leave_floor_(start_distance - 0.1 * resolution),
-      leaving_(start_distance < min_clearance && start_distance >= 0.5 * resolution) {}
+ClearanceRule::ClearanceRule(const map::Esdf& esdf, const Vec3& start, double min_clearance, double leave_distance)
+    : min_clearance_(min_clearance), leave_distance_(leave_distance) {
+  const auto& geo = esdf.geometry();
+  const double d = esdf.distance(start);
+  const common::Index3 idx = geo.coordToIndex(start);
+  leave_floor_ = d - 0.1 * geo.resolution();
+  leaving_ = d < min_clearance && !(geo.inside(idx) && esdf.isObstacle(idx));
+}
 
-bool ClearanceRule::accept(double distance) {
-  if (leaving_) {
-    if (distance >= min_clearance_) {
-      leaving_ = false;
-      return true;
-    }
-    return distance >= leave_floor_;
-  }
-  return distance >= min_clearance_;
+bool ClearanceRule::accept(double distance, double travelled) {
+  if (leaving_ && (distance >= min_clearance_ || !(travelled <= leave_distance_))) leaving_ = false;
+  return leaving_ ? distance >= leave_floor_ : distance >= min_clearance_;
 }
 
 Status checkTrajectory(const UniformBspline& spline, const map::Esdf& esdf, const OptimizerConfig& config,
@@ -256,18 +255,27 @@ Status checkTrajectory(const UniformBspline& spline, const map::Esdf& esdf, cons
   Eigen::MatrixXd weights(p + 1, samples + 1);
   for (int i = 0; i <= samples; ++i)
     UniformBspline::basisWeights(p, static_cast<double>(i) / samples, 0, weights.col(i).data());
-  const double start_distance = esdf.distance(spline.position(0.0));
-  ClearanceRule rule(config.min_clearance, start_distance, esdf.geometry().resolution());
-  bool too_close = false, came_nearer = false;  // a sample broke the rule; while leaving a near start
+  ClearanceRule rule(esdf, spline.position(0.0), config.min_clearance, config.leave_distance);
+  // The first sample that broke the rule: how far from the obstacle, and whether the curve was still
+  // leaving a near start (it came nearer) or had just run out of leave_distance.
+  bool too_close = false, came_nearer = false, left_too_long = false;
+  double failed_at = 0.0;
+  double travelled = 0.0;
+  Vec3 last = spline.position(0.0);
   for (int span = p; span < spline.numControlPoints(); ++span) {
     const Eigen::MatrixXd points = q.middleCols(span - p, p + 1) * weights;
     for (int i = 0; i <= samples; ++i) {
-      const double d = esdf.distance(Vec3(points.col(i)));
+      const Vec3 point = points.col(i);
+      travelled += (point - last).norm();
+      last = point;
+      const double d = esdf.distance(point);
       min_distance = std::min(min_distance, d);
       const bool leaving = rule.leaving();
-      if (!too_close && !rule.accept(d)) {
+      if (!too_close && !rule.accept(d, travelled)) {
         too_close = true;
-        came_nearer = leaving;
+        came_nearer = leaving && rule.leaving();
+        left_too_long = leaving && !rule.leaving();
+        failed_at = d;
       }
     }
   }
@@ -283,12 +291,17 @@ Status checkTrajectory(const UniformBspline& spline, const map::Esdf& esdf, cons
     return Status::Error("trajectory check: acceleration " + num(a) + " m/s^2 exceeds a_max " +
                          num(config.a_max));
   if (too_close) {
+    const std::string start = num(esdf.distance(spline.position(0.0)));
     if (came_nearer)
-      return Status::Error("trajectory check: starts " + num(start_distance) +
-                           " m from an obstacle, below min_clearance " + num(config.min_clearance) +
-                           ", and comes nearer (" + num(min_distance) + " m) before it is that far away");
-    return Status::Error("trajectory check: passes " + num(min_distance) +
-                         " m from an obstacle, below min_clearance " + num(config.min_clearance));
+      return Status::Error("trajectory check: starts " + start + " m from an obstacle, below min_clearance " +
+                           num(config.min_clearance) + ", and comes nearer (" + num(failed_at) +
+                           " m) before it is that far away");
+    if (left_too_long)
+      return Status::Error("trajectory check: starts " + start + " m from an obstacle and is still " +
+                           num(failed_at) + " m from one after leave_distance " + num(config.leave_distance) +
+                           " m, below min_clearance " + num(config.min_clearance));
+    return Status::Error("trajectory check: passes " + num(failed_at) + " m from an obstacle, below min_clearance " +
+                         num(config.min_clearance));
   }
   return Status::Ok();
 }

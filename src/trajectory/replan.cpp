@@ -58,27 +58,35 @@ bool serverDropped(std::uint32_t current_id, double sent_time, bool following, s
   return !following || following_id != current_id;
 }
 
-std::optional<double> firstCollisionTime(const UniformBspline& trajectory, double t_now,
-                                         const map::Esdf& esdf, double min_clearance, double horizon) {
+std::optional<double> firstCollisionTime(const UniformBspline& trajectory, double t_now, const map::Esdf& esdf,
+                                         double min_clearance, double leave_distance, double horizon) {
   if (trajectory.empty() || trajectory.dimension() != 3) return std::nullopt;
   if (std::isnan(t_now)) t_now = 0.0;  // as UniformBspline::evaluate() reads it
   const double t0 = std::clamp(t_now, 0.0, trajectory.duration());
   const double t1 = std::clamp(t_now + std::max(0.0, horizon), t0, trajectory.duration());
+  // Judged as when it was planned (checkTrajectory()): a trajectory that starts closer than min_clearance
+  // is followed from its start while it may still be leaving, so the floor is its start's, not wherever
+  // the vehicle is now (a distance that ripples along a wall would move it); only times from t_now count.
+  ClearanceRule rule(esdf, trajectory.position(0.0), min_clearance, leave_distance);
+  const double ts = rule.leaving() ? 0.0 : t0;
   const Eigen::MatrixXd& q = trajectory.controlPoints();
   double speed_bound = 0.0;  // the velocity curve lies in the hull of the polygon's velocities
   for (int i = 0; i + 1 < trajectory.numControlPoints(); ++i)
     speed_bound = std::max(speed_bound, (q.col(i + 1) - q.col(i)).norm() / trajectory.knotSpan());
-  const double resolution = esdf.geometry().resolution();
-  // Clamped as a double before the cast: a corrupt trajectory's speed bound must not overflow it, nor
-  // make the check take seconds (past kMaxSteps the samples are farther apart than half a voxel).
+  // At most half a voxel apart; the count clamped as a double before the cast (a corrupt trajectory's
+  // speed bound must not overflow it, nor make the check take seconds: past kMaxSteps the samples are
+  // farther apart), NaN (an infinite bound over no time) read as 1.
   constexpr double kMaxSteps = 100000.0;
-  const int steps = static_cast<int>(std::clamp(std::ceil((t1 - t0) * speed_bound / (0.5 * resolution)), 1.0, kMaxSteps));
-  // From where the vehicle is now: one that is already too close (a wall mapped late beside it) is in no
-  // more danger on a trajectory that takes it away than standing still.
-  ClearanceRule rule(min_clearance, esdf.distance(trajectory.position(t0)), resolution);
+  const double wanted = std::ceil((t1 - ts) * speed_bound / (0.5 * esdf.geometry().resolution()));
+  const int steps = wanted >= 1.0 ? static_cast<int>(std::min(wanted, kMaxSteps)) : 1;
+  double travelled = 0.0;
+  Vec3 last = trajectory.position(ts);
   for (int i = 0; i <= steps; ++i) {
-    const double t = t0 + (t1 - t0) * i / steps;
-    if (!rule.accept(esdf.distance(trajectory.position(t)))) return t;
+    const double t = ts + (t1 - ts) * i / steps;
+    const Vec3 p = trajectory.position(t);
+    travelled += (p - last).norm();
+    last = p;
+    if (!rule.accept(esdf.distance(p), travelled) && t >= t0) return t;
   }
   return std::nullopt;
 }

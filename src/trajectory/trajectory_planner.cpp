@@ -652,7 +652,8 @@ ReplanReason replanReason(const Trajectory* current, double t, const Vec3& targe
     in.time_left = current->duration() - t;
     in.target_distance_to_end = (current->goal - target).norm();
     in.collision_time =
-        firstCollisionTime(current->position, std::max(0.0, t), esdf, optimizer.min_clearance, config.collision_horizon);
+        firstCollisionTime(current->position, std::max(0.0, t), esdf, optimizer.min_clearance,
+                           optimizer.leave_distance, config.collision_horizon);
   }
   const ReplanReason reason = shouldReplan(in, replan);
   // A trajectory that ends at its target needs no replanning for running out: it arrives.

@@ -14,9 +14,7 @@ std::size_t Scene::occupiedCount() const {
 }
 
 double sceneVoxelCount(const Aabb& box, double resolution, double margin) {
-  double n = 1.0;
-  for (int a = 0; a < 3; ++a) n *= std::max(1.0, std::ceil((box.max[a] - box.min[a] + 2.0 * margin) / resolution) + 1.0);
-  return n;
+  return common::GridGeometry::coveringCount(box.expanded(margin), resolution);
 }
 
 Scene makeEmptyScene(const std::string& name, const Aabb& box, double resolution, double margin) {

@@ -144,7 +144,9 @@ TEST(Onboard, RunsTheChainOnD435iDepthAndVioOdometry) {
   EXPECT_GT(targets, 0u);
   // The metrics recorder (sensor_view.launch) records the flight in the world frame.
   EXPECT_TRUE(spinUntil([&] { return path && !path->poses.empty(); }, 20.0)) << "no flown_path from the recorder";
-  if (path) EXPECT_EQ(path->header.frame_id, "world");
+  if (path) {
+    EXPECT_EQ(path->header.frame_id, "world");
+  }
 }
 
 }  // namespace

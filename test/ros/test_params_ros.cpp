@@ -54,7 +54,7 @@ TEST(Parameters, ANodeletWithAnInvalidOrMissingParameterDoesNotStartAndNamesIt) 
       {"bad_command_limit", "go_feap/QuadrotorSim", "simulation/max_command_acceleration"},  // NaN
       {"bad_input_speed", "go_feap/TrajectoryPlanner", "planner/max_input_speed"},  // NaN: no speed refused
       {"bad_server_yaw_rate", "go_feap/TrajectoryServer", "server/max_yaw_rate"},  // below optimizer/yaw_rate_max
-      {"bad_server_tolerance", "go_feap/TrajectoryServer", "optimizer/limit_tolerance"},  // NaN: read as 0 in silence
+      {"bad_server_tolerance", "go_feap/TrajectoryServer", "optimizer: limit_tolerance"},  // NaN: read as 0 in silence
       {"bad_start", "go_feap/QuadrotorSim", "start"},                           // 100 m outside the maze
   };
   for (const Case& c : cases) {

@@ -472,43 +472,98 @@ TEST(CheckTrajectory, SamplesLongSpansDenselyEnoughToFindTheClosestApproach) {
 }
 
 // A spline starting closer than min_clearance (a wall mapped late beside the vehicle) may leave, moving
-// away or along, but not come nearer before it is min_clearance away; once there, the usual rule holds. A
-// start inside an obstacle voxel has no way out. Wall voxels at x in [1.0, 1.1] (centres 1.05).
-TEST(CheckTrajectory, AStartTooNearAnObstacleMayLeaveButNotComeNearer) {
+// away or along, but not come nearer before it is min_clearance away, nor skim along for longer than
+// leave_distance (1 m); once away, the usual rule holds. A start inside an obstacle voxel has no way out,
+// at a wall's face or at a pole's corner. Wall voxels at x in [1.0, 1.1] (centres 1.05), a one-voxel pole at
+// x in [3.0, 3.1], y in [3.5, 3.6].
+TEST(CheckTrajectory, AStartTooNearAnObstacleMayLeaveButNotComeNearerNorStayNear) {
   World world(Vec3(4.0, 4.0, 2.0));
   world.addBox(Index3(10, 0, 0), Index3(10, 39, 19));
+  world.addBox(Index3(30, 35, 0), Index3(30, 35, 19));
   world.sync();
-  const OptimizerConfig config = optimizerConfig();  // min_clearance 0.2
+  const OptimizerConfig config = optimizerConfig();  // min_clearance 0.2, leave_distance 1
+  ASSERT_EQ(config.leave_distance, 1.0);
   auto line = [](std::vector<Vec3> corners) {  // 0.2 m/s: well within the limits
     return UniformBspline::fitPath(UniformBspline::resamplePolyline(corners, 0.1), 0.5, Vec3::Zero(), Vec3::Zero());
   };
   auto check = [&](std::vector<Vec3> corners) { return traj::checkTrajectory(line(corners), world.esdf(), config); };
+  auto says = [](const go_feap::common::Status& st, const std::string& what) {
+    return !st && st.message().find(what) != std::string::npos;
+  };
   const Vec3 near(1.2, 2.0, 1.0);  // 0.15 m from the wall's centres
   ASSERT_NEAR(world.esdf().distance(near), 0.15, 1e-9);
   const go_feap::common::Status away = check({near, Vec3(3.0, 2.0, 1.0)});
   EXPECT_TRUE(away) << away.message();
-  const go_feap::common::Status along = check({near, Vec3(1.2, 3.0, 1.0), Vec3(3.0, 3.0, 1.0)});
+  const go_feap::common::Status along = check({near, Vec3(1.2, 2.5, 1.0), Vec3(2.5, 2.5, 1.0)});
   EXPECT_TRUE(along) << along.message();
-  const go_feap::common::Status nearer = check({near, Vec3(1.17, 2.5, 1.0), Vec3(3.0, 2.5, 1.0)});
-  ASSERT_FALSE(nearer);
-  EXPECT_NE(nearer.message().find("comes nearer"), std::string::npos) << nearer.message();
+  const go_feap::common::Status skims = check({near, Vec3(1.2, 3.5, 1.0), Vec3(2.5, 3.5, 1.0)});
+  EXPECT_TRUE(says(skims, "leave_distance")) << skims.message();
+  const go_feap::common::Status nearer = check({near, Vec3(1.17, 2.5, 1.0), Vec3(2.5, 2.5, 1.0)});
+  EXPECT_TRUE(says(nearer, "comes nearer")) << nearer.message();
   // Away and back: past min_clearance the usual rule holds.
-  EXPECT_FALSE(check({near, Vec3(2.0, 2.0, 1.0), Vec3(1.22, 2.5, 1.0)}));
-  // In a wall voxel (0.03 m from its centre): no way out.
-  const Vec3 inside(1.08, 2.0, 1.0);
-  const go_feap::common::Status stuck = check({inside, Vec3(3.0, 2.0, 1.0)});
-  ASSERT_FALSE(stuck);
-  EXPECT_NE(stuck.message().find("below min_clearance"), std::string::npos) << stuck.message();
-  // The flown trajectory's check from where the vehicle is: leaving is no collision, coming nearer is.
-  const UniformBspline leaving = line({near, Vec3(3.0, 2.0, 1.0)});
-  EXPECT_FALSE(traj::firstCollisionTime(leaving, 0.0, world.esdf(), config.min_clearance, 100.0).has_value());
+  const go_feap::common::Status back_again = check({near, Vec3(2.0, 2.0, 1.0), Vec3(1.22, 2.5, 1.0)});
+  EXPECT_TRUE(says(back_again, "passes 0.1")) << back_again.message();
+  // In a wall voxel (0.03 m from its centre), and at the corner of the pole's voxel (0.078 m from its
+  // centre by the trilinear distance, more than half a voxel): no way out.
+  const Vec3 in_wall(1.08, 2.0, 1.0), in_pole(3.09, 3.59, 1.0);
+  ASSERT_GT(world.esdf().distance(in_pole), 0.5 * kRes);
+  for (const auto& [start, to] : {std::pair{in_wall, Vec3(3.0, 2.0, 1.0)}, std::pair{in_pole, Vec3(3.09, 2.5, 1.0)}}) {
+    const go_feap::common::Status stuck = check({start, to});
+    EXPECT_TRUE(says(stuck, "passes")) << stuck.message();
+    EXPECT_TRUE(traj::firstCollisionTime(line({start, to}), 0.0, world.esdf(), config.min_clearance,
+                                         config.leave_distance, 100.0));
+  }
+  // The flown trajectory is judged as it was planned: leaving is no collision, at any time on the way;
+  // coming nearer is, as is skimming past leave_distance.
+  const UniformBspline leaving = line({near, Vec3(1.2, 2.5, 1.0), Vec3(2.5, 2.5, 1.0)});
+  for (double t = 0.0; t <= leaving.duration(); t += 0.1)
+    EXPECT_FALSE(traj::firstCollisionTime(leaving, t, world.esdf(), config.min_clearance, config.leave_distance, 100.0))
+        << "at " << t << " s";
   const UniformBspline back = line({near, Vec3(1.17, 2.5, 1.0), Vec3(3.0, 2.5, 1.0)});
-  const std::optional<double> t = traj::firstCollisionTime(back, 0.0, world.esdf(), config.min_clearance, 100.0);
+  const std::optional<double> t =
+      traj::firstCollisionTime(back, 0.0, world.esdf(), config.min_clearance, config.leave_distance, 100.0);
   ASSERT_TRUE(t.has_value());
   EXPECT_LT(world.esdf().distance(back.position(*t)), 0.15 - 0.1 * kRes);
-  EXPECT_TRUE(traj::firstCollisionTime(line({inside, Vec3(3.0, 2.0, 1.0)}), 0.0, world.esdf(), config.min_clearance, 100.0));
+  const UniformBspline skimming = line({near, Vec3(1.2, 3.5, 1.0), Vec3(2.5, 3.5, 1.0)});
+  const std::optional<double> t_skim =
+      traj::firstCollisionTime(skimming, 0.0, world.esdf(), config.min_clearance, config.leave_distance, 100.0);
+  ASSERT_TRUE(t_skim.has_value());
+  EXPECT_NEAR((skimming.position(*t_skim) - near).norm(), 1.0, 0.1);
+  // From a time on the way, only what lies ahead counts (the skim beyond 1 m still does).
+  double t_away = *t;
+  while (t_away < back.duration() && world.esdf().distance(back.position(t_away)) < 0.3) t_away += 0.05;
+  ASSERT_LT(t_away, back.duration());
+  EXPECT_EQ(traj::firstCollisionTime(back, t_away, world.esdf(), config.min_clearance, config.leave_distance, 100.0),
+            std::nullopt);
+  EXPECT_TRUE(traj::firstCollisionTime(skimming, 1.0, world.esdf(), config.min_clearance, config.leave_distance, 100.0));
   // A NaN time reads as the start.
-  EXPECT_EQ(traj::firstCollisionTime(back, std::nan(""), world.esdf(), config.min_clearance, 100.0), t);
+  EXPECT_EQ(traj::firstCollisionTime(back, std::nan(""), world.esdf(), config.min_clearance, config.leave_distance, 100.0),
+            t);
+}
+
+// Along a staircase wall (voxels on a 45 degree diagonal) the distance ripples by millimetres. A leaving
+// spline that passed the check is no predicted collision at any time on the way: the flown check keeps the
+// floor of the spline's start, where it used to take the distance wherever the vehicle was as the floor
+// (13 of 53 times along such a spline were collisions).
+TEST(CheckTrajectory, ALeavingSplineThatPassedIsNoCollisionAnywhereOnTheWay) {
+  World world(Vec3(4.0, 4.0, 2.0));
+  for (int k = 0; k < 30; ++k) world.addBox(Index3(5 + k, 5 + k, 0), Index3(5 + k, 5 + k, 19));
+  world.sync();
+  const OptimizerConfig config = optimizerConfig();
+  const Vec3 along = Vec3(1, 1, 0).normalized(), out = Vec3(1, -1, 0).normalized();
+  int accepted = 0;
+  for (double s = 0.0; s < 0.3; s += 0.013) {
+    const Vec3 start = Vec3(1.0, 1.0, 1.0) + s * along + 0.15 * out;
+    const UniformBspline spline = UniformBspline::fitPath(
+        UniformBspline::resamplePolyline({start, start + 0.6 * along, start + 0.6 * along + 1.0 * out}, 0.1), 0.5,
+        Vec3::Zero(), Vec3::Zero());
+    if (!traj::checkTrajectory(spline, world.esdf(), config)) continue;
+    ++accepted;
+    for (double t = 0.0; t <= spline.duration(); t += 0.05)
+      EXPECT_FALSE(traj::firstCollisionTime(spline, t, world.esdf(), config.min_clearance, config.leave_distance, 100.0))
+          << "start offset " << s << ", at " << t << " s";
+  }
+  EXPECT_GE(accepted, 10);
 }
 
 TEST(BsplineOptimizer, KeepsMovingBoundaryStates) {
@@ -688,17 +743,17 @@ TEST(Replan, FirstCollisionTimeMatchesFineSampling) {
       if (world.esdf().distance(s.position(t)) < min_clearance) oracle = t;
     }
     ASSERT_GE(oracle, 0.0);
-    const std::optional<double> t = traj::firstCollisionTime(s, 0.0, world.esdf(), min_clearance, 100.0);
+    const std::optional<double> t = traj::firstCollisionTime(s, 0.0, world.esdf(), min_clearance, 1.0, 100.0);
     ASSERT_TRUE(t.has_value());
     // Samples are at most half a voxel apart: the found time is within that much travel of the oracle.
     EXPECT_GE(*t, oracle - 1e-9);
     EXPECT_LE((s.position(*t) - s.position(oracle)).norm(), 0.5 * kRes + 1e-6);
     EXPECT_LT(world.esdf().distance(s.position(*t)), min_clearance);
     // A horizon ending before it, or a start after the wall, sees nothing.
-    EXPECT_FALSE(traj::firstCollisionTime(s, 0.0, world.esdf(), min_clearance, oracle - 0.05).has_value());
+    EXPECT_FALSE(traj::firstCollisionTime(s, 0.0, world.esdf(), min_clearance, 1.0, oracle - 0.05).has_value());
     double after = oracle;
     while (after < s.duration() && world.esdf().distance(s.position(after)) < 1.5) after += 0.01;
-    EXPECT_FALSE(traj::firstCollisionTime(s, after, world.esdf(), min_clearance, 100.0).has_value());
+    EXPECT_FALSE(traj::firstCollisionTime(s, after, world.esdf(), min_clearance, 1.0, 100.0).has_value());
   }
 }
 

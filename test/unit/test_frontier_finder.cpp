@@ -313,7 +313,9 @@ TEST(FrontierFinder, UpdateKeepsTheClustersItDoesNotTouch) {
   EXPECT_LT(delta.removed.size(), before / 2);
   // Every removed cluster was near the change; the far end's clusters are untouched.
   for (const auto& fr : f.frontiers()) {
-    if (fr.average.x() < 1.5) EXPECT_DOUBLE_EQ(fr.first_seen, 0.0);
+    if (fr.average.x() < 1.5) {
+      EXPECT_DOUBLE_EQ(fr.first_seen, 0.0);
+    }
   }
   for (std::uint32_t id : delta.added) {
     const frontier::Frontier* fr = f.find(id);

@@ -276,9 +276,10 @@ TEST(Stl, ColumnVoxeliserMarksWhatAnExhaustiveTestMarks) {
           const Index3 idx(i, j, k);
           const bool want = triangleMarksVoxel(g, idx, a, b, c);
           marked += want;
-          if (want && a.cwiseAbs().maxCoeff() < 1e3 && b.cwiseAbs().maxCoeff() < 1e3 && c.cwiseAbs().maxCoeff() < 1e3)
+          if (want && a.cwiseAbs().maxCoeff() < 1e3 && b.cwiseAbs().maxCoeff() < 1e3 && c.cwiseAbs().maxCoeff() < 1e3) {
             ASSERT_LE(pointTriangleDistance(g.indexToCoord(idx), a, b, c), 0.5 * std::sqrt(3.0) * 0.1 + 2e-4)
                 << "triangle " << t << " marks voxel " << idx.transpose() << ", which it does not touch";
+          }
           ASSERT_EQ(fast.occupied.at(idx) != 0, want)
               << "triangle " << t << " (" << a.transpose() << " | " << b.transpose() << " | " << c.transpose()
               << ") voxel " << idx.transpose();

@@ -109,6 +109,7 @@ void readOptimizer(R& p, trajectory::OptimizerConfig& o) {
   p.get("optimizer/lambda_smooth", o.lambda_smooth).get("optimizer/lambda_clearance", o.lambda_clearance);
   p.get("optimizer/lambda_feasibility", o.lambda_feasibility).get("optimizer/lambda_time", o.lambda_time);
   p.get("optimizer/clearance", o.clearance).get("optimizer/min_clearance", o.min_clearance);
+  p.get("optimizer/leave_distance", o.leave_distance);
   p.get("optimizer/v_max", o.v_max).get("optimizer/a_max", o.a_max).get("optimizer/yaw_rate_max", o.yaw_rate_max);
   p.get("optimizer/yaw_acc_max", o.yaw_acc_max);
   p.get("optimizer/feasibility_margin", o.feasibility_margin).get("optimizer/limit_tolerance", o.limit_tolerance);

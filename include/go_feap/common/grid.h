@@ -56,6 +56,14 @@ class GridGeometry {
     return GridGeometry(lo, resolution, dims);
   }
 
+  /// At least covering(box, resolution).size(), at most one voxel per axis more, counted as a double (no
+  /// int per axis nor their product can overflow before a size check).
+  static double coveringCount(const Aabb& box, double resolution) {
+    double n = 1.0;
+    for (int a = 0; a < 3; ++a) n *= std::max(1.0, std::ceil((box.max[a] - box.min[a]) / resolution) + 1.0);
+    return n;
+  }
+
   const Vec3& origin() const { return origin_; }
   double resolution() const { return resolution_; }
   const Index3& dims() const { return dims_; }

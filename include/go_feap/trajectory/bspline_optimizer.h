@@ -20,6 +20,8 @@ struct OptimizerConfig {
   double lambda_time = 1.0;    ///< weight of the duration (s)
   double clearance = 0.5;      ///< m, ESDF distance the free control points are pushed to (< max_distance)
   double min_clearance = 0.2;  ///< m, hard limit: a result whose sampled curve comes closer fails
+  /// m, a curve starting closer than min_clearance must reach it within this much travel (ClearanceRule).
+  double leave_distance = 1.0;
   double v_max = 2.0;          ///< m/s
   double a_max = 2.0;          ///< m/s^2
   double yaw_rate_max = 1.0;   ///< rad/s (yawTurn)
@@ -109,28 +111,32 @@ struct OptimizeStats {
   double min_distance = 0.0;      ///< m, smallest ESDF distance along the sampled curve
 };
 
-/// The clearance a curve keeps, judged sample by sample in time order from where it starts: min_clearance,
+/// The clearance a curve keeps, judged sample by sample in time order from its start: min_clearance,
 /// except that a curve starting closer (a wall mapped late beside the vehicle, a braking stop) may leave.
-/// Until it first reaches min_clearance, no sample may come closer than its start less a tenth of a voxel:
-/// it moves away or along, never nearer. A start within half a voxel of an obstacle voxel's centre (in
-/// it) has no such way out: every sample below min_clearance fails.
+/// Until it first reaches min_clearance, and for at most leave_distance of travel, no sample may come
+/// closer than its start less a tenth of a voxel: it moves away or along, never nearer, and does not
+/// skim along the obstacle for longer. A start in an obstacle voxel has no such way out: every sample
+/// below min_clearance fails.
 class ClearanceRule {
  public:
-  ClearanceRule(double min_clearance, double start_distance, double resolution);
-  /// Whether a sample at `distance` from the nearest obstacle passes; the samples come in time order.
-  bool accept(double distance);
-  /// Whether the curve started closer than min_clearance and has not yet reached it.
+  /// For a curve starting at `start`.
+  ClearanceRule(const map::Esdf& esdf, const Vec3& start, double min_clearance, double leave_distance);
+  /// Whether a sample at `distance` from the nearest obstacle, `travelled` m along the curve from its
+  /// start, passes; the samples come in time order.
+  bool accept(double distance, double travelled);
+  /// Whether the curve started closer than min_clearance and may still be leaving.
   bool leaving() const { return leaving_; }
 
  private:
   double min_clearance_;
+  double leave_distance_;
   double leave_floor_;
   bool leaving_;
 };
 
 /// Samples the spline densely (every half voxel or finer) and checks speed and acceleration against
 /// v_max, a_max (times 1 + limit_tolerance), the ESDF distance against min_clearance (a ClearanceRule:
-/// a spline starting closer must leave without coming nearer), and that every
+/// a spline starting closer must leave within leave_distance without coming nearer), and that every
 /// control point is finite. The message says which check failed and by how much. Fills `stats`' three
 /// sampled fields when not null.
 common::Status checkTrajectory(const UniformBspline& spline, const map::Esdf& esdf,

@@ -54,13 +54,14 @@ bool serverDropped(std::uint32_t current_id, double sent_time, bool following, s
 bool targetMoved(const Vec3& old_position, double old_yaw, const Vec3& new_position, double new_yaw,
                  const ReplanConfig& config);
 /// First time in [t_now, min(t_now + horizon, duration)] at which `trajectory` (3-D) comes closer than
-/// min_clearance to an obstacle of the ESDF (a ClearanceRule from its position at t_now: one already
-/// closer may leave, but not come nearer), sampled at most half a voxel apart (the step comes from a
-/// bound on the speed: the largest control-polygon velocity; at most 100000 samples). Points outside the
-/// ESDF's grid count as free (the ESDF reports max_distance there). nullopt when none does, or for an
-/// empty trajectory. A NaN t_now reads as 0.
-std::optional<double> firstCollisionTime(const UniformBspline& trajectory, double t_now,
-                                         const map::Esdf& esdf, double min_clearance, double horizon);
+/// min_clearance to an obstacle of the ESDF, judged as checkTrajectory() judged it when it was planned (a
+/// ClearanceRule from its start: one starting closer may leave within leave_distance without coming
+/// nearer), sampled at most half a voxel apart (the step comes from a bound on the speed: the largest
+/// control-polygon velocity; at most 100000 samples). Points outside the ESDF's grid count as free (the
+/// ESDF reports max_distance there). nullopt when none does, or for an empty trajectory. A NaN t_now
+/// reads as 0.
+std::optional<double> firstCollisionTime(const UniformBspline& trajectory, double t_now, const map::Esdf& esdf,
+                                         double min_clearance, double leave_distance, double horizon);
 
 /// Cubic spline from position p with velocity v that brakes along v at a_max (m/s^2, > 0) and then holds:
 /// it starts at p with velocity v (acceleration -a_max along v), never exceeds a_max, and ends at rest
