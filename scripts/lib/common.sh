@@ -29,8 +29,8 @@ needs_value() { [ "$1" -ge 2 ] || { log "$2 needs a value"; usage; exit 2; }; }
 
 # check_seed S: a whole number that fits the ROS parameter it travels as (a 32-bit XML-RPC integer).
 check_seed() {
-  case "$1" in ''|*[!0-9]*) log "--seed must be a whole number in [0, 2147483647]"; exit 2 ;; esac
-  [ "${#1}" -le 10 ] && [ "$1" -le 2147483647 ] || { log "--seed must be a whole number in [0, 2147483647]"; exit 2; }
+  case "$1" in ''|*[!0-9]*) ;; *) [ "${#1}" -le 10 ] && [ "$1" -le 2147483647 ] && return 0 ;; esac
+  log "--seed must be a whole number in [0, 2147483647], not '$1'"; exit 2
 }
 
 # Installs the Debian packages that are missing; a second run installs nothing.

@@ -87,9 +87,7 @@ class LayerManager : public nodelet::Nodelet {
     yaw_ = ros_conv::yawOf(msg->pose.pose.orientation);
     if (!manager_) {
       manager_ = std::make_unique<planning::LayerManager>(config_, box_, z);
-      const ros::Time now = ros::Time::now();
-      const double t = coreTime(now);
-      publish(now, t, manager_->step({}, t));
+      step({});
     }
   }
   void onFrontiers(const FrontierArray::ConstPtr& msg) {
@@ -137,7 +135,6 @@ class LayerManager : public nodelet::Nodelet {
   void onTimer(const ros::TimerEvent&) {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!manager_) return;
-    const ros::Time now = ros::Time::now();
     planning::LayerInputs in;
     in.trigger = pending_trigger_;
     pending_trigger_ = false;
@@ -151,6 +148,12 @@ class LayerManager : public nodelet::Nodelet {
         if (f.average.z >= band.z_min && f.average.z <= band.z_max) in.band_frontiers.push_back(f.id);
       }
     }
+    step(in);
+  }
+
+  // One step of the core at the exploration's clock, and what it says published (under mutex_).
+  void step(const planning::LayerInputs& in) {
+    const ros::Time now = ros::Time::now();
     const double t = coreTime(now);
     publish(now, t, manager_->step(in, t));
   }
