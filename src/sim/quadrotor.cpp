@@ -1,6 +1,8 @@
 #include "go_feap/sim/quadrotor.h"
 
+#include <algorithm>
 #include <cmath>
+#include <stdexcept>
 #include <string>
 
 namespace go_feap::sim {
@@ -49,8 +51,37 @@ Eigen::Vector4d Quadrotor::rotorThrusts(const Wrench& w) const {
 }
 
 Wrench Quadrotor::saturate(const Wrench& wanted) const {
+  const double lo = params_.motor_min_thrust, hi = params_.motor_max_thrust;
+  const Eigen::Vector4d exact = rotorThrusts(wanted);
+  if ((exact.array() >= lo).all() && (exact.array() <= hi).all()) {
+    const Eigen::Vector4d u = allocation_ * exact;
+    return {u[0], u.tail<3>()};
+  }
+  // Past the motor limits the rotors give up the yaw moment first, then collective thrust, and keep the
+  // roll and pitch moments, which are what turn the vehicle back upright. Clamping each rotor on its own
+  // (as before) let a large collective demand, all four rotors at their maximum, leave no moment at all:
+  // after a reference step of many metres down the vehicle pitched on past the tilt limit and fell.
+  const Eigen::Vector4d roll_pitch = allocation_inv_ * Eigen::Vector4d(0.0, wanted.moment.x(), wanted.moment.y(), 0.0);
+  const Eigen::Vector4d yaw = allocation_inv_ * Eigen::Vector4d(0.0, 0.0, 0.0, wanted.moment.z());
+  Eigen::Vector4d rp = roll_pitch;
+  if (!rp.allFinite() || !yaw.allFinite() || !std::isfinite(wanted.thrust)) {
+    const Eigen::Vector4d f = exact.cwiseMax(lo).cwiseMin(hi);  // no order among NaNs: clamp and go
+    const Eigen::Vector4d u = allocation_ * (f.allFinite() ? f : Eigen::Vector4d::Constant(lo));
+    return {u[0], u.tail<3>()};
+  }
+  const double spread = rp.maxCoeff() - rp.minCoeff();
+  if (spread > hi - lo) rp *= (hi - lo) / spread;  // more roll/pitch than the rotors span: keep its direction
+  // The collective per rotor nearest the wanted one that leaves room for the roll/pitch part.
+  const double collective = std::max(std::min(0.25 * wanted.thrust, hi - rp.maxCoeff()), lo - rp.minCoeff());
+  double yaw_share = 1.0;  // the largest share of the yaw part that still fits every rotor
+  for (int i = 0; i < 4; ++i) {
+    const double base = collective + rp[i];
+    if (yaw[i] > 0.0) yaw_share = std::min(yaw_share, (hi - base) / yaw[i]);
+    if (yaw[i] < 0.0) yaw_share = std::min(yaw_share, (lo - base) / yaw[i]);
+  }
+  yaw_share = std::max(yaw_share, 0.0);
   const Eigen::Vector4d f =
-      rotorThrusts(wanted).cwiseMax(params_.motor_min_thrust).cwiseMin(params_.motor_max_thrust);
+      (Eigen::Vector4d::Constant(collective) + rp + yaw_share * yaw).cwiseMax(lo).cwiseMin(hi);  // round-off
   const Eigen::Vector4d u = allocation_ * f;
   return {u[0], u.tail<3>()};
 }
@@ -77,6 +108,8 @@ Quadrotor::Derivative Quadrotor::derivative(const QuadrotorState& s, const Wrenc
 }
 
 Wrench Quadrotor::step(const Wrench& wanted, double dt) {
+  // NaN or infinite made the state NaN, a negative step integrated backwards.
+  if (!(dt > 0.0 && std::isfinite(dt))) throw std::invalid_argument("Quadrotor::step: dt must be finite and > 0");
   const Wrench w = saturate(wanted);
   auto advance = [](const QuadrotorState& s, const Derivative& d, double h) {
     QuadrotorState n = s;

@@ -36,7 +36,13 @@ Wrench So3Controller::compute(const QuadrotorState& s, const PositionReference& 
   if (horizontal > limit) F.head<2>() *= limit / horizontal;
 
   const Eigen::Vector3d b3 = F.normalized();
-  const Eigen::Vector3d b1c(std::cos(ref.yaw), std::sin(ref.yaw), 0.0);
+  // The heading aimed at is at most a quarter turn from the present one: the attitude error's size is the
+  // sine of the angle, so a heading reference half a turn round (an error of pi) gave no yaw moment at all
+  // and the vehicle never turned; nearer pi it turned slowly. Within a quarter turn this is the reference.
+  const double yaw_now = std::atan2(R(1, 0), R(0, 0));
+  const double yaw_error = std::remainder(ref.yaw - yaw_now, 2.0 * M_PI);
+  const double yaw_aim = std::abs(yaw_error) > 0.5 * M_PI ? yaw_now + std::copysign(0.5 * M_PI, yaw_error) : ref.yaw;
+  const Eigen::Vector3d b1c(std::cos(yaw_aim), std::sin(yaw_aim), 0.0);
   Eigen::Vector3d b2 = b3.cross(b1c);
   if (b2.norm() < 1e-6) b2 = R.col(1);  // heading undefined when b1c is parallel to b3
   b2.normalize();

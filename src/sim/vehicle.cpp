@@ -1,6 +1,8 @@
 #include "go_feap/sim/vehicle.h"
 
 #include <algorithm>
+#include <cmath>
+#include <stdexcept>
 
 namespace go_feap::sim {
 
@@ -16,6 +18,9 @@ void SimulatedVehicle::reset(const Eigen::Vector3d& position, double yaw, double
 }
 
 void SimulatedVehicle::advance(double duration, const PositionReference& ref) {
+  // An infinite duration never ended; zero, negative or NaN advance nothing, as before.
+  if (std::isinf(duration) && duration > 0.0)
+    throw std::invalid_argument("SimulatedVehicle::advance: duration must be finite");
   const double h = 1.0 / quad_.params().dynamics_rate;
   double left = duration;
   while (left > 1e-12) {

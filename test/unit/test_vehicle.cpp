@@ -1,9 +1,12 @@
 // Geometric controller + rigid-body dynamics in closed loop.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <stdexcept>
+#include <string>
 #include <utility>
 
 #include "go_feap/sim/vehicle.h"
@@ -153,6 +156,101 @@ TEST(Quadrotor, SaturationClampsEachRotorAndFreeFallWithoutThrust) {
   // No thrust: free fall, z = -g t^2 / 2 (RK4 is exact for constant acceleration).
   for (int i = 0; i < 500; ++i) q.step(Wrench{0.0, Eigen::Vector3d::Zero()}, 0.002);
   EXPECT_NEAR(q.state().position.z(), -0.5 * 9.81 * 1.0, 1e-9);
+}
+
+// Past the motor limits the roll and pitch moments come first, then the collective thrust, then yaw.
+TEST(Quadrotor, SaturationKeepsRollAndPitchThenThrustThenYaw) {
+  Quadrotor q{QuadrotorParams()};
+  const QuadrotorParams& p = q.params();
+  auto within = [&](const Wrench& w) {
+    const Eigen::Vector4d f = q.rotorThrusts(w);
+    return f.maxCoeff() <= p.motor_max_thrust + 1e-9 && f.minCoeff() >= p.motor_min_thrust - 1e-9;
+  };
+  // All rotors asked for more than their maximum, and a pitch moment: the moment is kept whole, the thrust
+  // is what is left (each rotor clamped on its own would have given no moment at all).
+  const Wrench climb{4.0 * p.motor_max_thrust + 5.0, Eigen::Vector3d(0.0, 0.3, 0.0)};
+  const Wrench a = q.saturate(climb);
+  EXPECT_TRUE(within(a));
+  EXPECT_LT((a.moment - climb.moment).norm(), 1e-9);
+  EXPECT_LT(a.thrust, 4.0 * p.motor_max_thrust);
+  EXPECT_GT(a.thrust, 4.0 * p.motor_max_thrust - 4.0 * 0.3 / (p.arm_length / std::sqrt(2.0)));
+  // More roll and pitch than the rotors can span: the direction is kept, the size scaled down.
+  const Wrench tumble{10.0, Eigen::Vector3d(50.0, -25.0, 0.0)};
+  const Wrench b = q.saturate(tumble);
+  EXPECT_TRUE(within(b));
+  EXPECT_NEAR(b.moment.x() / b.moment.y(), -2.0, 1e-9);
+  EXPECT_NEAR(b.moment.z(), 0.0, 1e-9);
+  const Eigen::Vector4d fb = q.rotorThrusts(b);
+  EXPECT_NEAR(fb.maxCoeff() - fb.minCoeff(), p.motor_max_thrust - p.motor_min_thrust, 1e-9);
+  // Hover thrust and a yaw moment beyond what is left: the thrust is kept, the yaw moment reduced.
+  const Wrench spin{p.mass * p.gravity, Eigen::Vector3d(0.0, 0.0, 5.0)};
+  const Wrench c = q.saturate(spin);
+  EXPECT_TRUE(within(c));
+  EXPECT_NEAR(c.thrust, spin.thrust, 1e-9);
+  EXPECT_GT(c.moment.z(), 0.0);
+  EXPECT_LT(c.moment.z(), 5.0);
+  EXPECT_LT(c.moment.head<2>().norm(), 1e-9);
+  EXPECT_TRUE(!within(Wrench{c.thrust, Eigen::Vector3d(0.0, 0.0, c.moment.z() * 1.01)}))
+      << "the yaw moment could have been larger";
+}
+
+// A reference many metres away (a hold after a refused plan, a hand-sent goal): the vehicle stays
+// within its tilt limit and arrives, instead of pitching over with every rotor at its maximum.
+TEST(Vehicle, AReferenceManyMetresAwayIsReachedUpright) {
+  for (const Eigen::Vector3d& step : {Eigen::Vector3d(8, 0, -10), Eigen::Vector3d(15, 0, -10),
+                                      Eigen::Vector3d(0, 10, -10), Eigen::Vector3d(10, 0, 10)}) {
+    SimulatedVehicle v{QuadrotorParams(), So3ControllerConfig()};
+    const Eigen::Vector3d start(0, 0, 12);
+    v.reset(start, 0.0);
+    PositionReference ref;
+    ref.position = start + step;
+    double max_tilt = 0.0, lowest = start.z(), max_rotor = 0.0;
+    for (int i = 0; i < 1500; ++i) {  // 15 s
+      v.advance(kDt, ref);
+      const double cos_tilt = (v.state().attitude * Eigen::Vector3d::UnitZ()).z();
+      max_tilt = std::max(max_tilt, std::acos(std::clamp(cos_tilt, -1.0, 1.0)));
+      lowest = std::min(lowest, v.state().position.z());
+      max_rotor = std::max(max_rotor, v.lastRotorThrusts().maxCoeff());
+    }
+    const std::string what = "step (" + std::to_string(step.x()) + ", " + std::to_string(step.y()) + ", " +
+                             std::to_string(step.z()) + ")";
+    EXPECT_LT(max_tilt, So3ControllerConfig().max_tilt + 0.35) << what;
+    // Falling 10 m the vehicle dips below the new height before it stops (1.1-1.7 m with these gains); with
+    // each rotor clamped on its own it pitched over and fell 9-24 m below it.
+    EXPECT_GT(lowest, std::min(start.z(), ref.position.z()) - 2.0) << what;
+    EXPECT_LT((v.state().position - ref.position).norm(), 0.05) << what;
+    EXPECT_LE(max_rotor, QuadrotorParams().motor_max_thrust + 1e-9) << what;
+  }
+}
+
+// The heading error's moment vanishes at half a turn in the geometric controller; the vehicle turns anyway.
+TEST(Vehicle, AHeadingHalfATurnRoundIsReached) {
+  for (const double start_yaw : {0.3, 0.0, -2.0}) {
+    SimulatedVehicle v{QuadrotorParams(), So3ControllerConfig()};
+    v.reset(Eigen::Vector3d(0, 0, 1), start_yaw);
+    PositionReference ref;
+    ref.position = Eigen::Vector3d(0, 0, 1);
+    ref.yaw = start_yaw + M_PI;
+    const Flight r = fly(v, 5.0, [&](double) { return ref; });
+    EXPECT_LT(std::abs(wrap(r.yaw.back() - ref.yaw)), 0.02) << "from yaw " << start_yaw;
+    for (const auto& p : r.p) ASSERT_LT((p - ref.position).norm(), 0.05) << "from yaw " << start_yaw;
+  }
+}
+
+TEST(Quadrotor, AStepThatIsNotAPositiveFiniteTimeIsRefused) {
+  Quadrotor q{QuadrotorParams()};
+  const Wrench hover{q.params().mass * q.params().gravity, Eigen::Vector3d::Zero()};
+  for (const double dt : {0.0, -0.002, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()})
+    EXPECT_THROW(q.step(hover, dt), std::invalid_argument) << "dt " << dt;
+  EXPECT_TRUE(q.state().finite());
+  EXPECT_EQ(q.state().position, Eigen::Vector3d::Zero());
+  SimulatedVehicle v{QuadrotorParams(), So3ControllerConfig()};
+  v.reset(Eigen::Vector3d(0, 0, 1), 0.0);
+  PositionReference ref;
+  ref.position = Eigen::Vector3d(0, 0, 1);
+  EXPECT_THROW(v.advance(std::numeric_limits<double>::infinity(), ref), std::invalid_argument);
+  v.advance(-1.0, ref);  // nothing to advance
+  EXPECT_EQ(v.time(), 0.0);
 }
 
 TEST(Quadrotor, TorqueFreeSpinConservesAngularMomentum) {

@@ -52,8 +52,10 @@ class Quadrotor {
   const QuadrotorState& state() const { return state_; }
   void setState(const QuadrotorState& state) { state_ = state; }
 
-  /// Maps a wanted wrench to the four rotor thrusts, clamps each to the motor limits and
-  /// returns the wrench the rotors really produce.
+  /// Maps a wanted wrench to the four rotor thrusts and returns the wrench the rotors really produce:
+  /// the wanted one when every rotor is within the motor limits, else one that keeps the roll and pitch
+  /// moments (scaled down in proportion only when the rotors cannot span them), then as much of the
+  /// collective thrust, then of the yaw moment, as the limits leave.
   Wrench saturate(const Wrench& wanted) const;
   /// Rotor thrusts (N) for a wrench, before clamping (front-left, front-right, rear-right, rear-left).
   Eigen::Vector4d rotorThrusts(const Wrench& w) const;
