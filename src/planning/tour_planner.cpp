@@ -49,6 +49,7 @@ common::Result<GlobalTour> TourPlanner::plan(const std::vector<FrontierSummary>&
   for (auto it = cache_.begin(); it != cache_.end();)
     it = ids.count(it->first.first) && ids.count(it->first.second) ? std::next(it) : cache_.erase(it);
   std::size_t local_fallbacks = 0;
+  std::set<std::pair<unsigned, unsigned>> fallback_pairs;  // each pair counted once per call
   PathDistances d;
   std::vector<double> path_from_uav(frontiers.size(), -1.0);  // searched in this call (-1: not yet)
   d.from_uav_path = [&](std::size_t j) {
@@ -69,12 +70,12 @@ common::Result<GlobalTour> TourPlanner::plan(const std::vector<FrontierSummary>&
     const auto key = std::make_pair(frontiers[i].id, frontiers[j].id);
     auto it = cache_.find(key);
     if (it == cache_.end()) it = cache_.emplace(key, search(frontiers[i].average, frontiers[j].average, now)).first;
-    local_fallbacks += it->second.euclidean_fallback;
+    if (it->second.euclidean_fallback) fallback_pairs.insert(key);  // asked both ways round, and again for rests
     return it->second.metres;
   };
   auto tour = planTour(frontiers, d, config_, last_tour_);
   if (tour) last_tour_ = tour->frontier_ids;
-  if (fallbacks) *fallbacks = local_fallbacks;
+  if (fallbacks) *fallbacks = local_fallbacks + fallback_pairs.size();
   return tour;
 }
 

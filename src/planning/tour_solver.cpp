@@ -428,11 +428,22 @@ Status checkTourProblem(const Eigen::MatrixXd& cost, const std::vector<double>& 
   for (Eigen::Index k = 0; k < n; ++k)
     if (!(xi[k] >= 0.0 && std::isfinite(xi[k])))
       return Status::Error("tour: xi of frontier " + std::to_string(k + 1) + " must be finite and >= 0");
+  double max_cost = 0.0, sum_xi = 0.0;
   for (Eigen::Index i = 0; i <= n; ++i)
-    for (Eigen::Index j = 1; j <= n; ++j)
+    for (Eigen::Index j = 1; j <= n; ++j) {
       if (i != j && !(cost(i, j) >= 0.0 && std::isfinite(cost(i, j))))
         return Status::Error("tour: cost(" + std::to_string(i) + ", " + std::to_string(j) +
                              ") must be finite and >= 0");
+      if (i != j) max_cost = std::max(max_cost, cost(i, j));
+    }
+  for (double x : xi) sum_xi += x;
+  // Every tour's cost is at most N legs of the largest cost at the largest weight. Where that bound is not
+  // finite (travel times near 1e308 s, lambda xi near 1e300) the solvers' sums overflowed: every tour cost
+  // infinity, the exact solver followed no parent and the heuristic kept no tour.
+  const double bound = static_cast<double>(n) * max_cost * (1.0 + lambda * sum_xi);
+  if (!(bound <= 1e300))
+    return Status::Error("tour: costs, xi and lambda are too large: a tour's cost could overflow (bound " +
+                         std::to_string(bound) + ")");
   return Status::Ok();
 }
 

@@ -1094,6 +1094,33 @@ TEST(TourPlanner, SearchesEachPairOnceAndFindsTheShortestOpenTour) {
   EXPECT_EQ(planner.cacheSize(), (n - 1) * (n - 2) / 2);
 }
 
+// Distances that fell back to a straight line are counted once each: the tour solver asks for a pair
+// both ways round and again when pricing rests, and each ask used to count.
+TEST(TourPlanner, CountsEachEuclideanFallbackOnce) {
+  World world(Index3(60, 40, 10));
+  world.fill(VoxelState::kFree);
+  world.set(Index3(30, 0, 0), Index3(31, 39, 9), VoxelState::kOccupied);  // no gap: the far side is cut off
+  const Astar astar(world.occupancy(), world.esdf(), astarConfig(0.2, true));
+  go_feap::planning::GlobalPlannerConfig config;
+  config.s_near = 100.0;
+  go_feap::planning::TourPlanner planner(config, astar);
+  std::vector<go_feap::planning::FrontierSummary> frontiers;
+  const std::vector<Vec3> at{Vec3(1.0, 1.0, 0.5), Vec3(2.5, 3.0, 0.5), Vec3(5.0, 2.0, 0.5)};  // the last cut off
+  for (std::size_t k = 0; k < at.size(); ++k) {
+    go_feap::planning::FrontierSummary f;
+    f.id = static_cast<unsigned>(k + 1);
+    f.average = at[k];
+    f.cell_count = 100;
+    frontiers.push_back(f);
+  }
+  for (int round = 0; round < 2; ++round) {  // the second round reads every pair from the cache
+    std::size_t fallbacks = 0;
+    ASSERT_TRUE(planner.plan(frontiers, Vec3(2.0, 0.5, 0.5), 0.0, &fallbacks));
+    // From the UAV to the cut-off frontier, and from each of the other two to it.
+    EXPECT_EQ(fallbacks, 3u) << "round " << round;
+  }
+}
+
 // Candidates topped up from beyond s_near are chosen by straight-line distance, but their legs from the
 // UAV are priced by path: a frontier 2 m away behind the wall (about 6 m by path through the gap) used to
 // be priced at 2 m and visited first, ahead of one 2.9 m away on the UAV's side.

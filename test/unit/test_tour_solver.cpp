@@ -229,6 +229,12 @@ TEST(TourProblem, InvalidInputIsRefusedWithAReason) {
   bad_cost(2, 1) = std::numeric_limits<double>::infinity();
   EXPECT_NE(message(solveHeuristic(bad_cost, p.xi, 1.0)).find("cost(2, 1)"), std::string::npos);
 
+  // Finite, but so large that a tour's cost overflows: refused, not an invalid tour or an exception.
+  const Eigen::MatrixXd huge = Eigen::MatrixXd::Constant(3, 3, 1e308);
+  EXPECT_NE(message(solveExact(huge, {0.0, 0.0}, 0.0)).find("overflow"), std::string::npos);
+  EXPECT_NE(message(solveHeuristic(huge, {0.0, 0.0}, 0.0)).find("overflow"), std::string::npos);
+  EXPECT_NE(message(solveExact(p.cost, {1e300, 1.0, 1.0, 1.0}, 1e10)).find("overflow"), std::string::npos);
+
   // No frontier: an empty, valid tour.
   const TourResult empty = solve(Eigen::MatrixXd::Zero(1, 1), {}, 1.0, 12);
   EXPECT_TRUE(empty.status.ok());
