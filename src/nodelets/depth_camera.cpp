@@ -49,6 +49,10 @@ class DepthCamera : public nodelet::Nodelet {
     ros_params::requireOrThrow(encoding_ == "32FC1" || encoding_ == "16UC1", me,
                                "parameter '" + p.fullName("depth_camera/encoding") + "' must be 32FC1 or 16UC1");
     ros_params::requireOrThrow(c.validate().ok(), me, c.validate().message());
+    // 16 bits of millimetres end at 65.535 m: a return beyond would be written as 65535 mm, a wall that is not there.
+    ros_params::requireOrThrow(encoding_ != "16UC1" || c.max_range <= 65.535, me,
+                               "parameter '" + p.fullName("depth_camera/max_range") +
+                                   "' must be <= 65.535 m with encoding 16UC1 (millimetres in 16 bits)");
     ros_params::requireOrThrow(rate_ > 0.0 && rate_ <= 100.0, me,
                                "parameter '" + p.fullName("depth_camera/rate") + "' must be in (0, 100] Hz");
     ros_params::requireOrThrow(common::isRigidTransform(T_B_C), me, "parameter '" + p.fullName("depth_camera/T_B_C") + "' must be a rigid transform");
