@@ -33,7 +33,21 @@
 namespace go_feap {
 
 class MetricsRecorder : public nodelet::Nodelet {
+ public:
+  // A run that began and did not finish (Ctrl-C, a launch that ended, a replayed bag's end, the hang
+  // guard) still writes its figures so far, with finish_reason "stopped": before, output_dir stayed empty.
+  ~MetricsRecorder() override {
+    // No callback runs once these are shut down (a running one is waited for), so none races the write.
+    timer_.stop();
+    for (ros::Subscriber* sub : {&handle_sub_, &odom_sub_, &status_sub_, &compute_sub_}) sub->shutdown();
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (started_ && !finished_)
+      finishRun(kStopped, status_ ? status_->elapsed : 0.0, status_ ? static_cast<int>(status_->blacklisted_frontiers) : 0);
+  }
+
  private:
+  static constexpr const char* kStopped = "stopped";
+
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
     ros::NodeHandle& pnh = getPrivateNodeHandle();
@@ -139,7 +153,10 @@ class MetricsRecorder : public nodelet::Nodelet {
     }
     std::lock_guard<std::mutex> lock(mutex_);
     status_ = msg;
-    if (msg->state == ExplorationStatus::FINISHED && !finished_ && started_) finishRun(msg);
+    if (msg->state == ExplorationStatus::FINISHED && !finished_ && started_) {
+      finishRun(msg->finish_reason, msg->elapsed, static_cast<int>(msg->blacklisted_frontiers));
+      if (shutdown_on_finish_) ros::requestShutdown();
+    }
     // Only whether the run has begun: its time is the layer manager's elapsed. (This was the clock minus
     // elapsed as a ros::Time, which threw, ending the whole nodelet manager, for an elapsed beyond the
     // clock: a status from a tool or another run early in a simulation.)
@@ -241,13 +258,14 @@ class MetricsRecorder : public nodelet::Nodelet {
     text_pub_.publish(text);
   }
 
-  void finishRun(const ExplorationStatus::ConstPtr& msg) {
+  /// Takes the last sample, fills the summary and writes the results (caller holds mutex_).
+  void finishRun(const std::string& reason, double elapsed, int blacklisted) {
     finished_ = true;
     addSample();
     metrics::Summary& s = recorder_.summary();
-    s.finish_reason = msg->finish_reason;
-    s.blacklisted_frontiers = static_cast<int>(msg->blacklisted_frontiers);
-    s.exploration_time_s = msg->elapsed;
+    s.finish_reason = reason;
+    s.blacklisted_frontiers = blacklisted;
+    s.exploration_time_s = elapsed;
     s.flight_distance_m = distance_;
     s.coverage = last_sample_.coverage;
     s.wall_time_s = (ros::WallTime::now() - wall_start_).toSec();
@@ -264,7 +282,6 @@ class MetricsRecorder : public nodelet::Nodelet {
         NODELET_ERROR_STREAM(getName() << ": " << st.message());
     }
     NODELET_INFO_STREAM(getName() << ": [summary] " << metrics::summaryJson(s));
-    if (shutdown_on_finish_) ros::requestShutdown();
   }
 
   double sample_rate_ = 2.0, collision_distance_ = 0.1, progress_period_ = 5.0, max_odom_step_ = 1.0;

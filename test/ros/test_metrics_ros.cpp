@@ -8,6 +8,8 @@
 // global, local and trajectory planner, on a probe mapper's map of one synthetic frame, must plan again.
 #include <gtest/gtest.h>
 #include <nav_msgs/Odometry.h>
+#include <nodelet/NodeletLoad.h>
+#include <nodelet/NodeletUnload.h>
 #include <nav_msgs/Path.h>
 #include <ros/ros.h>
 #include <rosgraph_msgs/Clock.h>
@@ -547,6 +549,56 @@ TEST(TrajectoryPlanner, PlansAgainFromTheOdometryWhenTheClockGoesBack) {
   ASSERT_TRUE(first_since) << trajectories.size() << " trajectories in 3 s after the clock went back 80 s, none since";
   EXPECT_LT((startOf(*first_since) - at_odometry).norm(), 0.1)
       << "starts at " << startOf(*first_since).transpose() << ", not at the odometry";
+}
+
+// A run that began and is stopped before it finishes (the launch ends: here the recorder is unloaded)
+// still writes what it measured, with finish_reason "stopped": output_dir used to stay empty (replay.launch
+// at the bag's end, Ctrl-C in a simulated run). A second recorder with the first's parameters and a
+// folder of its own, on topics of its own.
+TEST(MetricsRecorder, ARunStoppedBeforeItFinishesWritesItsFiguresSoFar) {
+  ros::NodeHandle nh;
+  XmlRpc::XmlRpcValue params;
+  ASSERT_TRUE(ros::param::get("/metrics_recorder", params));
+  const std::string output_dir = "/tmp/go_feap_metrics_stop_test_" + std::to_string(::getpid());
+  std::filesystem::remove_all(output_dir);
+  params["metrics"]["output_dir"] = output_dir;
+  ros::param::set("/stop_recorder", params);
+  auto status_pub = nh.advertise<go_feap::ExplorationStatus>("stop/status", 5, /*latch=*/true);
+  auto odom_pub = nh.advertise<nav_msgs::Odometry>("stop/odom", 20);
+  nodelet::NodeletLoad load;
+  load.request.name = "/stop_recorder";
+  load.request.type = "go_feap/MetricsRecorder";
+  for (const char* topic : {"status", "odom", "compute_time", "map_handle", "status_text", "coverage", "flown_path"}) {
+    load.request.remap_source_args.push_back(std::string("/") + topic);
+    load.request.remap_target_args.push_back(std::string("/stop/") + topic);
+  }
+  ASSERT_TRUE(ros::service::call("go_feap_manager/load_nodelet", load) && load.response.success);
+  ASSERT_TRUE(spinUntil([&] { return status_pub.getNumSubscribers() > 0 && odom_pub.getNumSubscribers() > 0; }, 20.0));
+  status_pub.publish(status(go_feap::ExplorationStatus::EXPLORE, "EXPLORE", 7.5));
+  spinUntil([] { return false; }, 0.5);
+  nav_msgs::Odometry odom;
+  odom.header.frame_id = "world";
+  odom.pose.pose.orientation.w = 1.0;
+  for (double x : {0.0, 0.25, 0.5}) {
+    odom.pose.pose.position.x = x;
+    odom.pose.pose.position.z = 1.0;
+    odom_pub.publish(odom);
+    spinUntil([] { return false; }, 0.2);
+  }
+  EXPECT_FALSE(std::filesystem::exists(output_dir + "/summary.json")) << "written before the run ended";
+  nodelet::NodeletUnload unload;
+  unload.request.name = "/stop_recorder";
+  ASSERT_TRUE(ros::service::call("go_feap_manager/unload_nodelet", unload) && unload.response.success);
+  const std::string summary_path = output_dir + "/summary.json";
+  ASSERT_TRUE(spinUntil([&] { return std::filesystem::exists(summary_path); }, 10.0))
+      << "no " << summary_path << " after the recorder was unloaded mid-run";
+  const nlohmann::json summary = nlohmann::json::parse(std::ifstream(summary_path));
+  EXPECT_EQ(summary["finish_reason"], "stopped");
+  EXPECT_DOUBLE_EQ(summary["exploration_time_s"].get<double>(), 7.5);
+  EXPECT_NEAR(summary["flight_distance_m"].get<double>(), 0.5, 1e-9);
+  for (const char* f : {"metrics.csv", "coverage.png"})
+    EXPECT_TRUE(std::filesystem::exists(output_dir + "/" + f)) << f;
+  std::filesystem::remove_all(output_dir);
 }
 
 }  // namespace

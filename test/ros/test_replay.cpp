@@ -1,16 +1,27 @@
 // Record and replay, through the launch files a user runs: record_flight.launch records a short
 // simulated maze flight with the onboard topic names (16UC1 depth, camera_info, odometry, TF);
-// replay.launch plays it through the mapper and planners and saves the map. The map must hold the
-// walls the flight saw: many occupied voxels, nearly all of them ground-truth obstacles. A bag
-// without depth is refused with the missing topic named. Each launch gets its own ROS master.
+// replay.launch plays it through the mapper and planners and saves the map. The recording must be a
+// flight (the vehicle moved), the map must hold the walls the flight saw (many occupied voxels, nearly
+// all of them ground-truth obstacles), and the recorder's files must be written when the bag ends. A bag
+// without depth, or with topics of the wrong type, is refused with the topics named. Each launch gets
+// its own ROS master.
 #include <gtest/gtest.h>
 #include <octomap/OcTree.h>
 #include <rosbag/bag.h>
+#include <rosbag/view.h>
+#include <geometry_msgs/PoseStamped.h>
 #include <nav_msgs/Odometry.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/CompressedImage.h>
+#include <tf2_msgs/TFMessage.h>
 
+#include <Eigen/Core>
+
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <string>
 
@@ -67,7 +78,7 @@ TEST_F(Replay, TheMapperCastsZeroDepthFreeOnlyForSixteenBitSimulation) {
   const std::string recording = dumped("record_flight.launch bag:=" + (dir_ / "x.bag").string());
   EXPECT_NE(recording.find(key + "true"), std::string::npos) << recording;
   for (const std::string& args : {std::string("sim_exploration.launch"), std::string("maze.launch"),
-                                  std::string("onboard.launch")}) {
+                                  std::string("onboard.launch"), "replay.launch bag:=" + (dir_ / "x.bag").string()}) {
     const std::string params = dumped(args);
     EXPECT_NE(params.find(key + "false"), std::string::npos) << args << ":\n" << params;
   }
@@ -77,9 +88,35 @@ TEST_F(Replay, RecordedFlightRebuildsTheWallsItSaw) {
   const std::string bag = (dir_ / "flight.bag").string(), bt = (dir_ / "replay.bt").string();
   const std::string rec = launch(11821, "record_flight.launch bag:=" + bag + " duration:=12", 240);
   ASSERT_TRUE(fs::exists(bag)) << rec.substr(rec.size() > 3000 ? rec.size() - 3000 : 0);
-  const std::string rep = launch(11822, "replay.launch bag:=" + bag + " save_map:=" + bt, 240);
+  {
+    // A flight, not a hover: the chain heard the simulator under the onboard names and flew. (Remapped
+    // around the include, the names were overridden by each node's own remap, and the bag held the
+    // vehicle hovering at its start.)
+    rosbag::Bag in(bag, rosbag::bagmode::Read);
+    std::optional<Eigen::Vector3d> first;
+    double farthest = 0.0;
+    for (const rosbag::MessageInstance& m : rosbag::View(in, rosbag::TopicQuery("/vins_estimator/odometry"))) {
+      const nav_msgs::Odometry::ConstPtr odom = m.instantiate<nav_msgs::Odometry>();
+      ASSERT_TRUE(odom);
+      const auto& q = odom->pose.pose.position;
+      const Eigen::Vector3d p(q.x, q.y, q.z);
+      if (!first) first = p;
+      farthest = std::max(farthest, (p - *first).norm());
+    }
+    ASSERT_TRUE(first) << "no odometry in the bag";
+    EXPECT_GT(farthest, 1.0) << "the recorded vehicle stayed within 1 m of its start";
+  }
+  const fs::path results = dir_ / "replay_results";
+  const std::string rep = launch(11822, "replay.launch bag:=" + bag + " save_map:=" + bt + " invalid_as_free:=true output_dir:=" + results.string(), 240);
   ASSERT_NE(rep.find("replay: save_map: wrote"), std::string::npos) << rep.substr(rep.size() > 3000 ? rep.size() - 3000 : 0);
   ASSERT_TRUE(fs::exists(bt));
+  // The replayed exploration did not finish within 12 s of flight: the recorder wrote what it had when the
+  // launch ended with the bag (it used to write nothing).
+  std::ifstream summary(results / "summary.json");
+  ASSERT_TRUE(summary.good()) << "no summary.json in output_dir after the replay";
+  std::stringstream summary_text;
+  summary_text << summary.rdbuf();
+  EXPECT_NE(summary_text.str().find("\"finish_reason\": \"stopped\""), std::string::npos) << summary_text.str();
 
   auto scene = go_feap::world::makeScene("maze", 0);
   ASSERT_TRUE(scene) << scene.message();
@@ -121,6 +158,36 @@ TEST_F(Replay, ABagWithoutDepthIsRefusedNamingTheMissingTopic) {
   }
   const std::string rep = launch(11823, "replay.launch bag:=" + bag, 120);
   EXPECT_NE(rep.find("lacks the topic(s) /camera/depth/image_rect_raw, /camera/depth/camera_info"), std::string::npos)
+      << rep.substr(rep.size() > 3000 ? rep.size() - 3000 : 0);
+}
+
+// Every topic is there, but the depth is a CompressedImage and the odometry a PoseStamped: rosbag play
+// would send them to no subscriber, and the replay end with an empty map saved as a success.
+TEST_F(Replay, ABagWithTopicsOfTheWrongTypeIsRefusedNamingThem) {
+  const std::string bag = (dir_ / "wrong_types.bag").string();
+  {
+    rosbag::Bag out(bag, rosbag::bagmode::Write);
+    for (int i = 1; i <= 5; ++i) {
+      const ros::Time t(i * 0.1);
+      sensor_msgs::CompressedImage depth;
+      depth.header.stamp = t;
+      out.write("/camera/depth/image_rect_raw", t, depth);
+      sensor_msgs::CameraInfo info;
+      info.header.stamp = t;
+      out.write("/camera/depth/camera_info", t, info);
+      geometry_msgs::PoseStamped pose;
+      pose.header.stamp = t;
+      pose.pose.orientation.w = 1.0;
+      out.write("/vins_estimator/odometry", t, pose);
+      tf2_msgs::TFMessage tf;
+      out.write("/tf", t, tf);
+      out.write("/tf_static", t, tf);
+    }
+  }
+  const std::string rep = launch(11824, "replay.launch bag:=" + bag, 120);
+  EXPECT_NE(rep.find("has topics of the wrong type: /camera/depth/image_rect_raw is sensor_msgs/CompressedImage, not "
+                     "sensor_msgs/Image; /vins_estimator/odometry is geometry_msgs/PoseStamped, not nav_msgs/Odometry"),
+            std::string::npos)
       << rep.substr(rep.size() > 3000 ? rep.size() - 3000 : 0);
 }
 
