@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -260,6 +261,46 @@ common::Status checkPcdSize(pcl::PCDReader& reader, const std::string& path) {
   return common::Status::Ok();
 }
 
+// Bytes of a PCLPointField datatype that holds a number, 0 for any other (BOOL, or a value no type has).
+std::size_t fieldBytes(std::uint8_t datatype) {
+  switch (datatype) {
+    case pcl::PCLPointField::INT8:
+    case pcl::PCLPointField::UINT8: return 1;
+    case pcl::PCLPointField::INT16:
+    case pcl::PCLPointField::UINT16: return 2;
+    case pcl::PCLPointField::INT32:
+    case pcl::PCLPointField::UINT32:
+    case pcl::PCLPointField::FLOAT32: return 4;
+    case pcl::PCLPointField::INT64:
+    case pcl::PCLPointField::UINT64:
+    case pcl::PCLPointField::FLOAT64: return 8;
+    default: return 0;
+  }
+}
+
+template <typename T>
+double valueAt(const std::uint8_t* at) {
+  T v;
+  std::memcpy(&v, at, sizeof(v));  // the blob's points need not be aligned for T
+  return static_cast<double>(v);
+}
+
+// The number of a type fieldBytes() accepts, stored at `at` (host byte order, as PCL's readers leave it).
+double readNumber(const std::uint8_t* at, std::uint8_t datatype) {
+  switch (datatype) {
+    case pcl::PCLPointField::INT8: return valueAt<std::int8_t>(at);
+    case pcl::PCLPointField::UINT8: return valueAt<std::uint8_t>(at);
+    case pcl::PCLPointField::INT16: return valueAt<std::int16_t>(at);
+    case pcl::PCLPointField::UINT16: return valueAt<std::uint16_t>(at);
+    case pcl::PCLPointField::INT32: return valueAt<std::int32_t>(at);
+    case pcl::PCLPointField::UINT32: return valueAt<std::uint32_t>(at);
+    case pcl::PCLPointField::INT64: return valueAt<std::int64_t>(at);
+    case pcl::PCLPointField::UINT64: return valueAt<std::uint64_t>(at);
+    case pcl::PCLPointField::FLOAT32: return valueAt<float>(at);
+    default: return valueAt<double>(at);
+  }
+}
+
 }  // namespace
 
 common::Result<std::vector<Vec3>> loadPointCloud(const std::string& path) {
@@ -300,33 +341,42 @@ common::Result<std::vector<Vec3>> loadPointCloud(const std::string& path) {
     return R::Error(path + ": corrupt " + kind + " file (" + e.what() + ")");
   }
   if (rc < 0) return R::Error(path + ": corrupt or truncated " + kind + " file (the PCL reader refused it)");
-  bool has_x = false, has_y = false, has_z = false;
-  for (const auto& f : blob.fields) {
-    has_x |= f.name == "x";
-    has_y |= f.name == "y";
-    has_z |= f.name == "z";
+  // x, y and z are read at their offsets in their own types: converting to PointXYZ matched the names only,
+  // and PCL left a field of another type (float64, an integer) at 0, so every point became (0, 0, 0).
+  const char* const axes[3] = {"x", "y", "z"};
+  const pcl::PCLPointField* xyz[3] = {nullptr, nullptr, nullptr};
+  for (const auto& f : blob.fields)
+    for (int a = 0; a < 3; ++a)
+      if (f.name == axes[a]) {
+        if (xyz[a]) return R::Error(path + ": " + kind + " file has the field '" + f.name + "' twice");
+        xyz[a] = &f;
+      }
+  for (int a = 0; a < 3; ++a) {
+    if (!xyz[a]) return R::Error(path + ": " + kind + " file has no x, y, z fields (no '" + axes[a] + "')");
+    const pcl::PCLPointField& f = *xyz[a];
+    const std::string field = path + ": " + kind + " file's field '" + f.name + "'";
+    if (f.count != 1)
+      return R::Error(field + " has COUNT " + std::to_string(f.count) + " (a coordinate must be one value)");
+    const std::size_t bytes = fieldBytes(f.datatype);
+    if (bytes == 0) return R::Error(field + " has type " + std::to_string(f.datatype) + ", which is no number");
+    if (f.offset + bytes > blob.point_step)
+      return R::Error(field + " lies past the end of a point (corrupt " + kind + " file)");
   }
-  if (!(has_x && has_y && has_z)) return R::Error(path + ": " + kind + " file has no x, y, z fields");
-  const std::size_t declared = static_cast<std::size_t>(blob.width) * blob.height;
-  if (blob.data.size() < declared * blob.point_step)
-    return R::Error(path + ": truncated " + kind + " file (header declares " + std::to_string(declared) +
+  const std::size_t width = blob.width, height = blob.height;
+  if (width * height == 0) return R::Error(path + ": the cloud is empty");
+  if (blob.row_step < width * blob.point_step || blob.data.size() < (height - 1) * blob.row_step + width * blob.point_step)
+    return R::Error(path + ": truncated " + kind + " file (header declares " + std::to_string(width * height) +
                     " points, data holds fewer)");
-
-  pcl::PointCloud<pcl::PointXYZ> cloud;
-  try {
-    pcl::fromPCLPointCloud2(blob, cloud);
-  } catch (const std::exception& e) {
-    return R::Error(path + ": corrupt " + kind + " file (" + e.what() + ")");
-  }
-  if (cloud.empty()) return R::Error(path + ": the cloud is empty");
   std::vector<Vec3> points;
-  points.reserve(cloud.size());
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    const auto& p = cloud[i];
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
-      return R::Error(path + ": point " + std::to_string(i) + " is NaN or Inf");
-    points.emplace_back(p.x, p.y, p.z);
-  }
+  points.reserve(width * height);
+  for (std::size_t r = 0; r < height; ++r)
+    for (std::size_t c = 0; c < width; ++c) {
+      const std::uint8_t* point = blob.data.data() + r * blob.row_step + c * blob.point_step;
+      Vec3 p;
+      for (int a = 0; a < 3; ++a) p[a] = readNumber(point + xyz[a]->offset, xyz[a]->datatype);
+      if (!p.allFinite()) return R::Error(path + ": point " + std::to_string(points.size()) + " is NaN or Inf");
+      points.push_back(p);
+    }
   return points;
 }
 

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <sstream>
 
 #include "go_feap/world/generators.h"
 #include "go_feap/world/scene_files.h"
@@ -772,4 +773,101 @@ TEST(BadInput, StartInsideObstacleOrOutsideBox) {
   auto b = loadSceneYaml(d.file("out.yaml"));
   ASSERT_FALSE(b);
   expectErrorMentions(b.message(), {"out.yaml", "outside the exploration box"});
+}
+
+namespace {
+
+struct PcdField {
+  std::string name;
+  int size;
+  char type;
+  int count;
+};
+
+// A PCD header declaring `fields` and `points` points (one row), with the word `data` after DATA.
+std::string pcdHeader(const std::vector<PcdField>& fields, int points, const std::string& data) {
+  std::ostringstream os;
+  os << "# .PCD v0.7\nVERSION 0.7\nFIELDS";
+  for (const auto& f : fields) os << " " << f.name;
+  os << "\nSIZE";
+  for (const auto& f : fields) os << " " << f.size;
+  os << "\nTYPE";
+  for (const auto& f : fields) os << " " << f.type;
+  os << "\nCOUNT";
+  for (const auto& f : fields) os << " " << f.count;
+  os << "\nWIDTH " << points << "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " << points << "\nDATA " << data << "\n";
+  return os.str();
+}
+
+template <typename T>
+void appendBytes(std::string& s, T v) {
+  s.append(reinterpret_cast<const char*>(&v), sizeof(v));
+}
+
+void expectPoints(const std::string& path, const std::vector<Vec3>& want) {
+  auto r = loadPointCloud(path);
+  ASSERT_TRUE(r) << r.message();
+  ASSERT_EQ(r->size(), want.size()) << path;
+  for (std::size_t i = 0; i < want.size(); ++i)
+    EXPECT_LT(((*r)[i] - want[i]).norm(), 1e-12) << path << " point " << i << ": " << (*r)[i].transpose();
+}
+
+}  // namespace
+
+// x, y, z stored as float64 or an integer type are read at their offsets in their own type: PCL's
+// conversion to PointXYZ, which only matched the names, made every such point (0, 0, 0) without a word.
+TEST(PointCloud, XyzOfEveryNumericTypeKeepTheirValues) {
+  TempDir d;
+  // float64 behind another field (x is not at offset 0), with values a float32 cannot hold.
+  const std::vector<Vec3> fine = {Vec3(1.000000123456789, -2.5, 0.1), Vec3(-7.123456789012, 3.0, 12.5)};
+  const std::vector<PcdField> f64 = {{"intensity", 4, 'F', 1}, {"x", 8, 'F', 1}, {"y", 8, 'F', 1}, {"z", 8, 'F', 1}};
+  std::ostringstream ascii;
+  ascii.precision(17);
+  for (const Vec3& p : fine) ascii << "0.5 " << p.x() << " " << p.y() << " " << p.z() << "\n";
+  writeText(d.file("f64a.pcd"), pcdHeader(f64, 2, "ascii") + ascii.str());
+  expectPoints(d.file("f64a.pcd"), fine);
+  std::string bin = pcdHeader(f64, 2, "binary");
+  for (const Vec3& p : fine) {
+    appendBytes(bin, 0.5f);
+    for (int a = 0; a < 3; ++a) appendBytes(bin, p[a]);
+  }
+  writeText(d.file("f64b.pcd"), bin);
+  expectPoints(d.file("f64b.pcd"), fine);
+  // Integer types, mixed: int32 x, int16 y, uint8 z; and int8, uint16, uint32.
+  const std::vector<Vec3> whole = {Vec3(-7, -300, 200), Vec3(100000, 12, 0)};
+  writeText(d.file("int.pcd"), pcdHeader({{"x", 4, 'I', 1}, {"y", 2, 'I', 1}, {"z", 1, 'U', 1}}, 2, "ascii") +
+                                   "-7 -300 200\n100000 12 0\n");
+  expectPoints(d.file("int.pcd"), whole);
+  std::string ibin = pcdHeader({{"x", 1, 'I', 1}, {"y", 2, 'U', 1}, {"z", 4, 'U', 1}}, 2, "binary");
+  appendBytes(ibin, std::int8_t(-7)), appendBytes(ibin, std::uint16_t(65000)), appendBytes(ibin, std::uint32_t(4000000000u));
+  appendBytes(ibin, std::int8_t(5)), appendBytes(ibin, std::uint16_t(0)), appendBytes(ibin, std::uint32_t(1));
+  writeText(d.file("int.bin.pcd"), ibin);
+  expectPoints(d.file("int.bin.pcd"), {Vec3(-7, 65000, 4000000000.0), Vec3(5, 0, 1)});
+  // PLY: double and uchar properties, ASCII and binary.
+  const std::string ply_head = "ply\nformat ascii 1.0\nelement vertex 2\n";
+  writeText(d.file("dbl.ply"), ply_head + "property double x\nproperty double y\nproperty double z\nend_header\n"
+                                   "1.000000123456789 -2.5 0.1\n-7.123456789012 3 12.5\n");
+  expectPoints(d.file("dbl.ply"), fine);
+  writeText(d.file("uchar.ply"), ply_head + "property uchar x\nproperty uchar y\nproperty uchar z\nend_header\n"
+                                            "1 2 3\n250 0 7\n");
+  expectPoints(d.file("uchar.ply"), {Vec3(1, 2, 3), Vec3(250, 0, 7)});
+  std::string pbin = "ply\nformat binary_little_endian 1.0\nelement vertex 2\nproperty float intensity\n"
+                     "property double x\nproperty double y\nproperty double z\nend_header\n";
+  for (const Vec3& p : fine) {
+    appendBytes(pbin, 0.5f);
+    for (int a = 0; a < 3; ++a) appendBytes(pbin, p[a]);
+  }
+  writeText(d.file("dbl.bin.ply"), pbin);
+  expectPoints(d.file("dbl.bin.ply"), fine);
+  // A coordinate of several values is refused, naming the field.
+  writeText(d.file("count2.pcd"), pcdHeader({{"x", 4, 'F', 2}, {"y", 4, 'F', 1}, {"z", 4, 'F', 1}}, 1, "ascii") +
+                                      "1 1 1 1\n");
+  auto c = loadPointCloud(d.file("count2.pcd"));
+  ASSERT_FALSE(c) << c->size() << " points, the first " << c->front().transpose();
+  expectErrorMentions(c.message(), {"count2.pcd", "field 'x'", "COUNT 2"});
+  // NaN in a float64 field is still refused.
+  writeText(d.file("nan64.pcd"), pcdHeader(f64, 1, "ascii") + "0 1 nan 2\n");
+  auto n = loadPointCloud(d.file("nan64.pcd"));
+  ASSERT_FALSE(n);
+  expectErrorMentions(n.message(), {"nan64.pcd", "NaN"});
 }
