@@ -5,6 +5,7 @@
 #include <pcl/point_types.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -41,7 +42,9 @@ struct CloudHeader {
   double values = 0.0;     ///< values per point
   double room = 0.0;       ///< bytes after the header
   std::streamoff data_start = -1;  ///< where the data begins (-1: unknown)
-  std::string data;        ///< PCD: ascii, binary, binary_compressed; PLY: ascii, binary_*
+  std::string data;        ///< PCD: ascii, binary, binary_compressed (as PCL reads data_word); PLY: ascii, binary_*
+  std::string data_word;   ///< PCD: the word after DATA, as written
+  bool data_line = false;  ///< PCD: a DATA line came
   bool fields = false;     ///< PCD: a FIELDS line came before DATA
   std::vector<PlyElement> elements;  ///< PLY
 };
@@ -56,6 +59,23 @@ double plyTypeBytes(const std::string& type) {
     if (type == t) return 4.0;
   if (type == "double" || type == "float64") return 8.0;
   return 0.0;
+}
+
+// How PCL's PCDReader reads the word after DATA: by its prefix, binary_compressed or binary (lower case), and
+// every other word as ascii ("ASCII" and "foo" alike).
+std::string pclDataKind(const std::string& word) {
+  if (word.rfind("binary_compressed", 0) == 0) return "binary_compressed";
+  if (word.rfind("binary", 0) == 0) return "binary";
+  return "ascii";
+}
+
+// A DATA word that is none of PCL's three (ascii in any case, binary, binary_compressed): PCL would read
+// "foo" or "Binary" data as ASCII text and "binary_lzf" as binary. "" for a known word.
+std::string pcdDataWordProblem(const std::string& path, const CloudHeader& h) {
+  std::string lower = h.data_word;
+  for (auto& ch : lower) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  if (lower == "ascii" || h.data_word == "binary" || h.data_word == "binary_compressed") return "";
+  return path + ": corrupt PCD file (DATA '" + h.data_word + "': expected ascii, binary or binary_compressed)";
 }
 
 CloudHeader readCloudHeader(const std::string& path, const std::string& kind) {
@@ -84,7 +104,9 @@ CloudHeader readCloudHeader(const std::string& path, const std::string& kind) {
       else if (key == "HEIGHT") words >> height;
       else if (key == "POINTS") words >> h.points;
       else if (key == "DATA") {
-        words >> h.data;
+        words >> h.data_word;
+        h.data_line = true;
+        h.data = pclDataKind(h.data_word);
         break;
       }
     } else {
@@ -178,6 +200,16 @@ std::string asciiRowsProblem(const std::string& path, const CloudHeader& h) {
   return "";
 }
 
+// Binary data with a whole point (PLY: vertex) or more after the `bytes` its header declares: data the header
+// does not count. Less is padding (a trailing newline). "" when there is less.
+std::string surplusProblem(const std::string& path, const std::string& kind, const CloudHeader& h, double bytes) {
+  if (h.room - bytes < std::max(1.0, h.per_point)) return "";
+  std::ostringstream why;
+  why << path << ": corrupt " << kind << " file (" << h.room - bytes << " bytes after the " << bytes
+      << " its header declares, " << h.points << (kind == "PLY" ? " vertices)" : " points)");
+  return why.str();
+}
+
 // A PLY's data against its header. ASCII: one row per element instance, as many as declared in all (PCL
 // read the declared vertices and dropped rows beyond them without a word), and every vertex row whole
 // numbers, as many as the vertex has properties. Binary without list properties: the bytes the header
@@ -211,11 +243,8 @@ std::string plyDataProblem(const std::string& path, const CloudHeader& h) {
       return path + ": corrupt PLY file (its header declares " + std::to_string(std::llround(declared)) +
              " rows in all, " + std::to_string(std::llround(h.points)) + " of them vertices; it has " +
              std::to_string(rows) + ")";
-  } else if (exact && h.room - bytes >= std::max(1.0, h.per_point)) {  // a trailing newline is no vertex
-    std::ostringstream why;
-    why << path << ": corrupt PLY file (" << h.room - bytes << " bytes after the " << bytes
-        << " its header declares, " << h.points << " vertices)";
-    return why.str();
+  } else if (exact) {
+    return surplusProblem(path, "PLY", h, bytes);
   }
   return "";
 }
@@ -322,8 +351,12 @@ common::Result<std::vector<Vec3>> loadPointCloud(const std::string& path) {
       // crashes it), so check the header against the file size first.
       header = readCloudHeader(path, kind);
       // PCL's header parser accepts text that is no PCD header at all; require the keywords.
-      if (!header.fields || header.data.empty()) return R::Error(path + ": corrupt PCD file (no FIELDS/DATA header)");
+      if (!header.fields || !header.data_line) return R::Error(path + ": corrupt PCD file (no FIELDS/DATA header)");
+      if (const std::string e = pcdDataWordProblem(path, header); !e.empty()) return R::Error(e);
       if (const std::string e = declaredSizeProblem(path, kind, header); !e.empty()) return R::Error(e);
+      if (header.data == "binary")
+        if (const std::string e = surplusProblem(path, kind, header, header.points * header.per_point); !e.empty())
+          return R::Error(e);
       if (const std::string e = asciiRowsProblem(path, header); !e.empty()) return R::Error(e);
       if (auto st = checkPcdSize(reader, path); !st) return st;
       rc = reader.read(path, blob);

@@ -871,3 +871,37 @@ TEST(PointCloud, XyzOfEveryNumericTypeKeepTheirValues) {
   ASSERT_FALSE(n);
   expectErrorMentions(n.message(), {"nan64.pcd", "NaN"});
 }
+
+// DATA is read as PCL reads it: any word PCL does not know as binary or binary_compressed is ASCII to it, so
+// "ASCII" gets the ASCII row checks (it skipped them), and a word that is none of the three is refused by
+// name. Binary data with a whole point more than declared is refused (a newline after it is not a point).
+TEST(BadInput, PcdDataWordAndSurplusBinaryData) {
+  TempDir d;
+  const std::vector<PcdField> xyz = {{"x", 4, 'F', 1}, {"y", 4, 'F', 1}, {"z", 4, 'F', 1}};
+  writeText(d.file("upper.pcd"), pcdHeader(xyz, 3, "ASCII") + "1.05 1.05 1.05\n0.5 0.5\nfoo bar baz\n");
+  auto a = loadPointCloud(d.file("upper.pcd"));
+  ASSERT_FALSE(a) << a->size() << " points";
+  expectErrorMentions(a.message(), {"upper.pcd", "row 2 has 2 values, the header 3"});
+  writeText(d.file("long.pcd"), pcdHeader(xyz, 2, "Ascii") + "1 1 1\n-1 1 1\n-1 -1 1\n");
+  auto l = loadPointCloud(d.file("long.pcd"));
+  ASSERT_FALSE(l) << l->size() << " points";
+  expectErrorMentions(l.message(), {"long.pcd", "declares 2 points, it has 3 rows"});
+  writeText(d.file("fine.pcd"), pcdHeader(xyz, 2, "ASCII") + "1 1 1\n-1 1 1\n");
+  expectPoints(d.file("fine.pcd"), {Vec3(1, 1, 1), Vec3(-1, 1, 1)});
+  std::string point;
+  for (float v : {1.0f, 1.0f, 1.0f}) appendBytes(point, v);
+  for (const char* word : {"foo", "Binary", "binary_lzf"}) {
+    writeText(d.file("word.pcd"), pcdHeader(xyz, 1, word) + point);
+    auto w = loadPointCloud(d.file("word.pcd"));
+    ASSERT_FALSE(w) << word << ": " << w->size() << " points";
+    expectErrorMentions(w.message(), {"word.pcd", std::string("DATA '") + word + "'"});
+  }
+  writeText(d.file("bin.pcd"), pcdHeader(xyz, 1, "binary") + point);
+  expectPoints(d.file("bin.pcd"), {Vec3(1, 1, 1)});
+  writeText(d.file("nl.pcd"), pcdHeader(xyz, 1, "binary") + point + "\n");
+  expectPoints(d.file("nl.pcd"), {Vec3(1, 1, 1)});
+  writeText(d.file("extra.pcd"), pcdHeader(xyz, 1, "binary") + point + point);
+  auto e = loadPointCloud(d.file("extra.pcd"));
+  ASSERT_FALSE(e) << e->size() << " points";
+  expectErrorMentions(e.message(), {"extra.pcd", "12 bytes after the 12"});
+}
