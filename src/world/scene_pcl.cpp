@@ -336,7 +336,7 @@ common::Result<std::vector<Vec3>> loadPointCloud(const std::string& path) {
   using R = common::Result<std::vector<Vec3>>;
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) return R::Error(path + ": file not found");
-  const std::string ext = fs::path(path).extension().string();
+  const std::string ext = lowerExtension(path);
   // PCL prints its own diagnostics; we return one message instead.
   pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
   pcl::PCLPointCloud2 blob;
@@ -368,7 +368,8 @@ common::Result<std::vector<Vec3>> loadPointCloud(const std::string& path) {
       if (const std::string e = plyDataProblem(path, header); !e.empty()) return R::Error(e);
       rc = reader.read(path, blob);
     } else {
-      return R::Error(path + ": unknown point cloud extension '" + ext + "' (expected .pcd or .ply)");
+      return R::Error(path + ": unknown point cloud extension '" + fs::path(path).extension().string() +
+                      "' (expected .pcd or .ply, in any case)");
     }
   } catch (const std::exception& e) {
     return R::Error(path + ": corrupt " + kind + " file (" + e.what() + ")");

@@ -1,5 +1,6 @@
 #include <yaml-cpp/yaml.h>
 
+#include <cctype>
 #include <filesystem>
 #include <limits>
 #include <sstream>
@@ -57,12 +58,13 @@ bool boolean(const YAML::Node& n, const std::string& key) {
   }
 }
 
-std::string lower(std::string s) {
-  for (auto& ch : s) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
-  return s;
-}
-
 }  // namespace
+
+std::string lowerExtension(const std::string& path) {
+  std::string ext = fs::path(path).extension().string();
+  for (auto& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  return ext;
+}
 
 common::Result<SceneFileSpec> parseSceneYaml(const std::string& yaml_path) {
   using R = common::Result<SceneFileSpec>;
@@ -133,7 +135,7 @@ common::Result<Scene> loadSceneFile(const SceneFileSpec& spec) {
   Scene scene = makeEmptyScene(spec.name, spec.box, spec.resolution, spec.margin);
   scene.start = spec.start;
   const Eigen::Affine3d T(spec.T_world_file);
-  const std::string ext = lower(fs::path(spec.file).extension().string());
+  const std::string ext = lowerExtension(spec.file);
   if (ext == ".pcd" || ext == ".ply") {
     auto points = loadPointCloud(spec.file);
     if (!points) return points.status();
@@ -180,7 +182,8 @@ common::Result<Scene> loadSceneFile(const SceneFileSpec& spec) {
           }
     }
   } else {
-    return R::Error(spec.file + ": unknown scene file extension '" + ext + "' (expected .pcd, .ply, .stl or .bt)");
+    return R::Error(spec.file + ": unknown scene file extension '" + fs::path(spec.file).extension().string() +
+                    "' (expected .pcd, .ply, .stl or .bt, in any case)");
   }
   if (spec.ground_plane) {
     const auto& geo = scene.geometry();
@@ -238,7 +241,7 @@ common::Result<Scene> loadGeneratedYaml(const std::string& yaml_path, const YAML
 common::Result<Scene> makeScene(const std::string& spec, std::uint64_t seed) {
   if (spec == "maze") return generateMaze(MazeConfig(), seed);
   if (spec == "powerplant") return generatePowerplant(PowerplantConfig(), seed);
-  const std::string ext = lower(fs::path(spec).extension().string());
+  const std::string ext = lowerExtension(spec);
   if (ext == ".yaml" || ext == ".yml") {
     YAML::Node root;
     try {

@@ -905,3 +905,24 @@ TEST(BadInput, PcdDataWordAndSurplusBinaryData) {
   ASSERT_FALSE(e) << e->size() << " points";
   expectErrorMentions(e.message(), {"extra.pcd", "12 bytes after the 12"});
 }
+
+// Extensions are matched whatever their case, by the cloud loader as by the scene loader.
+TEST(PointCloud, UpperCaseExtensions) {
+  TempDir d;
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  cloud.push_back(pcl::PointXYZ(0.55f, 0.55f, 0.55f));
+  pcl::io::savePCDFileBinary(d.file("UP.PCD"), cloud);
+  pcl::io::savePLYFileBinary(d.file("Up.Ply"), cloud);
+  writeBinaryStl(d.file("UP.STL"), cubeTriangles(0.5, 1.0));
+  for (const char* f : {"UP.PCD", "Up.Ply"}) {
+    auto pts = loadPointCloud(d.file(f));
+    ASSERT_TRUE(pts) << pts.message();
+    EXPECT_EQ(pts->size(), 1u) << f;
+  }
+  for (const char* f : {"UP.PCD", "Up.Ply", "UP.STL"}) {
+    writeText(d.file("up.yaml"), sceneYaml(f));
+    auto s = loadSceneYaml(d.file("up.yaml"));
+    ASSERT_TRUE(s) << s.message();
+    EXPECT_TRUE(s->isOccupied(Vec3(0.55, 0.55, 0.55))) << f;
+  }
+}

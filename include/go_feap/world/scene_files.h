@@ -23,6 +23,9 @@ struct OccupiedCube {
   double size;
 };
 
+/// The extension of `path` in lower case (".pcd" for "UP.PCD"): every loader matches extensions this way.
+std::string lowerExtension(const std::string& path);
+
 /// Reads x, y, z of every point of a .pcd or .ply file (PCL readers). Fails on missing,
 /// truncated or corrupt files, NaN/Inf points, and empty clouds.
 common::Result<std::vector<Vec3>> loadPointCloud(const std::string& path);
