@@ -50,6 +50,20 @@ common::Status validateScene(const Scene& scene) {
     return common::Status::Error(who + "exploration box min " + fmt(scene.box.min) +
                                  " must be below max " + fmt(scene.box.max) + " on every axis");
   }
+  // The box's voxels are those whose centres it holds (computeObservableSet, the tools' counts): a box
+  // between two layers of centres holds none, and nothing in it could be explored.
+  const auto& geo = scene.geometry();
+  Index3 lo, hi;
+  geo.centreRange(scene.box, lo, hi);
+  for (int a = 0; a < 3; ++a) {
+    if (hi[a] <= lo[a]) {
+      std::ostringstream why;
+      why << who << "exploration box " << fmt(scene.box.min) << " .. " << fmt(scene.box.max)
+          << " holds no voxel centre along " << "xyz"[a] << " (voxel centres lie at " << geo.origin()[a]
+          << " + (k + 0.5) x " << scene.resolution() << " m): make it at least one voxel wide";
+      return common::Status::Error(why.str());
+    }
+  }
   if (!scene.start.position.allFinite() || !std::isfinite(scene.start.yaw)) {
     return common::Status::Error(who + "start pose is not finite");
   }
@@ -57,6 +71,14 @@ common::Status validateScene(const Scene& scene) {
     return common::Status::Error(who + "start " + fmt(scene.start.position) +
                                  " lies outside the exploration box " + fmt(scene.box.min) + " .. " +
                                  fmt(scene.box.max));
+  }
+  // A start on the box's face can lie in a voxel of the margin, from which nothing is observable.
+  const Index3 start = geo.coordToIndex(scene.start.position);
+  if ((start.array() < lo.array()).any() || (start.array() >= hi.array()).any()) {
+    return common::Status::Error(who + "start " + fmt(scene.start.position) + " lies in the voxel centred at " +
+                                 fmt(geo.indexToCoord(start)) + ", outside the exploration box " +
+                                 fmt(scene.box.min) + " .. " + fmt(scene.box.max) +
+                                 ": nothing would be observable (move the start half a voxel into the box)");
   }
   if (scene.isOccupied(scene.start.position)) {
     return common::Status::Error(who + "start " + fmt(scene.start.position) + " lies inside an obstacle");

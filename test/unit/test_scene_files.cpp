@@ -773,6 +773,11 @@ TEST(BadInput, StartInsideObstacleOrOutsideBox) {
   auto b = loadSceneYaml(d.file("out.yaml"));
   ASSERT_FALSE(b);
   expectErrorMentions(b.message(), {"out.yaml", "outside the exploration box"});
+  // On the box's top face: in a voxel of the margin, with nothing observable.
+  writeText(d.file("top.yaml"), sceneYaml("p.pcd", "ground_plane: false", "[0.05, 0.05, 2]"));
+  auto c = loadSceneYaml(d.file("top.yaml"));
+  ASSERT_FALSE(c);
+  expectErrorMentions(c.message(), {"top.yaml", "voxel centred at", "outside the exploration box"});
 }
 
 namespace {
@@ -925,4 +930,23 @@ TEST(PointCloud, UpperCaseExtensions) {
     ASSERT_TRUE(s) << s.message();
     EXPECT_TRUE(s->isOccupied(Vec3(0.55, 0.55, 0.55))) << f;
   }
+}
+
+// A box holding no voxel centre has no voxel to explore (go_feap_scene then aborted writing an empty image),
+// and a start in a voxel whose centre lies outside the box has nothing observable: both are refused.
+TEST(BadInput, BoxWithoutVoxelCentresAndStartVoxelOutsideTheBox) {
+  Scene flat = makeEmptyScene("flat", Aabb{Vec3(-2, -2, 0.51), Vec3(2, 2, 0.54)}, 0.1, 1.0);
+  flat.start.position = Vec3(0.2, 0.2, 0.52);
+  const auto a = validateScene(flat);
+  ASSERT_FALSE(a.ok());
+  expectErrorMentions(a.message(), {"scene 'flat'", "holds no voxel centre along z"});
+  Scene edge = makeEmptyScene("edge", Aabb{Vec3(-2, -2, 0), Vec3(2, 2, 2)}, 0.1, 1.0);
+  edge.start.position = Vec3(0.55, 0.55, 2.0);  // on the box's top face: in the voxel above it
+  const auto b = validateScene(edge);
+  ASSERT_FALSE(b.ok());
+  expectErrorMentions(b.message(), {"scene 'edge'", "start (0.55, 0.55, 2)", "voxel centred at (0.55, 0.55, 2.05)",
+                                    "outside the exploration box"});
+  edge.start.position = Vec3(0.55, 0.55, 1.95);
+  ASSERT_TRUE(validateScene(edge).ok()) << validateScene(edge).message();
+  EXPECT_GT(computeObservableSet(edge).total(), 0u);
 }
