@@ -58,6 +58,15 @@ bool boolean(const YAML::Node& n, const std::string& key) {
   }
 }
 
+// Whether any voxel of the index range [lo, hi) is occupied.
+bool anyOccupied(const Scene& scene, const Index3& lo, const Index3& hi) {
+  for (int z = lo.z(); z < hi.z(); ++z)
+    for (int y = lo.y(); y < hi.y(); ++y)
+      for (int x = lo.x(); x < hi.x(); ++x)
+        if (scene.occupied.at(Index3(x, y, z))) return true;
+  return false;
+}
+
 }  // namespace
 
 std::string lowerExtension(const std::string& path) {
@@ -185,6 +194,12 @@ common::Result<Scene> loadSceneFile(const SceneFileSpec& spec) {
     return R::Error(spec.file + ": unknown scene file extension '" + fs::path(spec.file).extension().string() +
                     "' (expected .pcd, .ply, .stl or .bt, in any case)");
   }
+  // The file's own geometry is counted before the floor is added: a floor would hide a file that
+  // T_world_file placed wholly outside the box. (A box holding no voxel centre is validateScene's to name.)
+  Index3 lo, hi;
+  scene.geometry().centreRange(spec.box, lo, hi);
+  if ((hi.array() > lo.array()).all() && !anyOccupied(scene, lo, hi))
+    return R::Error(spec.file + ": no geometry falls inside the exploration box (check T_world_file and box)");
   if (spec.ground_plane) {
     const auto& geo = scene.geometry();
     const int kz = geo.coordToIndex(spec.box.min + Vec3::Constant(1e-6 * spec.resolution)).z();
@@ -192,8 +207,6 @@ common::Result<Scene> loadSceneFile(const SceneFileSpec& spec) {
       for (int y = 0; y < geo.dims().y(); ++y)
         for (int x = 0; x < geo.dims().x(); ++x) scene.occupied.at(Index3(x, y, kz)) = 1;
   }
-  if (scene.occupiedCount() == 0)
-    return R::Error(spec.file + ": no geometry falls inside the exploration box (check T_world_file and box)");
   if (auto st = validateScene(scene); !st) return st;
   return scene;
 }

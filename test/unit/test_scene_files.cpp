@@ -950,3 +950,24 @@ TEST(BadInput, BoxWithoutVoxelCentresAndStartVoxelOutsideTheBox) {
   ASSERT_TRUE(validateScene(edge).ok()) << validateScene(edge).message();
   EXPECT_GT(computeObservableSet(edge).total(), 0u);
 }
+
+// ground_plane must not hide geometry misplaced outside the box: the file's own geometry is counted inside
+// the box before the floor is added.
+TEST(SceneYaml, GeometryOnlyOutsideTheBoxIsRefusedWithOrWithoutAGroundPlane) {
+  TempDir d;
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  cloud.push_back(pcl::PointXYZ(2.55f, 0.55f, 0.55f));  // in the grid's margin, outside the box
+  pcl::io::savePCDFileBinary(d.file("out.pcd"), cloud);
+  cloud[0].x = 1.55f;
+  pcl::io::savePCDFileBinary(d.file("in.pcd"), cloud);
+  for (const char* floor : {"ground_plane: true", "ground_plane: false"}) {
+    writeText(d.file("m.yaml"), sceneYaml("out.pcd", floor));
+    auto s = loadSceneYaml(d.file("m.yaml"));
+    ASSERT_FALSE(s) << floor;
+    expectErrorMentions(s.message(), {"m.yaml", "out.pcd", "no geometry falls inside the exploration box"});
+    writeText(d.file("i.yaml"), sceneYaml("in.pcd", floor));
+    auto ok = loadSceneYaml(d.file("i.yaml"));
+    ASSERT_TRUE(ok) << floor << ": " << ok.message();
+    EXPECT_TRUE(ok->isOccupied(Vec3(1.55, 0.55, 0.55)));
+  }
+}
