@@ -1,8 +1,11 @@
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cctype>
 #include <filesystem>
+#include <initializer_list>
 #include <limits>
+#include <set>
 #include <sstream>
 
 #include "go_feap/world/generators.h"
@@ -58,6 +61,36 @@ bool boolean(const YAML::Node& n, const std::string& key) {
   }
 }
 
+// Refuses a key of the map `node` (whose keys are named `where` + key) that is not in `allowed`, naming the
+// allowed ones, and a key given twice (yaml-cpp keeps both and operator[] reads the first): a typo such as
+// 'ground_plnae: true' was ignored in silence, and a repeated resolution took its first value.
+void checkKeys(const YAML::Node& node, const std::string& where, std::initializer_list<const char*> allowed) {
+  std::set<std::string> seen;
+  for (const auto& entry : node) {
+    const std::string key = entry.first.IsScalar() ? entry.first.Scalar() : "(a key that is no string)";
+    if (std::none_of(allowed.begin(), allowed.end(), [&](const char* a) { return key == a; })) {
+      std::string list;
+      for (const char* a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+      const std::string parent = where.empty() ? "the file" : "'" + where.substr(0, where.size() - 1) + "'";
+      throw KeyError{"unknown key '" + where + key + "' (" + parent + " takes " + list + ")"};
+    }
+    if (!seen.insert(key).second) throw KeyError{"key '" + where + key + "' is given more than once"};
+  }
+}
+
+// The value of `scene.name`: a non-empty string.
+std::string sceneName(const YAML::Node& n) {
+  if (!n.IsScalar() || n.Scalar().empty()) throw KeyError{"key 'scene.name' must be a non-empty string"};
+  return n.Scalar();
+}
+
+// The map under `key` of `parent`, required.
+YAML::Node requireMap(const YAML::Node& parent, const std::string& key, const std::string& where) {
+  const YAML::Node n = require(parent, key, where);
+  if (!n.IsMap()) throw KeyError{"key '" + where + key + "' must be a map"};
+  return n;
+}
+
 // Whether any voxel of the index range [lo, hi) is occupied.
 bool anyOccupied(const Scene& scene, const Index3& lo, const Index3& hi) {
   for (int z = lo.z(); z < hi.z(); ++z)
@@ -88,11 +121,11 @@ common::Result<SceneFileSpec> parseSceneYaml(const std::string& yaml_path) {
   SceneFileSpec spec;
   try {
     if (!root.IsMap()) throw KeyError{"missing key 'scene'"};
+    checkKeys(root, "", {"scene"});
     const YAML::Node s = require(root, "scene", "");
     if (!s.IsMap()) throw KeyError{"key 'scene' must be a mapping"};
-    const YAML::Node name = require(s, "name", "scene.");
-    if (!name.IsScalar() || name.Scalar().empty()) throw KeyError{"key 'scene.name' must be a non-empty string"};
-    spec.name = name.Scalar();
+    checkKeys(s, "scene.", {"name", "file", "T_world_file", "resolution", "box", "start", "ground_plane", "margin"});
+    spec.name = sceneName(require(s, "name", "scene."));
     const YAML::Node file = require(s, "file", "scene.");
     if (!file.IsScalar() || file.Scalar().empty()) throw KeyError{"key 'scene.file' must be a file name"};
     fs::path fp(file.Scalar());
@@ -110,12 +143,14 @@ common::Result<SceneFileSpec> parseSceneYaml(const std::string& yaml_path) {
     spec.resolution = number(require(s, "resolution", "scene."), "scene.resolution");
     if (!(spec.resolution > 0.0)) throw KeyError{"key 'scene.resolution' must be > 0"};
 
-    const YAML::Node box = require(s, "box", "scene.");
+    const YAML::Node box = requireMap(s, "box", "scene.");
+    checkKeys(box, "scene.box.", {"min", "max"});
     spec.box.min = vec3(require(box, "min", "scene.box."), "scene.box.min");
     spec.box.max = vec3(require(box, "max", "scene.box."), "scene.box.max");
     if (!spec.box.valid()) throw KeyError{"key 'scene.box' needs min < max on every axis"};
 
-    const YAML::Node start = require(s, "start", "scene.");
+    const YAML::Node start = requireMap(s, "start", "scene.");
+    checkKeys(start, "scene.start.", {"position", "yaw"});
     spec.start.position = vec3(require(start, "position", "scene.start."), "scene.start.position");
     spec.start.yaw = number(require(start, "yaw", "scene.start."), "scene.start.yaw");
 
@@ -222,16 +257,21 @@ common::Result<Scene> loadSceneYaml(const std::string& yaml_path) {
 namespace {
 
 // A scene YAML whose `scene.generator` is `maze`: the procedural maze with the sizes given under
-// `scene.maze` (size_x, size_y, height, cell_size; each optional, the defaults otherwise) and a name.
-common::Result<Scene> loadGeneratedYaml(const std::string& yaml_path, const YAML::Node& s, std::uint64_t seed) {
+// `scene.maze` (size_x, size_y, height, cell_size; each optional, the defaults otherwise) and an optional
+// name; no other key.
+common::Result<Scene> loadGeneratedYaml(const std::string& yaml_path, const YAML::Node& root, std::uint64_t seed) {
   using R = common::Result<Scene>;
   try {
+    checkKeys(root, "", {"scene"});
+    const YAML::Node s = root["scene"];
+    checkKeys(s, "scene.", {"name", "generator", "maze"});
     const YAML::Node generator = require(s, "generator", "scene.");
     if (!generator.IsScalar() || generator.Scalar() != "maze")
       throw KeyError{"key 'scene.generator' must be 'maze' (the only generator a YAML can size)"};
     MazeConfig config;
     if (const YAML::Node m = s["maze"]) {
       if (!m.IsMap()) throw KeyError{"key 'scene.maze' must be a map"};
+      checkKeys(m, "scene.maze.", {"size_x", "size_y", "height", "cell_size"});
       if (m["size_x"]) config.size_x = number(m["size_x"], "scene.maze.size_x");
       if (m["size_y"]) config.size_y = number(m["size_y"], "scene.maze.size_y");
       if (m["height"]) config.height = number(m["height"], "scene.maze.height");
@@ -240,7 +280,7 @@ common::Result<Scene> loadGeneratedYaml(const std::string& yaml_path, const YAML
     if (auto st = config.validate(); !st) throw KeyError{st.message()};
     auto scene = generateMaze(config, seed);
     if (!scene) return R::Error(yaml_path + ": " + scene.message());
-    if (s["name"]) scene->name = s["name"].as<std::string>();
+    if (s["name"]) scene->name = sceneName(s["name"]);
     return scene;
   } catch (const KeyError& e) {
     return R::Error(yaml_path + ": " + e.message);
@@ -263,7 +303,7 @@ common::Result<Scene> makeScene(const std::string& spec, std::uint64_t seed) {
       return common::Result<Scene>::Error(spec + ": cannot be read as YAML (" + e.what() + ")");
     }
     if (root.IsMap() && root["scene"] && root["scene"].IsMap() && root["scene"]["generator"])
-      return loadGeneratedYaml(spec, root["scene"], seed);
+      return loadGeneratedYaml(spec, root, seed);
     return loadSceneYaml(spec);
   }
   return common::Result<Scene>::Error("unknown scene '" + spec +

@@ -7,6 +7,7 @@
 #include <pcl/point_types.h>
 
 #include <algorithm>
+#include <array>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -743,6 +744,16 @@ TEST(BadInput, SceneYamlMissingOrWronglyTypedKeys) {
       {"yaw: 0", "yaw: north", "scene.start.yaw"},
       {"  name: t\n", "", "scene.name"},
       {"ground_plane: false", "ground_plane: maybe", "scene.ground_plane"},
+      // keys the loader does not read (a typo loaded with no floor) or given twice (the first value was taken)
+      {"ground_plane: false", "ground_plnae: true",
+       "unknown key 'scene.ground_plnae' ('scene' takes name, file, T_world_file, resolution, box, start, "
+       "ground_plane, margin)"},
+      {"  resolution: 0.1\n", "  resolution: 0.1\n  resolution: 10\n", "key 'scene.resolution' is given more than once"},
+      {"box: {min", "box: {mni: [0, 0, 0], min", "unknown key 'scene.box.mni' ('scene.box' takes min, max)"},
+      {"max: [2, 2, 2]", "max: [2, 2, 2], max: [3, 3, 3]", "key 'scene.box.max' is given more than once"},
+      {"yaw: 0", "yaw: 0, pitch: 0", "unknown key 'scene.start.pitch' ('scene.start' takes position, yaw)"},
+      {"scene:\n", "scenery: 1\nscene:\n", "unknown key 'scenery' (the file takes scene)"},
+      {"  name: t\n", "  name: t\n  generator_seed: 4\n", "unknown key 'scene.generator_seed'"},
   };
   for (const Case& c : cases) {
     std::string y = good;
@@ -969,5 +980,31 @@ TEST(SceneYaml, GeometryOnlyOutsideTheBoxIsRefusedWithOrWithoutAGroundPlane) {
     auto ok = loadSceneYaml(d.file("i.yaml"));
     ASSERT_TRUE(ok) << floor << ": " << ok.message();
     EXPECT_TRUE(ok->isOccupied(Vec3(1.55, 0.55, 0.55)));
+  }
+}
+
+// A generated maze's YAML: a key the loader does not read (the maze's `hieght` was ignored in silence) or a key
+// given twice is refused, naming it; a name that is no string is named too (it said "bad conversion").
+TEST(BadInput, GeneratedMazeYamlUnknownRepeatedOrWronglyTypedKeys) {
+  TempDir d;
+  const std::string maze = "scene:\n  name: m\n  generator: maze\n  maze: {size_x: 10, size_y: 6, height: 3, cell_size: 2}\n";
+  writeText(d.file("maze.yaml"), maze);
+  auto m = makeScene(d.file("maze.yaml"), 0);
+  ASSERT_TRUE(m) << m.message();
+  EXPECT_EQ(m->name, "m");
+  const std::vector<std::array<std::string, 3>> cases = {  // replace what, by what, expected message
+      {"height: 3", "hieght: 30", "unknown key 'scene.maze.hieght' ('scene.maze' takes size_x, size_y, height, cell_size)"},
+      {"size_y: 6", "size_x: 12", "key 'scene.maze.size_x' is given more than once"},
+      {"  name: m\n", "  name: m\n  file: p.pcd\n", "unknown key 'scene.file' ('scene' takes name, generator, maze)"},
+      {"  name: m\n", "  name: m\n  name: n\n", "key 'scene.name' is given more than once"},
+      {"name: m", "name: {a: 1}", "key 'scene.name' must be a non-empty string"},
+  };
+  for (const auto& [from, to, expect] : cases) {
+    std::string y = maze;
+    y.replace(y.find(from), from.size(), to);
+    writeText(d.file("badmaze.yaml"), y);
+    auto s = makeScene(d.file("badmaze.yaml"), 0);
+    ASSERT_FALSE(s) << "accepted: " << y;
+    expectErrorMentions(s.message(), {"badmaze.yaml", expect});
   }
 }
