@@ -78,6 +78,18 @@ void checkKeys(const YAML::Node& node, const std::string& where, std::initialize
   }
 }
 
+// Whether the columns of `m` are (nearly) linearly dependent, whatever their lengths: the determinant of the
+// columns scaled to unit length is 1 for a rotation and 0 for dependent columns. An absolute |det| < 1e-9
+// refused a millimetre mesh turned 45 degrees (|det| 1e-9) and passed dependent columns of large scale.
+bool nearlySingular(Eigen::Matrix3d m) {
+  for (int c = 0; c < 3; ++c) {
+    const double length = m.col(c).stableNorm();  // no overflow for entries of 1e300
+    if (!(length > 0.0)) return true;
+    m.col(c) /= length;
+  }
+  return !(std::abs(m.determinant()) >= 1e-9);
+}
+
 // The value of `scene.name`: a non-empty string.
 std::string sceneName(const YAML::Node& n) {
   if (!n.IsScalar() || n.Scalar().empty()) throw KeyError{"key 'scene.name' must be a non-empty string"};
@@ -137,8 +149,8 @@ common::Result<SceneFileSpec> parseSceneYaml(const std::string& yaml_path) {
       for (int c = 0; c < 4; ++c) spec.T_world_file(r, c) = t[4 * r + c];
     if (spec.T_world_file.row(3) != Eigen::RowVector4d(0, 0, 0, 1))
       throw KeyError{"key 'scene.T_world_file' must end with the row 0 0 0 1 (row-major 4x4)"};
-    if (std::abs(spec.T_world_file.topLeftCorner<3, 3>().determinant()) < 1e-9)
-      throw KeyError{"key 'scene.T_world_file' has a singular rotation/scale part"};
+    if (nearlySingular(spec.T_world_file.topLeftCorner<3, 3>()))
+      throw KeyError{"key 'scene.T_world_file' has a singular rotation/scale part (its columns are (nearly) dependent)"};
 
     spec.resolution = number(require(s, "resolution", "scene."), "scene.resolution");
     if (!(spec.resolution > 0.0)) throw KeyError{"key 'scene.resolution' must be > 0"};

@@ -1008,3 +1008,39 @@ TEST(BadInput, GeneratedMazeYamlUnknownRepeatedOrWronglyTypedKeys) {
     expectErrorMentions(s.message(), {"badmaze.yaml", expect});
   }
 }
+
+// Singular means columns (nearly) dependent, whatever the scale: a millimetre mesh turned 45 degrees
+// (|det| 1e-9) was refused by an absolute |det| < 1e-9, and a micrometre one by any turn.
+TEST(SceneYaml, SmallScalesAreNotSingularDependentColumnsAre) {
+  TempDir d;
+  writeBinaryStl(d.file("mm.stl"), cubeTriangles(500, 1000));          // a 0.5 m cube in millimetres
+  writeBinaryStl(d.file("um.stl"), cubeTriangles(500000, 1000000));    // and in micrometres
+  const std::string c = "0.00070710678", n = "-0.00070710678";
+  struct Case {
+    std::string file, T;
+    Vec3 on_face;  // a point on a face of the placed cube, off every voxel edge
+  };
+  const std::vector<Case> ok = {
+      {"mm.stl", "[" + c + "," + n + ",0,0, " + c + "," + c + ",0,0, 0,0,0.001,0, 0,0,0,1]",
+       Vec3(0.25 * 0.70710678, 1.75 * 0.70710678, 0.75)},
+      {"um.stl", "[1e-6,0,0,0, 0,1e-6,0,0, 0,0,1e-6,0, 0,0,0,1]", Vec3(1.0, 0.75, 0.75)},
+  };
+  const std::string identity = "[1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]";
+  for (const Case& k : ok) {
+    std::string y = sceneYaml(k.file);
+    y.replace(y.find(identity), identity.size(), k.T);
+    writeText(d.file("t.yaml"), y);
+    auto s = loadSceneYaml(d.file("t.yaml"));
+    ASSERT_TRUE(s) << k.T << ": " << s.message();
+    EXPECT_TRUE(s->isOccupied(k.on_face)) << k.T;
+  }
+  for (const std::string T : {"[1,0,1,0, 0,1,0,0, 0,0,0,0, 0,0,0,1]", "[1e6,0,1e6,0, 0,1e6,0,0, 0,0,1e-4,0, 0,0,0,1]",
+                              "[1,0,0,0, 0,0,0,0, 0,0,1,0, 0,0,0,1]"}) {
+    std::string y = sceneYaml("mm.stl");
+    y.replace(y.find(identity), identity.size(), T);
+    writeText(d.file("s.yaml"), y);
+    auto s = loadSceneYaml(d.file("s.yaml"));
+    ASSERT_FALSE(s) << T;
+    expectErrorMentions(s.message(), {"s.yaml", "scene.T_world_file", "singular"});
+  }
+}
