@@ -15,6 +15,10 @@ common::Status PowerplantConfig::validate() const {
   if (!(size_x >= 30.0 && size_y >= 28.0 && height >= 20.0))
     return err("size_x/size_y/height", "must be at least 30 x 28 x 20 m");
   if (!(margin >= 0.0)) return err("margin", "must be >= 0");
+  // Bounded like the maze's and a file scene's grid: a resolution of 0.01 m asked for 2.7e10 voxels.
+  const double voxels = sceneVoxelCount({Vec3(-0.5 * size_x, -0.5 * size_y, 0.0), Vec3(0.5 * size_x, 0.5 * size_y, height)},
+                                        resolution, margin);
+  if (!(voxels <= kMaxSceneVoxels)) return err("size_x/size_y/height/resolution", "make a grid of more than 2^30 voxels");
   return common::Status::Ok();
 }
 

@@ -242,3 +242,19 @@ TEST(Powerplant, Deterministic) {
   EXPECT_EQ(a->occupied.data(), b->occupied.data());
   EXPECT_NE(a->occupied.data(), c->occupied.data());
 }
+
+// The site's grid is bounded like a maze's: a resolution of 0.01 m asked for 2.7e10 voxels.
+TEST(Powerplant, InvalidConfigNamesTheKey) {
+  EXPECT_TRUE(PowerplantConfig().validate().ok()) << PowerplantConfig().validate().message();
+  PowerplantConfig fine;
+  fine.resolution = 0.01;
+  const common::Status a = fine.validate();
+  ASSERT_FALSE(a.ok());
+  EXPECT_NE(a.message().find("resolution"), std::string::npos) << a.message();
+  EXPECT_NE(a.message().find("more than 2^30 voxels"), std::string::npos) << a.message();
+  PowerplantConfig wide;
+  wide.size_x = 1e7;
+  const common::Status b = wide.validate();
+  ASSERT_FALSE(b.ok());
+  EXPECT_NE(b.message().find("size_x"), std::string::npos) << b.message();
+}
