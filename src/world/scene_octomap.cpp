@@ -78,10 +78,11 @@ common::Result<std::vector<OccupiedCube>> loadOctomap(const std::string& path) {
   std::vector<OccupiedCube> cubes;
   for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
     if (!tree.isNodeOccupied(*it)) continue;
-    const octomap::point3d c = it.getCoordinate();
-    if (!std::isfinite(c.x()) || !std::isfinite(c.y()) || !std::isfinite(c.z()))
-      return R::Error(path + ": corrupt OctoMap file (non-finite leaf coordinate)");
-    cubes.push_back({Vec3(c.x(), c.y(), c.z()), it.getSize()});
+    // In double: a float centre is off by up to 1e-6 m at 30 m, which moves a leaf's faces off the voxel
+    // faces they lie on and would mark the next voxel.
+    const Vec3 c(it.getX(), it.getY(), it.getZ());
+    if (!c.allFinite()) return R::Error(path + ": corrupt OctoMap file (non-finite leaf coordinate)");
+    cubes.push_back({c, it.getSize()});
   }
   if (cubes.empty()) return R::Error(path + ": the OctoMap holds no occupied voxels");
   return cubes;

@@ -4,7 +4,6 @@
 #include <cctype>
 #include <filesystem>
 #include <initializer_list>
-#include <limits>
 #include <set>
 #include <sstream>
 
@@ -213,29 +212,16 @@ common::Result<Scene> loadSceneFile(const SceneFileSpec& spec) {
   } else if (ext == ".bt") {
     auto cubes = loadOctomap(spec.file);
     if (!cubes) return cubes.status();
-    // A pruned leaf may span many voxels: mark every grid voxel whose centre the leaf's cube, placed
-    // by T_world_file (rotated or scaled), covers. Only the grid voxels within the placed cube's bounds
-    // are looked at, so a large leaf costs no more than the grid (and a scale leaves no gaps).
-    const Eigen::Affine3d T_inv = T.inverse();
-    const auto& geo = scene.geometry();
-    for (const OccupiedCube& cube : *cubes) {
-      Aabb bounds{Vec3::Constant(std::numeric_limits<double>::infinity()),
-                  Vec3::Constant(-std::numeric_limits<double>::infinity())};
-      for (int c = 0; c < 8; ++c) {
-        const Vec3 corner = cube.centre + 0.5 * cube.size * Vec3(c & 1 ? 1 : -1, c & 2 ? 1 : -1, c & 4 ? 1 : -1);
-        bounds.min = bounds.min.cwiseMin(T * corner);
-        bounds.max = bounds.max.cwiseMax(T * corner);
-      }
-      Index3 lo, hi;
-      geo.centreRange(bounds, lo, hi);
-      const double half = 0.5 * cube.size * (1.0 + 1e-9);
-      for (int z = lo.z(); z < hi.z(); ++z)
-        for (int y = lo.y(); y < hi.y(); ++y)
-          for (int x = lo.x(); x < hi.x(); ++x) {
-            const Index3 idx(x, y, z);
-            if (((T_inv * geo.indexToCoord(idx)) - cube.centre).cwiseAbs().maxCoeff() <= half)
-              scene.occupied.at(idx) = 1;
-          }
+    // A leaf marks every grid voxel its cube, placed by T_world_file (turned, scaled), overlaps: marking
+    // only the voxels whose centres it covered lost a 0.03 m wall on a 0.1 m grid. Only the voxels within the
+    // placed cube's bounds are looked at, so a large leaf costs no more than the grid.
+    for (std::size_t i = 0; i < cubes->size(); ++i) {
+      const OccupiedCube& cube = (*cubes)[i];
+      const Vec3 centre = T * cube.centre;
+      const Eigen::Matrix3d half = 0.5 * cube.size * T.linear();
+      if (!(centre.allFinite() && half.allFinite()))
+        return R::Error(spec.file + ": leaf " + std::to_string(i) + " is not finite once placed by T_world_file");
+      voxelizeParallelepiped(scene, centre, half);
     }
   } else {
     return R::Error(spec.file + ": unknown scene file extension '" + fs::path(spec.file).extension().string() +

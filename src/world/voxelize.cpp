@@ -140,4 +140,55 @@ void voxelizeTriangle(Scene& scene, const Vec3& a, const Vec3& b, const Vec3& c)
   }
 }
 
+void voxelizeParallelepiped(Scene& scene, const Vec3& centre, const Eigen::Matrix3d& half) {
+  const auto& geo = scene.geometry();
+  const double res = geo.resolution();
+  if (!(centre.allFinite() && half.allFinite())) return;
+  const double shortest = 2.0 * half.colwise().norm().minCoeff();
+  const double tol = 1e-6 * std::min(res, shortest);
+  // Candidates: the voxels that the solid's bounds overlap by more than tol on every axis, clamped to the grid
+  // as doubles (a solid far outside must not overflow the cast to int).
+  const Vec3 reach = half.cwiseAbs().rowwise().sum();
+  Index3 lo, hi;
+  for (int a = 0; a < 3; ++a) {
+    const double from = (centre[a] - reach[a] + tol - geo.origin()[a]) / res;
+    const double to = (centre[a] + reach[a] - tol - geo.origin()[a]) / res;
+    const double dim = static_cast<double>(geo.dims()[a]);
+    lo[a] = static_cast<int>(std::clamp(std::floor(from), 0.0, dim));
+    hi[a] = static_cast<int>(std::clamp(std::ceil(to), 0.0, dim));
+  }
+  // Separating axes of a voxel and the solid: the grid's axes, the solid's face normals and the cross products
+  // of their edges (the grid's alone for an axis-aligned box). Along each the two must overlap by more than
+  // tol; the solid's half width along an axis does not depend on the voxel.
+  std::array<Vec3, 15> axes;
+  std::array<double, 15> solid_half;
+  int n = 0;
+  const bool aligned = ((half.array() != 0.0).cast<int>().colwise().sum() == 1).all();
+  auto add = [&](const Vec3& u, const Vec3& v) {
+    const Vec3 axis = u.cross(v);
+    const double length = axis.norm();
+    if (!(length > 1e-9 * u.norm() * v.norm())) return;  // parallel edges: the other axes decide
+    axes[n] = axis / length;
+    solid_half[n] = (half.transpose() * axes[n]).cwiseAbs().sum();
+    ++n;
+  };
+  for (int a = 0; a < 3; ++a) add(Vec3::Unit((a + 1) % 3), Vec3::Unit((a + 2) % 3));
+  if (!aligned) {
+    for (int i = 0; i < 3; ++i) {
+      add(half.col((i + 1) % 3), half.col((i + 2) % 3));
+      for (int a = 0; a < 3; ++a) add(Vec3::Unit(a), half.col(i));
+    }
+  }
+  for (int z = lo.z(); z < hi.z(); ++z)
+    for (int y = lo.y(); y < hi.y(); ++y)
+      for (int x = lo.x(); x < hi.x(); ++x) {
+        const Index3 idx(x, y, z);
+        const Vec3 d = centre - geo.indexToCoord(idx);
+        bool overlaps = true;
+        for (int k = 0; k < n && overlaps; ++k)
+          overlaps = 0.5 * res * axes[k].cwiseAbs().sum() + solid_half[k] - std::abs(axes[k].dot(d)) > tol;
+        if (overlaps) scene.occupied.at(idx) = 1;
+      }
+}
+
 }  // namespace go_feap::world

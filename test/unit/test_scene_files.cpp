@@ -1044,3 +1044,62 @@ TEST(SceneYaml, SmallScalesAreNotSingularDependentColumnsAre) {
     expectErrorMentions(s.message(), {"s.yaml", "scene.T_world_file", "singular"});
   }
 }
+
+// A leaf marks every grid voxel its cube, placed by T_world_file, overlaps; a leaf face lying on a voxel face
+// marks only the voxel on the leaf's side (so leaves filling whole voxels mark what they did). Marking only
+// the voxels whose centres a leaf covered lost a 0.03 m wall on a 0.1 m grid and marked a 0.05 m one in part.
+TEST(Octomap, LeavesFinerThanTheGridMarkEveryVoxelTheyOverlap) {
+  TempDir d;
+  const double kPi = 3.14159265358979323846;
+  for (double leaf : {0.03, 0.05}) {
+    SCOPED_TRACE(leaf);
+    // A wall one leaf thick, x in [leaf, 2 leaf], y in [-0.5, 0.5], z in [0, 1] (to whole leaves).
+    octomap::OcTree tree(leaf);
+    std::vector<Vec3> centres;
+    const int half = static_cast<int>(std::floor(0.5 / leaf + 1e-9)), high = static_cast<int>(std::floor(1.0 / leaf + 1e-9));
+    for (int j = -half; j < half; ++j)
+      for (int k = 0; k < high; ++k) {
+        centres.emplace_back(1.5 * leaf, (j + 0.5) * leaf, (k + 0.5) * leaf);
+        tree.updateNode(octomap::point3d(centres.back().x(), centres.back().y(), centres.back().z()), true);
+      }
+    ASSERT_TRUE(tree.writeBinary(d.file("w.bt")));
+    writeText(d.file("w.yaml"), sceneYaml("w.bt", "ground_plane: false", "[1.55, 1.55, 1.55]"));
+    auto s = loadSceneYaml(d.file("w.yaml"));
+    ASSERT_TRUE(s) << s.message();
+    // The voxels x in [0, 0.1), y in [-0.5, 0.5), z in [0, 1): one layer, and nothing else.
+    std::size_t in_wall = 0;
+    for (int j = -5; j < 5; ++j)
+      for (int k = 0; k < 10; ++k) in_wall += s->isOccupied(Vec3(0.05, 0.1 * j + 0.05, 0.1 * k + 0.05));
+    EXPECT_EQ(in_wall, 100u);
+    EXPECT_EQ(s->occupiedCount(), 100u);
+
+    // Turned 45 degrees about z and moved: every voxel holding a point of a leaf is marked (no holes), and
+    // every marked voxel lies near a leaf (its centre within the two cubes' half diagonals of a leaf centre).
+    Eigen::Affine3d T = Eigen::Translation3d(0.31, 0.2, 0.0) * Eigen::AngleAxisd(kPi / 4, Vec3::UnitZ());
+    std::ostringstream yaml;
+    yaml.precision(17);
+    yaml << "scene:\n  name: t\n  file: w.bt\n  T_world_file: [";
+    for (int r = 0; r < 4; ++r)
+      for (int c = 0; c < 4; ++c) yaml << T.matrix()(r, c) << (r == 3 && c == 3 ? "]\n" : ", ");
+    yaml << "  resolution: 0.1\n  box: {min: [-1, -1, -1], max: [2, 2, 2]}\n  start: {position: [1.55, 1.55, 1.55], yaw: 0}\n";
+    writeText(d.file("turned.yaml"), yaml.str());
+    auto t = loadSceneYaml(d.file("turned.yaml"));
+    ASSERT_TRUE(t) << t.message();
+    std::size_t holes = 0, far = 0;
+    for (const Vec3& c : centres)
+      for (int a = 0; a < 64; ++a) {
+        const Vec3 f = c + leaf * Vec3((a & 3) * 0.25 - 0.375, ((a >> 2) & 3) * 0.25 - 0.375, (a >> 4) * 0.25 - 0.375);
+        holes += !t->isOccupied(T * f);
+      }
+    const double reach = 0.5 * std::sqrt(3.0) * (0.1 + leaf);
+    const auto& g = t->geometry();
+    for (std::size_t l : occupiedSet(*t)) {
+      const Vec3 v = g.indexToCoord(g.unlinear(l));
+      bool near = false;
+      for (const Vec3& c : centres) near = near || (T * c - v).norm() <= reach;
+      far += !near;
+    }
+    EXPECT_EQ(holes, 0u);
+    EXPECT_EQ(far, 0u);
+  }
+}

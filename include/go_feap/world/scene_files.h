@@ -53,7 +53,8 @@ struct SceneFileSpec {
 common::Result<SceneFileSpec> parseSceneYaml(const std::string& yaml_path);
 
 /// Loads the geometry named by `spec` and voxelises it in the world frame: points mark
-/// their voxel, triangles every voxel they overlap, octree leaves every voxel they cover.
+/// their voxel, triangles every voxel they overlap, octree leaves every voxel they overlap
+/// (voxelizeParallelepiped).
 /// Geometry outside the grid (box + margin) is dropped.
 common::Result<Scene> loadSceneFile(const SceneFileSpec& spec);
 
@@ -69,6 +70,13 @@ bool triangleMarksVoxel(const common::GridGeometry& geo, const Index3& idx, cons
 /// of the grid columns the triangle crosses: the cost grows with the triangle's area, not with the
 /// volume of its bounding box.
 void voxelizeTriangle(Scene& scene, const Vec3& a, const Vec3& b, const Vec3& c);
+
+/// Marks every voxel of `scene` that the solid parallelepiped centre + half * [-1, 1]^3 (world frame; the columns
+/// of `half` are its half edges: an octree leaf placed by T_world_file) overlaps with a volume. A face lying on a
+/// voxel face marks only the voxel on the solid's side: triangleMarksVoxel's half-open rule for a solid
+/// [min, max), so a solid filling whole voxels marks just those. Faces within a millionth of a voxel (or of the
+/// solid's shortest edge) of each other count as lying on each other (rounding).
+void voxelizeParallelepiped(Scene& scene, const Vec3& centre, const Eigen::Matrix3d& half);
 
 /// Writes the occupied voxel centres as a binary PCD (world frame).
 common::Status saveScenePcd(const Scene& scene, const std::string& path);
