@@ -1,8 +1,10 @@
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
-#include <stdexcept>
 
 #include "go_feap/world/scene_files.h"
 
@@ -29,49 +31,102 @@ R parseBinary(const std::string& path, const std::string& bytes, std::uint32_t c
   return mesh;
 }
 
-R parseAscii(const std::string& path, const std::string& text) {
-  std::istringstream in(text);
-  std::string word;
-  TriangleMesh mesh;
-  bool ended = false;
-  std::size_t line_vertices = 0;
-  while (in >> word) {
-    if (word == "vertex") {
-      std::string xs, ys, zs;
-      if (!(in >> xs >> ys >> zs))
-        return R::Error(path + ": truncated ASCII STL (vertex " + std::to_string(mesh.vertices.size()) +
-                        " has fewer than 3 coordinates)");
-      Vec3 p;
-      // Whole words only: std::stod alone read "2abc" as 2.
-      auto whole = [](const std::string& s) {
-        std::size_t used = 0;
-        const double v = std::stod(s, &used);
-        if (used != s.size()) throw std::invalid_argument(s);
-        return v;
-      };
-      try {
-        p = Vec3(whole(xs), whole(ys), whole(zs));
-      } catch (const std::exception&) {
-        return R::Error(path + ": corrupt ASCII STL (vertex " + std::to_string(mesh.vertices.size()) +
-                        " has a non-numeric coordinate)");
-      }
-      if (!p.allFinite())
-        return R::Error(path + ": vertex " + std::to_string(mesh.vertices.size()) + " is NaN or Inf");
-      mesh.vertices.push_back(p);
-      ++line_vertices;
-    } else if (word == "endloop") {
-      if (line_vertices != 3)
-        return R::Error(path + ": corrupt ASCII STL (facet " + std::to_string(mesh.triangleCount()) +
-                        " has " + std::to_string(line_vertices) + " vertices, expected 3)");
-      line_vertices = 0;
-    } else if (word == "endsolid") {
-      ended = true;
-      break;
+// The words of an ASCII STL, each with the number of the line it stands on. STL separates its words by any
+// white space, so a facet may span lines or share one.
+class StlWords {
+ public:
+  explicit StlWords(const std::string& text) : text_(text) {}
+  /// The next word into `word`; false at the end of the text.
+  bool next(std::string& word) {
+    while (!(words_ >> word)) {
+      if (!std::getline(text_, line_text_)) return false;
+      ++line_;
+      words_.clear();
+      words_.str(line_text_);
     }
+    return true;
   }
-  if (!ended) return R::Error(path + ": truncated ASCII STL (no 'endsolid')");
-  if (line_vertices != 0 || mesh.vertices.size() % 3 != 0)
-    return R::Error(path + ": truncated ASCII STL (last facet incomplete)");
+  /// Skips the rest of the current line (a solid's name).
+  void skipLine() {
+    words_.clear();
+    words_.str("");
+  }
+  std::size_t line() const { return line_; }
+
+ private:
+  std::istringstream text_, words_;
+  std::string line_text_;
+  std::size_t line_ = 0;
+};
+
+// A whole word read as a number into `v`: "" when it is one, else what is wrong with it. Every word must be
+// whole (std::stod alone read "2abc" as 2); 1e999 overflows (a value too small for a double is read as ~0).
+std::string numberProblem(const std::string& word, double& v) {
+  errno = 0;
+  char* end = nullptr;
+  v = std::strtod(word.c_str(), &end);
+  if (end == word.c_str() || *end != '\0') return "a non-numeric coordinate '" + word + "'";
+  if (errno == ERANGE && std::isinf(v)) return "a coordinate '" + word + "' out of range";
+  return "";
+}
+
+// Every `solid ... endsolid` block of an ASCII STL, facet by facet: facet normal n n n, outer loop, three
+// vertex x y z, endloop, endfacet. A word out of place is refused with its line (a fourth coordinate, words
+// between facets were skipped; a second solid was dropped).
+R parseAscii(const std::string& path, const std::string& text) {
+  StlWords words(text);
+  TriangleMesh mesh;
+  std::string word;
+  auto corrupt = [&](const std::string& what) {
+    return R::Error(path + ": corrupt ASCII STL (line " + std::to_string(words.line()) + ": " + what + ")");
+  };
+  auto truncated = [&]() {
+    return R::Error(path + ": truncated ASCII STL (it ends inside facet " + std::to_string(mesh.triangleCount()) +
+                    " or before 'endsolid')");
+  };
+  auto got = [&](const std::string& want) { return "expected " + want + ", got '" + word + "'"; };
+  while (words.next(word)) {
+    if (word != "solid") return corrupt(got(mesh.vertices.empty() ? "'solid'" : "'solid' or the end of the file"));
+    words.skipLine();
+    while (true) {
+      if (!words.next(word)) return truncated();
+      if (word == "endsolid") break;
+      if (word != "facet") return corrupt(got("'facet' or 'endsolid'"));
+      const std::size_t facet = mesh.triangleCount();
+      double normal = 0.0;  // not used: the triangle's winding is what the voxelizer needs, not its normal
+      for (const std::string want : {"normal", "", "", "", "outer", "loop"}) {
+        if (!words.next(word)) return truncated();
+        if (want.empty()) {
+          if (std::string e = numberProblem(word, normal); !e.empty()) return corrupt("facet " + std::to_string(facet) + " has " + e);
+        } else if (word != want) {
+          return corrupt(got("'" + want + "'"));
+        }
+      }
+      for (int k = 0; k < 3; ++k) {
+        if (!words.next(word)) return truncated();
+        if (word == "endloop")
+          return corrupt("facet " + std::to_string(facet) + " has " + std::to_string(k) + " vertices, expected 3");
+        if (word != "vertex") return corrupt(got("'vertex'"));
+        Vec3 p;
+        for (int a = 0; a < 3; ++a) {
+          if (!words.next(word)) return truncated();
+          if (std::string e = numberProblem(word, p[a]); !e.empty())
+            return corrupt("vertex " + std::to_string(mesh.vertices.size()) + " has " + e);
+        }
+        if (!p.allFinite())
+          return R::Error(path + ": vertex " + std::to_string(mesh.vertices.size()) + " (line " +
+                          std::to_string(words.line()) + ") is NaN or Inf");
+        mesh.vertices.push_back(p);
+      }
+      for (const char* want : {"endloop", "endfacet"}) {
+        if (!words.next(word)) return truncated();
+        if (word == "vertex" && std::string(want) == "endloop")
+          return corrupt("facet " + std::to_string(facet) + " has more than 3 vertices, expected 3");
+        if (word != want) return corrupt(got("'" + std::string(want) + "'"));
+      }
+    }
+    words.skipLine();
+  }
   return mesh;
 }
 

@@ -1103,3 +1103,42 @@ TEST(Octomap, LeavesFinerThanTheGridMarkEveryVoxelTheyOverlap) {
     EXPECT_EQ(far, 0u);
   }
 }
+
+// Every solid of an ASCII STL is read (a second `solid ... endsolid` was dropped); a word out of place (a
+// fourth coordinate, stray words between facets) is refused with its line; a coordinate beyond double's range
+// is called out of range (it was "non-numeric"). STL's words are separated by any white space, lines or not.
+TEST(BadInput, AsciiStlSolidsAndMalformedLines) {
+  TempDir d;
+  const std::string a = " facet normal 0 0 1\n  outer loop\n   vertex 1 1 0.5\n   vertex 1.5 1 0.5\n"
+                        "   vertex 1 1.5 0.5\n  endloop\n endfacet\n";
+  const std::string b = " facet normal 0 0 1\n  outer loop\n   vertex -1 -1 0.5\n   vertex -1.5 -1 0.5\n"
+                        "   vertex -1 -1.5 0.5\n  endloop\n endfacet\n";
+  writeText(d.file("two.stl"), "solid a\n" + a + "endsolid a\nsolid b\n" + b + "endsolid b\n");
+  auto two = loadStl(d.file("two.stl"));
+  ASSERT_TRUE(two) << two.message();
+  ASSERT_EQ(two->triangleCount(), 2u);
+  EXPECT_EQ(two->vertices[1], Vec3(1.5, 1, 0.5));
+  EXPECT_EQ(two->vertices[4], Vec3(-1.5, -1, 0.5));
+  writeText(d.file("line.stl"), "solid x\nfacet normal 0 0 1 outer loop vertex 1 1 0.5 vertex 1.5 1 0.5 vertex 1 1.5 0.5 "
+                                "endloop endfacet\nendsolid x\n");
+  auto line = loadStl(d.file("line.stl"));
+  ASSERT_TRUE(line) << line.message();
+  EXPECT_EQ(line->triangleCount(), 1u);
+  auto refused = [&](const std::string& name, const std::string& text, const std::vector<std::string>& words) {
+    writeText(d.file(name), text);
+    auto r = loadStl(d.file(name));
+    ASSERT_FALSE(r) << name << ": " << r->triangleCount() << " triangles";
+    std::vector<std::string> all{name};
+    all.insert(all.end(), words.begin(), words.end());
+    expectErrorMentions(r.message(), all);
+  };
+  std::string four = "solid x\n" + a + "endsolid x\n";
+  four.replace(four.find("1 1.5 0.5"), 9, "1 1.5 0.5 7");
+  refused("four.stl", four, {"line 6", "'7'"});
+  refused("junk.stl", "solid x\n" + a + " GARBAGE here 12 blah\n" + b + "endsolid x\n", {"line 9", "'GARBAGE'"});
+  std::string huge = "solid x\n" + a + "endsolid x\n";
+  huge.replace(huge.find("1.5 1 0.5"), 9, "1.5 1 1e999");
+  refused("huge.stl", huge, {"line 5", "'1e999'", "out of range"});
+  refused("after.stl", "solid x\n" + a + "endsolid x\nsome words\n", {"line 10", "'some'"});
+  refused("open.stl", "solid x\n" + a + "solid y\n" + b + "endsolid y\n", {"line 9", "'solid'"});
+}
