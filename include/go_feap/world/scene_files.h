@@ -26,8 +26,8 @@ struct OccupiedCube {
 /// The extension of `path` in lower case (".pcd" for "UP.PCD"): every loader matches extensions this way.
 std::string lowerExtension(const std::string& path);
 
-/// Reads x, y, z of every point of a .pcd or .ply file (PCL readers). Fails on missing,
-/// truncated or corrupt files, NaN/Inf points, and empty clouds.
+/// Reads x, y, z of every point of a .pcd or .ply file (PCL readers), each in its own type (float32, float64
+/// or an integer type, COUNT 1). Fails on missing, truncated or corrupt files, NaN/Inf points, and empty clouds.
 common::Result<std::vector<Vec3>> loadPointCloud(const std::string& path);
 
 /// Reads a binary or ASCII STL. A file is binary when its size equals 84 + 50 n for the
@@ -49,7 +49,8 @@ struct SceneFileSpec {
   double margin = 1.0;        ///< optional: grid margin around the box (m)
 };
 
-/// Parses a scene YAML; `file` is resolved against the YAML's folder.
+/// Parses a scene YAML; `file` is resolved against the YAML's folder. A key the loader does not read, or one
+/// given twice, is refused (at every level), naming it.
 common::Result<SceneFileSpec> parseSceneYaml(const std::string& yaml_path);
 
 /// Loads the geometry named by `spec` and voxelises it in the world frame: points mark
