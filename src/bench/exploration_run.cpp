@@ -184,6 +184,9 @@ void ExplorationRun::frame() {
     coverage_->update(map_->occupancy(), update->frame.changed);
     t0 = Clock::now();
     finder_->update(map_->occupancy(), update->frame.changed, t_);
+    // The viewpoints cached for frontiers the change reaches go too (timed with the frontier block: it is
+    // done per map update, as the frontiers are; a "local" sample per frame would dilute that block's mean).
+    viewpoint_cache_.forgetChanged(map_->occupancy().geometry(), update->frame.changed);
     recorder_.addTime("frontier", msSince(t0));
   }
 }

@@ -235,6 +235,20 @@ FrontierDelta FrontierFinder::regrow(std::unordered_set<std::uint32_t> affected,
   std::vector<Frontier> added;
   std::vector<Cell> cells, buffer;
   std::vector<std::pair<std::size_t, std::size_t>> pieces;
+  // A piece made of exactly the cells of a removed cluster is that cluster, unchanged: it keeps its id and
+  // is neither removed nor added. (Every piece of a regrown region took a new id, though the change lay
+  // metres away: a blacklisted frontier came back under a new id and was tried again, and the planners'
+  // caches and tours keyed by id were dropped for the whole region at every frame.)
+  std::unordered_set<std::uint32_t> unchanged;
+  auto sameCluster = [&](std::size_t b, std::size_t e) -> std::uint32_t {
+    const std::uint32_t own = owner_[ownerSlot(cells[b].index)];
+    if (own == 0 || affected.count(own) == 0) return 0;
+    const Frontier* old = find(own);
+    if (!old || old->cells.size() != e - b) return 0;
+    for (std::size_t i = b; i < e; ++i)
+      if (owner_[ownerSlot(cells[i].index)] != own) return 0;
+    return own;  // as many cells, all its own: the same set
+  };
   for (auto& region : regions) {
     if (!keepRegion(region)) continue;
     // Sorted cells make the split independent of the order the flood fill found them in; the split
@@ -250,7 +264,8 @@ FrontierDelta FrontierFinder::regrow(std::unordered_set<std::uint32_t> affected,
     splitRange(cells, 0, cells.size(), buffer, pieces);
     for (const auto& [b, e] : pieces) {
       Frontier f;
-      f.id = next_id_++;
+      const std::uint32_t same = sameCluster(b, e);
+      f.id = same != 0 ? same : next_id_++;
       f.first_seen = now;
       f.box = {Vec3::Constant(1e18), Vec3::Constant(-1e18)};
       f.cells.reserve(e - b);
@@ -269,14 +284,19 @@ FrontierDelta FrontierFinder::regrow(std::unordered_set<std::uint32_t> affected,
       }
       f.average /= static_cast<double>(e - b);
       f.active = f.average.z() >= band_min_ && f.average.z() <= band_max_;
-      delta.added.push_back(f.id);
+      if (same != 0) {
+        unchanged.insert(same);
+        f.viewpoints = find(same)->viewpoints;
+      } else {
+        delta.added.push_back(f.id);
+      }
       added.push_back(std::move(f));
     }
   }
   // Cells of removed clusters that no new cluster took lose their owner.
   for (std::uint32_t id : affected) {
     const Frontier* f = find(id);
-    if (!f) continue;
+    if (!f || unchanged.count(id) > 0) continue;
     for (const Index3& c : f->cells) {
       std::uint32_t& own = owner_[ownerSlot(c)];
       if (own == id) own = 0;

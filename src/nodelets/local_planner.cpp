@@ -1,7 +1,8 @@
 // LocalPlanner: picks the next viewpoint. Samples candidate viewpoints around the first
 // frontiers of the global tour, filters them by frontier type (near or cluttered: steering
 // rate; open: N_view) and runs the viewpoint DAG. In: global_tour, frontiers, odom, depth
-// (obstacle-ratio window), layer, map_handle, frontier_failed (drops a failed target). Out:
+// (obstacle-ratio window), layer, map_handle, map_update (forgets the cached viewpoints of the frontiers
+// a change reaches), frontier_failed (drops a failed target). Out:
 // local_target (go_feap/ViewpointPath, numbered: a kept target is repeated with its number),
 // frontier_failed, viewpoint_markers, tour_wanted (std_msgs/Bool, with each tour: planning::planDue() for
 // the state that tour leaves, so after a plan for the target it chose or kept; the global planner sends
@@ -22,6 +23,7 @@
 #include <cmath>
 #include <functional>
 #include <mutex>
+#include <shared_mutex>
 #include <std_msgs/Bool.h>
 #include <std_msgs/UInt32.h>
 #include <optional>
@@ -30,6 +32,7 @@
 #include "go_feap/FrontierArray.h"
 #include "go_feap/GlobalTour.h"
 #include "go_feap/LayerBounds.h"
+#include "go_feap/MapUpdate.h"
 #include "go_feap/ViewpointPath.h"
 #include "go_feap/planning/local_planner.h"
 #include "go_feap/planning/viewpoints.h"
@@ -74,6 +77,7 @@ class LocalPlanner : public nodelet::Nodelet {
     layer_sub_ = ros_guard::subscribe(nh, getName(), "layer", 1, &LocalPlanner::onLayer, this);
     frontier_sub_ = ros_guard::subscribe(nh, getName(), "frontiers", 2, &LocalPlanner::onFrontiers, this);
     tour_sub_ = ros_guard::subscribe(nh, getName(), "global_tour", 2, &LocalPlanner::onTour, this);
+    update_sub_ = ros_guard::subscribe(nh, getName(), "map_update", 20, &LocalPlanner::onMapUpdate, this);
     failed_pub_ = nh.advertise<std_msgs::UInt32>("frontier_failed", 100);
     wanted_pub_ = nh.advertise<std_msgs::Bool>("tour_wanted", 2);
     failed_sub_ = ros_guard::subscribe(nh, getName(), "frontier_failed", 100, &LocalPlanner::onFailed, this);
@@ -107,6 +111,33 @@ class LocalPlanner : public nodelet::Nodelet {
     shared_ = *map;
     astar_ = std::make_unique<planning::Astar>(shared_->map->occupancy(), shared_->map->esdf(), astar_config_);
   }
+  // The viewpoints cached for frontiers a change of the map reaches are forgotten (a frontier keeps its id
+  // while its cells stay the same): by the changed voxels while the map is still at this update, by the
+  // update's box after, and all of them when updates were missed.
+  void onMapUpdate(const MapUpdate::ConstPtr& msg) {
+    if (!ros_check::mapUpdateProblem(*msg).empty()) {  // the frontier finder names it
+      std::lock_guard<std::mutex> lock(mutex_);
+      cache_.retain({});
+      return;
+    }
+    std::lock_guard<std::mutex> lock(mutex_);
+    const bool gap = last_update_ != 0 && msg->sequence != last_update_ + 1;
+    last_update_ = msg->sequence;
+    if (gap) {
+      cache_.retain({});
+      return;
+    }
+    if (msg->changed_voxels == 0 || !shared_) return;
+    std::shared_lock<std::shared_mutex> map_lock(shared_->mutex);
+    if (shared_->sequence == msg->sequence) {
+      cache_.forgetChanged(shared_->map->occupancy().geometry(), shared_->last_changed);
+    } else {
+      const common::Vec3 lo(msg->changed_min.x, msg->changed_min.y, msg->changed_min.z);
+      const common::Vec3 hi(msg->changed_max.x, msg->changed_max.y, msg->changed_max.z);
+      cache_.forgetChanged(common::Aabb{lo, hi});
+    }
+  }
+
   void onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
     // The velocity prices every leg from the vehicle: one not finite (it used to be taken as rest) or
     // faster than local/max_input_speed refuses the message whole.
@@ -405,7 +436,9 @@ class LocalPlanner : public nodelet::Nodelet {
   double committed_at_ = 0.0, speed_ = 0.0, frontier_extent_ = 2.0, max_input_speed_ = 20.0;
   std::string speed_limit_name_;  ///< local/max_input_speed's full name, for the messages
   double last_plan_ = -1e9;  ///< s (ROS time), when a tour was last planned against (planning::planDue())
-  ros::Subscriber handle_sub_, odom_sub_, depth_sub_, layer_sub_, frontier_sub_, tour_sub_, failed_sub_, status_sub_;
+  ros::Subscriber handle_sub_, odom_sub_, depth_sub_, layer_sub_, frontier_sub_, tour_sub_, failed_sub_, status_sub_,
+      update_sub_;
+  std::uint64_t last_update_ = 0;  ///< sequence of the last map_update
 };
 
 }  // namespace go_feap

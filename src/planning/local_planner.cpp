@@ -354,8 +354,45 @@ const std::vector<frontier::Viewpoint>& ViewpointCache::get(const frontier::Fron
   Entry& e = entries_[frontier.id];
   e.z_min = z_min;
   e.z_max = z_max;
+  // Sampling reads the map at the ring positions (up to the farthest radius and height offset from the
+  // frontier's average, inside its box), their clearance round them, and the lines from them to the cells.
+  double ring = 0.0, height = 0.0;
+  for (double r : config.ring_radii) ring = std::max(ring, std::abs(r));
+  for (double h : config.height_offsets) height = std::max(height, std::abs(h));
+  const double grow = std::hypot(ring, height) + config.clearance + map.geometry().resolution();
+  e.reach = {frontier.box.min - common::Vec3::Constant(grow), frontier.box.max + common::Vec3::Constant(grow)};
   e.viewpoints = sampleViewpoints(frontier, map, esdf, z_min, z_max, config);
   return e.viewpoints;
+}
+
+void ViewpointCache::forgetChanged(const common::GridGeometry& geometry, const std::vector<std::size_t>& changed) {
+  if (changed.empty() || entries_.empty()) return;
+  std::vector<common::Vec3> centres;
+  centres.reserve(changed.size());
+  common::Aabb all{common::Vec3::Constant(std::numeric_limits<double>::infinity()),
+                   common::Vec3::Constant(-std::numeric_limits<double>::infinity())};
+  for (std::size_t l : changed) {
+    centres.push_back(geometry.indexToCoord(geometry.unlinear(l)));
+    all.min = all.min.cwiseMin(centres.back());
+    all.max = all.max.cwiseMax(centres.back());
+  }
+  for (auto it = entries_.begin(); it != entries_.end();) {
+    const common::Aabb& r = it->second.reach;
+    const bool near = !((all.max.array() < r.min.array()).any() || (all.min.array() > r.max.array()).any());
+    const bool touched = near && std::any_of(centres.begin(), centres.end(), [&](const common::Vec3& c) {
+                           return (c.array() >= r.min.array()).all() && (c.array() <= r.max.array()).all();
+                         });
+    it = touched ? entries_.erase(it) : std::next(it);
+  }
+}
+
+void ViewpointCache::forgetChanged(const common::Aabb& changed) {
+  for (auto it = entries_.begin(); it != entries_.end();) {
+    const common::Aabb& r = it->second.reach;
+    // NaN bounds overlap everything: such a change forgets all.
+    const bool apart = (changed.max.array() < r.min.array()).any() || (changed.min.array() > r.max.array()).any();
+    it = apart ? std::next(it) : entries_.erase(it);
+  }
 }
 
 void ViewpointCache::retain(const std::vector<std::uint32_t>& ids) {

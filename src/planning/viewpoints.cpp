@@ -26,8 +26,9 @@ Status ViewpointConfig::validate() const {
   if (ring_radii.empty()) return err("ring_radii", "must not be empty");
   for (double r : ring_radii)
     if (!positiveFinite(r)) return err("ring_radii", "must all be > 0");
-  if (!(positiveFinite(angular_step) && angular_step <= 2.0 * kPi))
-    return err("angular_step", "must be in (0, 2 pi]");
+  // A floor as well: at 1e-6 rad each ring held 6.3 million positions and the sampler never came back.
+  if (!(angular_step >= kPi / 180.0 && angular_step <= 2.0 * kPi))
+    return err("angular_step", "must be in [pi / 180, 2 pi] (1 to 360 degrees)");
   if (height_offsets.empty()) return err("height_offsets", "must not be empty");
   for (double h : height_offsets)
     if (!std::isfinite(h)) return err("height_offsets", "must all be finite");
@@ -36,7 +37,7 @@ Status ViewpointConfig::validate() const {
   if (!(positiveFinite(hfov) && hfov < kPi)) return err("hfov", "must be in (0, pi)");
   if (!(positiveFinite(vfov) && vfov < kPi)) return err("vfov", "must be in (0, pi)");
   if (min_visible < 0) return err("min_visible", "must be >= 0");
-  if (yaw_samples < 1) return err("yaw_samples", "must be >= 1");
+  if (yaw_samples < 1 || yaw_samples > 360) return err("yaw_samples", "must be in [1, 360]");
   if (max_evaluated_cells < 0) return err("max_evaluated_cells", "must be >= 0 (0 = all cells)");
   return Status::Ok();
 }

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <functional>
 #include <limits>
+#include <map>
 #include <random>
 #include <set>
 
@@ -325,6 +326,66 @@ TEST(FrontierFinder, UpdateKeepsTheClustersItDoesNotTouch) {
   frontier::FrontierFinder full(cfg, m.geometry(), kBox);
   full.recomputeAll(m, 1.0);
   expectValidLocalClusters(f, full, m, cfg, "after growing the block");
+}
+
+// Below max_regrow_cells a change regrows the whole connected region; the pieces whose cells did not
+// change are the same clusters and keep their ids (they are neither removed nor added). Every piece used
+// to take a new id: a blacklisted frontier metres from the change came back under a new one.
+TEST(FrontierFinder, ARegrownClusterWhoseCellsDidNotChangeKeepsItsId) {
+  const Aabb box{Vec3(0, 0, 0), Vec3(20, 4, 2)};
+  map::OccupancyMap m(mapConfig(), box);
+  paint(m, Vec3(0, 0, 0), Vec3(20, 2.0, 2), VoxelState::kFree);  // a 20 m x 2 m wall of frontier at y 1.95
+  frontier::FrontierConfig cfg;
+  cfg.min_cluster_cells = 200;
+  cfg.max_cluster_extent = 2.5;
+  cfg.max_regrow_cells = 20000;  // the whole region is regrown
+  frontier::FrontierFinder f(cfg, m.geometry(), box);
+  f.recomputeAll(m, 0.0);
+  std::map<std::vector<std::size_t>, std::uint32_t> id_of;
+  for (const auto& fr : f.frontiers()) {
+    std::vector<std::size_t> v;
+    for (const Index3& c : fr.cells) v.push_back(m.geometry().linear(c));
+    id_of[v] = fr.id;
+  }
+  ASSERT_GE(id_of.size(), 6u);
+  // Three voxels beyond the wall seen free at its far end.
+  std::vector<std::size_t> changed;
+  for (int k = 5; k < 8; ++k) {
+    const Index3 i = m.geometry().coordToIndex(Vec3(19.55, 2.05, 0.05 + 0.1 * k));
+    m.setState(i, VoxelState::kFree);
+    changed.push_back(m.geometry().linear(i));
+  }
+  const frontier::FrontierDelta delta = f.update(m, changed, 1.0);
+  std::size_t same_cells = 0;
+  for (const auto& fr : f.frontiers()) {
+    std::vector<std::size_t> v;
+    for (const Index3& c : fr.cells) v.push_back(m.geometry().linear(c));
+    const auto it = id_of.find(v);
+    if (it == id_of.end()) {
+      EXPECT_NE(std::find(delta.added.begin(), delta.added.end(), fr.id), delta.added.end()) << "a changed cluster not added";
+      continue;
+    }
+    ++same_cells;
+    EXPECT_EQ(fr.id, it->second) << "a cluster with the same cells took a new id";
+    EXPECT_DOUBLE_EQ(fr.first_seen, 0.0);
+    EXPECT_EQ(std::find(delta.added.begin(), delta.added.end(), fr.id), delta.added.end());
+    EXPECT_EQ(std::find(delta.removed.begin(), delta.removed.end(), fr.id), delta.removed.end());
+  }
+  EXPECT_GE(same_cells, id_of.size() - 2) << "the change touched more than the wall's far end";
+  EXPECT_FALSE(delta.added.empty()) << "the far end's cluster changed";
+  for (std::uint32_t id : delta.removed) EXPECT_EQ(f.find(id), nullptr) << "removed " << id << " is still listed";
+  // The clusters are those of a full recomputation, and every cell has its cluster as owner (an update
+  // clearing the owners of the removed clusters' cells must not clear those of a kept one).
+  frontier::FrontierFinder full(cfg, m.geometry(), box);
+  full.recomputeAll(m, 1.0);
+  EXPECT_EQ(clusterSets(f, m.geometry()), clusterSets(full, m.geometry()));
+  std::vector<std::size_t> again;
+  const Index3 i = m.geometry().coordToIndex(Vec3(0.55, 2.05, 1.05));
+  m.setState(i, VoxelState::kFree);
+  again.push_back(m.geometry().linear(i));
+  f.update(m, again, 2.0);
+  full.recomputeAll(m, 2.0);
+  EXPECT_EQ(clusterSets(f, m.geometry()), clusterSets(full, m.geometry()));
 }
 
 TEST(FrontierFinder, WideClustersAreSplitSmallRegionsDropped) {

@@ -231,6 +231,7 @@ TEST(ViewpointConfig, ValidateNamesTheBadKey) {
   expectBad("ring_radii", [](ViewpointConfig& c) { c.ring_radii.clear(); });
   expectBad("ring_radii", [](ViewpointConfig& c) { c.ring_radii = {1.0, -1.0}; });
   expectBad("angular_step", [](ViewpointConfig& c) { c.angular_step = 0.0; });
+  expectBad("angular_step", [](ViewpointConfig& c) { c.angular_step = 1e-6; });  // 6.3 million per ring
   expectBad("height_offsets", [](ViewpointConfig& c) { c.height_offsets.clear(); });
   expectBad("height_offsets", [](ViewpointConfig& c) { c.height_offsets = {NAN}; });
   expectBad("clearance", [](ViewpointConfig& c) { c.clearance = -0.1; });
@@ -239,6 +240,7 @@ TEST(ViewpointConfig, ValidateNamesTheBadKey) {
   expectBad("vfov", [](ViewpointConfig& c) { c.vfov = 0.0; });
   expectBad("min_visible", [](ViewpointConfig& c) { c.min_visible = -1; });
   expectBad("yaw_samples", [](ViewpointConfig& c) { c.yaw_samples = 0; });
+  expectBad("yaw_samples", [](ViewpointConfig& c) { c.yaw_samples = 100000; });
   // Against the ESDF: a clearance past max_distance (where distances are truncated) passes no viewpoint.
   EsdfConfig esdf;
   esdf.max_distance = 2.0;
@@ -517,6 +519,70 @@ TEST(Viewpoints, CacheGivesTheSampledViewpointsAndDropsThoseTheMapHasFilled) {
   EXPECT_EQ(cache.misses(), 2u);
   cache.retain({});
   EXPECT_EQ(cache.size(), 0u);
+  cache.get(f, w.map(), w.esdf(), z_min, z_max, cfg);
+  EXPECT_EQ(cache.misses(), 3u);
+}
+
+// A frontier keeps its id while its cells stay the same, however the map round it changes: its cached
+// viewpoints go when a change reaches where they were sampled from, and stay for a change elsewhere. The
+// cache was emptied only with the id, so that a frontier whose ring was unknown when it was first sampled
+// kept no viewpoint (and was skipped at every plan until blacklisted) after its ring had been seen.
+TEST(Viewpoints, CacheForgetsAFrontierWhenTheMapChangesWithinItsReach) {
+  const ViewpointConfig cfg = testConfig();
+  const double z_min = 0.4, z_max = 1.4;
+  World w(Index3(80, 40, 20));
+  w.set(Index3::Zero(), Index3(79, 39, 19), VoxelState::kUnknown);
+  w.set(Index3(16, 16, 4), Index3(23, 23, 15), VoxelState::kFree);   // a free shell two voxels thick
+  w.set(Index3(18, 18, 6), Index3(21, 21, 13), VoxelState::kUnknown);  // round an unknown block
+  const Frontier f = [&] {
+    Frontier g = frontierOf(w);
+    // Only the block's faces (the shell's outer faces border unknown space too).
+    g.cells.erase(std::remove_if(g.cells.begin(), g.cells.end(),
+                                 [](const Index3& c) {
+                                   return (c.array() < Eigen::Array3i(17, 17, 5)).any() ||
+                                          (c.array() > Eigen::Array3i(22, 22, 14)).any();
+                                 }),
+                  g.cells.end());
+    g.box = {Vec3::Constant(1e18), Vec3::Constant(-1e18)};
+    g.average = Vec3::Zero();
+    for (const Index3& c : g.cells) {
+      const Vec3 p = w.geo().indexToCoord(c);
+      g.average += p / static_cast<double>(g.cells.size());
+      g.box.min = g.box.min.cwiseMin(p - Vec3::Constant(0.05));
+      g.box.max = g.box.max.cwiseMax(p + Vec3::Constant(0.05));
+    }
+    return g;
+  }();
+  ASSERT_GE(f.cells.size(), 50u);
+  go_feap::planning::ViewpointCache cache;
+  EXPECT_TRUE(cache.get(f, w.map(), w.esdf(), z_min, z_max, cfg).empty()) << "the ring lies in unknown space";
+  // A change 4 m away, beyond the ring's reach: the (empty) entry stays.
+  auto changed = [&](const Index3& lo, const Index3& hi) {
+    std::vector<std::size_t> out;
+    for (int z = lo.z(); z <= hi.z(); ++z)
+      for (int y = lo.y(); y <= hi.y(); ++y)
+        for (int x = lo.x(); x <= hi.x(); ++x) out.push_back(w.geo().linear(Index3(x, y, z)));
+    return out;
+  };
+  w.set(Index3(70, 0, 0), Index3(79, 39, 19), VoxelState::kFree);
+  cache.forgetChanged(w.geo(), changed(Index3(70, 0, 0), Index3(79, 39, 19)));
+  EXPECT_TRUE(cache.get(f, w.map(), w.esdf(), z_min, z_max, cfg).empty());
+  EXPECT_EQ(cache.misses(), 1u);
+  // The space round the block is seen free; the frontier's cells are the block's faces still.
+  w.set(Index3::Zero(), Index3(69, 39, 19), VoxelState::kFree);
+  w.set(Index3(18, 18, 6), Index3(21, 21, 13), VoxelState::kUnknown);
+  cache.forgetChanged(w.geo(), changed(Index3::Zero(), Index3(69, 39, 19)));
+  const std::vector<Viewpoint> fresh = sampleViewpoints(f, w.map(), w.esdf(), z_min, z_max, cfg);
+  ASSERT_FALSE(fresh.empty());
+  const std::vector<Viewpoint> got = cache.get(f, w.map(), w.esdf(), z_min, z_max, cfg);
+  ASSERT_EQ(got.size(), fresh.size());
+  for (std::size_t i = 0; i < got.size(); ++i) EXPECT_EQ(got[i].position, fresh[i].position);
+  EXPECT_EQ(cache.misses(), 2u);
+  // By box: one far off keeps the entry, one within reach forgets it.
+  cache.forgetChanged(go_feap::common::Aabb{Vec3(7.0, 0.0, 0.0), Vec3(7.9, 3.9, 1.9)});
+  cache.get(f, w.map(), w.esdf(), z_min, z_max, cfg);
+  EXPECT_EQ(cache.misses(), 2u);
+  cache.forgetChanged(go_feap::common::Aabb{Vec3(3.5, 2.0, 1.0), Vec3(3.6, 2.1, 1.1)});
   cache.get(f, w.map(), w.esdf(), z_min, z_max, cfg);
   EXPECT_EQ(cache.misses(), 3u);
 }

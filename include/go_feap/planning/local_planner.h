@@ -282,12 +282,21 @@ class VisitedViewpoints {
 /// that no longer exist, or sampled for another band, are replaced.
 class ViewpointCache {
  public:
-  /// The viewpoints of `frontier` in the band [z_min, z_max]: cached, re-checked, or sampled now.
+  /// The viewpoints of `frontier` in the band [z_min, z_max]: cached and re-checked (those no longer free
+  /// or clear dropped), or sampled now. Call forgetChanged() with every change of the map: an entry is
+  /// kept only while the map within its reach stays as it was.
   const std::vector<frontier::Viewpoint>& get(const frontier::Frontier& frontier, const map::OccupancyMap& map,
                                               const map::Esdf& esdf, double z_min, double z_max,
                                               const ViewpointConfig& config);
   /// Forgets every frontier not in `ids` (call with the current frontier ids).
   void retain(const std::vector<std::uint32_t>& ids);
+  /// Forgets the frontiers whose viewpoints a change of the map could alter: those with a changed voxel
+  /// (linear indices of `geometry`) within reach of their sampling (the frontier's box grown by the
+  /// farthest ring position, the clearance and a voxel; the lines of sight lie inside it too). A frontier
+  /// keeps its id while its cells stay the same, however the map round it changes.
+  void forgetChanged(const common::GridGeometry& geometry, const std::vector<std::size_t>& changed);
+  /// As above for a change known only by its bounding box (m).
+  void forgetChanged(const common::Aabb& changed);
   std::size_t size() const { return entries_.size(); }
   std::size_t hits() const { return hits_; }
   std::size_t misses() const { return misses_; }
@@ -295,6 +304,7 @@ class ViewpointCache {
  private:
   struct Entry {
     double z_min, z_max;
+    common::Aabb reach;  ///< where a change of the map could alter the viewpoints
     std::vector<frontier::Viewpoint> viewpoints;
   };
   std::unordered_map<std::uint32_t, Entry> entries_;
