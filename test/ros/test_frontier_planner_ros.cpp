@@ -300,7 +300,11 @@ TEST_F(FrontierPlannerTest, LocalPlannerNeverPlansAgainstARepeatedTour) {
   ros::Subscriber targets = nh_.subscribe<go_feap::ViewpointPath>(
       "probe/local_target", 5, [&](const go_feap::ViewpointPath::ConstPtr& m) { probe_target = m; });
   ros::Publisher tour_pub = nh_.advertise<go_feap::GlobalTour>("probe/global_tour", 10);
-  ASSERT_TRUE(spinUntil([&] { return tour_ && tour_pub.getNumSubscribers() >= 1; }, 90.0)) << "no tour to feed the probe";
+  // This node's subscriptions connected too: an answer sent before would be lost (1.5 s of the clock is
+  // 0.75 s of wall time at the simulator's rate factor 2).
+  ASSERT_TRUE(spinUntil([&] {
+    return tour_ && tour_pub.getNumSubscribers() >= 1 && want.getNumPublishers() >= 1 && times.getNumPublishers() >= 1;
+  }, 90.0)) << "no tour to feed the probe";
   auto feed = [&](bool repeated, double seconds) {
     const ros::Time start = ros::Time::now();
     ros::Time last;
