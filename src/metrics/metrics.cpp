@@ -118,10 +118,12 @@ nlohmann::json toJson(const Summary& s) {
   j["finish_reason"] = s.finish_reason;
   j["exploration_time_s"] = s.exploration_time_s;
   j["flight_distance_m"] = s.flight_distance_m;
-  j["coverage"] = s.coverage;
-  j["collisions"] = s.collisions;
+  // Figures that need a scene to compare with are null without one (onboard, replay): 0 m from an
+  // obstacle, no collision and a coverage of -1 read as measured.
+  j["coverage"] = s.ground_truth ? nlohmann::json(s.coverage) : nlohmann::json(nullptr);
+  j["collisions"] = s.ground_truth ? nlohmann::json(s.collisions) : nlohmann::json(nullptr);
   j["blacklisted_frontiers"] = s.blacklisted_frontiers;
-  j["min_obstacle_distance_m"] = s.min_obstacle_distance_m;
+  j["min_obstacle_distance_m"] = s.ground_truth ? nlohmann::json(s.min_obstacle_distance_m) : nlohmann::json(nullptr);
   j["wall_time_s"] = s.wall_time_s;
   nlohmann::json compute = nlohmann::json::object();
   double total = 0.0;

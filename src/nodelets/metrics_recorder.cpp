@@ -78,6 +78,7 @@ class MetricsRecorder : public nodelet::Nodelet {
       collisions_ = std::make_unique<metrics::CollisionMonitor>(*scene_, collision_distance_);
     } else {
       s.scene = "onboard";
+      s.ground_truth = false;
     }
     text_pub_ = nh.advertise<visualization_msgs::Marker>("status_text", 2);
     coverage_pub_ = nh.advertise<std_msgs::Float64>("coverage", 2);

@@ -280,6 +280,21 @@ TEST(Metrics, SummaryWithBytesThatAreNotTextIsStillWritten) {
   fs::remove_all(dir);
 }
 
+// Onboard or in a replay there is no scene to compare with: the figures that need one are null, not the
+// 0 m from an obstacle, no collision and coverage -1 that read as measured.
+TEST(Metrics, FiguresWithoutGroundTruthAreNull) {
+  metrics::Summary s = summary("onboard", "go_feap", 10.0, 12.5, -1.0, 0, "complete", 2.0);
+  s.ground_truth = false;
+  const nlohmann::json j = nlohmann::json::parse(metrics::summaryJson(s));
+  for (const char* key : {"coverage", "collisions", "min_obstacle_distance_m"}) EXPECT_TRUE(j[key].is_null()) << key;
+  EXPECT_DOUBLE_EQ(j["exploration_time_s"].get<double>(), 10.0);
+  EXPECT_DOUBLE_EQ(j["flight_distance_m"].get<double>(), 12.5);
+  s.ground_truth = true;
+  const nlohmann::json k = nlohmann::json::parse(metrics::summaryJson(s));
+  EXPECT_DOUBLE_EQ(k["coverage"].get<double>(), -1.0);
+  EXPECT_EQ(k["collisions"].get<int>(), 0);
+}
+
 TEST(Metrics, RecorderWritesSummaryCsvAndPlot) {
   metrics::Recorder r;
   r.summary() = summary("maze", "go_feap", 10.0, 12.5, 0.5, 1, "complete", 2.0);

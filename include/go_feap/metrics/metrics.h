@@ -115,6 +115,9 @@ struct Summary {
   int collisions = 0;
   int blacklisted_frontiers = 0;  ///< frontiers left blacklisted (after failed attempts) at the finish
   double min_obstacle_distance_m = 0.0;  ///< closest approach of the UAV centre to ground truth
+  /// false with no scene to compare with (onboard, replay): coverage, collisions and
+  /// min_obstacle_distance_m were never measured, and summary.json says null for them.
+  bool ground_truth = true;
   double wall_time_s = 0.0;
   std::map<std::string, BlockTime> compute;  ///< per block: mapping, frontier, global, local, trajectory
   std::map<std::string, double> extra;       ///< other figures (memory, speed-up, ...)
@@ -132,7 +135,7 @@ class Recorder {
   /// summary.json: scene, seed, planner, finish_reason, exploration_time_s, flight_distance_m,
   /// coverage, collisions, blacklisted_frontiers, min_obstacle_distance_m, wall_time_s, compute_ms {block: {mean, max, count}}
   /// with "total" = the sum of the planning blocks' means (frontier, global, local, trajectory), and
-  /// the extra figures.
+  /// the extra figures. Without ground truth, coverage, collisions and min_obstacle_distance_m are null.
   common::Status writeSummary(const std::string& path) const;
   /// metrics.csv: t,coverage,explored_m3,distance,layer,frontiers,x,y,z.
   common::Status writeCsv(const std::string& path) const;
