@@ -355,12 +355,37 @@ const std::vector<frontier::Viewpoint>& ViewpointCache::get(const frontier::Fron
   e.z_min = z_min;
   e.z_max = z_max;
   // Sampling reads the map at the ring positions (up to the farthest radius and height offset from the
-  // frontier's average, inside its box), their clearance round them, and the lines from them to the cells.
-  double ring = 0.0, height = 0.0;
+  // frontier's average, which lies among its cells; heights clamped into the band), their clearance round
+  // them, and the lines from them to the cells. The cells' own bounds, not frontier.box: a frontier built
+  // from a message may not carry its box (the LocalPlanner nodelet's did not, and every reach sat at the
+  // origin).
+  const auto& geo = map.geometry();
+  common::Aabb cells{common::Vec3::Constant(std::numeric_limits<double>::infinity()),
+                     common::Vec3::Constant(-std::numeric_limits<double>::infinity())};
+  for (const common::Index3& c : frontier.cells) {
+    cells.min = cells.min.cwiseMin(geo.indexToCoord(c));
+    cells.max = cells.max.cwiseMax(geo.indexToCoord(c));
+  }
+  cells.min = cells.min.cwiseMin(frontier.average);
+  cells.max = cells.max.cwiseMax(frontier.average);
+  const common::Vec3 half = common::Vec3::Constant(0.5 * geo.resolution());
+  double ring = 0.0, height = 0.0, offset_min = 0.0, offset_max = 0.0;
   for (double r : config.ring_radii) ring = std::max(ring, std::abs(r));
-  for (double h : config.height_offsets) height = std::max(height, std::abs(h));
-  const double grow = std::hypot(ring, height) + config.clearance + map.geometry().resolution();
-  e.reach = {frontier.box.min - common::Vec3::Constant(grow), frontier.box.max + common::Vec3::Constant(grow)};
+  for (double h : config.height_offsets) {
+    height = std::max(height, std::abs(h));
+    offset_min = std::min(offset_min, h);
+    offset_max = std::max(offset_max, h);
+  }
+  const double grow = std::hypot(ring, height) + config.clearance + geo.resolution();
+  e.reach = {cells.min - half - common::Vec3::Constant(grow), cells.max + half + common::Vec3::Constant(grow)};
+  // Heights clamped into the band (a frontier far above or below it) lie outside the grown box.
+  const double margin = config.clearance + geo.resolution();
+  if (std::isfinite(z_min) && std::isfinite(z_max) && z_min <= z_max) {
+    const double lowest = std::clamp(frontier.average.z() + offset_min, z_min, z_max);
+    const double highest = std::clamp(frontier.average.z() + offset_max, z_min, z_max);
+    e.reach.min.z() = std::min(e.reach.min.z(), lowest - margin);
+    e.reach.max.z() = std::max(e.reach.max.z(), highest + margin);
+  }
   e.viewpoints = sampleViewpoints(frontier, map, esdf, z_min, z_max, config);
   return e.viewpoints;
 }

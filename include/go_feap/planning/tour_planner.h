@@ -1,7 +1,8 @@
 // The global planning step with its path-length cache (DESIGN §3.4, §3.5): frontier summaries
 // and the UAV position in, ordered tour out. Path lengths come from A* on the inflated map;
 // frontier-to-frontier lengths are cached per id pair until either frontier changes (a changed
-// frontier gets a new id). Shared by the GlobalPlanner nodelet and the lock-step bench.
+// frontier gets a new id; one whose cells stay the same keeps its id, and its lengths, however the map
+// between the two changes, as FUEL keeps them). Shared by the GlobalPlanner nodelet and the lock-step bench.
 #pragma once
 
 #include <array>
