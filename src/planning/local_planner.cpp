@@ -362,13 +362,8 @@ const std::vector<frontier::Viewpoint>& ViewpointCache::get(const frontier::Fron
   const auto& geo = map.geometry();
   common::Aabb cells{common::Vec3::Constant(std::numeric_limits<double>::infinity()),
                      common::Vec3::Constant(-std::numeric_limits<double>::infinity())};
-  for (const common::Index3& c : frontier.cells) {
-    cells.min = cells.min.cwiseMin(geo.indexToCoord(c));
-    cells.max = cells.max.cwiseMax(geo.indexToCoord(c));
-  }
-  cells.min = cells.min.cwiseMin(frontier.average);
-  cells.max = cells.max.cwiseMax(frontier.average);
-  const common::Vec3 half = common::Vec3::Constant(0.5 * geo.resolution());
+  for (const common::Index3& c : frontier.cells) cells.extend(geo.indexToCoord(c));
+  cells.extend(frontier.average);
   double ring = 0.0, height = 0.0, offset_min = 0.0, offset_max = 0.0;
   for (double r : config.ring_radii) ring = std::max(ring, std::abs(r));
   for (double h : config.height_offsets) {
@@ -377,7 +372,7 @@ const std::vector<frontier::Viewpoint>& ViewpointCache::get(const frontier::Fron
     offset_max = std::max(offset_max, h);
   }
   const double grow = std::hypot(ring, height) + config.clearance + geo.resolution();
-  e.reach = {cells.min - half - common::Vec3::Constant(grow), cells.max + half + common::Vec3::Constant(grow)};
+  e.reach = cells.expanded(0.5 * geo.resolution() + grow);
   // Heights clamped into the band (a frontier far above or below it) lie outside the grown box.
   const double margin = config.clearance + geo.resolution();
   if (std::isfinite(z_min) && std::isfinite(z_max) && z_min <= z_max) {
@@ -390,6 +385,15 @@ const std::vector<frontier::Viewpoint>& ViewpointCache::get(const frontier::Fron
   return e.viewpoints;
 }
 
+namespace {
+
+// Whether two boxes share a point (a NaN bound overlaps everything).
+bool overlap(const common::Aabb& a, const common::Aabb& b) {
+  return !((a.max.array() < b.min.array()).any() || (a.min.array() > b.max.array()).any());
+}
+
+}  // namespace
+
 void ViewpointCache::forgetChanged(const common::GridGeometry& geometry, const std::vector<std::size_t>& changed) {
   if (changed.empty() || entries_.empty()) return;
   std::vector<common::Vec3> centres;
@@ -398,25 +402,20 @@ void ViewpointCache::forgetChanged(const common::GridGeometry& geometry, const s
                    common::Vec3::Constant(-std::numeric_limits<double>::infinity())};
   for (std::size_t l : changed) {
     centres.push_back(geometry.indexToCoord(geometry.unlinear(l)));
-    all.min = all.min.cwiseMin(centres.back());
-    all.max = all.max.cwiseMax(centres.back());
+    all.extend(centres.back());
   }
   for (auto it = entries_.begin(); it != entries_.end();) {
     const common::Aabb& r = it->second.reach;
-    const bool near = !((all.max.array() < r.min.array()).any() || (all.min.array() > r.max.array()).any());
-    const bool touched = near && std::any_of(centres.begin(), centres.end(), [&](const common::Vec3& c) {
-                           return (c.array() >= r.min.array()).all() && (c.array() <= r.max.array()).all();
-                         });
+    const bool touched =
+        overlap(all, r) && std::any_of(centres.begin(), centres.end(), [&](const common::Vec3& c) { return r.contains(c); });
     it = touched ? entries_.erase(it) : std::next(it);
   }
 }
 
 void ViewpointCache::forgetChanged(const common::Aabb& changed) {
   for (auto it = entries_.begin(); it != entries_.end();) {
-    const common::Aabb& r = it->second.reach;
     // NaN bounds overlap everything: such a change forgets all.
-    const bool apart = (changed.max.array() < r.min.array()).any() || (changed.min.array() > r.max.array()).any();
-    it = apart ? std::next(it) : entries_.erase(it);
+    it = overlap(changed, it->second.reach) ? entries_.erase(it) : std::next(it);
   }
 }
 
