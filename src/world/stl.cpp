@@ -38,6 +38,11 @@ class StlWords {
   explicit StlWords(const std::string& text) : text_(text) {}
   /// The next word into `word`; false at the end of the text.
   bool next(std::string& word) {
+    if (!pending_.empty()) {
+      word = std::move(pending_);
+      pending_.clear();
+      return true;
+    }
     while (!(words_ >> word)) {
       if (!std::getline(text_, line_text_)) return false;
       ++line_;
@@ -46,16 +51,21 @@ class StlWords {
     }
     return true;
   }
-  /// Skips the rest of the current line (a solid's name).
-  void skipLine() {
-    words_.clear();
-    words_.str("");
+  /// Skips a solid's name: the rest of the current line, up to a word `stop` on it (some writers put the
+  /// first 'facet' on the 'solid' line, or the next 'solid' after an 'endsolid'), which is read next.
+  void skipName(const char* stop) {
+    std::string word;
+    while (words_ >> word)
+      if (word == stop) {
+        pending_ = std::move(word);
+        return;  // the rest of the line follows it
+      }
   }
   std::size_t line() const { return line_; }
 
  private:
   std::istringstream text_, words_;
-  std::string line_text_;
+  std::string line_text_, pending_;
   std::size_t line_ = 0;
 };
 
@@ -87,7 +97,7 @@ R parseAscii(const std::string& path, const std::string& text) {
   auto got = [&](const std::string& want) { return "expected " + want + ", got '" + word + "'"; };
   while (words.next(word)) {
     if (word != "solid") return corrupt(got(mesh.vertices.empty() ? "'solid'" : "'solid' or the end of the file"));
-    words.skipLine();
+    words.skipName("facet");
     while (true) {
       if (!words.next(word)) return truncated();
       if (word == "endsolid") break;
@@ -125,7 +135,7 @@ R parseAscii(const std::string& path, const std::string& text) {
         if (word != want) return corrupt(got("'" + std::string(want) + "'"));
       }
     }
-    words.skipLine();
+    words.skipName("solid");
   }
   return mesh;
 }

@@ -1124,6 +1124,18 @@ TEST(BadInput, AsciiStlSolidsAndMalformedLines) {
   auto line = loadStl(d.file("line.stl"));
   ASSERT_TRUE(line) << line.message();
   EXPECT_EQ(line->triangleCount(), 1u);
+  // The first facet on the solid's line, and a whole file of two solids on one line (a name cannot hold
+  // the word 'facet' or, after 'endsolid', 'solid').
+  std::string flat = "solid a " + a + "endsolid a solid b " + b + "endsolid b";
+  std::replace(flat.begin(), flat.end(), '\n', ' ');
+  for (const auto& [name, text] : {std::pair<std::string, std::string>{"sameline.stl", "solid my part " + a + "endsolid my part\n"},
+                                   {"flat.stl", flat}}) {
+    writeText(d.file(name), text);
+    auto r = loadStl(d.file(name));
+    ASSERT_TRUE(r) << name << ": " << r.message();
+    EXPECT_EQ(r->triangleCount(), name == "flat.stl" ? 2u : 1u) << name;
+    EXPECT_EQ(r->vertices[1], Vec3(1.5, 1, 0.5)) << name;
+  }
   auto refused = [&](const std::string& name, const std::string& text, const std::vector<std::string>& words) {
     writeText(d.file(name), text);
     auto r = loadStl(d.file(name));
