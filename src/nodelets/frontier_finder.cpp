@@ -1,6 +1,7 @@
 // FrontierFinder: keeps the frontier clusters of the shared map up to date.
 // In: map_handle, map_update (from EsdfMapper, same manager), layer (LayerBounds).
-// Out: frontiers (go_feap/FrontierArray), frontier_markers (one colour per cluster, xi as text).
+// Out: frontiers (go_feap/FrontierArray, after each map update and when the band changes),
+// frontier_markers (one colour per cluster, xi as text).
 // State on the parameter server: ~id_reserved, the ids reserved so far (see reserveIds()).
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
@@ -10,6 +11,7 @@
 
 #include <limits>
 #include <mutex>
+#include <utility>
 
 #include "go_feap/FrontierArray.h"
 #include "go_feap/LayerBounds.h"
@@ -79,8 +81,13 @@ class FrontierFinder : public nodelet::Nodelet {
       return;
     }
     std::lock_guard<std::mutex> lock(mutex_);
+    const bool changed = band_ != std::make_pair(msg->z_min, msg->z_max);
     band_ = {msg->z_min, msg->z_max};
-    if (finder_) finder_->setActiveBand(msg->z_min, msg->z_max);
+    if (!finder_) return;
+    finder_->setActiveBand(msg->z_min, msg->z_max);
+    // The planners see the new band's active flags now, not at the next map update. The frontiers are those
+    // of the last update, sent with its stamp (the layer manager sends the same band again while it looks round).
+    if (changed) publish(last_stamp_, last_stamp_.toSec());
   }
 
   void onUpdate(const MapUpdate::ConstPtr& msg) {
@@ -129,6 +136,7 @@ class FrontierFinder : public nodelet::Nodelet {
     }
     ros_conv::publishComputeTime(compute_pub_, "frontier", t_compute);
     last_sequence_ = msg->sequence;
+    last_stamp_ = msg->header.stamp;
     publish(msg->header.stamp, now);
     reserveIds();  // an update that used more than the margin (a recomputation of a huge map) is covered now
   }
@@ -229,6 +237,7 @@ class FrontierFinder : public nodelet::Nodelet {
   std::unique_ptr<frontier::FrontierFinder> finder_;
   std::pair<double, double> band_{-1e18, 1e18};
   std::uint64_t last_sequence_ = 0;
+  ros::Time last_stamp_;  ///< of the last map update the frontiers come from
   std::uint32_t first_id_ = 1;     ///< the first id this finder hands out (~id_reserved when it started)
   std::uint32_t id_reserved_ = 1;  ///< ids below it are handed out or reserved (~id_reserved)
   ros::Publisher compute_pub_;

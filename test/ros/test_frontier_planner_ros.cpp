@@ -513,6 +513,35 @@ TEST_F(FrontierPlannerTest, MalformedChainMessagesAreRefusedAndTheNodeletsKeepWo
                                  << band->z_max;
   }
   EXPECT_GT(active, 0u) << "no frontier in the band: the check shows nothing";
+
+  // A new band reaches the planners at once: the finder sends its frontiers again with the new band's active
+  // flags and the stamp of the map update they come from (they used to wait for the next update, whose
+  // stamp is always a new one). Then the manager's band again.
+  std::vector<go_feap::FrontierArray::ConstPtr> seen;
+  ros::Subscriber all = nh_.subscribe<go_feap::FrontierArray>(
+      "frontiers", 100, [&](const go_feap::FrontierArray::ConstPtr& m) { seen.push_back(m); });
+  ASSERT_TRUE(spinUntil([&] { return !seen.empty(); }, 30.0)) << "no frontiers";
+  go_feap::LayerBounds other = *band;
+  other.z_min = band->z_max;
+  other.z_max = band->z_max + 1.0;
+  const std::size_t before = seen.size();
+  layer_pub.publish(other);
+  std::size_t again = 0;
+  ASSERT_TRUE(spinUntil([&] {
+    for (std::size_t k = std::max<std::size_t>(before, 1); k < seen.size() && again == 0; ++k)
+      if (seen[k]->header.stamp == seen[k - 1]->header.stamp) again = k;
+    return again != 0;
+  }, 10.0)) << "the frontiers were not sent again on a band change (" << seen.size() - before << " updates since)";
+  for (const auto& f : seen[again]->frontiers)
+    EXPECT_EQ(f.active, f.average.z >= other.z_min && f.average.z <= other.z_max) << "frontier " << f.id << " z " << f.average.z;
+  EXPECT_EQ(seen[again]->frontiers.size(), seen[again - 1]->frontiers.size()) << "the same frontiers, sent again";
+  layer_pub.publish(*band);
+  const std::size_t restored = seen.size();
+  ASSERT_TRUE(spinUntil([&] {
+    return seen.size() > restored && std::all_of(seen.back()->frontiers.begin(), seen.back()->frontiers.end(), [&](const auto& f) {
+             return f.active == (f.average.z >= band->z_min && f.average.z <= band->z_max);
+           });
+  }, 10.0)) << "the manager's band did not come back";
 }
 
 // The frontier finder unloaded and loaded again into the running manager (a nodelet restarted): its ids

@@ -480,6 +480,43 @@ TEST(FrontierFinder, NearCountsAndActiveBand) {
   for (const auto& fr : f.frontiers()) EXPECT_TRUE(fr.active);
 }
 
+// A band that splits the frontiers by height: only those whose average lies within [z_min, z_max] are active,
+// after setActiveBand and for the clusters an update makes or remakes afterwards.
+TEST(FrontierFinder, ActiveBandSplitsFrontiersByHeight) {
+  const Aabb box{Vec3(0, 0, 0), Vec3(10, 2, 3)};
+  map::OccupancyMap m(mapConfig(), box);
+  // Free pockets (each its own frontier) with averages at z = 0.5, 1.5 and 2.5.
+  for (const Vec3& c : {Vec3(1, 1, 0.5), Vec3(4, 1, 1.5), Vec3(7, 1, 2.5)})
+    paint(m, c - Vec3(0.2, 0.2, 0.2), c + Vec3(0.2, 0.2, 0.2), VoxelState::kFree);
+  frontier::FrontierConfig cfg;
+  cfg.max_cluster_extent = 100.0;
+  frontier::FrontierFinder f(cfg, m.geometry(), box);
+  f.recomputeAll(m, 0.0);
+  ASSERT_EQ(f.frontiers().size(), 3u);
+  auto expectBand = [&](double lo, double hi, std::size_t active_count, const char* when) {
+    std::size_t active = 0;
+    for (const auto& fr : f.frontiers()) {
+      EXPECT_EQ(fr.active, fr.average.z() >= lo && fr.average.z() <= hi) << when << ": " << fr.average.transpose();
+      active += fr.active;
+    }
+    EXPECT_EQ(active, active_count) << when;
+  };
+  f.setActiveBand(1.0, 2.0);
+  expectBand(1.0, 2.0, 1, "band [1, 2]");
+  f.setActiveBand(0.0, 2.0);
+  expectBand(0.0, 2.0, 2, "band [0, 2]");
+  f.setActiveBand(1.0, 2.0);
+  // New pockets at z = 1.5 (active) and 2.5 (not), and the one at z = 0.5 grown (remade, still below).
+  auto [lo, hi] = paint(m, Vec3(8.8, 0.8, 1.3), Vec3(9.2, 1.2, 1.7), VoxelState::kFree);
+  f.update(m, lo, hi, 1.0);
+  std::tie(lo, hi) = paint(m, Vec3(2.3, 0.8, 2.3), Vec3(2.7, 1.2, 2.7), VoxelState::kFree);
+  f.update(m, lo, hi, 1.0);
+  std::tie(lo, hi) = paint(m, Vec3(0.8, 0.8, 0.3), Vec3(1.4, 1.2, 0.7), VoxelState::kFree);
+  f.update(m, lo, hi, 1.0);
+  ASSERT_EQ(f.frontiers().size(), 5u);
+  expectBand(1.0, 2.0, 2, "after updates");
+}
+
 namespace {
 
 // Cells of the regions the finder holds, against a full recomputation by a finder without hysteresis
