@@ -84,10 +84,13 @@ class GlobalPlanner : public nodelet::Nodelet {
         NODELET_ERROR_STREAM_THROTTLE(10.0, getName() << ": " << other);
       return;
     }
-    auto map =
-        ros_map::acceptHandle(*msg, [&](const map::EsdfConfig& esdf) { return astar_config_.validate(esdf); });
+    auto map = ros_map::acceptHandle(*msg);
     if (!map) {
       NODELET_ERROR_STREAM_THROTTLE(10.0, getName() << ": " << map.message());
+      return;
+    }
+    if (const common::Status st = astar_config_.validate((*map)->map->config().esdf); !st) {
+      ros_params::stopManager(getName(), st.message());  // Astar's constructor would throw
       return;
     }
     shared_ = *map;

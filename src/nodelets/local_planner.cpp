@@ -99,15 +99,18 @@ class LocalPlanner : public nodelet::Nodelet {
         NODELET_ERROR_STREAM_THROTTLE(10.0, getName() << ": " << other);
       return;
     }
-    auto map = ros_map::acceptHandle(*msg, [&](const map::EsdfConfig& esdf) {
-      // Astar's constructor throws otherwise; a viewpoint clearance past max_distance passes no viewpoint.
-      const common::Status st = astar_config_.validate(esdf);
-      return st ? viewpoint_config_.validate(esdf) : st;
-    });
+    auto map = ros_map::acceptHandle(*msg);
     if (!map) {
       NODELET_ERROR_STREAM_THROTTLE(10.0, getName() << ": " << map.message());
       return;
     }
+    // Astar's constructor throws otherwise; a viewpoint clearance past max_distance passes no viewpoint.
+    const map::EsdfConfig& esdf = (*map)->map->config().esdf;
+    for (const common::Status& st : {astar_config_.validate(esdf), viewpoint_config_.validate(esdf)})
+      if (!st) {
+        ros_params::stopManager(getName(), st.message());
+        return;
+      }
     shared_ = *map;
     astar_ = std::make_unique<planning::Astar>(shared_->map->occupancy(), shared_->map->esdf(), astar_config_);
   }

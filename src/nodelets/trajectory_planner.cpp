@@ -78,17 +78,18 @@ class TrajectoryPlanner : public nodelet::Nodelet {
         NODELET_ERROR_STREAM_THROTTLE(10.0, getName() << ": " << other);
       return;
     }
-    auto map = ros_map::acceptHandle(*msg, [&](const map::EsdfConfig& esdf) {
-      const common::Status st = optimizer_.validate(esdf);
-      if (!st.ok()) return st;
-      for (const planning::AstarConfig* c : {&astar_config_, &scout_config_, &coarse_config_})
-        if (const common::Status s = c->validate(esdf); !s.ok()) return s;
-      return common::Status::Ok();
-    });
+    auto map = ros_map::acceptHandle(*msg);
     if (!map) {
       NODELET_ERROR_STREAM_THROTTLE(10.0, getName() << ": " << map.message());
       return;
     }
+    const map::EsdfConfig& esdf = (*map)->map->config().esdf;
+    for (const common::Status& st : {optimizer_.validate(esdf), astar_config_.validate(esdf), scout_config_.validate(esdf),
+                                     coarse_config_.validate(esdf)})
+      if (!st) {
+        ros_params::stopManager(getName(), st.message());
+        return;
+      }
     shared_ = *map;
     astar_ = std::make_unique<planning::Astar>(shared_->map->occupancy(), shared_->map->esdf(), astar_config_);
     scout_ = std::make_unique<planning::Astar>(shared_->map->occupancy(), shared_->map->esdf(), scout_config_);

@@ -68,6 +68,13 @@ void requireOrThrow(bool ok, const std::string& nodelet, const std::string& what
   throw std::runtime_error(nodelet + ": " + what);
 }
 
+void stopManager(const std::string& nodelet, const std::string& what) {
+  ROS_FATAL_STREAM(nodelet << ": " << what << "; the parameters of this nodelet and of the map's mapper conflict: "
+                           << "stopping the nodelet manager");
+  ros::WallDuration(0.5).sleep();  // the message leaves on /rosout first (its own thread sends it)
+  ros::requestShutdown();
+}
+
 }  // namespace go_feap::ros_params
 
 #include "go_feap/world/scene_files.h"

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <gtest/gtest.h>
+#include <ros/master.h>
 #include <ros/ros.h>
 
 #include <rosgraph_msgs/Log.h>
@@ -11,12 +12,26 @@
 #include <deque>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "go_feap/PositionCommand.h"
 #include "go_feap/world/scene.h"
 #include "go_feap/world/scene_files.h"
 
 namespace go_feap::test {
+
+/// The nodes the ROS master lists as publishing `topic` (getSystemState); empty when it does not answer.
+inline std::vector<std::string> publishersOf(const std::string& topic) {
+  XmlRpc::XmlRpcValue args, result, payload;
+  args[0] = ros::this_node::getName();
+  std::vector<std::string> nodes;
+  if (!ros::master::execute("getSystemState", args, result, payload, false)) return nodes;
+  XmlRpc::XmlRpcValue& publishers = payload[0];
+  for (int i = 0; i < publishers.size(); ++i)
+    if (static_cast<std::string>(publishers[i][0]) == topic)
+      for (int j = 0; j < publishers[i][1].size(); ++j) nodes.push_back(static_cast<std::string>(publishers[i][1][j]));
+  return nodes;
+}
 
 /// Spins until pred() holds or `wall_timeout` wall seconds pass; returns pred().
 template <typename Pred>

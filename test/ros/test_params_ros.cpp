@@ -8,8 +8,13 @@
 #include <nodelet/NodeletLoad.h>
 #include <nodelet/NodeletUnload.h>
 #include <ros/ros.h>
+#include <geometry_msgs/PoseStamped.h>
 #include <rosgraph_msgs/Log.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
 
+#include <algorithm>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -83,6 +88,73 @@ TEST(Parameters, ANodeletWithAnInvalidOrMissingParameterDoesNotStartAndNamesIt) 
   nodelet::NodeletUnload unload;
   unload.request.name = "/good_layer_manager";
   EXPECT_TRUE(ros::service::call("go_feap_manager/unload_nodelet", unload) && unload.response.success);
+}
+
+// A parameter that conflicts with the mapper's (viewpoints/clearance past esdf/max_distance: no viewpoint
+// would pass) is found when the map comes, not at the start: the local planner starts, then names it in a
+// fatal message and stops its manager, as a refused parameter ends a launch (it used to log an error every
+// 10 s and plan nothing for good). params.test runs a mapper in a manager of its own, /conflict/manager;
+// the test feeds it frames, with each of which it sends its map's handle in the process.
+TEST(Parameters, AClearanceThatConflictsWithTheMappersStopsTheManagerAndNamesIt) {
+  ros::NodeHandle nh;
+  std::vector<std::string> fatal;
+  auto log_sub = nh.subscribe<rosgraph_msgs::Log>("/rosout", 200, [&](const rosgraph_msgs::Log::ConstPtr& m) {
+    if (m->level >= rosgraph_msgs::Log::FATAL) fatal.push_back(m->msg);
+  });
+  ros::Publisher info_pub = nh.advertise<sensor_msgs::CameraInfo>("conflict/camera_info", 1, /*latch=*/true);
+  ros::Publisher depth_pub = nh.advertise<sensor_msgs::Image>("conflict/depth", 5);
+  ros::Publisher pose_pub = nh.advertise<geometry_msgs::PoseStamped>("conflict/camera_pose", 5);
+  ASSERT_TRUE(ros::service::waitForService("conflict/manager/load_nodelet", ros::Duration(30.0)));
+  // This test hears the manager's /rosout before the planner is loaded (a message would be lost before),
+  // and the mapper hears the test.
+  std::vector<std::string> publishers;
+  ASSERT_TRUE(spinUntil(
+      [&] {
+        publishers = go_feap::test::publishersOf("/rosout");  // this node's own publisher among them
+        return std::count(publishers.begin(), publishers.end(), "/conflict/manager") == 1 &&
+               log_sub.getNumPublishers() >= publishers.size() && info_pub.getNumSubscribers() > 0 &&
+               depth_pub.getNumSubscribers() > 0 && pose_pub.getNumSubscribers() > 0;
+      },
+      20.0))
+      << "/rosout: " << log_sub.getNumPublishers() << " connected of " << ::testing::PrintToString(publishers);
+  nodelet::NodeletLoad srv;
+  srv.request.name = "/conflict/local_planner";
+  srv.request.type = "go_feap/LocalPlanner";
+  ASSERT_TRUE(ros::service::call("conflict/manager/load_nodelet", srv) && srv.response.success)
+      << "its own parameters are valid: it starts";
+
+  sensor_msgs::CameraInfo info;
+  info.width = 64, info.height = 48;
+  info.K = {32.0, 0.0, 32.0, 0.0, 32.0, 24.0, 0.0, 0.0, 1.0};
+  info_pub.publish(info);
+  sensor_msgs::Image depth;
+  depth.header.frame_id = "camera";
+  depth.width = info.width, depth.height = info.height;
+  depth.encoding = "32FC1";
+  depth.step = 4 * depth.width;
+  const std::vector<float> metres(depth.width * depth.height, 2.0f);
+  depth.data.resize(depth.step * depth.height);
+  std::memcpy(depth.data.data(), metres.data(), depth.data.size());
+  geometry_msgs::PoseStamped pose;
+  pose.header.frame_id = "world";
+  pose.pose.position.z = 1.0;
+  pose.pose.orientation.w = 1.0;
+  const std::string expected = "/conflict/local_planner: viewpoints: clearance must be <=";
+  ros::WallTime sent;
+  EXPECT_TRUE(spinUntil(
+      [&] {
+        if ((ros::WallTime::now() - sent).toSec() >= 0.2) {  // a frame every 0.2 s, until the message comes
+          depth.header.stamp = pose.header.stamp = ros::Time::now();
+          pose_pub.publish(pose);
+          depth_pub.publish(depth);
+          sent = ros::WallTime::now();
+        }
+        return std::any_of(fatal.begin(), fatal.end(), [&](const std::string& m) { return m.find(expected) != std::string::npos; });
+      },
+      20.0))
+      << "no fatal message naming viewpoints/clearance; fatal messages: " << ::testing::PrintToString(fatal);
+  EXPECT_TRUE(spinUntil([&] { return !ros::service::exists("conflict/manager/load_nodelet", false); }, 20.0))
+      << "the manager still runs";
 }
 
 }  // namespace

@@ -50,6 +50,12 @@ class ParamReader {
 /// a nodelet whose parameters are wrong does not start.
 void requireOrThrow(bool ok, const std::string& nodelet, const std::string& what);
 
+/// For a parameter found wrong only when another nodelet's values come (a reader's clearance past the
+/// mapper's esdf/max_distance, known once the map arrives): logs `what` as fatal and shuts this process's
+/// nodelet manager down, which ends a launch as a nodelet refusing to start does. The nodelet is still
+/// in its callback: it returns and does nothing more.
+void stopManager(const std::string& nodelet, const std::string& what);
+
 }  // namespace go_feap::ros_params
 
 namespace go_feap::world {

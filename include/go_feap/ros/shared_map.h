@@ -11,7 +11,6 @@
 #include <ros/message_traits.h>
 #include <ros/serialization.h>
 
-#include <functional>
 #include <memory>
 #include <shared_mutex>
 #include <string>
@@ -32,17 +31,16 @@ struct MapHandle {
   std::shared_ptr<SharedMap> shared;
 };
 
-/// The map a received handle points to, or an error when it carries none (it came from
-/// another process, where no pointer can travel) or when `suits` refuses the map's ESDF
-/// (a reader's clearance, say, that the truncated distances cannot serve).
-inline common::Result<std::shared_ptr<SharedMap>> acceptHandle(
-    const MapHandle& handle, const std::function<common::Status(const map::EsdfConfig&)>& suits = {}) {
+/// The map a received handle points to, or an error when it carries none: it came from another process,
+/// where no pointer can travel, or it is the latched copy a nodelet subscribing after the mapper's start
+/// gets (roscpp keeps a latched message serialised when no subscriber in the process took it; the mapper
+/// sends its handle again with every frame). A reader checks the map's ESDF against its own
+/// clearances next (ros_params::stopManager when they conflict).
+inline common::Result<std::shared_ptr<SharedMap>> acceptHandle(const MapHandle& handle) {
   using R = common::Result<std::shared_ptr<SharedMap>>;
-  if (!handle.shared) return R::Error("map_handle carries no map: run this nodelet in the EsdfMapper's nodelet manager");
-  if (suits) {
-    const common::Status st = suits(handle.shared->map->config().esdf);
-    if (!st.ok()) return R::Error(st.message());
-  }
+  if (!handle.shared) return R::Error("map_handle carries no map: a copy latched before this nodelet subscribed (the mapper sends "
+                                         "its map with its next frame), or a mapper outside this nodelet's manager (run "
+                                         "it in the EsdfMapper's manager)");
   return handle.shared;
 }
 
