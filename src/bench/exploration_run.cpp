@@ -322,7 +322,7 @@ void ExplorationRun::trajectoryStep() {
   trajectory::PlanRequest request;
   if (trajectory_) {
     const trajectory::TrajectorySample s = trajectory::sampleTrajectory(*trajectory_, t_ - trajectory_start_);
-    request.start = s.position, request.velocity = s.velocity, request.yaw = s.yaw;
+    request.start = s.position, request.velocity = s.velocity, request.yaw = s.yaw, request.yaw_rate = s.yaw_dot;
     request.acceleration = s.acceleration;
   } else {
     request.start = hold_position_, request.yaw = hold_yaw_;

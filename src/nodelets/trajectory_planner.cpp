@@ -245,6 +245,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
       request.acceleration =
           common::Vec3(command_->acceleration.x, command_->acceleration.y, command_->acceleration.z);
       request.yaw = command_->yaw;
+      request.yaw_rate = command_->yaw_dot;
       return std::min(now, command_->header.stamp);
     }
     request.start = *odom_position_;

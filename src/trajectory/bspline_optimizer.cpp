@@ -8,6 +8,7 @@
 #include <nlopt.hpp>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace go_feap::trajectory {
 
@@ -387,22 +388,46 @@ Result<UniformBspline> optimize(const UniformBspline& init, const map::Esdf& esd
   return result;
 }
 
-Result<UniformBspline> yawTurn(double yaw0, double yaw1, double min_duration, const OptimizerConfig& config) {
+Result<UniformBspline> yawTurn(double yaw0, double yaw1, double min_duration, const OptimizerConfig& config,
+                               double rate0) {
   if (Status s = config.validate(); !s) return s;
-  if (!std::isfinite(yaw0) || !std::isfinite(yaw1) || !std::isfinite(min_duration))
-    return Result<UniformBspline>::Error("yawTurn: yaws and min_duration must be finite");
+  if (!std::isfinite(yaw0) || !std::isfinite(yaw1) || !std::isfinite(min_duration) || !std::isfinite(rate0))
+    return Result<UniformBspline>::Error("yawTurn: yaws, min_duration and rate0 must be finite");
   const double turn = std::remainder(yaw1 - yaw0, 2.0 * M_PI);
-  // Control points: yaw0 three times (start at rest), m equal steps, yaw1 three times (end at rest).
-  // The rate's control values are then 0, 0, turn / (m dt) (m times), 0, 0; the acceleration's are
-  // steps of that over dt. The span that reaches yaw_rate_max at yaw_acc_max is yaw_rate_max / yaw_acc_max.
-  double dt = config.yaw_rate_max / config.yaw_acc_max;
-  const int m = std::max(1, static_cast<int>(std::ceil(std::abs(turn) / (config.yaw_rate_max * dt) - 1e-9)));
-  const int spans = m + 2;
-  dt = std::max(dt, min_duration / spans);
-  Eigen::MatrixXd q(1, m + 5);
-  q(0, 0) = q(0, 1) = yaw0;
-  for (int i = 0; i <= m; ++i) q(0, 2 + i) = yaw0 + turn * i / m;
-  q(0, m + 3) = q(0, m + 4) = yaw0 + turn;
+  const double rate_max = config.yaw_rate_max;
+  const double w0 = std::clamp(rate0, -rate_max, rate_max);
+  // The rate's control values r_i = (q_{i+1} - q_i) / dt: w0 twice (the start's rate, no acceleration),
+  // a 0 where the turn goes against w0 (the rate passes through rest), k equal values c, then 0 twice (end at
+  // rest). The curve starts at q_1 = yaw0 and ends at the last control point, yaw0 + turn, so the middle
+  // values sum to turn / dt - w0. Between neighbours the rate steps by at most yaw_acc_max dt, and the span
+  // that reaches yaw_rate_max at yaw_acc_max is yaw_rate_max / yaw_acc_max. From rest (w0 = 0) this is k
+  // steps of turn / (k dt), the least k at that span, spread over min_duration when that is longer.
+  const double dt0 = rate_max / config.yaw_acc_max;
+  const int k0 = std::max(1, static_cast<int>(std::ceil(std::abs(turn) / (rate_max * dt0) - 1e-9)));
+  int k = 0, bridge = 0;
+  double dt = dt0;
+  // Some k up to k0 + 1 with the bridge fits: |c| <= (|turn| / dt0 + rate_max) / (k0 + 1) <= rate_max.
+  for (int spans = k0 + 2; spans <= k0 + 4 && k == 0; ++spans)
+    for (int b = 0; b <= 1 && k == 0; ++b) {
+      const int n = spans - 2 - b;
+      if (n < 1) continue;
+      const double span = std::max(dt0, min_duration / spans);
+      const double v = (turn / span - w0) / n;
+      const double step = config.yaw_acc_max * span * (1.0 + 1e-9);
+      if (std::abs(v) > rate_max * (1.0 + 1e-9) || std::abs(v) > step) continue;
+      if (b == 0 && std::abs(v - w0) > step) continue;
+      k = n, bridge = b, dt = span;
+    }
+  if (k == 0) return Result<UniformBspline>::Error("yawTurn: no rate profile fits (a bug)");
+  // Control points: yaw0 - w0 dt, yaw0, yaw0 + w0 dt (twice with the bridge), then k equal steps of
+  // c dt = (turn - w0 dt) / k, and yaw0 + turn twice more.
+  const int j0 = 2 + bridge;
+  Eigen::MatrixXd q(1, j0 + k + 3);
+  q(0, 0) = yaw0 - w0 * dt;
+  q(0, 1) = yaw0;
+  for (int j = 2; j <= j0; ++j) q(0, j) = yaw0 + w0 * dt;
+  for (int i = 1; i <= k; ++i) q(0, j0 + i) = yaw0 + w0 * dt + (turn - w0 * dt) * i / k;
+  q(0, j0 + k + 1) = q(0, j0 + k + 2) = q(0, j0 + k);
   return UniformBspline(q, kDegree, dt);
 }
 

@@ -207,15 +207,28 @@ std::vector<Vec3> profileSamples(const std::vector<Vec3>& path, double v_start, 
 
 namespace {
 
-/// Brake to a stop where the reference is while turning to `yaw`; at rest, hold still for as long as
-/// the turn takes (the replanning rule goes by the position's duration). Moving: the next plan comes
-/// from wherever the braking has got to. Partial, with the target as goal.
+/// Brake to a stop where the reference is while turning to `yaw`, then hold still for as long as the turn
+/// takes (the replanning rule goes by the position's duration: a stop over before the turn made the next
+/// plan start the turn again). Partial, with the target as goal.
 Trajectory turnTowards(const PlanRequest& request, double yaw, const OptimizerConfig& optimizer) {
   Trajectory out;
   out.position = safeStop(request.start, request.velocity, optimizer.a_max);
-  auto turn = yawTurn(request.yaw, yaw, out.position.duration(), optimizer);
+  auto turn = yawTurn(request.yaw, yaw, out.position.duration(), optimizer, request.yaw_rate);
   out.yaw = turn ? std::move(turn).value() : UniformBspline(Eigen::MatrixXd::Constant(1, 4, request.yaw), 3, 0.1);
-  if (request.velocity.norm() < 1e-9) out.position = UniformBspline(request.start.replicate(1, 4), 3, out.yaw.duration());
+  const double speed = request.velocity.norm();
+  const double gap = out.yaw.duration() - out.position.duration();
+  // A stop shorter than a tenth of a millimetre (an odometry's noise, the last moment of braking): held where it starts,
+  // as its spans would be too short to fill the turn with. Else the stop's last point, repeated.
+  if (speed * speed / (2.0 * optimizer.a_max) < 1e-4) {
+    out.position = UniformBspline(request.start.replicate(1, 4), 3, out.yaw.duration());
+  } else if (gap > 0.0) {
+    const Eigen::MatrixXd& q = out.position.controlPoints();
+    const double dt = out.position.knotSpan();
+    const auto extra = static_cast<Eigen::Index>(std::min(std::ceil(gap / dt - 1e-9), 10000.0));
+    Eigen::MatrixXd padded(q.rows(), q.cols() + extra);
+    padded << q, q.rightCols<1>().replicate(1, extra);
+    out.position = UniformBspline(padded, 3, dt);
+  }
   out.goal = request.target;
   out.partial = true;
   return out;
@@ -233,7 +246,7 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
   PlanReport& rep = report ? *report : local;
   rep = PlanReport();
   if (!request.start.allFinite() || !request.velocity.allFinite() || !request.target.allFinite() ||
-      !std::isfinite(request.yaw) || !std::isfinite(request.target_yaw))
+      !std::isfinite(request.yaw) || !std::isfinite(request.yaw_rate) || !std::isfinite(request.target_yaw))
     return R::Error("plan request is not finite");
   // A target where the reference already is: turn in place (braking first if moving).
   auto turnInPlace = [&]() -> R {
@@ -241,7 +254,7 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
     out.position = safeStop(request.start, request.velocity, optimizer.a_max);
     out.goal = request.target;
     rep.path_status = planning::PathStatus::kFound;
-    auto yaw = yawTurn(request.yaw, request.target_yaw, 0.0, optimizer);
+    auto yaw = yawTurn(request.yaw, request.target_yaw, 0.0, optimizer, request.yaw_rate);
     if (!yaw) return R::Error("yaw spline failed: " + yaw.message());
     out.yaw = std::move(yaw).value();
     return out;
@@ -510,7 +523,7 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
     const Vec3 last = points.back() - points[points.size() - 2];
     if (last.head<2>().norm() > 1e-6) target_yaw = std::atan2(last.y(), last.x());
   }
-  auto yaw = yawTurn(request.yaw, target_yaw, 0.0, optimizer);
+  auto yaw = yawTurn(request.yaw, target_yaw, 0.0, optimizer, request.yaw_rate);
   if (!yaw) return R::Error("yaw spline failed: " + yaw.message());
   out.yaw = std::move(yaw).value();
   return out;

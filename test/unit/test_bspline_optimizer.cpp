@@ -587,6 +587,19 @@ TEST(BsplineOptimizer, KeepsMovingBoundaryStates) {
 // ---------------------------------------------------------------------------------------------------------
 // Yaw.
 
+// The largest |rate| and |acceleration| of a 1-D spline by central differences, densely sampled.
+std::pair<double, double> maxRateAndAcceleration(const UniformBspline& s) {
+  double rate = 0.0, acc = 0.0;
+  const double h = 1e-4;
+  for (int j = 0; j <= 4000; ++j) {
+    const double t = std::clamp(s.duration() * j / 4000, h, s.duration() - h);
+    const double a = s.value(t - h)[0], b = s.value(t)[0], c = s.value(t + h)[0];
+    rate = std::max(rate, std::abs(c - a) / (2 * h));
+    acc = std::max(acc, std::abs(c - 2 * b + a) / (h * h));
+  }
+  return {rate, acc};
+}
+
 TEST(YawSpline, TurnsTheShortWayInNearlyTheLeastTimeWithinTheLimits) {
   OptimizerConfig config = optimizerConfig();
   Rng rng(21);
@@ -606,16 +619,9 @@ TEST(YawSpline, TurnsTheShortWayInNearlyTheLeastTimeWithinTheLimits) {
     EXPECT_NEAR(s.value(s.duration())[0], yaw0 + turn, 1e-9);
     EXPECT_NEAR(s.evaluate(0.0, 1)[0], 0.0, 1e-9);
     EXPECT_NEAR(s.evaluate(s.duration(), 1)[0], 0.0, 1e-9);
-    // Rate and acceleration by central differences, densely sampled, within the limits.
-    double rate = 0.0, acc = 0.0;
-    const double h = 1e-4;
-    for (int j = 0; j <= 4000; ++j) {
-      const double t = std::clamp(s.duration() * j / 4000, h, s.duration() - h);
-      const double a = s.value(t - h)[0], b = s.value(t)[0], c = s.value(t + h)[0];
-      rate = std::max(rate, std::abs(c - a) / (2 * h));
-      acc = std::max(acc, std::abs(c - 2 * b + a) / (h * h));
-      EXPECT_LE(std::abs(b - yaw0), std::abs(turn) + 1e-9);  // no overshoot
-    }
+    // Rate and acceleration by central differences, densely sampled, within the limits; no overshoot.
+    const auto [rate, acc] = maxRateAndAcceleration(s);
+    for (int j = 0; j <= 400; ++j) EXPECT_LE(std::abs(s.value(s.duration() * j / 400)[0] - yaw0), std::abs(turn) + 1e-9);
     EXPECT_LE(rate, config.yaw_rate_max * (1 + 1e-6)) << "trial " << trial;
     EXPECT_LE(acc, config.yaw_acc_max * 1.01) << "trial " << trial;
     // Without a minimum duration it is close to the bang-coast-bang optimum: at most one span of ramp
@@ -639,6 +645,59 @@ TEST(YawSpline, TurnsTheShortWayInNearlyTheLeastTimeWithinTheLimits) {
   const auto limit = traj::yawTurn(0.0, M_PI, 0.0, config);
   ASSERT_TRUE(limit.ok()) << limit.message();
   EXPECT_LE(limit->numControlPoints(), 1005);
+}
+
+// From a start rate (a replan mid-turn): the spline starts at yaw0 with that rate (clamped to yaw_rate_max)
+// and no acceleration, ends at rest at yaw0 + turn, keeps both limits (through rest first when the turn
+// goes against the rate), and lasts little longer than from rest. A turn replanned halfway goes on at the
+// rate it had (from rest it stepped the rate down by 1 rad/s within one command) and ends about when the
+// first would have.
+TEST(YawSpline, AStartRateIsKeptAndTheLimitsHold) {
+  OptimizerConfig config = optimizerConfig();
+  Rng rng(22);
+  for (int trial = 0; trial < 300; ++trial) {
+    config.yaw_rate_max = rng(0.5, 2.0);
+    config.yaw_acc_max = rng(2.0, 10.0);
+    const double yaw0 = rng(-kPi, kPi), yaw1 = rng(-kPi, kPi);
+    const double rate0 = rng(-1.2, 1.2) * config.yaw_rate_max;  // past the limit too: clamped
+    const double min_duration = trial % 3 == 0 ? rng(0.1, 6.0) : 0.0;
+    const auto r = traj::yawTurn(yaw0, yaw1, min_duration, config, rate0);
+    ASSERT_TRUE(r.ok()) << r.message();
+    const UniformBspline& s = *r;
+    const double turn = std::remainder(yaw1 - yaw0, 2 * kPi);
+    const double span = config.yaw_rate_max / config.yaw_acc_max;
+    EXPECT_GE(s.duration(), min_duration - 1e-9);
+    EXPECT_NEAR(s.value(0.0)[0], yaw0, 1e-9);
+    EXPECT_NEAR(s.evaluate(0.0, 1)[0], std::clamp(rate0, -config.yaw_rate_max, config.yaw_rate_max), 1e-9) << "trial " << trial;
+    EXPECT_NEAR(s.evaluate(0.0, 2)[0], 0.0, 1e-6);
+    EXPECT_NEAR(s.value(s.duration())[0], yaw0 + turn, 1e-9);
+    EXPECT_NEAR(s.evaluate(s.duration(), 1)[0], 0.0, 1e-9);
+    const auto [rate, acc] = maxRateAndAcceleration(s);
+    EXPECT_LE(rate, config.yaw_rate_max * (1 + 1e-6)) << "trial " << trial;
+    EXPECT_LE(acc, config.yaw_acc_max * 1.01) << "trial " << trial;
+    if (min_duration == 0.0) {
+      EXPECT_LE(s.duration(), std::abs(turn) / config.yaw_rate_max + 5 * span + 1e-9) << "trial " << trial;
+    }
+    // Without a start rate it is the turn from rest, control point for control point.
+    const auto rest = traj::yawTurn(yaw0, yaw1, min_duration, config);
+    const auto zero = traj::yawTurn(yaw0, yaw1, min_duration, config, 0.0);
+    ASSERT_TRUE(rest.ok() && zero.ok());
+    EXPECT_EQ(rest->controlPoints(), zero->controlPoints());
+  }
+  config = optimizerConfig();
+  config.yaw_rate_max = 1.0, config.yaw_acc_max = 5.0;
+  const auto first = traj::yawTurn(0.0, 3.0, 0.0, config);
+  ASSERT_TRUE(first.ok());
+  const double t = 1.0, yaw = first->value(t)[0], rate = first->evaluate(t, 1)[0];
+  ASSERT_NEAR(rate, 1.0, 1e-9);
+  const auto again = traj::yawTurn(yaw, 3.0, 0.0, config, rate);
+  ASSERT_TRUE(again.ok());
+  EXPECT_NEAR(again->evaluate(0.0, 1)[0], rate, 1e-9);
+  // Nearly as it was (its rate spread over whole spans: 4e-4 rad behind 0.1 s on); from rest it is 0.075 rad behind.
+  EXPECT_NEAR(again->value(0.1)[0], first->value(t + 0.1)[0], 0.01) << "the turn goes on as it was";
+  EXPECT_LE(t + again->duration(), first->duration() + 0.2 + 1e-9);
+  EXPECT_NEAR(again->value(again->duration())[0], 3.0, 1e-9);
+  EXPECT_FALSE(traj::yawTurn(0.0, 1.0, 0.0, config, std::nan("")).ok());
 }
 
 // ---------------------------------------------------------------------------------------------------------
@@ -857,7 +916,9 @@ TEST(TrajectoryPlanner, AStartTooNearAWallIsPlannedAway) {
     bool left = false;
     for (int k = 0; k <= 2000; ++k) {
       const double d = world.esdf().distance(planned->position.position(planned->duration() * k / 2000));
-      if (!left) EXPECT_GE(d, gap - 0.1 * kRes) << "gap " << gap << " sample " << k;
+      if (!left) {
+        EXPECT_GE(d, gap - 0.1 * kRes) << "gap " << gap << " sample " << k;
+      }
       left = left || d >= optimizer.min_clearance;
     }
     EXPECT_TRUE(left) << "gap " << gap;
@@ -1223,6 +1284,19 @@ TEST(TrajectoryPlanner, EnclosedStartsLookAroundInsteadOfFailingTheTarget) {
   request.velocity = Vec3(1.0, 0.0, 0.0);
   const traj::Trajectory braking = traj::lookAroundTrajectory(request, planner, optimizer);
   EXPECT_LT(traj::sampleTrajectory(braking, braking.duration()).velocity.norm(), 1e-9);
+  // Moving, slowly or fast: the stop is held for as long as the turn takes (a stop over at once, as from an
+  // odometry's 1e-4 m/s, made the next plan start the turn from rest again), from the start's velocity on.
+  for (double speed : {1e-4, 0.05, 1.0}) {
+    request.velocity = Vec3(0.0, speed, 0.0);
+    const traj::Trajectory slow = traj::lookAroundTrajectory(request, planner, optimizer);
+    EXPECT_GE(slow.position.duration(), slow.yaw.duration() - 1e-9) << speed;
+    EXPECT_LT(traj::sampleTrajectory(slow, slow.duration()).velocity.norm(), 1e-9) << speed;
+    EXPECT_LT((traj::sampleTrajectory(slow, slow.duration()).position - request.start).norm(), 0.3) << speed;
+    if (speed > 0.01) {
+      EXPECT_NEAR(traj::sampleTrajectory(slow, 0.0).velocity.y(), speed, 1e-9) << speed;
+    }
+  }
+  request.velocity.setZero();
   // The replanning rule retries the target shortly before the turn ends, not at once.
   World world(Vec3(4, 4, 3));
   world.sync();

@@ -152,11 +152,13 @@ common::Result<UniformBspline> optimize(const UniformBspline& init, const map::E
                                         const OptimizerConfig& config, OptimizeStats* stats = nullptr);
 
 /// 1-D cubic yaw spline that turns from yaw0 to yaw1 the short way round (|turn| <= pi) in about the
-/// least time the limits allow: from rest, the rate rises to at most yaw_rate_max within one knot span
-/// (yaw acceleration at most yaw_acc_max), stays constant, and falls back to rest in the last span. The
-/// rate and acceleration bounds hold exactly (the derivatives lie in the hulls of their control values).
-/// It lasts at least min_duration (the turn is spread over it, slower). Fails on non-finite input or an
-/// invalid config.
-common::Result<UniformBspline> yawTurn(double yaw0, double yaw1, double min_duration, const OptimizerConfig& config);
+/// least time the limits allow: from the rate rate0 (clamped to yaw_rate_max; the reference's rate, so that
+/// a replan mid-turn goes on turning instead of starting from rest), the rate moves to a constant at most
+/// yaw_rate_max within one knot span (through rest first when the turn goes against rate0), stays there,
+/// and falls back to rest in the last span. The rate and acceleration bounds (yaw_acc_max) hold exactly:
+/// the derivatives lie in the hulls of their control values. It lasts at least min_duration (the turn is
+/// spread over it, slower). Fails on non-finite input or an invalid config.
+common::Result<UniformBspline> yawTurn(double yaw0, double yaw1, double min_duration, const OptimizerConfig& config,
+                                       double rate0 = 0.0);
 
 }  // namespace go_feap::trajectory

@@ -113,6 +113,8 @@ struct PlanRequest {
   /// replan does not first drop the acceleration to zero and build it up again
   Vec3 acceleration = Vec3::Zero();
   double yaw = 0.0;              ///< rad, the reference's heading
+  /// rad/s, the reference's yaw rate: a turn goes on from it (yawTurn's rate0) instead of from rest
+  double yaw_rate = 0.0;
   Vec3 target = Vec3::Zero();    ///< m, viewpoint position
   double target_yaw = 0.0;       ///< rad, viewpoint heading
   double time = 0.0;             ///< s, when it is planned (for a SearchMemory)
