@@ -161,10 +161,15 @@ class TrajectoryServer : public nodelet::Nodelet {
     last_odom_ = ros::Time::now();
     odom_position_ = Eigen::Vector3d(p.x, p.y, p.z);
     if (odom_gap_) {
+      // Held where the odometry is now, not where the reference was before the gap: the vehicle flew
+      // blind meanwhile, or its odometry came back in another place (a VIO re-initialised), and the old
+      // reference would pull it there at once (the planner's next plans start from the held command).
       odom_gap_ = false;
-      NODELET_WARN_STREAM(getName() << ": odometry is back; following the next trajectory");
+      hold_ = false;
+      NODELET_WARN_STREAM(getName() << ": odometry is back, " << (*odom_position_ - hold_position_).norm()
+                                    << " m from the held reference; holding there, following the next trajectory");
     }
-    if (!hold_) {  // first pose: hold it until a trajectory arrives
+    if (!hold_) {  // first pose, or the first after a gap: hold it until a trajectory arrives
       hold_position_ = Eigen::Vector3d(p.x, p.y, p.z);
       hold_yaw_ = ros_conv::yawOf(q);
       hold_ = true;

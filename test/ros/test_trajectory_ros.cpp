@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
 #include <functional>
 #include <limits>
 #include <string>
@@ -415,8 +416,11 @@ class ProbeServer {
   ProbeServer() {
     odom_pub_ = nh_.advertise<nav_msgs::Odometry>("probe/odom", 10);
     bspline_pub_ = nh_.advertise<go_feap::Bspline>("probe/bspline", 10);
-    cmd_sub_ = nh_.subscribe<go_feap::PositionCommand>(
-        "probe/position_cmd", 200, [this](const go_feap::PositionCommand::ConstPtr& m) { command = m; });
+    cmd_sub_ = nh_.subscribe<go_feap::PositionCommand>("probe/position_cmd", 200, [this](const go_feap::PositionCommand::ConstPtr& m) {
+      command = m;
+      history.push_back(m);
+      if (history.size() > 1000) history.pop_front();
+    });
   }
   bool connected() {
     return spinUntil(
@@ -452,10 +456,12 @@ class ProbeServer {
     t.start_time = start;
     bspline_pub_.publish(go_feap::ros_traj::toMsg(t));
   }
+  void send(const go_feap::ros_traj::Trajectory& t) { bspline_pub_.publish(go_feap::ros_traj::toMsg(t)); }
   Vec3 commanded() const { return Vec3(command->position.x, command->position.y, command->position.z); }
 
   Vec3 vehicle = Vec3(0.5, 0.5, 1.5);  ///< where the odometry puts it (a test may move it)
   go_feap::PositionCommand::ConstPtr command;
+  std::deque<go_feap::PositionCommand::ConstPtr> history;  ///< the last 1000 commands
 
  private:
   ros::NodeHandle nh_;
@@ -573,6 +579,65 @@ TEST_F(ProbeServerTest, ATrajectoryStartingLaterWaitsWhileTheRunningOneIsFollowe
   probe.hover(1.5);
   EXPECT_EQ(probe.command->trajectory_id, 923u) << "a trajectory starting 3 m from the vehicle was taken";
   EXPECT_EQ(probe.command->trajectory_flag, go_feap::PositionCommand::TRAJECTORY_STATUS_READY);
+}
+
+// Every command of a followed trajectory is the trajectory sampled at the command's stamp: position,
+// velocity, acceleration, heading and yaw rate (the feed-forward terms the controller flies by).
+TEST_F(ProbeServerTest, CommandsAreTheTrajectorySampledAtTheirStamps) {
+  const Vec3 a = probe.vehicle;
+  Eigen::MatrixXd q(3, 7), y(1, 7);
+  for (int i = 0; i < 7; ++i) q.col(i) = a + Vec3(0.6, 0.3, 0.1) * std::clamp((i - 1) / 4.0, 0.0, 1.0) * std::clamp((i - 1) / 4.0, 0.0, 1.0);
+  y << 0.0, 0.0, 0.2, 0.5, 0.9, 1.2, 1.2;
+  go_feap::ros_traj::Trajectory t;
+  t.position = go_feap::trajectory::UniformBspline(q, 3, 0.75);
+  t.yaw = go_feap::trajectory::UniformBspline(y, 3, 0.75);
+  t.id = 941;
+  t.start_time = ros::Time::now();
+  probe.history.clear();
+  probe.send(t);
+  probe.hover(2.5);
+  int checked = 0, moving = 0;
+  for (const auto& c : probe.history) {
+    if (c->trajectory_id != 941u) continue;
+    const auto s = go_feap::trajectory::sampleTrajectory(t, c->header.stamp.toSec() - t.start_time.toSec());
+    const Vec3 p(c->position.x, c->position.y, c->position.z), v(c->velocity.x, c->velocity.y, c->velocity.z),
+        acc(c->acceleration.x, c->acceleration.y, c->acceleration.z);
+    EXPECT_LT((p - s.position).norm(), 1e-9) << "at " << c->header.stamp;
+    EXPECT_LT((v - s.velocity).norm(), 1e-9) << "at " << c->header.stamp;
+    EXPECT_LT((acc - s.acceleration).norm(), 1e-9) << "at " << c->header.stamp;
+    EXPECT_NEAR(std::remainder(c->yaw - s.yaw, 2 * M_PI), 0.0, 1e-9) << "at " << c->header.stamp;
+    EXPECT_NEAR(c->yaw_dot, s.yaw_dot, 1e-9) << "at " << c->header.stamp;
+    ++checked;
+    moving += s.velocity.norm() > 0.05 && std::abs(s.yaw_dot) > 0.05 && s.acceleration.norm() > 0.01;
+  }
+  EXPECT_GT(checked, 100) << "commands of the trajectory";
+  EXPECT_GT(moving, 20) << "commands while it moved, turned and accelerated";
+}
+
+// Odometry back after a gap holds the vehicle where the odometry now puts it (a VIO re-initialised in the
+// gap, 3 m off): the server used to command the stale reference from before the gap, dragging the vehicle
+// 3 m at once, while every plan from that held command was refused for starting too far from the
+// odometry. A trajectory from where the vehicle is, is followed; so is the next gap's return.
+TEST_F(ProbeServerTest, OdometryBackAfterAGapIsHeldWhereItSays) {
+  const double odom_timeout = param("server/odom_timeout");
+  probe.hover(2.0 * odom_timeout, true);
+  const Vec3 held = probe.commanded();
+  probe.hover(0.2, true);
+  EXPECT_EQ(probe.command->trajectory_flag, go_feap::PositionCommand::TRAJECTORY_STATUS_EMPTY);
+  EXPECT_LT((probe.commanded() - held).norm(), 1e-9) << "the reference moved during the gap";
+  EXPECT_GT((held - (probe.vehicle + Vec3(3.0, 0.0, 0.0))).norm(), 1.0);
+  probe.vehicle += Vec3(3.0, 0.0, 0.0);
+  ASSERT_GT(3.0, param("server/max_start_offset"));
+  probe.hover(0.3);
+  EXPECT_EQ(probe.command->trajectory_flag, go_feap::PositionCommand::TRAJECTORY_STATUS_EMPTY);
+  EXPECT_LT((probe.commanded() - probe.vehicle).norm(), 1e-9) << "the stale reference is still held";
+  probe.fly(probe.vehicle, probe.vehicle + Vec3(1.0, 0.0, 0.0), 931, ros::Time::now());
+  ASSERT_TRUE(spinUntil([&] { return probe.hover(0.05)->trajectory_id == 931u; }, 20.0))
+      << "a trajectory from where the odometry is was refused";
+  probe.hover(2.0 * odom_timeout, true);
+  probe.vehicle -= Vec3(3.0, 0.0, 0.0);
+  probe.hover(0.3);
+  EXPECT_LT((probe.commanded() - probe.vehicle).norm(), 1e-9) << "not held where the odometry came back";
 }
 
 }  // namespace
