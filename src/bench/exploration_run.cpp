@@ -112,6 +112,7 @@ ExplorationRun::ExplorationRun(const world::Scene& scene, const ExplorationConfi
       max_sim_time_(max_sim_time),
       vehicle_(config.quadrotor, config.controller),
       renderer_(config.camera, scene),
+      noise_rng_(scene.seed),
       window_(config.local),
       collisions_(scene, config.loop.collision_distance) {
   for (const common::Status& st : {config.validate(), world::validateScene(scene)})
@@ -174,6 +175,8 @@ void ExplorationRun::frame() {
   T_W_B.translation() = s.position;
   const Eigen::Isometry3d T_W_C = T_W_B * config_.T_B_C;
   renderer_.render(T_W_C, depth_);
+  if (config_.camera.noise_stddev_per_m > 0.0 || config_.camera.dropout_probability > 0.0)
+    renderer_.addNoise(depth_, noise_rng_);  // as the DepthCamera nodelet does
   if (const auto ratio = planning::obstacleRatio(depth_, config_.local.max_range)) window_.push(*ratio);
   auto t0 = Clock::now();
   auto update = map_->integrate(depth_, intrinsics_, T_W_C);

@@ -33,9 +33,12 @@ struct Outcome {
   std::vector<std::string> events;
 };
 
-Outcome explore(const std::string& planner, std::uint64_t seed, double max_sim_time) {
+Outcome explore(const std::string& planner, std::uint64_t seed, double max_sim_time, double noise = 0.0,
+                double dropout = 0.0) {
   auto config = bench::loadExplorationConfig(GO_FEAP_CONFIG_DIR, planner);
   EXPECT_TRUE(config) << config.message();
+  config->camera.noise_stddev_per_m = noise;
+  config->camera.dropout_probability = dropout;
   auto scene = go_feap::world::makeScene(kSmallMaze, seed);
   EXPECT_TRUE(scene) << scene.message();
   bench::ExplorationRun run(*scene, *config, planner, max_sim_time);
@@ -106,6 +109,22 @@ TEST(Bench, SameSeedAndOptionsGiveTheSameRun) {
   // A different maze (seed) gives a different run.
   const Outcome c = explore("go_feap", 2, 40.0);
   EXPECT_NE(a.samples.back().position, c.samples.back().position);
+}
+
+// depth_camera/noise_stddev_per_m and dropout_probability reach the bench's camera as the DepthCamera
+// nodelet's (the bench rendered noiseless images whatever they said), seeded by the run's seed: the same
+// noisy run twice, another than without noise.
+TEST(Bench, CameraNoiseIsAppliedAndSeededByTheRun) {
+  const Outcome a = explore("go_feap", 1, 10.0, 0.02, 0.05), b = explore("go_feap", 1, 10.0, 0.02, 0.05);
+  const Outcome plain = explore("go_feap", 1, 10.0);
+  ASSERT_EQ(a.samples.size(), b.samples.size());
+  for (std::size_t i = 0; i < a.samples.size(); ++i) {
+    EXPECT_EQ(a.samples[i].position, b.samples[i].position) << i;
+    EXPECT_EQ(a.samples[i].coverage, b.samples[i].coverage) << i;
+  }
+  ASSERT_FALSE(a.samples.empty());
+  ASSERT_FALSE(plain.samples.empty());
+  EXPECT_NE(a.samples.back().coverage, plain.samples.back().coverage) << "the noise changed nothing";
 }
 
 // A copy of the package's config in a fresh temporary folder, with modes/<mode>.yaml holding `yaml`.

@@ -8,6 +8,7 @@
 #include <atomic>
 #include <functional>
 #include <memory>
+#include <random>
 #include <optional>
 #include <string>
 
@@ -121,6 +122,7 @@ class ExplorationRun {
   double max_sim_time_;
   sim::SimulatedVehicle vehicle_;
   sim::DepthRenderer renderer_;
+  std::mt19937_64 noise_rng_;  ///< the camera's noise and dropout (DepthRenderer::addNoise), seeded by the scene's seed
   map::DepthIntrinsics intrinsics_;
   std::unique_ptr<map::VoxelMap> map_;
   std::unique_ptr<frontier::FrontierFinder> finder_;
