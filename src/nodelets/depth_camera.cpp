@@ -81,6 +81,12 @@ class DepthCamera : public nodelet::Nodelet {
   // Renders when the odometry stamp reaches the next frame time, so that the image, its
   // camera pose and the odometry share one exact stamp.
   void onOdom(const nav_msgs::Odometry::ConstPtr& odom) {
+    // A refused message is as if it never came: it takes no frame's turn and no part in the stamp checks.
+    const std::string bad = ros_conv::odometryPoseProblem(*odom, world_frame_);
+    if (!bad.empty()) {
+      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": odometry refused: " << bad);
+      return;
+    }
     const ros::Time stamp = odom->header.stamp;
     // Odometry whose stamp stands still (a source stamping every message alike, or a stalled clock
     // relayed): frames are timed by the stamps, so none comes until it moves on. Said once the stamp has
@@ -105,11 +111,6 @@ class DepthCamera : public nodelet::Nodelet {
     // back until that time): the frames start again from this stamp. In seconds as a double: a
     // ros::Time one period past a stamp near 2^32 s would throw.
     next_frame_ = (std::isnan(next_frame_) || ahead < -period || ahead > period) ? now + period : next_frame_ + period;
-    const std::string bad = ros_conv::odometryPoseProblem(*odom, world_frame_);
-    if (!bad.empty()) {
-      NODELET_WARN_STREAM_THROTTLE(1.0, getName() << ": odometry refused: " << bad << "; frame skipped");
-      return;
-    }
     Eigen::Isometry3d T_W_B;
     tf2::fromMsg(odom->pose.pose, T_W_B);
     const Eigen::Isometry3d T_W_C = T_W_B * T_B_C_;
