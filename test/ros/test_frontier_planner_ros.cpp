@@ -12,6 +12,7 @@
 #include <deque>
 #include <functional>
 #include <limits>
+#include <map>
 #include <vector>
 
 #include <std_msgs/Bool.h>
@@ -57,6 +58,7 @@ class FrontierPlannerTest : public ::testing::Test {
   // every update.
   void onTour(const go_feap::GlobalTour::ConstPtr& m) {
     if (m->frontier_ids.empty()) return;
+    toursByStamp()[m->header.stamp] = m;
     for (const auto& f : recent_frontiers_)
       if (f->header.stamp == m->header.stamp) {
         tour_ = m;
@@ -80,6 +82,12 @@ class FrontierPlannerTest : public ::testing::Test {
   ros::Publisher cmd_pub_;
   go_feap::FrontierArray::ConstPtr frontiers_, tour_frontiers_;
   std::deque<go_feap::FrontierArray::ConstPtr> recent_frontiers_;
+  /// Every tour with frontiers since the first test began: a kept target carries the stamp of a tour long
+  /// past, chosen during an earlier test.
+  static std::map<ros::Time, go_feap::GlobalTour::ConstPtr>& toursByStamp() {
+    static std::map<ros::Time, go_feap::GlobalTour::ConstPtr> tours;
+    return tours;
+  }
   go_feap::GlobalTour::ConstPtr tour_;
   nav_msgs::Odometry::ConstPtr odom_;
   std::uint32_t highest_id_ = 0;  ///< of every frontier received
@@ -194,6 +202,36 @@ TEST_F(FrontierPlannerTest, LocalTargetIsAFreeViewpointOfATourFrontier) {
           ASSERT_FALSE(scene->isOccupied(Vec3(v + Vec3(dx, dy, dz)))) << "viewpoint " << v.transpose();
     EXPECT_TRUE(scene->box.contains(v));
   }
+  // Of a tour frontier: the target carries the stamp of the tour it was chosen from, each viewpoint one of
+  // that tour's first local/k_frontiers frontiers (not 0, a turn in place where none was found), on a
+  // ring round its P_avg (the tour's waypoint): within the largest of viewpoints/ring_radii across.
+  go_feap::ViewpointPath::ConstPtr target;
+  go_feap::GlobalTour::ConstPtr tour;
+  ASSERT_TRUE(spinUntil(
+      [&] {
+        target = target_;
+        const auto it = target ? toursByStamp().find(target->header.stamp) : toursByStamp().end();
+        if (it != toursByStamp().end()) tour = it->second;
+        return tour != nullptr;
+      },
+      30.0))
+      << "no local_target with the stamp of a tour";
+  int k_frontiers = 0;
+  std::vector<double> radii;
+  ASSERT_TRUE(ros::param::get("/local_planner/local/k_frontiers", k_frontiers));
+  ASSERT_TRUE(ros::param::get("/local_planner/viewpoints/ring_radii", radii) && !radii.empty());
+  const double reach = *std::max_element(radii.begin(), radii.end());
+  for (std::size_t i = 0; i < target->positions.size(); ++i) {
+    const std::uint32_t id = target->frontier_ids[i];
+    ASSERT_NE(id, 0u) << "viewpoint " << i << " belongs to no frontier (a turn in place)";
+    const auto first = tour->frontier_ids.begin();
+    const auto last = first + std::min<std::ptrdiff_t>(k_frontiers, static_cast<std::ptrdiff_t>(tour->frontier_ids.size()));
+    const auto it = std::find(first, last, id);
+    ASSERT_NE(it, last) << "viewpoint " << i << " observes frontier " << id << ", not one of the tour's first " << k_frontiers;
+    const auto& w = tour->waypoints[static_cast<std::size_t>(it - first)];
+    const auto& p = target->positions[i];
+    EXPECT_LE(std::hypot(p.x - w.x, p.y - w.y), reach + 1e-6) << "viewpoint " << i << " of frontier " << id;
+  }
 }
 
 // A failed attempt reported on frontier_failed for the local target's frontier (the trajectory planner
@@ -223,10 +261,17 @@ TEST_F(FrontierPlannerTest, AFailedTargetIsDroppedAndChosenAgain) {
   // The layer manager and the local planner share one manager: one connection.
   ASSERT_TRUE(spinUntil([&] { return failed_pub.getNumSubscribers() >= 1; }, 10.0));
   std_msgs::UInt32 failed;
+  // Another frontier's failure leaves the target as it is (the local planner reports failures of its own).
+  failed.data = kept->frontier_ids.front() + 1000000;
+  failed_pub.publish(failed);
+  spinUntil([] { return false; }, 1.5);
+  EXPECT_EQ(target_->target_seq, kept->target_seq) << "another frontier's failure dropped the target";
+  EXPECT_EQ(target_->frontier_ids.front(), kept->frontier_ids.front());
   failed.data = kept->frontier_ids.front();
   failed_pub.publish(failed);
   EXPECT_TRUE(spinUntil([&] { return target_->header.stamp > kept->header.stamp; }, 5.0))
       << "the local planner kept its target for frontier " << failed.data << " after it failed";
+  EXPECT_NE(target_->target_seq, kept->target_seq) << "the target chosen again kept its number";
 }
 
 // The fuel mode's planners (beside the go_feap ones, on fuel/...): while the local planner holds its
