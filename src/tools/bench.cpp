@@ -292,8 +292,8 @@ int main(int argc, char** argv) {
   std::error_code out_ec;  // made at the start; again in case it went meanwhile, without throwing
   std::filesystem::create_directories(out_dir, out_ec);
   const auto comparisons = metrics::compare(summaries);
-  // Compute times depend on how many runs shared the cores (a powerplant seed 0 replan: 26.0 ms
-  // alone on a core, 33.3 ms two at a time on two): say so beside them.
+  // Compute times depend on how many runs shared the cores (a powerplant replan: 28.0 ms alone on a
+  // core, 33.5 ms two at a time on two): say so beside them.
   const std::string md = metrics::tableMarkdown(rows, comparisons) + "\nCompute times measured with " +
                          std::to_string(jobs) + " run(s) at a time on " +
                          std::to_string(std::thread::hardware_concurrency()) + " hardware thread(s).\n";
