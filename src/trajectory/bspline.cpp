@@ -22,6 +22,8 @@ UniformBspline::UniformBspline(Eigen::MatrixXd control_points, int degree, doubl
 }
 
 void UniformBspline::basisWeights(int degree, double s, int order, double* weights) {
+  // A negative order would make more weights than the buffers hold.
+  if (order < 0) throw std::invalid_argument("UniformBspline: a derivative order must be >= 0, got " + std::to_string(order));
   std::fill(weights, weights + degree + 1, 0.0);
   if (order > degree) return;
   // Cox-de Boor on the integer knots of one span: every denominator of level j equals j.

@@ -326,6 +326,9 @@ TEST(Bspline, RejectsBadArguments) {
   EXPECT_EQ(line.evaluate(std::nan(""), 1), line.evaluate(0.0, 1));
   EXPECT_EQ(line.value(INFINITY), line.value(line.duration()));
   EXPECT_EQ(line.value(-INFINITY), line.value(0.0));
+  // A negative derivative order is refused (it wrote past the weights' buffers).
+  EXPECT_THROW(line.evaluate(0.5, -1), std::invalid_argument);
+  EXPECT_THROW(line.maxDerivativeNorm(-5), std::invalid_argument);
   const UniformBspline empty;
   EXPECT_TRUE(empty.empty());
   EXPECT_EQ(empty.duration(), 0.0);

@@ -73,6 +73,7 @@ class UniformBspline {
   /// Value at time t (clamped to [0, duration]; NaN reads as 0).
   Eigen::VectorXd value(double t) const { return evaluate(t, 0); }
   /// The order-th time derivative at t (clamped to [0, duration]; NaN reads as 0); zero when order > degree.
+  /// Throws std::invalid_argument for a negative order (here and in maxDerivativeNorm).
   Eigen::VectorXd evaluate(double t, int order) const;
   /// 3-D value; the spline must have dimension 3.
   Vec3 position(double t) const { return value(t); }
