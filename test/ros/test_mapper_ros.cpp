@@ -17,6 +17,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <vector>
 
 #include "go_feap/MapUpdate.h"
 #include "go_feap/PositionCommand.h"
@@ -138,6 +139,29 @@ TEST_F(MapperTest, TurningInPlaceMapsTheWallsBadFramesAreSkippedSaveMapWorks) {
     ASSERT_TRUE(spinUntil([&] { return real_depth && real_pose && real_depth->header.stamp == real_pose->header.stamp; }, 30.0))
         << "no depth frame with its pose";
   }
+  // That frame again with its pose 1.5 m off (more than mapper/max_pose_jump: a relocalisation) is skipped:
+  // no map_update carries its stamp. Sent 0.05 m off it is taken (the check is not vacuous). The frames
+  // above were all-zero images, which change nothing when integrated: they could not tell.
+  double max_jump = 0.0;
+  ASSERT_TRUE(ros::param::get("/esdf_mapper/mapper/max_pose_jump", max_jump));
+  ASSERT_LT(max_jump, 1.5);
+  auto sendShifted = [&](double dx) {
+    sensor_msgs::Image d = *real_depth;
+    geometry_msgs::PoseStamped q = *real_pose;
+    d.header.stamp = q.header.stamp = ros::Time::now() + ros::Duration(0.0005);
+    q.pose.position.x += dx;
+    std::vector<ros::Time> stamps;
+    ros::Subscriber u = nh_.subscribe<go_feap::MapUpdate>(
+        "map_update", 50, [&](const go_feap::MapUpdate::ConstPtr& m) { stamps.push_back(m->header.stamp); });
+    spinUntil([&] { return u.getNumPublishers() > 0; }, 10.0);
+    pose_pub_.publish(q);
+    depth_pub_.publish(d);
+    spinUntil([&] { return std::count(stamps.begin(), stamps.end(), d.header.stamp) > 0; }, 1.5);
+    return std::count(stamps.begin(), stamps.end(), d.header.stamp) > 0;
+  };
+  EXPECT_FALSE(sendShifted(1.5)) << "a frame 1.5 m from the last was integrated";
+  spinUntil([] { return false; }, 0.3);  // the simulator's next frame (a jump back) is skipped too
+  EXPECT_TRUE(sendShifted(0.05)) << "a frame 0.05 m from the last was not integrated";
   sensor_msgs::Image far_depth = *real_depth;
   geometry_msgs::PoseStamped far_pose = *real_pose;
   far_depth.header.stamp = far_pose.header.stamp = ros::Time(4000000000u, 0);
