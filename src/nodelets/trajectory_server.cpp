@@ -62,19 +62,24 @@ class TrajectoryServer : public nodelet::Nodelet {
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
     const common::Status planner_ok = planner.validate();
     ros_params::requireOrThrow(planner_ok.ok(), getName(), planner_ok.message());
+    // The server checks control polygons, the planner samples: a stop from a reference at the planner's
+    // speed (trajectory::safeStop) has a polygon up to 4/3 faster than its start (m / (m - 1/2), m >= 2 spans).
     const double scale = 1.0 + planner.limit_tolerance;
+    constexpr double kStopPolygon = 4.0 / 3.0;
     const struct {
-      double limit, planner_limit;
+      double limit, planner_limit, factor;
       const char *key, *planner_key;
-    } pairs[] = {{max_speed_, planner.v_max, "server/max_speed", "optimizer/v_max"},
-                 {max_acceleration_, planner.a_max, "server/max_acceleration", "optimizer/a_max"},
-                 {max_yaw_rate_, planner.yaw_rate_max, "server/max_yaw_rate", "optimizer/yaw_rate_max"}};
+    } pairs[] = {{max_speed_, planner.v_max, kStopPolygon, "server/max_speed", "optimizer/v_max"},
+                 {max_acceleration_, planner.a_max, 1.0, "server/max_acceleration", "optimizer/a_max"},
+                 {max_yaw_rate_, planner.yaw_rate_max, 1.0, "server/max_yaw_rate", "optimizer/yaw_rate_max"}};
     for (const auto& pair : pairs) {
+      const double least = pair.planner_limit * scale * pair.factor;
       std::ostringstream why;
-      why << "parameter '" << p.fullName(pair.key) << "' (" << pair.limit << ") is below the planner's '"
-          << p.fullName(pair.planner_key) << "' (" << pair.planner_limit << ", " << pair.planner_limit * scale
-          << " with optimizer/limit_tolerance): every plan that reaches it would be refused";
-      ros_params::requireOrThrow(pair.limit >= pair.planner_limit * scale, getName(), why.str());
+      why << "parameter '" << p.fullName(pair.key) << "' (" << pair.limit << ") is below " << least << ", the planner's '"
+          << p.fullName(pair.planner_key) << "' (" << pair.planner_limit << ") with optimizer/limit_tolerance"
+          << (pair.factor > 1.0 ? " and the 4/3 a braking plan's control polygon may reach" : "")
+          << ": plans that reach it would be refused";
+      ros_params::requireOrThrow(pair.limit >= least, getName(), why.str());
     }
     cmd_pub_ = nh.advertise<PositionCommand>("position_cmd", 10);
     bspline_sub_ = ros_guard::subscribe(nh, getName(), "bspline", 5, &TrajectoryServer::onBspline, this);

@@ -46,6 +46,8 @@ TEST(LookRound, NoFrontierInViewTurnsRoundBeforeEndingComplete) {
   int targets = 0;
   auto target_sub = nh.subscribe<go_feap::ViewpointPath>("local_target", 10,
                                                          [&](const go_feap::ViewpointPath::ConstPtr&) { ++targets; });
+  ASSERT_TRUE(spinUntil([&] { return target_sub.getNumPublishers() > 0; }, 10.0))
+      << "local_target is not connected: the count below would show nothing";
   spinUntil([] { return false; }, 1.0);
   targets = 0;
   spinUntil([] { return false; }, 4.0);
