@@ -145,23 +145,29 @@ TEST_F(MapperTest, TurningInPlaceMapsTheWallsBadFramesAreSkippedSaveMapWorks) {
   double max_jump = 0.0;
   ASSERT_TRUE(ros::param::get("/esdf_mapper/mapper/max_pose_jump", max_jump));
   ASSERT_LT(max_jump, 1.5);
+  std::vector<ros::Time> stamps;  // of every map_update from here on
+  ros::Subscriber u = nh_.subscribe<go_feap::MapUpdate>(
+      "map_update", 50, [&](const go_feap::MapUpdate::ConstPtr& m) { stamps.push_back(m->header.stamp); });
+  ASSERT_TRUE(spinUntil([&] { return u.getNumPublishers() > 0; }, 10.0));
+  const auto updated = [&](const ros::Time& t) { return std::count(stamps.begin(), stamps.end(), t) > 0; };
   auto sendShifted = [&](double dx) {
     sensor_msgs::Image d = *real_depth;
     geometry_msgs::PoseStamped q = *real_pose;
     d.header.stamp = q.header.stamp = ros::Time::now() + ros::Duration(0.0005);
     q.pose.position.x += dx;
-    std::vector<ros::Time> stamps;
-    ros::Subscriber u = nh_.subscribe<go_feap::MapUpdate>(
-        "map_update", 50, [&](const go_feap::MapUpdate::ConstPtr& m) { stamps.push_back(m->header.stamp); });
-    spinUntil([&] { return u.getNumPublishers() > 0; }, 10.0);
     pose_pub_.publish(q);
     depth_pub_.publish(d);
-    spinUntil([&] { return std::count(stamps.begin(), stamps.end(), d.header.stamp) > 0; }, 1.5);
-    return std::count(stamps.begin(), stamps.end(), d.header.stamp) > 0;
+    return d.header.stamp;
   };
-  EXPECT_FALSE(sendShifted(1.5)) << "a frame 1.5 m from the last was integrated";
-  spinUntil([] { return false; }, 0.3);  // the simulator's next frame (a jump back) is skipped too
-  EXPECT_TRUE(sendShifted(0.05)) << "a frame 0.05 m from the last was not integrated";
+  const ros::Time jumped = sendShifted(1.5);
+  // The simulator's frames go on: the next after the jump is a jump back (skipped), the one after is mapped.
+  // Three mapped after it: the jump was judged by then, even had a simulator frame overtaken it.
+  ASSERT_TRUE(spinUntil([&] { return std::count_if(stamps.begin(), stamps.end(), [&](const ros::Time& t) { return t > jumped; }) >= 3; },
+                        30.0))
+      << "no map_update after the jump";
+  EXPECT_FALSE(updated(jumped)) << "a frame 1.5 m from the last was integrated";
+  const ros::Time near = sendShifted(0.05);
+  EXPECT_TRUE(spinUntil([&] { return updated(near); }, 30.0)) << "a frame 0.05 m from the last was not integrated";
   sensor_msgs::Image far_depth = *real_depth;
   geometry_msgs::PoseStamped far_pose = *real_pose;
   far_depth.header.stamp = far_pose.header.stamp = ros::Time(4000000000u, 0);
