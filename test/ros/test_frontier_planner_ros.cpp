@@ -465,6 +465,83 @@ TEST_F(FrontierPlannerTest, FuelModeLocalPlannerWantsNoTourRightAfterChoosingATa
   EXPECT_FALSE(answers.front()) << "a tour was wanted right after a target was chosen from the last one";
 }
 
+// The omission term orders through the nodelet. The go_feap-mode probe global planner (lambda 0.5, the
+// shipped omission weights) gets two frontiers straight above and below the UAV: A 0.5 m up, B 0.6 m
+// down, in plain sight (paths of 0.5, 0.6 and 1.1 m). Brute force of J = travel time + lambda * sum xi t
+// (v_max 2 m/s): with xi 0 on both, A comes first (J 0.55 s against 0.55 s + 0.05 s); with xi 2 s on B
+// (|C| <= c_small, T < t_max, 0 < N_near < n_max) and A's xi taken away by any one factor (|C| 3000: xi
+// 0.02 s; T 30 s; N_near 0; N_near 5), B comes first (0.61 s against 0.66 s, lambda 0.1 too; 0.85 s
+// against 1.10 s here). Each factor alone turns the order, so a nodelet that dropped one of them on the
+// way (cells, duration or n_near from the message) or the weight would keep A first and fail.
+TEST_F(FrontierPlannerTest, OmissionLikelyFrontierComesFirstThroughTheNodelet) {
+  std::map<ros::Time, go_feap::GlobalTour::ConstPtr> tours;
+  ros::Subscriber tour_sub = nh_.subscribe<go_feap::GlobalTour>(
+      "probe/feap/global_tour", 20, [&](const go_feap::GlobalTour::ConstPtr& m) { tours[m->header.stamp] = m; });
+  ros::Publisher frontier_pub = nh_.advertise<go_feap::FrontierArray>("probe/feap/frontiers", 2);
+  ASSERT_TRUE(spinUntil([&] {
+    return odom_ && frontier_pub.getNumSubscribers() >= 1 && tour_sub.getNumPublishers() >= 1;
+  }, 90.0)) << "no odometry, or the probe is not connected";
+  const auto& p = odom_->pose.pose.position;
+  const Vec3 uav(p.x, p.y, p.z);
+  ASSERT_GT(uav.z(), 0.6 + 0.3) << "the UAV is too low for a frontier 0.6 m below it";
+  struct Omission {
+    int cells;
+    double duration;
+    std::uint32_t n_near;
+  };
+  const Omission likely{10, 1.0, 2};  // xi = 1 * 2 * 1 = 2 s
+  const std::uint32_t id_a = 4000000001u, id_b = 4000000002u;  // far above the finder's ids
+  auto frontier = [](std::uint32_t id, const Vec3& at, const Omission& o) {
+    go_feap::Frontier f;
+    f.id = id;
+    geometry_msgs::Point c;
+    c.x = at.x(), c.y = at.y(), c.z = at.z();
+    f.cells.assign(static_cast<std::size_t>(o.cells), c);  // |C| is the cell count
+    f.average = f.aabb_min = f.aabb_max = c;
+    f.duration = o.duration;
+    f.n_near = o.n_near;
+    f.active = true;
+    return f;
+  };
+  // Publishes A and B with these attributes (0.15 s apart: global/rate lets one through per 0.1 s) until
+  // the tour planned from one of them comes; returns its order.
+  auto orderFor = [&](const Omission& a, const Omission& b) {
+    go_feap::FrontierArray msg;
+    msg.header.frame_id = "world";
+    msg.frontiers = {frontier(id_a, uav + Vec3(0.0, 0.0, 0.5), a), frontier(id_b, uav + Vec3(0.0, 0.0, -0.6), b)};
+    std::vector<std::uint32_t> order;
+    ros::WallTime last;
+    spinUntil([&] {
+      for (const auto& [stamp, tour] : tours)
+        if (stamp == msg.header.stamp && !msg.header.stamp.isZero()) {
+          order.assign(tour->frontier_ids.begin(), tour->frontier_ids.end());
+          return true;
+        }
+      if (last.isZero() || (ros::WallTime::now() - last).toSec() >= 0.15) {
+        msg.header.stamp = ros::Time::now();
+        frontier_pub.publish(msg);
+        last = ros::WallTime::now();
+      }
+      return false;
+    }, 30.0);
+    return order;
+  };
+  const std::vector<std::uint32_t> a_first = {id_a, id_b}, b_first = {id_b, id_a};
+  const Omission unlikely{10, 30.0, 2};  // T >= t_max: xi 0
+  EXPECT_EQ(orderFor(unlikely, unlikely), a_first) << "with no omission term, the nearer frontier first";
+  const struct {
+    Omission a;
+    const char* what;
+  } cases[] = {{{3000, 1.0, 2}, "A's cell count (3000: alpha 0.01)"},
+               {{10, 30.0, 2}, "A's duration (30 s: omega 0)"},
+               {{10, 1.0, 0}, "A's n_near (0: beta 0)"},
+               {{10, 1.0, 5}, "A's n_near (5: beta 0)"}};
+  for (const auto& c : cases) {
+    EXPECT_EQ(orderFor(c.a, likely), b_first) << "B, likely omitted, not first with only " << c.what << " telling them apart";
+    EXPECT_EQ(orderFor(likely, c.a), a_first) << "A not first with " << c.what << " given to B";
+  }
+}
+
 // The chain's own messages, fed malformed from outside (a bag, a tool), are refused whole and the
 // nodelets go on with what they had (go_feap/ros/message_checks.h). Last in the file: it publishes on
 // the chain's layer topic.
