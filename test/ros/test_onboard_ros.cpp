@@ -17,6 +17,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <vector>
 
 #include "go_feap/Bspline.h"
 #include "go_feap/ExplorationStatus.h"
@@ -38,7 +39,11 @@ TEST(Onboard, RunsTheChainOnD435iDepthAndVioOdometry) {
   go_feap::ExplorationStatus::ConstPtr status;
   std::size_t changed = 0, commands = 0;
   auto depth_sub = nh.subscribe<sensor_msgs::Image>("vehicle/depth", 2, [&](const sensor_msgs::Image::ConstPtr& m) { depth = m; });
-  auto odom_sub = nh.subscribe<nav_msgs::Odometry>("vehicle/odom", 10, [&](const nav_msgs::Odometry::ConstPtr& m) { odom = m; });
+  std::vector<Eigen::Vector3d> odom_positions;  // every odometry position, for the flown path
+  auto odom_sub = nh.subscribe<nav_msgs::Odometry>("vehicle/odom", 1000, [&](const nav_msgs::Odometry::ConstPtr& m) {
+    odom = m;
+    odom_positions.emplace_back(m->pose.pose.position.x, m->pose.pose.position.y, m->pose.pose.position.z);
+  });
   std::size_t integrated = 0;  // frames (a still vehicle changes voxels only in the first frames, which
                               // may come before this subscription connects)
   auto update_sub = nh.subscribe<go_feap::MapUpdate>("map_update", 10, [&](const go_feap::MapUpdate::ConstPtr& m) {
@@ -142,10 +147,29 @@ TEST(Onboard, RunsTheChainOnD435iDepthAndVioOdometry) {
       << "no position commands following a trajectory";
   EXPECT_GT(tours, 0u);
   EXPECT_GT(targets, 0u);
-  // The metrics recorder (sensor_view.launch) records the flight in the world frame.
-  EXPECT_TRUE(spinUntil([&] { return path && !path->poses.empty(); }, 20.0)) << "no flown_path from the recorder";
+  // The metrics recorder (sensor_view.launch) records the flight in the world frame: a path that goes
+  // 0.3 m from where it began, each pose a position the odometry gave.
+  auto reach = [&] {
+    if (!path || path->poses.empty()) return 0.0;
+    const auto& a = path->poses.front().pose.position;
+    double most = 0.0;
+    for (const auto& q : path->poses)
+      most = std::max(most, std::hypot(q.pose.position.x - a.x, q.pose.position.y - a.y, q.pose.position.z - a.z));
+    return most;
+  };
+  EXPECT_TRUE(spinUntil([&] { return reach() > 0.3; }, 30.0))
+      << "no flown_path from the recorder that shows the flight (" << (path ? path->poses.size() : 0u)
+      << " poses reaching " << reach() << " m from the first)";
   if (path) {
     EXPECT_EQ(path->header.frame_id, "world");
+    std::size_t unmatched = 0;
+    for (const auto& q : path->poses) {
+      const Eigen::Vector3d p(q.pose.position.x, q.pose.position.y, q.pose.position.z);
+      unmatched += std::none_of(odom_positions.begin(), odom_positions.end(),
+                                [&](const Eigen::Vector3d& o) { return (o - p).norm() < 1e-9; });
+      EXPECT_EQ(q.header.frame_id, "world");
+    }
+    EXPECT_EQ(unmatched, 0u) << "flown_path poses that are no odometry position, of " << path->poses.size();
   }
 }
 
