@@ -75,6 +75,12 @@ common::Status OccupancyConfig::validate() const {
     return bad("p_hit", "must be at least 0.503: its log-odds step rounds to 0 at one byte per voxel");
   if (std::lround(logit(p_miss) * scale) > -1)
     return bad("p_miss", "must be at most 0.497: its log-odds step rounds to 0 at one byte per voxel");
+  // A step past one byte wrapped round in the constructor's cast: p_hit 0.95 became a step of -109, and
+  // every return made its voxel freer (a map without obstacles).
+  if (std::lround(logit(p_hit) * scale) > 127)
+    return bad("p_hit", "must be at most 0.927: its log-odds step must fit one byte per voxel");
+  if (std::lround(logit(p_miss) * scale) < -127)
+    return bad("p_miss", "must be at least 0.073: its log-odds step must fit one byte per voxel");
   if (std::lround(logit(p_max) * scale) <= std::floor(logit(p_occupied) * scale))
     return bad("p_occupied", "must lie below p_max by more than one byte step of log-odds (0.02): no voxel could pass it");
   return common::Status::Ok();

@@ -184,7 +184,8 @@ TEST(OccupancyMap, InvalidPixelsAreFreeOrSkippedByParameter) {
 }
 
 // The probabilities become byte steps of log-odds (1/50 each). A configuration whose hit or miss step
-// rounds to 0, or whose clamp p_max rounds to no more than the threshold p_occupied, is refused with the key
+// rounds to 0 or past one byte (p_hit 0.95 wrapped round to a step of -109: every return made its voxel
+// freer), or whose clamp p_max rounds to no more than the threshold p_occupied, is refused with the key
 // named; every configuration that is accepted must map a surface seen again and again as occupied and the
 // same voxel, then seen through again and again, as free (which those refused ones never did).
 TEST(OccupancyMap, ConfigsWhoseByteStepsVanishAreRefusedAndAcceptedOnesMapObstacles) {
@@ -194,8 +195,8 @@ TEST(OccupancyMap, ConfigsWhoseByteStepsVanishAreRefusedAndAcceptedOnesMapObstac
   const cv::Mat wall(K.height, K.width, CV_32FC1, cv::Scalar(2.05f)), through(K.height, K.width, CV_32FC1, cv::Scalar(9.0f));
   const Vec3 surface(2.052, 0.0, 1.5);  // where the return on the optical axis is marked, just behind the face
   int accepted = 0, refused = 0;
-  for (double p_hit : {0.5005, 0.502, 0.503, 0.51, 0.65})
-    for (double p_miss : {0.4995, 0.498, 0.497, 0.35})
+  for (double p_hit : {0.5005, 0.502, 0.503, 0.51, 0.65, 0.927, 0.95})
+    for (double p_miss : {0.4995, 0.498, 0.497, 0.35, 0.073, 0.05})
       for (auto [p_occupied, p_max] : {std::pair{0.8, 0.9}, std::pair{0.881, 0.8814}, std::pair{0.87, 0.8814}}) {
         map::MapConfig c = mapConfig();
         c.occupancy.skip_pixel = 1;
@@ -206,8 +207,8 @@ TEST(OccupancyMap, ConfigsWhoseByteStepsVanishAreRefusedAndAcceptedOnesMapObstac
         const common::Status st = c.occupancy.validate();
         if (!st.ok()) {
           ++refused;
-          const bool named = (p_hit < 0.503 && st.message().find("p_hit") != std::string::npos) ||
-                             (p_miss > 0.497 && st.message().find("p_miss") != std::string::npos) ||
+          const bool named = ((p_hit < 0.503 || p_hit > 0.927) && st.message().find("p_hit") != std::string::npos) ||
+                             ((p_miss > 0.497 || p_miss < 0.073) && st.message().find("p_miss") != std::string::npos) ||
                              (p_occupied == 0.881 && st.message().find("p_occupied") != std::string::npos);
           EXPECT_TRUE(named) << what << ": " << st.message();
           continue;
@@ -225,8 +226,8 @@ TEST(OccupancyMap, ConfigsWhoseByteStepsVanishAreRefusedAndAcceptedOnesMapObstac
         EXPECT_TRUE(seeUntil(through, VoxelState::kFree)) << what << ": seen through 300 times, still not free";
         EXPECT_TRUE(seeUntil(wall, VoxelState::kOccupied)) << what << ": seen again 300 times, not occupied";
       }
-  EXPECT_EQ(accepted, 3 * 2 * 2);  // p_hit 0.503 and up, p_miss 0.497 and down, the two real margins
-  EXPECT_EQ(refused, 5 * 4 * 3 - accepted);
+  EXPECT_EQ(accepted, 4 * 3 * 2);  // p_hit 0.503 to 0.927, p_miss 0.497 down to 0.073, the two real margins
+  EXPECT_EQ(refused, 7 * 6 * 3 - accepted);
 }
 
 // REP 117's values: +inf (no return within the range) is free space to max_range whatever
