@@ -16,7 +16,7 @@
 #include <sensor_msgs/PointCloud2.h>
 #include <sensor_msgs/image_encodings.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
-#include <tf2_eigen/tf2_eigen.h>
+#include <Eigen/Geometry>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/message_filter.h>
 #include <tf2_ros/transform_listener.h>
@@ -111,8 +111,21 @@ class EsdfMapper : public nodelet::Nodelet {
         exact_sync_ = std::make_unique<message_filters::Synchronizer<ExactPolicy>>(ExactPolicy(kSyncQueue), depth_sub_, pose_sub_);
         exact_sync_->registerCallback(&EsdfMapper::onDepthPair, this);
       } else {
-        approx_sync_ = std::make_unique<message_filters::Synchronizer<ApproxPolicy>>(ApproxPolicy(kSyncQueue), depth_sub_, pose_sub_);
+        // ApproximateTime subtracts the stamps it holds as ros::Time, which throws past 2^31 s: one message
+        // stamped 4e9 s (a sender's clock gone wrong) took the nodelet manager down, outside any callback
+        // of ours. Each message reaches it through a guarded callback that refuses such stamps first.
+        approx_sync_ = std::make_unique<message_filters::Synchronizer<ApproxPolicy>>(ApproxPolicy(kSyncQueue));
         approx_sync_->registerCallback(&EsdfMapper::onDepthPair, this);
+        depth_sub_.registerCallback([this](const sensor_msgs::Image::ConstPtr& m) {
+          ros_guard::run(getName(), "the depth synchroniser", [&] {
+            if (pairableStamp("depth image", m->header.stamp)) approx_sync_->add<0>(m);
+          });
+        });
+        pose_sub_.registerCallback([this](const geometry_msgs::PoseStamped::ConstPtr& m) {
+          ros_guard::run(getName(), "the camera_pose synchroniser", [&] {
+            if (pairableStamp("camera_pose", m->header.stamp)) approx_sync_->add<1>(m);
+          });
+        });
       }
     }
     publishHandle();
@@ -145,6 +158,16 @@ class EsdfMapper : public nodelet::Nodelet {
   }
 
   // More images than the synchroniser keeps since the last pair: none of them found its camera_pose.
+  /// Whether a message stamped `stamp` may enter the approximate synchroniser: within 2^30 s (34 years) of
+  /// now, so that any two it holds are less than 2^31 s apart (said and skipped otherwise).
+  bool pairableStamp(const char* what, const ros::Time& stamp) {
+    const double off = stamp.toSec() - ros::Time::now().toSec();
+    if (std::abs(off) < 1073741824.0) return true;
+    skip("stamp", std::string(what) + " stamped " + std::to_string(stamp.toSec()) + " s, " + std::to_string(off) +
+                      " s from now: too far to pair (mapper/sync_mode approximate)");
+    return false;
+  }
+
   void onDepthArrived() {
     if (++unpaired_ <= kSyncQueue) return;
     skip("pose_sync", std::to_string(unpaired_ - 1) + " depth images in a row found no camera_pose " +
@@ -168,9 +191,17 @@ class EsdfMapper : public nodelet::Nodelet {
                                     world_frame_ + "'");
     const std::string bad = ros_conv::odometryPoseProblem(pose->pose);
     if (!bad.empty()) return skip("pose", "camera_pose refused: " + bad);
-    Eigen::Isometry3d T_W_C;
-    tf2::fromMsg(pose->pose, T_W_C);
-    integrate(depth, T_W_C);
+    const auto& p = pose->pose.position;
+    integrate(depth, rigid(p.x, p.y, p.z, pose->pose.orientation));
+  }
+
+  /// The pose with its quaternion normalised: one accepted as a unit quaternion (within 1e-3) but not
+  /// quite one gave a rotation matrix scaled off rigid, which integrate() refused as no rotation at all.
+  static Eigen::Isometry3d rigid(double x, double y, double z, const geometry_msgs::Quaternion& q) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = Eigen::Quaterniond(q.w, q.x, q.y, q.z).normalized().toRotationMatrix();
+    T.translation() = Eigen::Vector3d(x, y, z);
+    return T;
   }
 
   // The TF filter's callback, under ros_guard like every other.
@@ -201,7 +232,8 @@ class EsdfMapper : public nodelet::Nodelet {
     } catch (const tf2::TransformException& e) {
       return skip("tf", std::string("no transform ") + world_frame_ + " <- " + depth->header.frame_id + ": " + e.what());
     }
-    integrate(depth, tf2::transformToEigen(tf));
+    const auto& t = tf.transform.translation;
+    integrate(depth, rigid(t.x, t.y, t.z, tf.transform.rotation));
   }
 
   void integrate(const sensor_msgs::Image::ConstPtr& msg, const Eigen::Isometry3d& T_W_C) {
@@ -286,7 +318,7 @@ class EsdfMapper : public nodelet::Nodelet {
       std::shared_lock<std::shared_mutex> lock(shared_->mutex);
       const map::VoxelMap& m = *shared_->map;
       const auto& geo = m.geometry();
-      const int kz = geo.coordToIndex(common::Vec3(0, 0, slice_height_)).z();
+      const int kz = geo.clampedIndex(common::Vec3(0, 0, slice_height_)).z();  // any height: outside, no slice
       for (std::size_t l = 0; l < geo.size(); ++l) {
         const common::Index3 idx = geo.unlinear(l);
         const common::Vec3 c = geo.indexToCoord(idx);

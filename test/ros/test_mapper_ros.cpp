@@ -210,13 +210,18 @@ TEST_F(MapperTest, TurningInPlaceMapsTheWallsBadFramesAreSkippedSaveMapWorks) {
 // The probe mapper (probe/... in mapper.test) is fed only by this test: its inputs, its map_updates counted,
 // and a real frame with its pose and camera_info from the simulated camera to feed it.
 struct Probe {
+  /// The probe mapper whose topics start with `prefix` (mapper.test: probe/ in sync_mode exact,
+  /// approx_probe/ in approximate).
+  explicit Probe(const std::string& prefix = "probe/")
+      : info_pub(nh.advertise<sensor_msgs::CameraInfo>(prefix + "camera_info", 5, /*latch=*/true)),
+        depth_pub(nh.advertise<sensor_msgs::Image>(prefix + "depth", 5)),
+        pose_pub(nh.advertise<geometry_msgs::PoseStamped>(prefix + "camera_pose", 5)),
+        update_sub(nh.subscribe<go_feap::MapUpdate>(prefix + "map_update", 10,
+                                                    [this](const go_feap::MapUpdate::ConstPtr&) { ++updates; })) {}
   ros::NodeHandle nh;
-  ros::Publisher info_pub = nh.advertise<sensor_msgs::CameraInfo>("probe/camera_info", 5, /*latch=*/true);
-  ros::Publisher depth_pub = nh.advertise<sensor_msgs::Image>("probe/depth", 5);
-  ros::Publisher pose_pub = nh.advertise<geometry_msgs::PoseStamped>("probe/camera_pose", 5);
+  ros::Publisher info_pub, depth_pub, pose_pub;
   std::size_t updates = 0;
-  ros::Subscriber update_sub =
-      nh.subscribe<go_feap::MapUpdate>("probe/map_update", 10, [this](const go_feap::MapUpdate::ConstPtr&) { ++updates; });
+  ros::Subscriber update_sub;
   sensor_msgs::CameraInfo::ConstPtr info;
   sensor_msgs::Image::ConstPtr depth;
   geometry_msgs::PoseStamped::ConstPtr pose;
@@ -335,6 +340,41 @@ TEST_F(MapperTest, FramesWithAnUnsetOrForeignPoseOrAnImageShorterThanItsSizeAreS
       << "a frame with an unset or foreign pose, an unreadable image or the stamp 0 was integrated";
   probe.sendReal();
   EXPECT_TRUE(spinUntil([&] { return probe.updates == base + 1; }, 10.0)) << "the next real frame was not integrated";
+  // A quaternion 8e-4 off unit length (accepted within 1e-3): integrated, at this 120-degree camera
+  // rotation too (its rotation matrix, scaled off rigid, was refused as no rotation).
+  geometry_msgs::PoseStamped scaled = *probe.pose;
+  for (double* c : {&scaled.pose.orientation.x, &scaled.pose.orientation.y, &scaled.pose.orientation.z,
+                    &scaled.pose.orientation.w})
+    *c *= 1.0008;
+  probe.send(*probe.depth, scaled);
+  EXPECT_TRUE(spinUntil([&] { return probe.updates == base + 2; }, 10.0))
+      << "a frame whose pose quaternion is 8e-4 off unit length was not integrated";
+}
+
+// sync_mode approximate: message_filters' ApproximateTime subtracts the stamps it holds as ros::Time, which
+// throws past 2^31 s; a depth image or pose stamped 4e9 s (a sender's clock gone wrong) took the whole
+// nodelet manager down. Such messages are skipped, and the next real frames are integrated.
+TEST_F(MapperTest, InApproximateModeMessagesStampedFarAheadAreSkippedAndTheNextFramesIntegrated) {
+  Probe probe("approx_probe/");
+  ASSERT_TRUE(probe.connect());
+  probe.info_pub.publish(*probe.info);
+  ASSERT_TRUE(probe.sendRealUntilIntegrated());
+  const ros::Time far(4000000000u, 0);
+  sensor_msgs::Image far_depth = *probe.depth;
+  geometry_msgs::PoseStamped far_pose = *probe.pose;
+  far_depth.header.stamp = far_pose.header.stamp = far;
+  // A pose with a usual stamp waits in the synchroniser for its image; an image stamped far ahead comes
+  // instead (the synchroniser weighs their interval: 4e9 s less the pose's stamp).
+  geometry_msgs::PoseStamped waiting = *probe.pose;
+  waiting.header.stamp = probe.depth->header.stamp + ros::Duration(0.001 * ++probe.frame);
+  probe.pose_pub.publish(waiting);
+  spinUntil([] { return false; }, 0.5);
+  probe.depth_pub.publish(far_depth);
+  spinUntil([] { return false; }, 0.5);
+  probe.pose_pub.publish(far_pose);  // a pair stamped far ahead
+  probe.depth_pub.publish(far_depth);
+  spinUntil([] { return false; }, 0.5);
+  EXPECT_TRUE(probe.sendRealUntilIntegrated()) << "after messages stamped far ahead";
 }
 
 // sync_mode tf: a depth frame waits, without blocking the mapper, for a transform that comes late (VIO
