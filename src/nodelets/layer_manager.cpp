@@ -142,6 +142,11 @@ class LayerManager : public nodelet::Nodelet {
     in.map_progress = progress_;
     in.yaw = yaw_;
     const planning::Band band = current_band_;
+    in.frontiers_known = frontiers_ != nullptr;
+    if (!frontiers_ && (manager_->state() == planning::ExplorationState::kExplore ||
+                        manager_->state() == planning::ExplorationState::kFinalPass))
+      NODELET_WARN_STREAM_THROTTLE(5.0, getName() << ": no frontiers yet (from the frontier finder): no band counts as "
+                                                     "explored until they come");
     if (frontiers_) {
       for (const auto& f : frontiers_->frontiers) {
         in.all_frontiers.push_back(f.id);

@@ -160,12 +160,12 @@ LayerOutputs LayerManager::step(const LayerInputs& in, double t) {
   const std::size_t blacklisted_left = in.all_frontiers.size() - usable_in_box;
   if (state_ == ExplorationState::kExplore || state_ == ExplorationState::kFinalPass) {
     const bool final_pass = state_ == ExplorationState::kFinalPass;
-    if (countUsable(in.band_frontiers) > 0) {
+    if (!in.frontiers_known || countUsable(in.band_frontiers) > 0) {
       empty_since_ = -1.0;
     } else if (empty_since_ < 0.0) {
       empty_since_ = t;
     }
-    if (usable_in_box > 0) {
+    if (!in.frontiers_known || usable_in_box > 0) {
       box_empty_since_ = -1.0;
     } else if (box_empty_since_ < 0.0) {
       box_empty_since_ = t;

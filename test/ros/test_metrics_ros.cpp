@@ -35,6 +35,7 @@
 #include "go_feap/ExplorationStatus.h"
 #include "go_feap/FrontierArray.h"
 #include "go_feap/GlobalTour.h"
+#include "go_feap/LayerBounds.h"
 #include "go_feap/MapUpdate.h"
 #include "go_feap/PositionCommand.h"
 #include "go_feap/ViewpointPath.h"
@@ -263,6 +264,48 @@ TEST(LayerManager, ElapsedTimeGoesOnFromWhereItWasWhenTheClockGoesBack) {
   for (const go_feap::ExplorationStatus& s : statuses)
     EXPECT_GE(s.elapsed, last.elapsed - 1e-6) << "at " << s.header.stamp.toSec() << " s";
   EXPECT_GT(statuses.back().elapsed, last.elapsed + 1.0) << "the exploration's clock did not go on";
+}
+
+// Before any frontier list has come, the probe layer manager (started, its vehicle still, so never
+// looked round) asks for no look round: an empty list is not yet known to be empty (a finder that never
+// started ended the run "complete" after the look round). The first list, empty, lets its band settle
+// (settle_time 1 s) and the look round is asked for. Before BlacklistFollowsTheFrontiersListed, the first
+// test to send it frontiers.
+TEST(LayerManager, NoBandSettlesBeforeTheFirstFrontierList) {
+  ros::NodeHandle nh;
+  auto clock_pub = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
+  auto frontiers_pub = nh.advertise<go_feap::FrontierArray>("probe/frontiers", 10);
+  int layers = 0, looks = 0;
+  auto layer_sub = nh.subscribe<go_feap::LayerBounds>("probe/layer", 50, [&](const go_feap::LayerBounds::ConstPtr& m) {
+    ++layers;
+    looks += m->look_around;
+  });
+  int exploring = 0;
+  auto status_sub = nh.subscribe<go_feap::ExplorationStatus>("probe/status", 50, [&](const go_feap::ExplorationStatus::ConstPtr& m) {
+    exploring += m->state == go_feap::ExplorationStatus::EXPLORE;
+  });
+  ASSERT_TRUE(spinUntil([&] {
+    return frontiers_pub.getNumSubscribers() > 0 && layer_sub.getNumPublishers() > 0 &&
+           status_sub.getNumPublishers() > 0 && clock_pub.getNumSubscribers() > 0;
+  }, 30.0)) << "the probe layer manager is not connected";
+  double now = ros::Time::now().toSec();
+  auto tick_until = [&](double seconds, const std::function<bool()>& done) {
+    for (double t = 0.0; t < seconds && !done(); t += 0.05) {
+      now += 0.05;
+      publishClock(clock_pub, now);
+      spinUntil(done, 0.02);
+    }
+    return done();
+  };
+  const int before = exploring;
+  tick_until(3.0, [] { return false; });  // three settle times
+  ASSERT_GT(exploring, before + 10) << "the probe layer manager is not exploring";
+  EXPECT_EQ(looks, 0) << "a look round asked for before any frontier list came";
+  go_feap::FrontierArray none;
+  none.header.stamp = ros::Time(now);
+  none.header.frame_id = "world";
+  frontiers_pub.publish(none);
+  EXPECT_TRUE(tick_until(5.0, [&] { return looks > 0; })) << "no look round asked for once an empty list came";
 }
 
 // One depth frame for the probe mapper (probe/mapper/... in metrics.test; 3 m everywhere, from 1 m up

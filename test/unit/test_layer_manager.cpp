@@ -64,6 +64,36 @@ TEST(LayerManager, BandsGoUpFromTheStartBandThenDown) {
   EXPECT_EQ(far_down.bandOrder(), (std::vector<int>{0, 1, 2, 3, 4, 5}));
 }
 
+// Before any frontier list has arrived (a finder that has not started, a camera that sends nothing), the
+// empty lists say nothing: no look round is asked for, no band settles and the run does not end
+// "complete" (the heading may go round all the same); the first list, empty, lets the box settle.
+TEST(LayerManager, NoBandIsExploredBeforeAnyFrontierListArrives) {
+  LayerManagerConfig c = config();
+  c.layer_height = 100.0;  // one band
+  LayerManager m(c, kBox, 2.3);
+  LayerInputs in;
+  in.frontiers_known = false;
+  in.trigger = true;
+  double t = 0.0;
+  ASSERT_EQ(m.step(in, t).state, ExplorationState::kExplore);
+  in.trigger = false;
+  bool asked_to_look = false;
+  for (int k = 0; k < 400; ++k) {  // 40 s, the heading going round, the map growing
+    in.yaw = 0.1 * k;
+    in.map_progress = static_cast<std::uint64_t>(k);
+    const LayerOutputs out = m.step(in, t += 0.1);
+    ASSERT_EQ(out.state, ExplorationState::kExplore) << "at " << t << " s";
+    asked_to_look = asked_to_look || out.look_around;
+  }
+  EXPECT_FALSE(asked_to_look) << "a look round asked for with no frontier list";
+  EXPECT_TRUE(m.lookedAround());
+  in.frontiers_known = true;
+  LayerOutputs out;
+  for (int k = 0; k < 12 && out.state != ExplorationState::kFinished; ++k) out = m.step(in, t += 0.1);
+  EXPECT_EQ(out.state, ExplorationState::kFinished);
+  EXPECT_EQ(out.reason, FinishReason::kComplete);
+}
+
 TEST(LayerManager, WalksEveryTransitionToComplete) {
   LayerManager m(config(), kBox, 2.3);
   double t = 0.0;

@@ -45,6 +45,10 @@ struct LayerInputs {
   std::vector<std::uint32_t> failed;       ///< frontiers the planners failed to reach since the last step
   std::uint64_t map_progress = 0;          ///< any counter that grows while the map grows (e.g. frames that changed it)
   std::optional<double> yaw;               ///< rad, the vehicle's heading now (none while unknown)
+  /// A frontier list has arrived at all: before the first, the empty lists above say nothing, and no band
+  /// (nor the box) counts as explored (a finder that never started, or a camera that never sent a frame,
+  /// ended the run "complete" after the look round)
+  bool frontiers_known = true;
 };
 
 struct Transition {
