@@ -261,8 +261,10 @@ bool samePlace(const Vec3& p, double yaw, const Viewpoint& vp, const LocalPlanne
 
 bool VisitedViewpoints::choose(const Viewpoint& chosen, double t, const LocalPlannerConfig& config) {
   if (config.max_choices == 0) return false;
+  // Choices older than the window go, and so do choices stamped after t: the clock went back (a bag
+  // played again, a simulator restarted), and they belong to the run before.
   choices_.erase(std::remove_if(choices_.begin(), choices_.end(),
-                                [&](const Choice& c) { return c.t < t - config.choice_window; }),
+                                [&](const Choice& c) { return c.t < t - config.choice_window || c.t > t; }),
                  choices_.end());
   choices_.push_back({chosen.position, chosen.yaw, t});
   const auto same = std::count_if(choices_.begin(), choices_.end(),

@@ -815,6 +815,15 @@ TEST(Viewpoints, PlacesChosenMaxChoicesTimesWithinTheWindowAreNoLongerProposed) 
   EXPECT_TRUE(visited.exhausted(a, local));  // for good: long after the window
   EXPECT_FALSE(visited.choose(turned, 1000.0, local));
 
+  // Choices from before the clock went back (a bag played again) do not add up with those after it.
+  go_feap::planning::VisitedViewpoints replayed;
+  EXPECT_FALSE(replayed.choose(a, 100.0, local));
+  EXPECT_FALSE(replayed.choose(a, 101.0, local));
+  EXPECT_FALSE(replayed.choose(a, 5.0, local));
+  EXPECT_FALSE(replayed.choose(a, 6.0, local));
+  EXPECT_FALSE(replayed.exhausted(a, local));
+  EXPECT_TRUE(replayed.choose(a, 7.0, local));  // the third since the clock went back
+
   // Choices a window apart never add up; with max_choices 0 nothing is ever exhausted.
   go_feap::planning::VisitedViewpoints spread;
   for (int k = 0; k < 5; ++k) EXPECT_FALSE(spread.choose(a, k * (local.choice_window + 1.0), local)) << k;
