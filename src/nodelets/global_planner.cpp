@@ -93,9 +93,13 @@ class GlobalPlanner : public nodelet::Nodelet {
       ros_params::stopManager(getName(), st.message());  // Astar's constructor would throw
       return;
     }
+    // Built before anything is kept: a constructor that threw would leave the map taken and no planner
+    // (the next frontiers would reach a null one, and the handle would never be taken again).
+    auto astar = std::make_unique<planning::Astar>((*map)->map->occupancy(), (*map)->map->esdf(), astar_config_);
+    auto planner = std::make_unique<planning::TourPlanner>(config_, *astar);
     shared_ = *map;
-    astar_ = std::make_unique<planning::Astar>(shared_->map->occupancy(), shared_->map->esdf(), astar_config_);
-    planner_ = std::make_unique<planning::TourPlanner>(config_, *astar_);
+    astar_ = std::move(astar);
+    planner_ = std::move(planner);
   }
 
   void onOdom(const nav_msgs::Odometry::ConstPtr& msg) {

@@ -111,8 +111,11 @@ class LocalPlanner : public nodelet::Nodelet {
         ros_params::stopManager(getName(), st.message());
         return;
       }
+    // Built before the map is kept: a constructor that threw would leave the map taken and no A* (the
+    // next tour would reach a null one, and the handle would never be taken again).
+    auto astar = std::make_unique<planning::Astar>((*map)->map->occupancy(), (*map)->map->esdf(), astar_config_);
     shared_ = *map;
-    astar_ = std::make_unique<planning::Astar>(shared_->map->occupancy(), shared_->map->esdf(), astar_config_);
+    astar_ = std::move(astar);
   }
   // The viewpoints cached for frontiers a change of the map reaches are forgotten (a frontier keeps its id
   // while its cells stay the same): by the changed voxels while the map is still at this update, by the

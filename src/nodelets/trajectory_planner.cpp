@@ -90,10 +90,16 @@ class TrajectoryPlanner : public nodelet::Nodelet {
         ros_params::stopManager(getName(), st.message());
         return;
       }
+    // Built before the map is kept: a constructor that threw would leave the map taken and a search
+    // missing (the next plan would reach a null one, and the handle would never be taken again).
+    const map::OccupancyMap& occupancy = (*map)->map->occupancy();
+    auto astar = std::make_unique<planning::Astar>(occupancy, (*map)->map->esdf(), astar_config_);
+    auto scout = std::make_unique<planning::Astar>(occupancy, (*map)->map->esdf(), scout_config_);
+    auto coarse = std::make_unique<planning::Astar>(occupancy, (*map)->map->esdf(), coarse_config_);
     shared_ = *map;
-    astar_ = std::make_unique<planning::Astar>(shared_->map->occupancy(), shared_->map->esdf(), astar_config_);
-    scout_ = std::make_unique<planning::Astar>(shared_->map->occupancy(), shared_->map->esdf(), scout_config_);
-    coarse_ = std::make_unique<planning::Astar>(shared_->map->occupancy(), shared_->map->esdf(), coarse_config_);
+    astar_ = std::move(astar);
+    scout_ = std::move(scout);
+    coarse_ = std::move(coarse);
   }
   void onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
     // The velocity is the start of every plan from the odometry: one not finite (it used to be taken as
