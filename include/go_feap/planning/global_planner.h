@@ -57,7 +57,8 @@ struct PathDistances {
   std::function<double(std::size_t i, std::size_t j)> between;  ///< frontier i -> frontier j
   /// Optional: a lower bound of from_uav(j) (the straight-line distance). When given, frontiers are
   /// asked about in increasing bound, and from_uav is not called for one whose bound is no smaller
-  /// than the n_max_tsp-th smallest distance found so far: it could not be a candidate.
+  /// than the n_max_tsp-th smallest distance found so far (n_max_tsp + rest_frontiers-th with a rest
+  /// leg, rest_weight > 0): it could not be a candidate, nor an end of the rest leg.
   std::function<double(std::size_t j)> from_uav_lower_bound;
   /// Optional: the path length UAV -> frontier j where from_uav(j) is only an estimate (a frontier at
   /// or beyond s_near, whose straight-line distance orders the top-up). When given, it prices the leg

@@ -29,8 +29,11 @@ struct ViewpointConfig {
   /// subset of at most this many of its cells and scaled to the whole frontier (ray casts
   /// dominate the sampler's cost).
   int max_evaluated_cells = 0;
-  /// true: a viewpoint also needs the voxels `clearance` away along each axis to be known, as the flight
-  /// path search does (astar/known_clearance), so every viewpoint is a goal a flight can end at.
+  /// true: a viewpoint also needs the voxels `clearance` away along each axis to be known: the flight path
+  /// search's rule (astar/known_clearance), at the viewpoints' clearance (0.4 m) rather than the search's
+  /// (0.3 m). The two reach different voxels, so a viewpoint is not always a voxel the search may end at:
+  /// the flight then ends within planner/goal_tolerance of it, or the plan fails and the frontier counts
+  /// a failed attempt.
   bool known_clearance = false;
 
   /// Checks every key; the message names the bad one, e.g. "viewpoints: hfov must be in (0, pi)".
