@@ -201,6 +201,7 @@ void ExplorationRun::layerStep() {
   in.failed.swap(failed_);
   in.map_progress = map_progress_;
   in.yaw = yaw();
+  in.position = vehicle_.state().position;
   for (const frontier::Frontier& f : finder_->frontiers()) {
     in.all_frontiers.push_back(f.id);
     if (f.average.z() >= layer_out_.band.z_min && f.average.z() <= layer_out_.band.z_max)

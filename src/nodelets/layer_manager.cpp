@@ -143,6 +143,7 @@ class LayerManager : public nodelet::Nodelet {
     in.yaw = yaw_;
     const planning::Band band = current_band_;
     in.frontiers_known = frontiers_ != nullptr;
+    in.position = last_position_;
     if (!frontiers_ && (manager_->state() == planning::ExplorationState::kExplore ||
                         manager_->state() == planning::ExplorationState::kFinalPass))
       NODELET_WARN_STREAM_THROTTLE(5.0, getName() << ": no frontiers yet (from the frontier finder): no band counts as "

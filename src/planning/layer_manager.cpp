@@ -18,6 +18,7 @@ common::Status LayerManagerConfig::validate() const {
   if (max_retries < 1) return bad("max_retries", "must be >= 1");
   if (!(time_limit > 0.0)) return bad("time_limit", "must be > 0");
   if (!(stuck_timeout > 0.0)) return bad("stuck_timeout", "must be > 0");
+  if (!(progress_travel >= 0.0) || !std::isfinite(progress_travel)) return bad("progress_travel", "must be finite and >= 0");
   return common::Status::Ok();
 }
 
@@ -128,6 +129,7 @@ LayerOutputs LayerManager::step(const LayerInputs& in, double t) {
       t_trigger_ = t;
       progress_time_ = t;
       last_progress_ = in.map_progress;
+      progress_position_ = in.position;
       position_ = 0;
       go(ExplorationState::kExplore, "triggered");
     }
@@ -141,14 +143,20 @@ LayerOutputs LayerManager::step(const LayerInputs& in, double t) {
     headings_seen_ |= 1u << octant;
   }
   if (state_ == ExplorationState::kExplore || state_ == ExplorationState::kFinalPass) {
-    if (in.map_progress != last_progress_) {
+    // Progress: the map changed, or the vehicle got progress_travel from where it was at the last
+    // progress (a long transit through mapped space changes no voxel; jitter in place does not count).
+    const bool flown = in.position && progress_position_ && config_.progress_travel > 0.0 &&
+                       (*in.position - *progress_position_).norm() >= config_.progress_travel;
+    if (in.map_progress != last_progress_ || flown || (in.position && !progress_position_)) {
+      if (in.map_progress != last_progress_ || flown) progress_time_ = t;
       last_progress_ = in.map_progress;
-      progress_time_ = t;
+      progress_position_ = in.position;
     }
     if (t - t_trigger_ >= config_.time_limit) {
       finish(FinishReason::kTimeLimit, "time limit reached");
     } else if (t - progress_time_ >= config_.stuck_timeout) {
-      finish(FinishReason::kStuck, "no map progress for " + std::to_string(config_.stuck_timeout) + " s");
+      finish(FinishReason::kStuck, "no map progress nor " + std::to_string(config_.progress_travel) + " m flown for " +
+                                       std::to_string(config_.stuck_timeout) + " s");
     }
   }
   // A band (or, in the final pass, the box) without usable frontiers for settle_time is

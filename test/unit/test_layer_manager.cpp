@@ -260,6 +260,44 @@ TEST(LayerManager, TimeLimitAndStuckTerminate) {
   EXPECT_NE(out.transitions.back().why.find("no map progress"), std::string::npos);
 }
 
+// A flight counts as progress (a long transit through mapped space changes no voxel, and ended a run
+// "stuck" with frontiers left at its end): 20 s at 1 m/s with the map unchanged is not stuck; jitter
+// within progress_travel is, stuck_timeout after the flight; with progress_travel 0 the flight counts
+// for nothing.
+TEST(LayerManager, AFlightIsProgressJitterIsNot) {
+  for (double travel : {1.0, 0.0}) {
+    LayerManagerConfig c = config();
+    c.stuck_timeout = 5.0;
+    c.progress_travel = travel;
+    LayerManager m(c, kBox, 0.5);
+    LayerInputs in = frontiers({1}, {1}, 42);  // the map never changes
+    in.trigger = true;
+    in.position = Vec3(0.0, 0.0, 0.5);
+    m.step(in, 0.0);
+    in.trigger = false;
+    LayerOutputs out;
+    double t = 0.0;
+    for (int k = 1; k <= 40 && out.state != ExplorationState::kFinished; ++k) {  // 20 s, 0.5 m a step
+      in.position = Vec3(0.5 * k, 0.0, 0.5);
+      out = m.step(in, t += 0.5);
+    }
+    if (travel == 0.0) {
+      EXPECT_EQ(out.reason, FinishReason::kStuck) << "the flight counted with progress_travel 0";
+      EXPECT_NEAR(t, 5.0, 1e-9);
+      continue;
+    }
+    ASSERT_EQ(out.state, ExplorationState::kExplore) << "stuck while flying, at " << t << " s";
+    const double flown_until = t;
+    for (int k = 0; k < 40 && out.state != ExplorationState::kFinished; ++k) {  // jitter of 0.9 m at most
+      in.position = Vec3(20.0 + 0.45 * (k % 3 - 1), 0.0, 0.5);
+      out = m.step(in, t += 0.5);
+    }
+    EXPECT_EQ(out.reason, FinishReason::kStuck);
+    // Stuck stuck_timeout after the last metre's progress (the flight's last steps), not later.
+    EXPECT_LE(t - flown_until, c.stuck_timeout + 1e-9);
+  }
+}
+
 TEST(LayerManager, ValidateNamesKeys) {
   LayerManagerConfig c = config();
   c.layer_height = 0.0;
@@ -278,6 +316,11 @@ TEST(LayerManager, ValidateNamesKeys) {
   c = config();
   c.max_retries = 0;
   EXPECT_NE(c.validate().message().find("max_retries"), std::string::npos);
+  for (double travel : {-1.0, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()}) {
+    c = config();
+    c.progress_travel = travel;
+    EXPECT_NE(c.validate().message().find("progress_travel"), std::string::npos) << travel;
+  }
   EXPECT_STREQ(toString(FinishReason::kStuck), "stuck");
   EXPECT_STREQ(toString(ExplorationState::kFinalPass), "FINAL_PASS");
 }

@@ -77,7 +77,7 @@ template <class R>
 void readLayers(R& p, planning::LayerManagerConfig& c) {
   p.get("layers/layer_height", c.layer_height).get("layers/settle_time", c.settle_time);
   p.get("layers/max_retries", c.max_retries).get("layers/time_limit", c.time_limit);
-  p.get("layers/stuck_timeout", c.stuck_timeout);
+  p.get("layers/stuck_timeout", c.stuck_timeout).get("layers/progress_travel", c.progress_travel);
 }
 
 template <class R>

@@ -20,7 +20,10 @@ struct LayerManagerConfig {
   double settle_time = 1.0;       ///< s a band must stay without frontiers before it counts as explored
   int max_retries = 3;            ///< failed attempts on a frontier before it is blacklisted
   double time_limit = 600.0;      ///< s after the trigger: FINISHED(time_limit)
-  double stuck_timeout = 30.0;    ///< s without map progress while frontiers remain: FINISHED(stuck)
+  double stuck_timeout = 30.0;    ///< s without progress (map or flight) while exploring: FINISHED(stuck)
+  /// m the vehicle must get from where progress was last seen for its flight to count as progress (a
+  /// transit through mapped space changes no voxel); 0: the map's changes only
+  double progress_travel = 1.0;
   common::Status validate() const;
 };
 
@@ -49,6 +52,7 @@ struct LayerInputs {
   /// (nor the box) counts as explored (a finder that never started, or a camera that never sent a frame,
   /// ended the run "complete" after the look round)
   bool frontiers_known = true;
+  std::optional<common::Vec3> position;    ///< m, the vehicle's position now (none while unknown)
 };
 
 struct Transition {
@@ -110,6 +114,7 @@ class LayerManager {
   double box_empty_since_ = -1.0;  ///< when the whole box last became free of usable frontiers
   std::uint64_t last_progress_ = 0;
   double progress_time_ = 0.0;
+  std::optional<common::Vec3> progress_position_;  ///< where the vehicle was when progress was last seen
   std::map<std::uint32_t, int> failures_;
   std::set<std::uint32_t> blacklist_;
   std::uint32_t highest_seen_ = 0;  ///< the highest frontier id any step's all_frontiers held
