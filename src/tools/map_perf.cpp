@@ -166,7 +166,9 @@ int main(int argc, char** argv) {
     if (path.status != planning::PathStatus::kFound || path.length < 0.3) continue;
     ++traj_tried;
     const auto t8 = Clock::now();
-    const auto samples = trajectory::UniformBspline::resamplePolyline(path.path, 0.3);
+    // At least 6 segments, as the trajectory planner takes: a hop under 0.9 m at 0.3 m gave 3 points, fewer
+    // than fitPath's end conditions need, and its exception ended the tool.
+    const auto samples = trajectory::UniformBspline::resamplePolyline(path.path, std::min(0.3, path.length / 6.0));
     const double total = std::max(path.length / (0.6 * opt_config.v_max), 2.5 * std::sqrt(path.length / opt_config.a_max));
     const auto init = trajectory::UniformBspline::fitPath(samples, total / std::max<std::size_t>(1, samples.size() - 1),
                                                           common::Vec3::Zero(), common::Vec3::Zero());
