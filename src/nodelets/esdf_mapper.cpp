@@ -158,13 +158,13 @@ class EsdfMapper : public nodelet::Nodelet {
   }
 
   // More images than the synchroniser keeps since the last pair: none of them found its camera_pose.
-  /// Whether a message stamped `stamp` may enter the approximate synchroniser: within 2^30 s (34 years) of
-  /// now, so that any two it holds are less than 2^31 s apart (said and skipped otherwise).
+  /// Whether a message stamped `stamp` may enter the approximate synchroniser (ros_conv::pairableStamp():
+  /// within 2^30 s, 34 years, of now); said and skipped otherwise.
   bool pairableStamp(const char* what, const ros::Time& stamp) {
-    const double off = stamp.toSec() - ros::Time::now().toSec();
-    if (std::abs(off) < 1073741824.0) return true;
-    skip("stamp", std::string(what) + " stamped " + std::to_string(stamp.toSec()) + " s, " + std::to_string(off) +
-                      " s from now: too far to pair (mapper/sync_mode approximate)");
+    const double now = ros::Time::now().toSec();
+    if (ros_conv::pairableStamp(stamp.toSec(), now)) return true;
+    skip("stamp", std::string(what) + " stamped " + std::to_string(stamp.toSec()) + " s, " +
+                      std::to_string(stamp.toSec() - now) + " s from now: too far to pair (mapper/sync_mode approximate)");
     return false;
   }
 

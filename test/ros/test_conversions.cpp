@@ -173,6 +173,29 @@ bool says(const std::string& problem, const std::string& what) {
 
 // Flown distance from odometry: the first message adds nothing, a step up to max_step adds its length,
 // a longer one is a jump (a relocalisation) and adds nothing.
+// Stamps that ApproximateTime may hold together: any two accepted against one clock are less than 2^31 s
+// apart (its ros::Time subtraction throws beyond); with no clock yet (now 0), stamps below 2^31 s.
+TEST(Conversions, PairableStampsAreLessThan2To31SecondsApart) {
+  using go_feap::ros_conv::pairableStamp;
+  const double k30 = std::ldexp(1.0, 30), k31 = std::ldexp(1.0, 31);
+  for (double now : {100.0, 1.8e9, 4.0e9}) {
+    EXPECT_TRUE(pairableStamp(now, now));
+    EXPECT_TRUE(pairableStamp(now + k30 - 1.0, now));
+    EXPECT_FALSE(pairableStamp(now + k30, now));
+    EXPECT_TRUE(pairableStamp(now - k30 + 1.0, now));
+    EXPECT_FALSE(pairableStamp(now - k30, now));
+    EXPECT_FALSE(pairableStamp(now + 4.0e9, now));
+  }
+  EXPECT_FALSE(pairableStamp(4.0e9, 100.0));  // a sender's clock gone wrong, under sim time
+  EXPECT_FALSE(pairableStamp(4.0e9, 1.8e9));  // and under wall time
+  EXPECT_FALSE(pairableStamp(1.8e9, 100.0));  // wall stamps under a simulated clock
+  // No clock yet: wall stamps pass, stamps from 2^31 s on do not.
+  EXPECT_TRUE(pairableStamp(1.8e9, 0.0));
+  EXPECT_TRUE(pairableStamp(0.5, 0.0));
+  EXPECT_FALSE(pairableStamp(k31, 0.0));
+  EXPECT_FALSE(pairableStamp(4.0e9, 0.0));
+}
+
 TEST(Conversions, VelocitiesNotFiniteOrFasterThanTheLimitAreNamed) {
   using go_feap::ros_conv::velocityProblem;
   EXPECT_EQ(velocityProblem(Vec3(12, 0, 16), 20.0, "planner/max_input_speed"), "");  // 20 m/s

@@ -52,6 +52,15 @@ inline std::string odometryPoseProblem(const geometry_msgs::Pose& pose) {
   return why.str();
 }
 
+/// Whether a message stamped `stamp` (s) may meet others in message_filters' ApproximateTime, which
+/// subtracts stamps as ros::Time and throws past 2^31 s: within 2^30 s of `now` (s), so that any two it
+/// holds are less than 2^31 s apart; with no clock yet (now 0: use_sim_time before the first /clock),
+/// below 2^31 s, which keeps any two of them less than 2^31 s apart too.
+inline bool pairableStamp(double stamp, double now) {
+  constexpr double k30 = 1073741824.0, k31 = 2147483648.0;
+  return now > 0.0 ? std::abs(stamp - now) < k30 : stamp < k31;
+}
+
 /// Why a velocity (odometry's, or a command's) cannot be planned from: not finite, or faster than
 /// `max_speed` m/s (the parameter `limit_name`), which no vehicle flies and a planner must not brake from
 /// (a braking plan from 1e7 m/s took gigabytes). "" when usable.
