@@ -332,30 +332,38 @@ TEST_F(TrajectoryTargetTest, AnOdometryJumpAwayFromTheReferenceIsPlannedFromTheO
 
   // A plan from the commanded state starts when that state held: at the stamp of the command it was
   // planned from (sent here 0.06 s old, at 100 Hz: within the 0.1 s a command counts as recent), not
-  // when the planner got to it, so that the server takes it over where the reference is by then.
-  std::vector<double> stamps;
-  goal = this->target(odometry_pose, 4);
-  goal.yaws.front() = yaw_ - 1.0;
-  const std::int64_t sane_id = planned.back().id;
-  Every late(0.01), odometry_rate(0.05), target_late(0.2, ros::Time::now() + ros::Duration(0.3));
-  ASSERT_TRUE(spinSimUntil(
-      5.5,
-      [&] {
-        if (odometry_rate.due()) odom_pub.publish(odometry());
-        if (late.due()) {
-          go_feap::PositionCommand m = command();
-          m.header.stamp = ros::Time::now() - ros::Duration(0.06);
-          stamps.push_back(m.header.stamp.toSec());
-          cmd_pub.publish(m);
-        }
-        if (target_late.due()) target_pub.publish(goal);
-      },
-      [&] { return planned.back().id != sane_id; }))
-      << "no trajectory to the target planned from late commands";
-  const double start = planned.back().start_time.toSec();
-  EXPECT_TRUE(std::find(stamps.begin(), stamps.end(), start) != stamps.end())
-      << "starts at " << start << " s, the stamp of no command (it arrived at " << received.back() << " s)";
-  EXPECT_LE(start, received.back() - 0.05) << "starts when it was planned, not when its start state held";
+  // when the planner got to it, so that the server takes it over where the reference is by then. A
+  // loaded machine can hold the commands up past the 0.1 s (the plan then rightly starts from the
+  // odometry): up to five new targets are sent until one is planned from a command.
+  std::string tries;
+  bool from_command = false;
+  for (int attempt = 0; attempt < 5 && !from_command; ++attempt) {
+    std::vector<double> stamps;
+    goal = this->target(odometry_pose, 4 + attempt);
+    goal.yaws.front() = yaw_ + (attempt % 2 ? 1.0 : -1.0);
+    const std::int64_t before = planned.back().id;
+    Every late(0.01), odometry_rate(0.05), target_late(0.2, ros::Time::now() + ros::Duration(0.3));
+    ASSERT_TRUE(spinSimUntil(
+        5.5,
+        [&] {
+          if (odometry_rate.due()) odom_pub.publish(odometry());
+          if (late.due()) {
+            go_feap::PositionCommand m = command();
+            m.header.stamp = ros::Time::now() - ros::Duration(0.06);
+            stamps.push_back(m.header.stamp.toSec());
+            cmd_pub.publish(m);
+          }
+          if (target_late.due()) target_pub.publish(goal);
+        },
+        [&] { return planned.back().id != before; }))
+        << "no trajectory to the target planned from late commands";
+    const double start = planned.back().start_time.toSec();
+    from_command = std::find(stamps.begin(), stamps.end(), start) != stamps.end();
+    tries += " " + std::to_string(start) + " (arrived " + std::to_string(received.back()) + ")";
+    if (from_command)
+      EXPECT_LE(start, received.back() - 0.05) << "starts when it was planned, not when its start state held";
+  }
+  EXPECT_TRUE(from_command) << "no plan of five started at the stamp of a command:" << tries;
 }
 
 // A second trajectory server (probe/...) fed only by this test. It holds the first usable odometry pose
