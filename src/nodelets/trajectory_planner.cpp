@@ -40,6 +40,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     config::readTrajectoryPlanner(p, planner_);
     p.get("planner/rate", rate_).get("planner/odom_timeout", odom_timeout_).get("planner/drop_grace", drop_grace_);
     p.get("planner/max_tracking_error", max_tracking_error_).get("planner/max_input_speed", max_input_speed_);
+    p.get("planner/command_timeout", command_timeout_);
     config::readAstar(p, astar_config_);
     config::readAstar(p, scout_config_, "scout_astar");
     config::readAstar(p, coarse_config_, "coarse_astar");
@@ -59,6 +60,8 @@ class TrajectoryPlanner : public nodelet::Nodelet {
                                "parameter '" + p.fullName("planner/max_tracking_error") + "' must be > 0");
     ros_params::requireOrThrow(std::isfinite(max_input_speed_) && max_input_speed_ > 0.0, getName(),
                                "parameter '" + p.fullName("planner/max_input_speed") + "' must be > 0");
+    ros_params::requireOrThrow(std::isfinite(command_timeout_) && command_timeout_ > 0.0, getName(),
+                               "parameter '" + p.fullName("planner/command_timeout") + "' must be > 0");
     speed_limit_name_ = p.fullName("planner/max_input_speed");
     compute_pub_ = nh.advertise<ComputeTime>("compute_time", 20);
     bspline_pub_ = nh.advertise<Bspline>("bspline", 5);
@@ -234,10 +237,10 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     }
   }
 
-  // A position_cmd from the last 0.1 s: the reference the server is sending now (in seconds as doubles:
+  // A position_cmd from the last planner/command_timeout s: the reference the server is sending now (in seconds as doubles:
   // its stamp is the sender's).
   bool commandRecent(const ros::Time& now) const {
-    return command_ && now.toSec() - command_->header.stamp.toSec() < 0.1;
+    return command_ && now.toSec() - command_->header.stamp.toSec() < command_timeout_;
   }
 
   // Start state: the commanded state when recent (continuity of the reference), else odometry (also
@@ -353,6 +356,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
   planning::AstarConfig astar_config_, scout_config_, coarse_config_;
   trajectory::TrajectoryPlannerConfig planner_;
   double rate_ = 10.0, odom_timeout_ = 0.5, drop_grace_ = 0.5, max_tracking_error_ = 1.0, max_input_speed_ = 20.0;
+  double command_timeout_ = 0.1;  ///< s, planner/command_timeout
   std::string speed_limit_name_;  ///< planner/max_input_speed's full name, for the messages
   bool from_odometry_ = false;  ///< the next plan starts from the odometry: it was far from the reference
   common::Vec3 odom_velocity_ = common::Vec3::Zero();  ///< world frame

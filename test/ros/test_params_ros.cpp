@@ -59,6 +59,7 @@ TEST(Parameters, ANodeletWithAnInvalidOrMissingParameterDoesNotStartAndNamesIt) 
       {"bad_camera_range", "go_feap/DepthCamera", "depth_camera/max_range"},    // 70 m in 16-bit millimetres
       {"bad_command_limit", "go_feap/QuadrotorSim", "simulation/max_command_acceleration"},  // NaN
       {"bad_input_speed", "go_feap/TrajectoryPlanner", "planner/max_input_speed"},  // NaN: no speed refused
+      {"bad_command_timeout", "go_feap/TrajectoryPlanner", "planner/command_timeout"},  // 0: no command recent
       {"bad_server_yaw_rate", "go_feap/TrajectoryServer", "server/max_yaw_rate"},  // below optimizer/yaw_rate_max
       {"bad_server_speed", "go_feap/TrajectoryServer", "server/max_speed"},     // 2.2 m/s: below 2.8 (v_max with the tolerance, times 4/3 for a braking polygon)
       {"bad_server_tolerance", "go_feap/TrajectoryServer", "optimizer: limit_tolerance"},  // NaN: read as 0 in silence

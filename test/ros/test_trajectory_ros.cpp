@@ -331,7 +331,7 @@ TEST_F(TrajectoryTargetTest, AnOdometryJumpAwayFromTheReferenceIsPlannedFromTheO
   EXPECT_LT((sane.velocity - velocity).norm(), 0.02) << "starts at " << sane.velocity.transpose() << " m/s";
 
   // A plan from the commanded state starts when that state held: at the stamp of the command it was
-  // planned from (sent here 0.06 s old, at 100 Hz: within the 0.1 s a command counts as recent), not
+  // planned from (sent here 0.06 s old, at 100 Hz: within planner/command_timeout, 0.1 s), not
   // when the planner got to it, so that the server takes it over where the reference is by then. A
   // loaded machine can hold the commands up past the 0.1 s (the plan then rightly starts from the
   // odometry): up to five new targets are sent until one is planned from a command.
