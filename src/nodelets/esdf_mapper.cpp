@@ -157,7 +157,6 @@ class EsdfMapper : public nodelet::Nodelet {
     ros_guard::run(getName(), "the depth and camera_pose callback", [&] { onDepthPose(depth, pose); });
   }
 
-  // More images than the synchroniser keeps since the last pair: none of them found its camera_pose.
   /// Whether a message stamped `stamp` may enter the approximate synchroniser (ros_conv::pairableStamp():
   /// within 2^30 s, 34 years, of now); said and skipped otherwise.
   bool pairableStamp(const char* what, const ros::Time& stamp) {
@@ -168,6 +167,7 @@ class EsdfMapper : public nodelet::Nodelet {
     return false;
   }
 
+  // More images than the synchroniser keeps since the last pair: none of them found its camera_pose.
   void onDepthArrived() {
     if (++unpaired_ <= kSyncQueue) return;
     skip("pose_sync", std::to_string(unpaired_ - 1) + " depth images in a row found no camera_pose " +

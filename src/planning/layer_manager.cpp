@@ -147,8 +147,9 @@ LayerOutputs LayerManager::step(const LayerInputs& in, double t) {
     // progress (a long transit through mapped space changes no voxel; jitter in place does not count).
     const bool flown = in.position && progress_position_ && config_.progress_travel > 0.0 &&
                        (*in.position - *progress_position_).norm() >= config_.progress_travel;
-    if (in.map_progress != last_progress_ || flown || (in.position && !progress_position_)) {
-      if (in.map_progress != last_progress_ || flown) progress_time_ = t;
+    const bool progress = in.map_progress != last_progress_ || flown;
+    if (progress) progress_time_ = t;
+    if (progress || !progress_position_) {  // the position too once it is first known
       last_progress_ = in.map_progress;
       progress_position_ = in.position;
     }
