@@ -160,15 +160,21 @@ common::Result<FrameChange> OccupancyMap::integrate(const cv::Mat& depth, const 
   };
 
   // 1. Sampled pixels -> ray end voxels; returns mark their voxel as hit. The per-pixel
-  // arithmetic is written out on scalars (the hot loop of a mapping update).
+  // arithmetic is written out on scalars, in voxel units (the hot loop of a mapping update).
   const Vec3 du = R.col(0) / K.fx;
-  const Vec3 lo = bounds.min, hi = bounds.max, g0 = geo_.origin();
+  const Vec3 g0 = geo_.origin();
   const double inv_res = 1.0 / geo_.resolution();
   const Index3 dims = geo_.dims();
+  const Vec3 dims_v = dims.cast<double>();
+  const Vec3 origin_v = (origin - g0) * inv_res, du_v = du * inv_res;
+  // A return marks the voxel just behind the measured surface point (1 % of a voxel deeper): a point
+  // exactly on a voxel face (as a voxel world renders it) belongs to the surface's voxel.
+  const double behind = 0.01 * geo_.resolution();
   std::size_t last_end = std::numeric_limits<std::size_t>::max();
   bool last_hit = false;
   for (int v = 0; v < depth.rows; v += config_.skip_pixel) {
     const Vec3 row = R.col(1) * ((v - K.cy) / K.fy) + R.col(2);
+    const Vec3 row_v = row * inv_res;
     const float* row_m = metric ? depth.ptr<float>(v) : nullptr;
     const std::uint16_t* row_mm = metric ? nullptr : depth.ptr<std::uint16_t>(v);
     for (int u = 0; u < depth.cols; u += config_.skip_pixel) {
@@ -188,24 +194,28 @@ common::Result<FrameChange> OccupancyMap::integrate(const cv::Mat& depth, const 
         hit = false;
       }
       ++change.pixels_used;
-      const Vec3 ray = row + du * (u - K.cx);  // direction with unit optical-axis component
-      Vec3 b = origin + ray * d;
-      // A return marks the voxel just behind the measured surface point: a point exactly
-      // on a voxel face (as a voxel world renders it) belongs to the surface's voxel.
-      if (hit) b += ray * (0.02 * config_.resolution / ray.norm());
-      Index3 e;
-      if (origin_inside && b.x() >= lo.x() && b.y() >= lo.y() && b.z() >= lo.z() && b.x() <= hi.x() &&
-          b.y() <= hi.y() && b.z() <= hi.z()) {
+      // Ray direction with unit optical-axis component; the end point at depth t along it.
+      const double t = hit ? d + behind : d, s = u - K.cx;
+      const double bx = origin_v.x() + (row_v.x() + du_v.x() * s) * t;
+      const double by = origin_v.y() + (row_v.y() + du_v.y() * s) * t;
+      const double bz = origin_v.z() + (row_v.z() + du_v.z() * s) * t;
+      std::size_t l;
+      Vec3 clipped;  // the end point in metres, where the map clipped the ray
+      bool was_clipped = false;
+      if (origin_inside && bx >= 0.0 && by >= 0.0 && bz >= 0.0 && bx < dims_v.x() && by < dims_v.y() &&
+          bz < dims_v.z()) {
         // Inside the map the voxel coordinates are >= 0: truncation is the floor.
-        for (int i = 0; i < 3; ++i) e[i] = std::min(static_cast<int>((b[i] - g0[i]) * inv_res), dims[i] - 1);
+        l = (static_cast<std::size_t>(static_cast<int>(bz)) * dims.y() + static_cast<int>(by)) * dims.x() +
+            static_cast<int>(bx);
       } else {
-        Vec3 a = origin;
+        Vec3 a = origin, b = origin + (row + du * s) * t;
         const Vec3 b_full = b;
         if (!clipSegment(bounds, a, b)) continue;
         if ((b - b_full).squaredNorm() > 1e-12) hit = false;  // the return lies outside the map
-        e = geo_.coordToIndex(b).cwiseMax(Index3::Zero()).cwiseMin(dims - Index3::Ones());
+        l = geo_.linear(geo_.coordToIndex(b).cwiseMax(Index3::Zero()).cwiseMin(dims - Index3::Ones()));
+        clipped = b;
+        was_clipped = true;
       }
-      const std::size_t l = geo_.linear(e);
       // Neighbouring pixels mostly end in the same voxel: nothing new to record then.
       if (l == last_end && hit == last_hit) continue;
       last_end = l;
@@ -213,7 +223,7 @@ common::Result<FrameChange> OccupancyMap::integrate(const cv::Mat& depth, const 
       if (hit) mark(l, kHitMark);
       if (!testBit(end_bits_, l)) {
         setBit(end_bits_, l);
-        ends.emplace_back(l, b);
+        ends.emplace_back(l, was_clipped ? clipped : Vec3(origin + (row + du * s) * t));
       }
     }
   }
@@ -222,11 +232,19 @@ common::Result<FrameChange> OccupancyMap::integrate(const cv::Mat& depth, const 
 
   for (const auto& [e, point] : ends) {
     clearBit(end_bits_, e);
-    const Index3 end = geo_.unlinear(e);
     const bool end_is_hit = marksOf(marks_, e) & kHitMark;
     Vec3 a = origin, b = point;
     if (!bounds.contains(a) && !clipSegment(bounds, a, b)) continue;  // camera outside the map
     ++change.rays;
+    // Up to the end voxel, which is marked free unless a return marked it hit.
+    const common::Walk walk = common::traverseInGrid(geo_, a, b, [&](std::size_t l) {
+      if (l == e && end_is_hit) return false;
+      mark(l, kFreeMark);
+      return l != e;
+    });
+    if (walk != common::Walk::kLeavesGrid) continue;
+    // A segment ending on the grid's far face: its last voxel lies outside.
+    const Index3 end = geo_.unlinear(e);
     common::traverse(geo_, a, b, [&](const Index3& c) {
       if (c == end && end_is_hit) return false;
       if (!geo_.inside(c)) return true;
@@ -271,11 +289,11 @@ void OccupancyMap::setState(const Index3& idx, VoxelState s) {
 }
 
 bool OccupancyMap::isLineFree(const Vec3& a, const Vec3& b, bool unknown_blocks) const {
-  return common::traverse(geo_, a, b, [&](const Index3& c) {
-    if (!geo_.inside(c)) return false;
-    const VoxelState s = stateAt(geo_.linear(c));
-    return !(s == VoxelState::kOccupied || (unknown_blocks && s == VoxelState::kUnknown));
-  });
+  // A segment with an end voxel outside the grid is blocked there.
+  return common::traverseInGrid(geo_, a, b, [&](std::size_t l) {
+           const VoxelState s = stateAt(l);
+           return !(s == VoxelState::kOccupied || (unknown_blocks && s == VoxelState::kUnknown));
+         }) == common::Walk::kCompleted;
 }
 
 std::size_t OccupancyMap::memoryBytes() const {

@@ -147,3 +147,53 @@ TEST(Traverse, StopsWhenTheVisitorSaysSo) {
   EXPECT_FALSE(done);
   EXPECT_EQ(seen, 4);
 }
+
+TEST(Traverse, InGridWalkGivesTheSameVoxelsAsLinearIndicesOrRefusesSegmentsLeavingTheGrid) {
+  using go_feap::common::Walk;
+  const GridGeometry g(Vec3(-1.0, -2.0, 0.5), 0.1, Index3(40, 30, 20));
+  std::mt19937 rng(11);
+  // Points from half a metre around the grid: some segments end outside it.
+  std::uniform_real_distribution<double> ux(-1.5, 3.5), uy(-2.5, 1.5), uz(0.0, 3.0);
+  int inside = 0, leaving = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    const Vec3 a(ux(rng), uy(rng), uz(rng)), b(ux(rng), uy(rng), uz(rng));
+    std::vector<std::size_t> linear;
+    const Walk w = go_feap::common::traverseInGrid(g, a, b, [&](std::size_t l) {
+      linear.push_back(l);
+      return true;
+    });
+    const std::vector<Index3> cells = walk(g, a, b);
+    if (!g.inside(g.coordToIndex(a)) || !g.inside(g.coordToIndex(b))) {
+      EXPECT_EQ(w, Walk::kLeavesGrid) << trial;
+      EXPECT_TRUE(linear.empty()) << trial;
+      ++leaving;
+      continue;
+    }
+    ++inside;
+    EXPECT_EQ(w, Walk::kCompleted) << trial;
+    ASSERT_EQ(linear.size(), cells.size()) << trial;
+    for (std::size_t k = 0; k < cells.size(); ++k) {
+      ASSERT_TRUE(g.inside(cells[k])) << trial;
+      EXPECT_EQ(linear[k], g.linear(cells[k])) << trial << " voxel " << k;
+    }
+  }
+  EXPECT_GT(inside, 100);
+  EXPECT_GT(leaving, 100);
+  // On the far face (its voxel is outside), far away, or not a number: refused, nothing visited.
+  const GridGeometry h(Vec3(0, 0, 0), 0.1, Index3(20, 20, 20));
+  int visits = 0;
+  auto count = [&](std::size_t) { return ++visits > 0; };
+  EXPECT_EQ(go_feap::common::traverseInGrid(h, Vec3(0.5, 0.5, 0.5), Vec3(2.0, 0.5, 0.5), count), Walk::kLeavesGrid);
+  EXPECT_EQ(go_feap::common::traverseInGrid(h, Vec3(0.5, 0.5, 0.5), Vec3(1e300, 0.5, 0.5), count), Walk::kLeavesGrid);
+  EXPECT_EQ(go_feap::common::traverseInGrid(h, Vec3(0.5, 0.5, 0.5), Vec3(std::nan(""), 0.5, 0.5), count),
+            Walk::kLeavesGrid);
+  EXPECT_EQ(visits, 0);
+  // Up to the face's voxel, and stopped by the visitor.
+  EXPECT_EQ(go_feap::common::traverseInGrid(h, Vec3(0.05, 0.05, 0.05), Vec3(1.95, 0.05, 0.05), count), Walk::kCompleted);
+  EXPECT_EQ(visits, 20);
+  visits = 0;
+  EXPECT_EQ(go_feap::common::traverseInGrid(h, Vec3(0.05, 0.05, 0.05), Vec3(1.55, 0.85, 0.35),
+                                            [&](std::size_t) { return ++visits < 4; }),
+            Walk::kStopped);
+  EXPECT_EQ(visits, 4);
+}
