@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
+#include <limits>
 #include <numeric>
 #include <sstream>
 #include <tuple>
@@ -13,7 +14,10 @@ namespace go_feap::metrics {
 
 Stats stats(const std::vector<double>& values) {
   Stats s;
-  if (values.empty()) return s;
+  if (values.empty()) {
+    s.avg = s.std = s.max = s.min = std::numeric_limits<double>::quiet_NaN();
+    return s;
+  }
   const double n = static_cast<double>(values.size());
   s.avg = std::accumulate(values.begin(), values.end(), 0.0) / n;
   double var = 0.0;
@@ -39,13 +43,19 @@ std::vector<TableRow> aggregate(const std::vector<Summary>& runs) {
     for (const Summary& s : runs) {
       if (s.scene != scene || s.planner != planner) continue;
       ++row.runs;
-      row.finished += s.finish_reason == "complete";
-      row.finished_with_blacklisted += s.finish_reason == "complete" && s.blacklisted_frontiers > 0;
-      time.push_back(s.exploration_time_s);
-      distance.push_back(s.flight_distance_m);
+      const bool finished = s.finish_reason == "complete";
+      row.finished += finished;
+      row.finished_with_blacklisted += finished && s.blacklisted_frontiers > 0;
+      // The time and distance of a run that did not finish (stopped at the time limit, stuck, diverged,
+      // interrupted) measure where it stopped, not an exploration: a run stuck early would have looked fast.
+      if (finished) {
+        time.push_back(s.exploration_time_s);
+        distance.push_back(s.flight_distance_m);
+      }
       coverage.push_back(s.coverage);
       row.collisions += s.collisions;
-      for (const auto& [name, b] : s.compute) blocks[name].push_back(b.mean());
+      for (const auto& [name, b] : s.compute)
+        if (b.count > 0) blocks[name].push_back(b.mean());
     }
     row.exploration_time_s = stats(time);
     row.flight_distance_m = stats(distance);
@@ -54,8 +64,8 @@ std::vector<TableRow> aggregate(const std::vector<Summary>& runs) {
     row.coverage_min = c.min;
     double total = 0.0;
     for (const auto& [name, values] : blocks) {
-      // A run that never ran a block counts as 0 ms for it.
-      const double mean = std::accumulate(values.begin(), values.end(), 0.0) / row.runs;
+      // Over the runs that ran the block (a run ended before its first plan does not pull the mean down).
+      const double mean = std::accumulate(values.begin(), values.end(), 0.0) / static_cast<double>(values.size());
       row.compute_ms[name] = mean;
       if (isPlanningBlock(name)) total += mean;
     }
@@ -92,20 +102,24 @@ std::vector<Comparison> compare(const std::vector<Summary>& runs) {
         if (base == by_seed.end()) continue;
         const Summary& o = *base->second;
         ++c.pairs;
-        c.both_finished += s->finish_reason == "complete" && o.finish_reason == "complete";
+        // Times compare only where both runs finished (as in the tables).
+        if (s->finish_reason != "complete" || o.finish_reason != "complete") continue;
+        ++c.both_finished;
         c.faster += s->exploration_time_s < o.exploration_time_s;
         time += s->exploration_time_s, base_time += o.exploration_time_s;
         distance += s->flight_distance_m, base_distance += o.flight_distance_m;
         diffs.push_back(s->exploration_time_s - o.exploration_time_s);
       }
-      if (c.pairs > 0) {
-        c.time_ratio = base_time > 0.0 ? time / base_time : 0.0;
-        c.distance_ratio = base_distance > 0.0 ? distance / base_distance : 0.0;
+      // No figure (NaN: null in JSON, "–" in Markdown) where there is nothing to compute it from.
+      c.time_ratio = c.distance_ratio = c.time_diff_avg = c.time_diff_se = std::numeric_limits<double>::quiet_NaN();
+      if (c.both_finished > 0) {
+        if (base_time > 0.0) c.time_ratio = time / base_time;
+        if (base_distance > 0.0) c.distance_ratio = distance / base_distance;
         const Stats d = stats(diffs);
         c.time_diff_avg = d.avg;
-        const double n = static_cast<double>(c.pairs);
+        const double n = static_cast<double>(c.both_finished);
         // Population std from stats(), turned into the sample std for the standard error.
-        if (c.pairs >= 2) c.time_diff_se = d.std * std::sqrt(n / (n - 1.0)) / std::sqrt(n);
+        if (c.both_finished >= 2) c.time_diff_se = d.std * std::sqrt(n / (n - 1.0)) / std::sqrt(n);
       }
       out.push_back(std::move(c));
     }
@@ -148,6 +162,20 @@ std::string tableJson(const std::vector<TableRow>& rows) {
   return out.dump(2, ' ', false, nlohmann::json::error_handler_t::replace);  // as summaryJson
 }
 
+namespace {
+
+// A figure for a Markdown table at the stream's precision, or "–" where there is none (NaN).
+struct Number {
+  double value;
+};
+std::ostream& operator<<(std::ostream& os, Number n) {
+  if (std::isnan(n.value)) return os << "–";
+  return os << n.value;
+}
+Number number(double value) { return Number{value}; }
+
+}  // namespace
+
 std::string tableMarkdown(const std::vector<TableRow>& rows, const std::vector<Comparison>& comparisons) {
   std::ostringstream md;
   md << std::fixed;
@@ -160,9 +188,11 @@ std::string tableMarkdown(const std::vector<TableRow>& rows, const std::vector<C
     if (r.finished_with_blacklisted > 0) md << " (" << r.finished_with_blacklisted << " left blacklisted frontiers)";
     md << std::setprecision(1);
     for (const Stats* s : {&r.exploration_time_s, &r.flight_distance_m})
-      md << " | " << s->avg << " | " << s->std << " | " << s->max << " | " << s->min;
+      md << " | " << number(s->avg) << " | " << number(s->std) << " | " << number(s->max) << " | " << number(s->min);
     md << " | " << 100.0 * r.coverage_avg << " | " << 100.0 * r.coverage_min << " | " << r.collisions << " |\n";
   }
+  md << "\nTime and distance over the finished runs (std: population standard deviation); coverage and collisions "
+        "over all runs.\n";
   md << "\n### Compute per call, ms (Table IV)\n\n"
      << "| scene | planner | mapping | frontier | global | local | trajectory | total |\n"
      << "|---|---|---|---|---|---|---|---|\n";
@@ -170,7 +200,7 @@ std::string tableMarkdown(const std::vector<TableRow>& rows, const std::vector<C
     md << "| " << r.scene << " | " << r.planner << std::setprecision(2);
     for (const char* b : {"mapping", "frontier", "global", "local", "trajectory", "total"}) {
       const auto it = r.compute_ms.find(b);
-      md << " | " << (it == r.compute_ms.end() ? 0.0 : it->second);
+      md << " | " << number(it == r.compute_ms.end() ? std::numeric_limits<double>::quiet_NaN() : it->second);
     }
     md << " |\n";
   }
@@ -181,8 +211,10 @@ std::string tableMarkdown(const std::vector<TableRow>& rows, const std::vector<C
      << "|---|---|---|---|---|---|---|---|---|---|\n";
   for (const Comparison& c : comparisons)
     md << "| " << c.scene << " | " << c.planner << " | " << c.baseline << " | " << c.pairs << " | " << c.both_finished
-       << std::setprecision(3) << " | " << c.time_ratio << " | " << c.distance_ratio << std::setprecision(1) << " | "
-       << c.time_diff_avg << " | " << c.time_diff_se << " | " << c.faster << " of " << c.pairs << " |\n";
+       << std::setprecision(3) << " | " << number(c.time_ratio) << " | " << number(c.distance_ratio)
+       << std::setprecision(1) << " | " << number(c.time_diff_avg) << " | " << number(c.time_diff_se) << " | "
+       << c.faster << " of " << c.both_finished << " |\n";
+  md << "\nOver the pairs where both runs finished.\n";
   return md.str();
 }
 

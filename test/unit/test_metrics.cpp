@@ -2,6 +2,7 @@
 // and brute force.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -45,6 +46,8 @@ go_feap::common::Result<go_feap::world::Scene> smallMaze(std::uint64_t seed) {
   return go_feap::world::generateMaze(config, seed);
 }
 
+// Time and distance are over the finished runs (a run stopped at the time limit, or stuck early, did not explore
+// the scene in its time); coverage and collisions over all.
 TEST(Table, AggregatesPerSceneAndPlannerWithPopulationStd) {
   const std::vector<metrics::Summary> runs = {
       summary("maze", "go_feap", 100, 200, 0.99, 0, "complete", 1.0),
@@ -58,11 +61,11 @@ TEST(Table, AggregatesPerSceneAndPlannerWithPopulationStd) {
   EXPECT_EQ(g.planner, "go_feap");
   EXPECT_EQ(g.runs, 3);
   EXPECT_EQ(g.finished, 2);
-  EXPECT_DOUBLE_EQ(g.exploration_time_s.avg, 110.0);
-  EXPECT_NEAR(g.exploration_time_s.std, std::sqrt(200.0 / 3.0), 1e-12);  // deviations -10, 10, 0
-  EXPECT_DOUBLE_EQ(g.exploration_time_s.max, 120.0);
+  EXPECT_DOUBLE_EQ(g.exploration_time_s.avg, 105.0);  // 100 and 110; not the time-limit run's 120
+  EXPECT_NEAR(g.exploration_time_s.std, 5.0, 1e-12);  // deviations -5, 5
+  EXPECT_DOUBLE_EQ(g.exploration_time_s.max, 110.0);
   EXPECT_DOUBLE_EQ(g.exploration_time_s.min, 100.0);
-  EXPECT_DOUBLE_EQ(g.flight_distance_m.avg, 210.0);
+  EXPECT_DOUBLE_EQ(g.flight_distance_m.avg, 205.0);
   EXPECT_NEAR(g.coverage_avg, (0.99 + 0.97 + 1.0) / 3.0, 1e-12);
   EXPECT_DOUBLE_EQ(g.coverage_min, 0.97);
   EXPECT_EQ(g.collisions, 2);
@@ -79,13 +82,39 @@ TEST(Table, AggregatesPerSceneAndPlannerWithPopulationStd) {
   EXPECT_EQ(j[0]["scene"], "maze");
   EXPECT_EQ(j[0]["runs"], 3);
   EXPECT_EQ(j[0]["finished"], 2);
-  EXPECT_DOUBLE_EQ(j[0]["exploration_time_s"]["avg"].get<double>(), 110.0);
+  EXPECT_DOUBLE_EQ(j[0]["exploration_time_s"]["avg"].get<double>(), 105.0);
   EXPECT_DOUBLE_EQ(j[0]["flight_distance_m"]["min"].get<double>(), 200.0);
   EXPECT_DOUBLE_EQ(j[0]["coverage"]["min"].get<double>(), 0.97);
   EXPECT_EQ(j[0]["collisions"], 2);
   EXPECT_DOUBLE_EQ(j[0]["compute_ms"]["total"].get<double>(), 4.0);
   const std::string md = metrics::tableMarkdown(rows);
-  EXPECT_NE(md.find("| maze | go_feap | 3 | 2 | 110.0 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| maze | go_feap | 3 | 2 | 105.0 | 5.0 | 110.0 | 100.0 | 205.0 |"), std::string::npos) << md;
+}
+
+// A row whose runs all stopped unfinished has no time or distance (null, "–"), and a block a run never ran (it
+// stopped before its first plan) does not count as 0 ms.
+TEST(Table, RowsWithoutFinishedRunsAndBlocksARunNeverRanHaveNoFigureForThem) {
+  std::vector<metrics::Summary> runs = {
+      summary("maze", "go_feap", 100, 200, 0.99, 0, "complete", 1.0),
+      summary("maze", "go_feap", 3, 1, 0.02, 0, "diverged", 1.0),
+      summary("maze", "fuel", 3000, 900, 0.90, 0, "time_limit", 5.0),
+      summary("maze", "fuel", 40, 50, 0.30, 0, "interrupted", 5.0),
+  };
+  runs[1].compute.erase("global");  // diverged before its first plan
+  const auto rows = metrics::aggregate(runs);
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_DOUBLE_EQ(rows[0].exploration_time_s.avg, 100.0);
+  EXPECT_DOUBLE_EQ(rows[0].compute_ms.at("global"), 2.0);  // the finished run's; the other never planned
+  EXPECT_DOUBLE_EQ(rows[0].compute_ms.at("mapping"), 1.0);
+  EXPECT_EQ(rows[1].finished, 0);
+  EXPECT_TRUE(std::isnan(rows[1].exploration_time_s.avg));
+  EXPECT_TRUE(std::isnan(rows[1].flight_distance_m.min));
+  EXPECT_NEAR(rows[1].coverage_avg, 0.6, 1e-12);
+  const nlohmann::json j = nlohmann::json::parse(metrics::tableJson(rows));
+  EXPECT_TRUE(j[1]["exploration_time_s"]["avg"].is_null());
+  EXPECT_TRUE(j[1]["flight_distance_m"]["std"].is_null());
+  const std::string md = metrics::tableMarkdown(rows);
+  EXPECT_NE(md.find("| maze | fuel | 2 | 0 | – | – | – | – | – | – | – | – | 60.0 | 30.0 | 0 |"), std::string::npos) << md;
 }
 
 // A run can end "complete" with frontiers it gave up on (blacklisted after failed attempts): the tables say how
@@ -105,7 +134,7 @@ TEST(Table, CountsFinishedRunsThatLeftBlacklistedFrontiers) {
   const nlohmann::json j = nlohmann::json::parse(metrics::tableJson(rows));
   EXPECT_EQ(j[0]["finished_with_blacklisted"], 1);
   const std::string md = metrics::tableMarkdown(rows);
-  EXPECT_NE(md.find("| maze | go_feap | 3 | 2 (1 left blacklisted frontiers) | 110.0 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| maze | go_feap | 3 | 2 (1 left blacklisted frontiers) | 105.0 |"), std::string::npos) << md;
   runs[1].blacklisted_frontiers = 0;
   EXPECT_EQ(metrics::aggregate(runs)[0].finished_with_blacklisted, 0);
 }
@@ -119,20 +148,24 @@ TEST(Table, ComparesTheFirstPlannerWithEachOtherPairedBySeed) {
   };
   const std::vector<metrics::Summary> runs = {
       run("maze", "go_feap", 0, 100, 200, "complete"),  run("maze", "fuel", 0, 110, 210, "complete"),
-      run("maze", "go_feap", 1, 120, 220, "max_sim_time"), run("maze", "fuel", 1, 100, 230, "complete"),
+      run("maze", "go_feap", 1, 120, 220, "complete"),  run("maze", "fuel", 1, 100, 230, "complete"),
       run("maze", "go_feap", 2, 90, 180, "complete"),   // no fuel run of seed 2
       run("maze", "fuel", 3, 200, 400, "complete"),     // no go_feap run of seed 3
+      run("maze", "go_feap", 4, 50, 60, "stuck"),       // paired, but stuck early: its 50 s compare with nothing
+      run("maze", "fuel", 4, 130, 260, "complete"),
       run("maze", "nearest", 0, 150, 300, "complete"),
       run("maze", "nearest", 0, 999, 999, "complete"),  // a second run of one seed: the first is paired
       run("pillar", "go_feap", 0, 50, 60, "complete"),  // one planner: nothing to compare
+      run("office", "go_feap", 0, 3000, 900, "time_limit"),  // no pair where both finished
+      run("office", "fuel", 0, 200, 300, "complete"),
   };
   const auto c = metrics::compare(runs);
-  ASSERT_EQ(c.size(), 2u);
+  ASSERT_EQ(c.size(), 3u);
   EXPECT_EQ(c[0].scene, "maze");
   EXPECT_EQ(c[0].planner, "go_feap");
   EXPECT_EQ(c[0].baseline, "fuel");
-  EXPECT_EQ(c[0].pairs, 2);
-  EXPECT_EQ(c[0].both_finished, 1);
+  EXPECT_EQ(c[0].pairs, 3);
+  EXPECT_EQ(c[0].both_finished, 2);
   EXPECT_DOUBLE_EQ(c[0].time_ratio, 220.0 / 210.0);
   EXPECT_DOUBLE_EQ(c[0].distance_ratio, 420.0 / 440.0);
   EXPECT_DOUBLE_EQ(c[0].time_diff_avg, 5.0);  // differences -10 and +20
@@ -142,19 +175,29 @@ TEST(Table, ComparesTheFirstPlannerWithEachOtherPairedBySeed) {
   EXPECT_EQ(c[1].pairs, 1);
   EXPECT_DOUBLE_EQ(c[1].time_ratio, 100.0 / 150.0);
   EXPECT_DOUBLE_EQ(c[1].time_diff_avg, -50.0);
-  EXPECT_DOUBLE_EQ(c[1].time_diff_se, 0.0);
+  EXPECT_TRUE(std::isnan(c[1].time_diff_se));  // one pair: no standard error
   EXPECT_EQ(c[1].faster, 1);
+  EXPECT_EQ(c[2].scene, "office");
+  EXPECT_EQ(c[2].pairs, 1);
+  EXPECT_EQ(c[2].both_finished, 0);
+  EXPECT_TRUE(std::isnan(c[2].time_ratio));
+  EXPECT_EQ(c[2].faster, 0);
 
   const nlohmann::json j = nlohmann::json::parse(metrics::comparisonJson(c));
   ASSERT_TRUE(j.is_array());
-  ASSERT_EQ(j.size(), 2u);
+  ASSERT_EQ(j.size(), 3u);
   EXPECT_EQ(j[0]["baseline"], "fuel");
-  EXPECT_EQ(j[0]["pairs"], 2);
+  EXPECT_EQ(j[0]["pairs"], 3);
+  EXPECT_TRUE(j[1]["time_diff_s"]["se"].is_null());
+  EXPECT_TRUE(j[2]["time_ratio"].is_null());
+  EXPECT_TRUE(j[2]["distance_ratio"].is_null());
   EXPECT_DOUBLE_EQ(j[0]["time_ratio"].get<double>(), 220.0 / 210.0);
   EXPECT_DOUBLE_EQ(j[0]["time_diff_s"]["avg"].get<double>(), 5.0);
   EXPECT_NEAR(j[0]["time_diff_s"]["se"].get<double>(), 15.0, 1e-9);
   const std::string md = metrics::tableMarkdown(metrics::aggregate(runs), c);
-  EXPECT_NE(md.find("| maze | go_feap | fuel | 2 | 1 | 1.048 | 0.955 | 5.0 | 15.0 | 1 of 2 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| maze | go_feap | fuel | 3 | 2 | 1.048 | 0.955 | 5.0 | 15.0 | 1 of 2 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| maze | go_feap | nearest | 1 | 1 | 0.667 | 0.667 | -50.0 | – | 1 of 1 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| office | go_feap | fuel | 1 | 0 | – | – | – | – | 0 of 0 |"), std::string::npos) << md;
   EXPECT_EQ(metrics::tableMarkdown(metrics::aggregate(runs)).find("Paired by seed"), std::string::npos);
 }
 

@@ -11,7 +11,8 @@
 
 namespace go_feap::metrics {
 
-/// avg, population std, max and min of a series (all 0 for an empty one).
+/// avg, population std, max and min of a series (all NaN for an empty one: written null in JSON, "–" in
+/// Markdown).
 struct Stats {
   double avg = 0.0, std = 0.0, max = 0.0, min = 0.0;
 };
@@ -22,10 +23,13 @@ struct TableRow {
   int runs = 0;
   int finished = 0;  ///< runs that reached FINISHED(complete)
   int finished_with_blacklisted = 0;  ///< of those, runs that left blacklisted frontiers unexplored
+  /// Over the finished runs only (NaN without any): a run that stopped otherwise (time limit, stuck,
+  /// diverged, interrupted) did not explore the scene in that time.
   Stats exploration_time_s, flight_distance_m;
-  double coverage_avg = 0.0, coverage_min = 0.0;
+  double coverage_avg = 0.0, coverage_min = 0.0;  ///< over all runs
   int collisions = 0;                      ///< total over the runs
-  std::map<std::string, double> compute_ms;  ///< per block: mean over runs of each run's mean; "total" too
+  /// per block: mean, over the runs that ran the block, of each run's mean; "total" (the planning blocks' sum) too
+  std::map<std::string, double> compute_ms;
 };
 
 /// One row per (scene, planner), in order of first appearance in `runs`.
@@ -37,11 +41,12 @@ std::vector<TableRow> aggregate(const std::vector<Summary>& runs);
 struct Comparison {
   std::string scene, planner, baseline;
   int pairs = 0;          ///< seeds both ran (a seed run twice by one planner pairs its first run)
-  int both_finished = 0;  ///< pairs where both runs reached FINISHED(complete)
-  /// planner's mean exploration time over the pairs / the baseline's (0 without pairs)
+  int both_finished = 0;  ///< pairs where both runs reached FINISHED(complete): the figures below are over these
+  /// planner's mean exploration time over the pairs that both finished / the baseline's (NaN without any)
   double time_ratio = 0.0;
   double distance_ratio = 0.0;  ///< likewise for the flight distance
-  /// per pair, planner's time - baseline's: mean, and its standard error (sample std / sqrt(pairs); 0 below 2 pairs)
+  /// per pair, planner's time - baseline's: mean (NaN without pairs), and its standard error (sample std /
+  /// sqrt(pairs); NaN below 2 pairs)
   double time_diff_avg = 0.0, time_diff_se = 0.0;
   int faster = 0;  ///< pairs where the planner's time is below the baseline's
 };
