@@ -32,8 +32,8 @@ common::Status LoopConfig::validate() const {
   if (!rate(control_rate)) return common::Status::Error("loop: control_rate must be in (0, 1000] Hz");
   if (!rate(plan_rate)) return common::Status::Error("global: rate must be in (0, 1000] Hz");
   if (!rate(sample_rate)) return common::Status::Error("metrics: sample_rate must be in (0, 1000] Hz");
-  if (!std::isfinite(collision_distance) || collision_distance < 0.0)
-    return common::Status::Error("metrics: collision_distance must be finite and >= 0");
+  if (!metrics::CollisionMonitor::validDistance(collision_distance))
+    return common::Status::Error("metrics: collision_distance must be in (0, 0.5] m");
   return common::Status::Ok();
 }
 
@@ -77,6 +77,13 @@ common::Result<ExplorationConfig> loadExplorationConfig(const std::string& confi
   common::YamlReader mapping(config_dir + "/mapping.yaml");
   config::readMap(mapping, c.map);
   if (!mapping.ok()) return mapping.status();
+  // The runs of every mode are measured alike: a mode file setting metrics/* would compare planners
+  // under different collision or sampling rules in one table.
+  for (const char* key : {"metrics/sample_rate", "metrics/collision_distance"}) {
+    double unused = 0.0;
+    if (common::YamlReader(mode).get(key, unused).ok())
+      return R::Error(mode + ": a planner mode must not set '" + key + "' (every mode is measured alike)");
+  }
   common::YamlReader exploration({config_dir + "/exploration.yaml", mode});
   config::readFrontier(exploration, c.frontier);
   config::readGlobalPlanner(exploration, c.global);

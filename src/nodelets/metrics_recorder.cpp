@@ -61,8 +61,8 @@ class MetricsRecorder : public nodelet::Nodelet {
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
     ros_params::requireOrThrow(sample_rate_ > 0.0 && sample_rate_ <= 1000.0, getName(),
                                "parameter '" + p.fullName("metrics/sample_rate") + "' must be in (0, 1000] Hz");
-    ros_params::requireOrThrow(std::isfinite(collision_distance_) && collision_distance_ >= 0.0, getName(),
-                               "parameter '" + p.fullName("metrics/collision_distance") + "' must be >= 0");
+    ros_params::requireOrThrow(metrics::CollisionMonitor::validDistance(collision_distance_), getName(),
+                               "parameter '" + p.fullName("metrics/collision_distance") + "' must be in (0, 0.5] m");
     ros_params::requireOrThrow(std::isfinite(max_odom_step_) && max_odom_step_ > 0.0, getName(),
                                "parameter '" + p.fullName("metrics/max_odom_step") + "' must be finite and > 0");
     ros_params::requireOrThrow(std::isfinite(progress_period_) && progress_period_ > 0.0, getName(),

@@ -52,13 +52,23 @@ int usage(const char* why) {
   return 2;
 }
 
+// The comma-separated items of `s`, empty ones included ("a,,b" and "a," have one; refused by the caller).
 std::vector<std::string> split(const std::string& s) {
   std::vector<std::string> out;
-  std::stringstream in(s);
-  std::string item;
-  while (std::getline(in, item, ','))
-    if (!item.empty()) out.push_back(item);
+  std::size_t begin = 0;
+  for (std::size_t comma; (comma = s.find(',', begin)) != std::string::npos; begin = comma + 1)
+    out.push_back(s.substr(begin, comma - begin));
+  out.push_back(s.substr(begin));
   return out;
+}
+
+// A planner mode names a file config/modes/<name>.yaml and the results folders <scene>/<name>: letters,
+// digits, '_' and '-' only ("./go_feap" was another name for go_feap's file, and its runs wrote into the
+// same folders; "../x" reached outside).
+bool plannerNameOk(const std::string& name) {
+  return !name.empty() && std::all_of(name.begin(), name.end(), [](char c) {
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' || c == '-';
+  });
 }
 
 std::string sceneName(const std::string& spec) {
@@ -119,7 +129,14 @@ int main(int argc, char** argv) {
   double max_sim_time = 900.0;  // a whole number: "3abc" and "0x4" were taken as 3 and 4
   if (args.count("--max-sim-time") && !(tools::parseNumber(args["--max-sim-time"], max_sim_time) && max_sim_time > 0.0))
     return usage("--max-sim-time must be a number > 0");
-  if (scenes.empty() || planners.empty()) return usage("--scene and --planner need at least one name");
+  for (const std::vector<std::string>* names : {&scenes, &planners})
+    if (std::find(names->begin(), names->end(), std::string()) != names->end())
+      return usage(names == &scenes ? "--scene has an empty name (two commas, or one at an end)"
+                                    : "--planner has an empty name (two commas, or one at an end)");
+  for (const std::string& p : planners)
+    if (!plannerNameOk(p))
+      return usage(("--planner '" + p + "': a mode's name has letters, digits, '_' and '-' only").c_str());
+  if (args.count("--out") && args["--out"].empty()) return usage("--out must name a folder");
   // Each once: a scene or planner named twice flew its runs twice, into the same folder, and the table
   // counted them twice.
   for (const std::vector<std::string>* names : {&scenes, &planners})
@@ -164,6 +181,11 @@ int main(int argc, char** argv) {
     auto scene = world::makeScene(s, seed);
     if (!scene) {
       std::cerr << "go_feap_bench: scene '" << s << "': " << scene.message() << "\n";
+      return 1;
+    }
+    // The tables show the name in Markdown cells: a '|' or a line break would break their rows.
+    if (scene->name.find_first_of("|\r\n") != std::string::npos) {
+      std::cerr << "go_feap_bench: scene '" << s << "': its name has a '|' or a line break, which table.md cannot show\n";
       return 1;
     }
     // Two scenes must not share a results folder (named by the spec's stem) nor a name (the tables group
@@ -248,9 +270,10 @@ int main(int argc, char** argv) {
         for (const std::string& e : run.events()) events += e + "\n";
         std::error_code dir_ec;
         std::filesystem::create_directories(dir.str(), dir_ec);
-        for (const common::Status& st :
-             {metrics::writeTextWhole(dir.str() + "/events.log", events), run.recorder().writeAll(dir.str())})
-          if (!st.ok()) throw std::runtime_error(st.message());
+        // One after the other: summary.json is not written when events.log could not be.
+        if (const common::Status st = metrics::writeTextWhole(dir.str() + "/events.log", events); !st.ok())
+          throw std::runtime_error(st.message());
+        if (const common::Status st = run.recorder().writeAll(dir.str()); !st.ok()) throw std::runtime_error(st.message());
         out.ok = true;
       } catch (const std::exception& e) {
         out.error = e.what();
@@ -295,7 +318,7 @@ int main(int argc, char** argv) {
   // Compute times depend on how many runs shared the cores (a powerplant replan: 28.0 ms alone on a
   // core, 33.5 ms two at a time on two): say so beside them.
   const std::string md = metrics::tableMarkdown(rows, comparisons) + "\nCompute times measured with " +
-                         std::to_string(jobs) + " run(s) at a time on " +
+                         std::to_string(std::min<std::size_t>(jobs, queue.size())) + " run(s) at a time on " +
                          std::to_string(std::thread::hardware_concurrency()) + " hardware thread(s).\n";
   // Each table whole or not at all, checked; a comparison.json left from an earlier call into the same
   // folder goes when this one compares nothing.

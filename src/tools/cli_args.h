@@ -8,7 +8,7 @@
 
 namespace go_feap::tools {
 
-/// Parses argv as "--key value" pairs and bare "--flag"s named in `flags`. Returns an
+/// Parses argv as "--key value" pairs and bare "--flag"s named in `flags`, each at most once. Returns an
 /// error message (empty when fine); "-h"/"--help" sets `help`.
 inline std::string parseArgs(int argc, char** argv, const std::map<std::string, bool>& known,
                              std::map<std::string, std::string>& values, bool& help) {
@@ -21,6 +21,8 @@ inline std::string parseArgs(int argc, char** argv, const std::map<std::string, 
     }
     const auto it = known.find(a);
     if (it == known.end()) return "unknown argument '" + a + "'";
+    // Given twice, the last would silently win: "--runs 3 ... --runs 5" ran 5.
+    if (values.count(a)) return a + " is given twice";
     if (!it->second) {  // a flag without value
       values[a] = "1";
       continue;

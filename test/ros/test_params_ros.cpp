@@ -51,6 +51,7 @@ TEST(Parameters, ANodeletWithAnInvalidOrMissingParameterDoesNotStartAndNamesIt) 
       {"bad_layers_rate", "go_feap/LayerManager", "layers/rate"},                // 1e9 Hz: a timer that never sleeps
       {"bad_layer_height", "go_feap/LayerManager", "layers: layer_height"},     // infinite: NaN bands
       {"bad_max_odom_step", "go_feap/LayerManager", "metrics/max_odom_step"},   // -1 m
+      {"bad_collision_distance", "go_feap/MetricsRecorder", "metrics/collision_distance"},  // 0: no collision ever counted
       {"missing_layers", "go_feap/LayerManager", "layers/"},                    // no exploration.yaml at all
       {"bad_pose_tolerance", "go_feap/EsdfMapper", "mapper/pose_tolerance"},    // 5 s
       {"bad_map_size", "go_feap/EsdfMapper", "exploration_box"},                // 1e6 m long: 2.9e10 voxels

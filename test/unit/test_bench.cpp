@@ -189,6 +189,12 @@ TEST(Bench, CommandLineValuesOutOfRangeAreRefusedUpFront) {
            {bench + " --seed 18446744073709551615 --runs 2", "--seed + --runs - 1 must fit in 64 bits"},  // wrapped to 0
            {bench + " --scene maze,maze", "'maze' is named twice in --scene"},
            {bench + " --planner go_feap,fuel,go_feap", "'go_feap' is named twice in --planner"},
+           {bench + " --runs 3 --max-sim-time 2 --runs 5", "--runs is given twice"},  // the last won
+           {bench + " --planner go_feap,,fuel", "--planner has an empty name"},         // was dropped
+           {bench + " --scene maze,", "--scene has an empty name"},
+           {bench + " --planner ./go_feap", "a mode's name has letters, digits"},  // go_feap's file, another folder
+           {bench + " --planner ../modes/fuel", "a mode's name has letters, digits"},
+           {bench + " --out ''", "--out must name a folder"},  // fell back to the default folder
            {map_perf + " --scene maze --skip-pixel 4294967296", "--skip-pixel must be an integer from 1 to 640"},
            {map_perf + " --scene maze --frames 4294967296", "--frames must be an integer from 1 to 1000000"},
            {esdf_perf + " --max-distance 2abc", "--max-distance must be a number"}}) {  // was taken as 2
@@ -242,11 +248,22 @@ TEST(Bench, ResultsFoldersHoldEachRunOnceAndTheTablesWhole) {
   EXPECT_NE(table.find("caf\xef\xbf\xbd"), std::string::npos) << "the bad byte replaced by U+FFFD";
   EXPECT_TRUE(fs::is_regular_file(fs::path(out) / "table.md"));
   EXPECT_TRUE(fs::is_regular_file(fs::path(out) / "comparison.json"));
-  // Into the same folder with one planner: nothing compared, no comparison.json left over.
+  // Into the same folder with one planner: nothing compared, no comparison.json left over. One run with two
+  // jobs: the table says one run had the cores.
   const auto [rc2, said2] = runCommand("timeout 300 " + bench + " --scene " + (dir / "named.yaml").string() +
-                                       " --max-sim-time 2 --out " + out);
+                                       " --max-sim-time 2 --jobs 2 --out " + out);
   ASSERT_EQ(rc2, 0) << said2;
   EXPECT_FALSE(fs::exists(fs::path(out) / "comparison.json"));
+  std::ifstream md_in(fs::path(out) / "table.md");
+  const std::string md((std::istreambuf_iterator<char>(md_in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(md.find("Compute times measured with 1 run(s) at a time"), std::string::npos) << md;
+  // A scene name that would break table.md's rows: refused before any run.
+  std::ofstream(dir / "piped.yaml") << "scene:\n  name: \"a|b\"\n  generator: maze\n"
+                                       "  maze: {size_x: 10.0, size_y: 6.0, height: 3.0, cell_size: 2.0}\n";
+  const auto [rc4, said4] = runCommand("timeout 60 " + bench + " --scene " + (dir / "piped.yaml").string() +
+                                       " --max-sim-time 2 --out " + out);
+  EXPECT_EQ(rc4, 1) << said4;
+  EXPECT_NE(said4.find("its name has a '|' or a line break"), std::string::npos) << said4;
   // Two scenes bound for one results folder (the spec's stem names it): refused before any run.
   fs::copy_file(kSmallMaze, dir / "maze.yaml");
   const auto [rc3, said3] = runCommand("timeout 60 " + bench + " --scene maze," + (dir / "maze.yaml").string() +
@@ -274,6 +291,26 @@ TEST(Bench, ConfigErrorsNameTheModeOrKey) {
   ASSERT_FALSE(fast);
   EXPECT_NE(fast.message().find("global: rate must be in (0, 1000] Hz"), std::string::npos) << fast.message();
   std::filesystem::remove_all(fast_dir);
+  // Every mode is measured alike: a mode setting the collision rule is refused.
+  const std::filesystem::path rule_dir = configWithMode("lenient", "metrics:\n  collision_distance: 0.01\n");
+  auto lenient = bench::loadExplorationConfig(rule_dir.string(), "lenient");
+  ASSERT_FALSE(lenient);
+  EXPECT_NE(lenient.message().find("must not set 'metrics/collision_distance'"), std::string::npos) << lenient.message();
+  // A collision distance of 0 never counted a collision (a centre inside an obstacle is at 0, not below), one
+  // beyond the clearance horizon (0.5 m) counted one at the start and never another.
+  std::ifstream in(rule_dir / "exploration.yaml");
+  const std::string yaml((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string key = "collision_distance: 0.1";
+  const std::size_t at = yaml.find(key);
+  ASSERT_NE(at, std::string::npos);
+  for (const std::string distance : {"0.0", "0.6"}) {
+    std::ofstream(rule_dir / "exploration.yaml") << std::string(yaml).replace(at, key.size(), "collision_distance: " + distance);
+    auto bad_rule = bench::loadExplorationConfig(rule_dir.string(), "go_feap");
+    ASSERT_FALSE(bad_rule) << distance;
+    EXPECT_NE(bad_rule.message().find("metrics: collision_distance must be in (0, 0.5] m"), std::string::npos)
+        << bad_rule.message();
+  }
+  std::filesystem::remove_all(rule_dir);
 }
 
 // A run never outlasts its time limit by more than a second of simulated time, however slowly the layer

@@ -27,6 +27,11 @@ class CollisionMonitor {
  public:
   /// m: clearances are looked up this far at most; a closest approach beyond it reads as this.
   static constexpr double kHorizon = 0.5;
+  /// Whether `collision_distance` can be measured: in (0, kHorizon] m. At 0 nothing ever counted (a
+  /// centre inside an obstacle is at 0, not below it); beyond kHorizon every position did.
+  static bool validDistance(double collision_distance) {
+    return collision_distance > 0.0 && collision_distance <= kHorizon;
+  }
   CollisionMonitor(const world::Scene& scene, double collision_distance)
       : scene_(scene), collision_distance_(collision_distance) {}
   /// Checks the next position of the path; true when it starts a new collision.
