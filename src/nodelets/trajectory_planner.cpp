@@ -232,8 +232,16 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     try {
       plan(now, reason);
     } catch (const std::exception& e) {  // a core precondition broken by odd input: never crash the manager
-      NODELET_ERROR_STREAM_THROTTLE(1.0, getName() << ": planning aborted: " << e.what());
+      NODELET_ERROR_STREAM_THROTTLE(1.0, getName() << ": planning aborted: " << e.what() << "; stopping");
       target_.reset();
+      // The trajectory flown may be the one just found to collide: brake to a stop instead of flying it on.
+      try {
+        trajectory::PlanRequest stop;
+        const ros::Time start_time = startState(now, stop);
+        publish(now, start_time, trajectory::stopTrajectory(stop.start, stop.velocity, stop.yaw, optimizer_));
+      } catch (const std::exception& e2) {
+        NODELET_ERROR_STREAM_THROTTLE(1.0, getName() << ": no stop trajectory either: " << e2.what());
+      }
     }
   }
 

@@ -27,15 +27,21 @@ Bspline toMsg(const Trajectory& t) {
 common::Result<Trajectory> fromMsg(const Bspline& msg) {
   using R = common::Result<Trajectory>;
   const int p = msg.order, n = static_cast<int>(msg.pos_pts.size());
-  if (p < 1 || p > 7) return R::Error("bspline: order " + std::to_string(p) + " is not in [1, 7]");
+  // Degree 2 at least: a degree-1 spline's velocity jumps at every knot (no acceleration bound holds).
+  if (p < 2 || p > 7) return R::Error("bspline: order " + std::to_string(p) + " is not in [2, 7]");
   if (n < p + 1) return R::Error("bspline: " + std::to_string(n) + " control points are too few for order " + std::to_string(p));
   if (static_cast<int>(msg.knots.size()) != n + p + 1)
     return R::Error("bspline: " + std::to_string(msg.knots.size()) + " knots, expected " + std::to_string(n + p + 1));
   const double dt = msg.knots[1] - msg.knots[0];
   if (!(dt > 0.0) || !std::isfinite(dt)) return R::Error("bspline: knot span must be finite and > 0");
+  const double tolerance = 1e-6 * std::max(1.0, dt);
   for (std::size_t i = 1; i < msg.knots.size(); ++i)
-    if (std::abs(msg.knots[i] - msg.knots[i - 1] - dt) > 1e-6 * std::max(1.0, dt))
-      return R::Error("bspline: knots are not uniform");
+    if (!(std::abs(msg.knots[i] - msg.knots[i - 1] - dt) <= tolerance))  // a NaN knot fails too
+      return R::Error("bspline: knots are not uniform (or not finite)");
+  // The spline's parameter 0 is start_time, at knot `order`: knots from 0 on would shift it order spans late.
+  if (!(std::abs(msg.knots[0] + p * dt) <= tolerance))
+    return R::Error("bspline: knots must start at -order * knot span (the spline's time 0 is start_time), got " +
+                    std::to_string(msg.knots[0]));
   Eigen::MatrixXd q(3, n);
   for (int i = 0; i < n; ++i) q.col(i) << msg.pos_pts[i].x, msg.pos_pts[i].y, msg.pos_pts[i].z;
   if (!q.allFinite()) return R::Error("bspline: a control point is not finite");

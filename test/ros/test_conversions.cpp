@@ -247,6 +247,45 @@ TEST(Conversions, TrajectoriesMovingFasterThanTheServerTakesAreNamed) {
   EXPECT_TRUE(says(motionProblem(t, 30.0, 50.0, 20.0), "rad/s, above 20 rad/s")) << motionProblem(t, 30.0, 50.0, 20.0);
 }
 
+// A Bspline message the server flies is the planner's own kind: cubic (degree 2 at least: degree 1 jumps in
+// velocity at each knot), uniform finite knots starting at -order spans (a sender counting knots from 0
+// had its spline shifted order spans late in silence; a NaN knot passed the uniformity test).
+TEST(Conversions, BsplineMessagesRoundTripAndMalformedOnesAreNamed) {
+  go_feap::ros_traj::Trajectory t;
+  t.position = go_feap::trajectory::safeStop(Vec3(0, 0, 1), Vec3(2, 0, 0), 2.0);
+  go_feap::trajectory::OptimizerConfig turn;
+  auto yaw = go_feap::trajectory::yawTurn(0.0, 1.0, 0.0, turn);
+  ASSERT_TRUE(yaw) << yaw.message();
+  t.yaw = *yaw;
+  t.id = 7;
+  const go_feap::Bspline good = go_feap::ros_traj::toMsg(t);
+  const auto back = go_feap::ros_traj::fromMsg(good);
+  ASSERT_TRUE(back) << back.message();
+  EXPECT_EQ(back->id, 7);
+  for (double s : {0.0, 0.3, t.position.duration()})
+    EXPECT_LT((back->position.position(s) - t.position.position(s)).norm(), 1e-12) << s;
+  auto refused = [&](const std::function<void(go_feap::Bspline&)>& spoil, const std::string& says_what) {
+    go_feap::Bspline m = good;
+    spoil(m);
+    const auto r = go_feap::ros_traj::fromMsg(m);
+    ASSERT_FALSE(r) << says_what;
+    EXPECT_TRUE(says(r.message(), says_what)) << r.message();
+  };
+  refused([](go_feap::Bspline& m) { m.knots[3] = std::nan(""); }, "knots are not uniform (or not finite)");
+  refused([](go_feap::Bspline& m) { m.knots[0] = std::nan(""); }, "knot span must be finite");
+  refused([](go_feap::Bspline& m) {
+    const double dt = m.knots[1] - m.knots[0];
+    for (std::size_t i = 0; i < m.knots.size(); ++i) m.knots[i] = i * dt;  // from 0: order spans late
+  }, "knots must start at -order * knot span");
+  refused([](go_feap::Bspline& m) {  // degree 1 with knots that fit it
+    m.order = 1;
+    m.knots.pop_back();
+    m.knots.pop_back();
+    const double dt = m.knots[1] - m.knots[0];
+    for (std::size_t i = 0; i < m.knots.size(); ++i) m.knots[i] = (static_cast<double>(i) - 1.0) * dt;
+  }, "order 1 is not in [2, 7]");
+}
+
 TEST(Conversions, FlownStepsCountUpToTheJumpLimit) {
   using go_feap::ros_conv::flownStep;
   EXPECT_EQ(flownStep(std::nullopt, Vec3(5, 0, 0), 1.0), std::optional<double>(0.0));
