@@ -252,11 +252,8 @@ TEST(Conversions, TrajectoriesMovingFasterThanTheServerTakesAreNamed) {
 // had its spline shifted order spans late in silence; a NaN knot passed the uniformity test).
 TEST(Conversions, BsplineMessagesRoundTripAndMalformedOnesAreNamed) {
   go_feap::ros_traj::Trajectory t;
-  t.position = go_feap::trajectory::safeStop(Vec3(0, 0, 1), Vec3(2, 0, 0), 2.0);
-  go_feap::trajectory::OptimizerConfig turn;
-  auto yaw = go_feap::trajectory::yawTurn(0.0, 1.0, 0.0, turn);
-  ASSERT_TRUE(yaw) << yaw.message();
-  t.yaw = *yaw;
+  static_cast<go_feap::trajectory::Trajectory&>(t) =
+      go_feap::trajectory::stopTrajectory(Vec3(0, 0, 1), Vec3(2, 0, 0), 0.5, go_feap::trajectory::OptimizerConfig());
   t.id = 7;
   const go_feap::Bspline good = go_feap::ros_traj::toMsg(t);
   const auto back = go_feap::ros_traj::fromMsg(good);
