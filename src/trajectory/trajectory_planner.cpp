@@ -58,8 +58,9 @@ common::Status TrajectoryPlannerConfig::validate() const {
   if (fine_spans < 0 || fine_spans > 1000) return common::Status::Error("planner: fine_spans must be in [0, 1000]");
   if (!std::isfinite(profile_acceleration) || profile_acceleration < 0.0 || profile_acceleration >= 1.0)
     return common::Status::Error("planner: profile_acceleration must be in [0, 1) (a share of a_max)");
-  if (!positive(profile_knot_span) || profile_knot_span > 1.0)
-    return common::Status::Error("planner: profile_knot_span must be in (0, 1] s");
+  // At least 5 ms: the timed fit has a knot per span of the profile's duration (1e-9 s overflowed the count).
+  if (!(profile_knot_span >= 0.005 && profile_knot_span <= 1.0))
+    return common::Status::Error("planner: profile_knot_span must be in [0.005, 1] s");
   if (!std::isfinite(profile_ramp) || profile_ramp < 0.0 || profile_ramp > 2.0)
     return common::Status::Error("planner: profile_ramp must be in [0, 2] s");
   if (!std::isfinite(profile_corner_cut) || profile_corner_cut < 0.0)

@@ -1808,6 +1808,13 @@ TEST(TrajectoryPlanner, FailedSearchesAreRememberedForAWhile) {
   EXPECT_EQ(fresh.size(), 0u);
   planner.failed_search_memory = -1.0;
   EXPECT_NE(planner.validate().message().find("failed_search_memory"), std::string::npos);
+  // A timed-fit knot span of 1e-9 s overflowed its knot count (an int) on any path.
+  traj::TrajectoryPlannerConfig fine;
+  fine.profile_knot_span = 1e-9;
+  EXPECT_NE(fine.validate().message().find("profile_knot_span must be in [0.005, 1] s"), std::string::npos)
+      << fine.validate().message();
+  fine.profile_knot_span = 0.005;
+  EXPECT_TRUE(fine.validate().ok()) << fine.validate().message();
 }
 
 // staysFlyable(): a spline through mapped free space passes; the same spline fails once a voxel it
