@@ -162,6 +162,10 @@ int main(int argc, char** argv) {
                 << (ec ? " (" + ec.message() + ")" : std::string(" (a file of that name is there)")) << "\n";
       return 1;
     }
+    // Results of an earlier call stay beside this call's (its tables hold only this call's runs).
+    if (!std::filesystem::is_empty(out_dir, ec))
+      std::cerr << "go_feap_bench: --out " << out_dir << " already holds results: this call's runs and tables "
+                << "replace theirs, the other runs' folders stay\n";
   }
 
   // Check every configuration and scene before the first run starts.

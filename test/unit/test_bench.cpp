@@ -253,6 +253,8 @@ TEST(Bench, ResultsFoldersHoldEachRunOnceAndTheTablesWhole) {
   const auto [rc2, said2] = runCommand("timeout 300 " + bench + " --scene " + (dir / "named.yaml").string() +
                                        " --max-sim-time 2 --jobs 2 --out " + out);
   ASSERT_EQ(rc2, 0) << said2;
+  EXPECT_NE(said2.find("already holds results"), std::string::npos) << said2;
+  EXPECT_EQ(said.find("already holds results"), std::string::npos) << said;  // the first call's folder was new
   EXPECT_FALSE(fs::exists(fs::path(out) / "comparison.json"));
   std::ifstream md_in(fs::path(out) / "table.md");
   const std::string md((std::istreambuf_iterator<char>(md_in)), std::istreambuf_iterator<char>());
