@@ -59,7 +59,16 @@ class TrajectoryServer : public nodelet::Nodelet {
     // refuse every plan that uses it, and the vehicle would hold for good.
     trajectory::OptimizerConfig planner;
     config::readOptimizer(p, planner);
+    double max_tracking_error = 0.0;
+    p.get("planner/max_tracking_error", max_tracking_error);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
+    // The planner plans from its reference while the odometry is within max_tracking_error of it: a server
+    // refusing starts nearer than that would refuse those plans, and the planner would plan them again for good.
+    ros_params::requireOrThrow(max_start_offset_ > max_tracking_error, getName(),
+                               "parameter '" + p.fullName("server/max_start_offset") + "' (" +
+                                   std::to_string(max_start_offset_) + ") must be above '" +
+                                   p.fullName("planner/max_tracking_error") + "' (" +
+                                   std::to_string(max_tracking_error) + ")");
     const common::Status planner_ok = planner.validate();
     ros_params::requireOrThrow(planner_ok.ok(), getName(), planner_ok.message());
     // The server checks control polygons, the planner samples: a stop from a reference at the planner's

@@ -64,6 +64,7 @@ TEST(Parameters, ANodeletWithAnInvalidOrMissingParameterDoesNotStartAndNamesIt) 
       {"bad_server_yaw_rate", "go_feap/TrajectoryServer", "server/max_yaw_rate"},  // below optimizer/yaw_rate_max
       {"bad_server_speed", "go_feap/TrajectoryServer", "server/max_speed"},     // 2.2 m/s: below 2.8 (v_max with the tolerance, times 4/3 for a braking polygon)
       {"bad_server_tolerance", "go_feap/TrajectoryServer", "optimizer: limit_tolerance"},  // NaN: read as 0 in silence
+      {"bad_server_start_offset", "go_feap/TrajectoryServer", "server/max_start_offset"},  // 0.8 m, below the planner's 1 m tracking error
       {"bad_start", "go_feap/QuadrotorSim", "start"},                           // 100 m outside the maze
   };
   for (const Case& c : cases) {
