@@ -224,7 +224,7 @@ ClearanceRule::ClearanceRule(const map::Esdf& esdf, const Vec3& start, double mi
     : min_clearance_(min_clearance), leave_distance_(leave_distance) {
   const auto& geo = esdf.geometry();
   const double d = esdf.distance(start);
-  const common::Index3 idx = geo.coordToIndex(start);
+  const common::Index3 idx = geo.clampedIndex(start);
   leave_floor_ = d - 0.1 * geo.resolution();
   leaving_ = d < min_clearance && !(geo.inside(idx) && esdf.isObstacle(idx));
 }
@@ -248,8 +248,9 @@ Status checkTrajectory(const UniformBspline& spline, const map::Esdf& esdf, cons
     for (int j = span - p; j < span; ++j) len += (q.col(j + 1) - q.col(j)).norm();
     longest = std::max(longest, len);
   }
+  // Clamped before the cast: a polygon kilometres long (finite, absurd) overflowed the int.
   const int samples =
-      std::clamp(static_cast<int>(std::ceil(longest / (0.5 * esdf.geometry().resolution()))), 8, 1000);
+      static_cast<int>(std::clamp(std::ceil(longest / (0.5 * esdf.geometry().resolution())), 8.0, 1000.0));
   const double v = spline.maxDerivativeNorm(1, samples);
   const double a = spline.maxDerivativeNorm(2, samples);
   double min_distance = std::numeric_limits<double>::infinity();

@@ -95,7 +95,7 @@ bool staysFlyable(const UniformBspline& spline, const planning::Astar& astar, do
   std::optional<common::Index3> checked;
   for (double t = 0.0;; t = std::min(t + step, spline.duration())) {
     const Vec3 p = spline.position(t);
-    const common::Index3 idx = geo.coordToIndex(p);
+    const common::Index3 idx = geo.clampedIndex(p);
     if (t >= spline.duration()) return idx == checked || !refused(p, idx);
     if ((p - start).norm() > exempt_radius && idx != checked) {
       if (refused(p, idx)) return false;
@@ -305,7 +305,7 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
       // The lattice voxel nearest the target may be a little off it: join the target's own voxel when the
       // segment there is flyable; otherwise the way is flown as a partial path and replanned near its end.
       const common::GridGeometry& geo = astar.geometry();
-      const Vec3 goal_voxel = geo.indexToCoord(geo.coordToIndex(request.target));
+      const Vec3 goal_voxel = geo.indexToCoord(geo.clampedIndex(request.target));
       const double last_leg = (goal_voxel - way.path.back()).norm();
       if (last_leg > 1e-9 && astar.segmentTraversable(way.path.back(), goal_voxel)) {
         way.path.push_back(goal_voxel);
