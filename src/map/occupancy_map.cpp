@@ -167,17 +167,31 @@ common::Result<FrameChange> OccupancyMap::integrate(const cv::Mat& depth, const 
   const Index3 dims = geo_.dims();
   const Vec3 dims_v = dims.cast<double>();
   const Vec3 origin_v = (origin - g0) * inv_res, du_v = du * inv_res;
-  // A return marks the voxel just behind the measured surface point (1 % of a voxel deeper): a point
-  // exactly on a voxel face (as a voxel world renders it) belongs to the surface's voxel.
-  const double behind = 0.01 * geo_.resolution();
+  // A return marks the voxel just behind the measured surface point, 2 % of a voxel further along the
+  // ray: a point exactly on a voxel face (as a voxel world renders it) belongs to the surface's voxel. (A
+  // push of 1 % of a voxel in depth missed 85 of the maze's 14,600 wall voxels at grazing angles, where the
+  // rendered float depth is off by a millimetre or so.) In depth units it is 0.02 res / |ray|, with |ray| the
+  // camera-frame length of the pixel's ray; computed once per intrinsics.
+  const int step = config_.skip_pixel;
+  const std::size_t per_row = static_cast<std::size_t>((depth.cols + step - 1) / step);
+  if (behind_.empty() || behind_for_.width != K.width || behind_for_.height != K.height || behind_for_.fx != K.fx ||
+      behind_for_.fy != K.fy || behind_for_.cx != K.cx || behind_for_.cy != K.cy ||
+      behind_.size() != per_row * static_cast<std::size_t>((depth.rows + step - 1) / step)) {
+    behind_.clear();
+    for (int v = 0; v < depth.rows; v += step)
+      for (int u = 0; u < depth.cols; u += step)
+        behind_.push_back(0.02 * geo_.resolution() / Vec3((u - K.cx) / K.fx, (v - K.cy) / K.fy, 1.0).norm());
+    behind_for_ = K;
+  }
   std::size_t last_end = std::numeric_limits<std::size_t>::max();
   bool last_hit = false;
-  for (int v = 0; v < depth.rows; v += config_.skip_pixel) {
+  for (int v = 0; v < depth.rows; v += step) {
     const Vec3 row = R.col(1) * ((v - K.cy) / K.fy) + R.col(2);
     const Vec3 row_v = row * inv_res;
+    const double* row_behind = behind_.data() + static_cast<std::size_t>(v / step) * per_row;  // once a row
     const float* row_m = metric ? depth.ptr<float>(v) : nullptr;
     const std::uint16_t* row_mm = metric ? nullptr : depth.ptr<std::uint16_t>(v);
-    for (int u = 0; u < depth.cols; u += config_.skip_pixel) {
+    for (int u = 0, k = 0; u < depth.cols; u += step, ++k) {
       double d = metric ? static_cast<double>(row_m[u]) : 0.001 * row_mm[u];
       bool hit = true;
       // REP 117: +inf is no return within the range (free space to it), -inf a surface nearer than the
@@ -195,7 +209,7 @@ common::Result<FrameChange> OccupancyMap::integrate(const cv::Mat& depth, const 
       }
       ++change.pixels_used;
       // Ray direction with unit optical-axis component; the end point at depth t along it.
-      const double t = hit ? d + behind : d, s = u - K.cx;
+      const double t = hit ? d + row_behind[k] : d, s = u - K.cx;
       const double bx = origin_v.x() + (row_v.x() + du_v.x() * s) * t;
       const double by = origin_v.y() + (row_v.y() + du_v.y() * s) * t;
       const double bz = origin_v.z() + (row_v.z() + du_v.z() * s) * t;
@@ -298,7 +312,7 @@ bool OccupancyMap::isLineFree(const Vec3& a, const Vec3& b, bool unknown_blocks)
 
 std::size_t OccupancyMap::memoryBytes() const {
   return logodds_.capacity() + 8 * (marks_.capacity() + end_bits_.capacity()) +
-         sizeof(std::size_t) * touched_.capacity();
+         sizeof(std::size_t) * touched_.capacity() + sizeof(double) * behind_.capacity();
 }
 
 }  // namespace go_feap::map

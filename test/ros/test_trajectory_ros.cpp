@@ -360,8 +360,9 @@ TEST_F(TrajectoryTargetTest, AnOdometryJumpAwayFromTheReferenceIsPlannedFromTheO
     const double start = planned.back().start_time.toSec();
     from_command = std::find(stamps.begin(), stamps.end(), start) != stamps.end();
     tries += " " + std::to_string(start) + " (arrived " + std::to_string(received.back()) + ")";
-    if (from_command)
+    if (from_command) {
       EXPECT_LE(start, received.back() - 0.05) << "starts when it was planned, not when its start state held";
+    }
   }
   EXPECT_TRUE(from_command) << "no plan of five started at the stamp of a command:" << tries;
 }

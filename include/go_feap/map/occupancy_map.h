@@ -118,6 +118,10 @@ class OccupancyMap {
   // whether a voxel was touched this frame; end_bits_ holds one bit per voxel.
   std::vector<std::uint64_t> marks_, end_bits_;
   std::vector<std::size_t> touched_;
+  // Per sampled pixel (row-major, every skip_pixel-th), the push of a return behind its measured point in
+  // depth units, kept while the intrinsics and skip_pixel stay (a square root and a division per pixel).
+  std::vector<double> behind_;
+  DepthIntrinsics behind_for_;
 };
 
 }  // namespace go_feap::map
