@@ -8,6 +8,7 @@
 #include <rosgraph_msgs/Clock.h>
 #include <tf2_ros/transform_broadcaster.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -131,7 +132,14 @@ class QuadrotorSim : public nodelet::Nodelet {
     double t = 0.0, report_t = 0.0;
     auto report_wall = wall_start;
     publishClock(origin);
+    bool diverged = false;
     while (running_ && ros::ok()) {
+      if (diverged) {  // the clock only: every timeout of the chain runs on it
+        t += period;
+        publishClock(origin + ros::Duration(t));
+        waitUntil(wall_start + std::chrono::duration<double>(t / rate_factor_));
+        continue;
+      }
       sim::PositionReference ref;
       {
         std::lock_guard<std::mutex> lock(mutex_);
@@ -147,11 +155,16 @@ class QuadrotorSim : public nodelet::Nodelet {
         ref = (!have_command_ || timed_out_) ? hold_ : command_;
       }
       vehicle_->advance(period, ref);
-      if (!vehicle_->state().finite()) {  // nothing to publish from; the rest of the chain holds what it has
+      if (!vehicle_->state().finite()) {
+        // Nothing to publish from: the odometry stops and the chain holds what it has. /clock goes on (when
+        // this nodelet drives it), or every timeout on simulated time (the odometry's, the run's time limit)
+        // would wait for ever and the run would hang instead of ending.
         NODELET_ERROR_STREAM(getName() << ": the simulated vehicle's state is not finite after " << t
                                        << " s: the dynamics diverged (quadrotor/inertia, controller gains and "
-                                          "quadrotor/dynamics_rate); the simulation stops");
-        return;
+                                          "quadrotor/dynamics_rate); the simulation stops"
+                                       << (publish_clock_ ? " (the clock goes on)" : ""));
+        diverged = true;
+        continue;
       }
       t += period;
       {
@@ -162,8 +175,7 @@ class QuadrotorSim : public nodelet::Nodelet {
       publishClock(stamp);
       publishState(stamp);
 
-      const auto target = wall_start + std::chrono::duration<double>(t / rate_factor_);
-      std::this_thread::sleep_until(target);
+      waitUntil(wall_start + std::chrono::duration<double>(t / rate_factor_));
       const auto now = std::chrono::steady_clock::now();
       const double wall = std::chrono::duration<double>(now - report_wall).count();
       if (wall >= 10.0) {
@@ -173,6 +185,19 @@ class QuadrotorSim : public nodelet::Nodelet {
         report_wall = now;
       }
     }
+  }
+
+  // Sleeps until `target` in slices, so that unloading (running_ false) or shutdown never waits out a long
+  // step (a rate factor of 1e-3 made each 0.01 s step 10 s of wall time).
+  template <typename TimePoint>
+  void waitUntil(TimePoint target) const {
+    constexpr auto kSlice = std::chrono::milliseconds(50);
+    for (auto now = std::chrono::steady_clock::now(); now < target && running_ && ros::ok();
+         now = std::chrono::steady_clock::now())
+      std::this_thread::sleep_for(
+          std::min(std::chrono::duration_cast<std::chrono::steady_clock::duration>(target - now) +
+                       std::chrono::steady_clock::duration(1),
+                   std::chrono::duration_cast<std::chrono::steady_clock::duration>(kSlice)));
   }
 
   void publishClock(const ros::Time& stamp) {
