@@ -105,14 +105,19 @@ class DepthCamera : public nodelet::Nodelet {
     const double period = 1.0 / rate_;
     const double now = stamp.toSec();
     const double ahead = std::isnan(next_frame_) ? 0.0 : next_frame_ - now;  // s to the next frame
-    if (ahead > 0.0 && ahead <= period) return;  // not yet
+    // Not yet. Within a microsecond counts as due: stamps are whole nanoseconds and the schedule a sum of
+    // periods, so a frame due with this stamp came out 1e-12 s ahead of it, and waited for the next odometry
+    // (a 50 Hz camera on 100 Hz odometry sent frames 0.03 s apart, and dropped some).
+    constexpr double kDue = 1e-6;
+    if (ahead > kDue && ahead <= period) return;
     // On time: the next frame one period on. More than a period late, or more than a period early (a
     // clock that went back, or one odometry stamp far ahead, which would otherwise hold every frame
     // back until that time): the frames start again from this stamp. In seconds as a double: a
     // ros::Time one period past a stamp near 2^32 s would throw.
     next_frame_ = (std::isnan(next_frame_) || ahead < -period || ahead > period) ? now + period : next_frame_ + period;
-    Eigen::Isometry3d T_W_B;
-    tf2::fromMsg(odom->pose.pose, T_W_B);
+    // The orientation normalised: odometry may be up to 1e-3 off unit length (it passes the pose checks).
+    const auto& p = odom->pose.pose.position;
+    const Eigen::Isometry3d T_W_B = ros_conv::rigidPose(p.x, p.y, p.z, odom->pose.pose.orientation);
     const Eigen::Isometry3d T_W_C = T_W_B * T_B_C_;
 
     cv_bridge::CvImage image;

@@ -192,16 +192,7 @@ class EsdfMapper : public nodelet::Nodelet {
     const std::string bad = ros_conv::odometryPoseProblem(pose->pose);
     if (!bad.empty()) return skip("pose", "camera_pose refused: " + bad);
     const auto& p = pose->pose.position;
-    integrate(depth, rigid(p.x, p.y, p.z, pose->pose.orientation));
-  }
-
-  /// The pose with its quaternion normalised: one accepted as a unit quaternion (within 1e-3) but not
-  /// quite one gave a rotation matrix scaled off rigid, which integrate() refused as no rotation at all.
-  static Eigen::Isometry3d rigid(double x, double y, double z, const geometry_msgs::Quaternion& q) {
-    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-    T.linear() = Eigen::Quaterniond(q.w, q.x, q.y, q.z).normalized().toRotationMatrix();
-    T.translation() = Eigen::Vector3d(x, y, z);
-    return T;
+    integrate(depth, ros_conv::rigidPose(p.x, p.y, p.z, pose->pose.orientation));
   }
 
   // The TF filter's callback, under ros_guard like every other.
@@ -233,7 +224,7 @@ class EsdfMapper : public nodelet::Nodelet {
       return skip("tf", std::string("no transform ") + world_frame_ + " <- " + depth->header.frame_id + ": " + e.what());
     }
     const auto& t = tf.transform.translation;
-    integrate(depth, rigid(t.x, t.y, t.z, tf.transform.rotation));
+    integrate(depth, ros_conv::rigidPose(t.x, t.y, t.z, tf.transform.rotation));
   }
 
   void integrate(const sensor_msgs::Image::ConstPtr& msg, const Eigen::Isometry3d& T_W_C) {

@@ -249,6 +249,32 @@ TEST_F(SimulatorTest, OdometryWhoseStampStandsStillIsReported) {
       << frames.size() << " frames over 1 s of advancing stamps";
 }
 
+// The probe camera runs at 50 Hz: on odometry every 0.01 s it sends a frame with every other stamp. Its
+// schedule is a sum of periods in doubles and the stamps whole nanoseconds, so a frame due with a stamp came
+// out 1e-12 s after it and waited for the next one: frames 0.03 s apart, then 0.01 s, and some lost.
+TEST_F(SimulatorTest, ACameraAtHalfTheOdometryRateSendsEveryOtherStamp) {
+  ASSERT_TRUE(spinUntil([&] { return last_odom_ != nullptr; }, 60.0)) << "no odom";
+  ros::Publisher odom_pub = nh_.advertise<nav_msgs::Odometry>("probe/odom", 200);
+  std::vector<double> frames;
+  ros::Subscriber depth_sub = nh_.subscribe<sensor_msgs::Image>(
+      "probe/depth", 200, [&](const sensor_msgs::Image::ConstPtr& m) { frames.push_back(m->header.stamp.toSec()); });
+  ASSERT_TRUE(spinUntil([&] { return odom_pub.getNumSubscribers() > 0 && depth_sub.getNumPublishers() > 0; }, 30.0))
+      << "the probe camera is not connected";
+  nav_msgs::Odometry odom = *last_odom_;
+  constexpr int kStamps = 300;
+  for (int k = 0; k < kStamps; ++k) {
+    odom.header.stamp = ros::Time(2.0 + 0.01 * k);  // rounded to whole nanoseconds, as a clock's stamps are
+    odom_pub.publish(odom);
+    spinUntil([] { return false; }, 0.01);
+  }
+  spinUntil([&] { return frames.size() >= kStamps / 2; }, 10.0);
+  ASSERT_GE(frames.size(), 2u);
+  std::size_t off = 0;
+  for (std::size_t i = 1; i < frames.size(); ++i) off += std::abs(frames[i] - frames[i - 1] - 0.02) > 1e-6;
+  EXPECT_EQ(off, 0u) << frames.size() << " frames, " << off << " of them not 0.02 s after the one before";
+  EXPECT_EQ(frames.size(), static_cast<std::size_t>(kStamps / 2));
+}
+
 }  // namespace
 
 GO_FEAP_ROSTEST_MAIN("test_simulator_ros")

@@ -92,6 +92,16 @@ inline std::string odometryJump(const common::Vec3& last, const common::Vec3& p)
          " m (more than metrics/max_odom_step): not counted as flown";
 }
 
+/// The pose (x, y, z, q) with its quaternion normalised: one accepted as a unit quaternion (within 1e-3) but
+/// not quite one gives a rotation matrix scaled off rigid (the mapper refused such a camera pose as no
+/// rotation at all; a camera scaled every ray of its frame).
+inline Eigen::Isometry3d rigidPose(double x, double y, double z, const geometry_msgs::Quaternion& q) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::Quaterniond(q.w, q.x, q.y, q.z).normalized().toRotationMatrix();
+  T.translation() = Eigen::Vector3d(x, y, z);
+  return T;
+}
+
 /// A velocity given in the body frame of `orientation` (nav_msgs/Odometry's twist, which is in the
 /// child frame) turned into the world frame. The quaternion is normalised first.
 inline common::Vec3 worldVelocity(const geometry_msgs::Quaternion& orientation, const geometry_msgs::Vector3& body) {
