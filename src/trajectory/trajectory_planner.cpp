@@ -254,10 +254,6 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
     Trajectory out;
     out.position = safeStop(request.start, request.velocity, optimizer.a_max);
     out.goal = request.target;
-    // Braking from speed ends past the target (a metre at 2 m/s): partial, so that it is replanned before
-    // its end and the target reached from where it stops (marked as ending there, nothing replanned it).
-    out.partial = (out.position.position(out.position.duration()) - request.target).norm() >=
-                  0.5 * astar.geometry().resolution();
     rep.path_status = planning::PathStatus::kFound;
     auto yaw = yawTurn(request.yaw, request.target_yaw, 0.0, optimizer, request.yaw_rate);
     if (!yaw) return R::Error("yaw spline failed: " + yaw.message());

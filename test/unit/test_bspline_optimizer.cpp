@@ -1240,36 +1240,6 @@ TEST(TrajectoryPlanner, LongPathsAreFlownToTheHorizonAndReplannedOnTheWay) {
   EXPECT_LE(whole->duration(), planner.max_slowdown * length / (planner.cruise_fraction * optimizer.v_max) + 1e-9);
 }
 
-// A target where the reference already is (within half a voxel) is a turn in place, braking first when moving.
-// At rest it ends at the target; from 2 m/s it stops a metre past it, and is then partial: replanned before
-// its end (it was marked as ending at the target, so nothing replanned it and the vehicle hovered there).
-TEST(TrajectoryPlanner, ATurnInPlaceThatBrakesPastItsTargetIsReplanned) {
-  OpenRoom room(Vec3(20, 4, 3));
-  const OptimizerConfig optimizer = optimizerConfig();
-  const traj::TrajectoryPlannerConfig planner;
-  const ReplanConfig replan;
-  traj::PlanRequest request;
-  request.start = Vec3(5.0, 2.0, 1.5);
-  request.target = request.start + Vec3(0.02, 0.0, 0.0);
-  request.target_yaw = 1.0;
-  auto reason = [&](const traj::Trajectory& t, double at) {
-    return traj::replanReason(&t, at, request.target, false, room.world.esdf(), replan, optimizer, planner);
-  };
-  const auto still = traj::planTrajectory(request, room.astar, room.world.esdf(), optimizer, planner);
-  ASSERT_TRUE(still) << still.message();
-  EXPECT_FALSE(still->partial);
-  EXPECT_LT((still->position.position(still->duration()) - request.start).norm(), 1e-9);
-  EXPECT_EQ(reason(*still, still->duration() - 0.5 * replan.min_time_left), ReplanReason::kNone);
-  request.velocity = Vec3(2.0, 0.0, 0.0);
-  const auto moving = traj::planTrajectory(request, room.astar, room.world.esdf(), optimizer, planner);
-  ASSERT_TRUE(moving) << moving.message();
-  const Vec3 end = moving->position.position(moving->duration());
-  EXPECT_NEAR(end.x() - request.start.x(), 2.0 * 2.0 / (2.0 * optimizer.a_max), 0.2);
-  EXPECT_TRUE(moving->partial);
-  EXPECT_LT((moving->goal - request.target).norm(), 1e-12);
-  EXPECT_EQ(reason(*moving, moving->duration() - 0.5 * replan.min_time_left), ReplanReason::kShortTimeLeft);
-}
-
 // A failed search is the vehicle's predicament when the start was blocked or the search ran dry inside
 // the snap_radius ball; then the vehicle turns in place towards the target (or on by enclosed_turn when it
 // already faces it), holding still for the whole turn, and retries the target before the turn ends.
