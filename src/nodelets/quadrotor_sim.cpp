@@ -92,7 +92,9 @@ class QuadrotorSim : public nodelet::Nodelet {
     hold_.yaw = start_yaw;
     command_ = hold_;
 
-    odom_pub_ = nh.advertise<nav_msgs::Odometry>("odom", 10);
+    // A second of odometry per subscriber link: a subscriber in another process that reads late on a loaded
+    // machine gets every message instead of losing all but the last 10 (0.1 s at 100 Hz).
+    odom_pub_ = nh.advertise<nav_msgs::Odometry>("odom", 100);
     if (publish_clock_) clock_pub_ = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
     cmd_sub_ = ros_guard::subscribe(nh, getName(), "position_cmd", 10, &QuadrotorSim::onCommand, this, ros::TransportHints().tcpNoDelay());
     NODELET_INFO_STREAM(me << ": vehicle at (" << start.transpose() << "), yaw " << start_yaw << ", scene '"
