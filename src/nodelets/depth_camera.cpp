@@ -38,7 +38,8 @@ class DepthCamera : public nodelet::Nodelet {
     config::readDepthCamera(p, c);
     int seed = 0;
     Eigen::Matrix4d T_B_C;
-    p.get("depth_camera/noise_seed", seed).get("depth_camera/rate", rate_);
+    double odom_rate = 0.0;
+    p.get("depth_camera/noise_seed", seed).get("depth_camera/rate", rate_).get("simulation/odom_rate", odom_rate);
     p.get("depth_camera/encoding", encoding_);
     p.getFrame("depth_camera/camera_frame", camera_frame_).getMatrix4("depth_camera/T_B_C", T_B_C);
     p.getFrame("simulation/world_frame", world_frame_).getFrame("simulation/body_frame", body_frame_);
@@ -55,6 +56,11 @@ class DepthCamera : public nodelet::Nodelet {
                                    "' must be <= 65.535 m with encoding 16UC1 (millimetres in 16 bits)");
     ros_params::requireOrThrow(rate_ > 0.0 && rate_ <= 100.0, me,
                                "parameter '" + p.fullName("depth_camera/rate") + "' must be in (0, 100] Hz");
+    // Frames are rendered at odometry stamps: a faster camera came at the odometry's rate, in silence.
+    ros_params::requireOrThrow(rate_ <= odom_rate, me,
+                               "parameter '" + p.fullName("depth_camera/rate") + "' (" + std::to_string(rate_) +
+                                   " Hz) must be <= '" + p.fullName("simulation/odom_rate") + "' (" +
+                                   std::to_string(odom_rate) + " Hz): frames are rendered at odometry stamps");
     ros_params::requireOrThrow(common::isRigidTransform(T_B_C), me, "parameter '" + p.fullName("depth_camera/T_B_C") + "' must be a rigid transform");
     T_B_C_.matrix() = T_B_C;
     rng_.seed(static_cast<std::uint64_t>(seed));

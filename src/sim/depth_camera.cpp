@@ -26,8 +26,9 @@ Status DepthCameraConfig::validate() const {
   auto err = [](const char* key, const char* why) {
     return Status::Error(std::string("depth_camera: ") + key + " " + why);
   };
-  if (width <= 0) return err("width", "must be > 0");
-  if (height <= 0) return err("height", "must be > 0");
+  // Up to 8192 a side (a D435i's depth is 1280 x 720): 1e5 x 1e5 asked for 40 GB at the first frame.
+  if (width <= 0 || width > kMaxSide) return err("width", "must be in [1, 8192] pixels");
+  if (height <= 0 || height > kMaxSide) return err("height", "must be in [1, 8192] pixels");
   if (!(hfov_deg > 0.0 && hfov_deg < 180.0)) return err("hfov_deg", "must be in (0, 180)");
   if (!(vfov_deg > 0.0 && vfov_deg < 180.0)) return err("vfov_deg", "must be in (0, 180)");
   if (fx != 0.0 || fy != 0.0 || cx != 0.0 || cy != 0.0) {

@@ -58,6 +58,7 @@ TEST(Parameters, ANodeletWithAnInvalidOrMissingParameterDoesNotStartAndNamesIt) 
       {"bad_cluster_extent", "go_feap/LocalPlanner", "frontier/max_cluster_extent"},  // NaN
       {"bad_camera_extrinsic", "go_feap/DepthCamera", "depth_camera/T_B_C"},    // a NaN translation
       {"bad_camera_range", "go_feap/DepthCamera", "depth_camera/max_range"},    // 70 m in 16-bit millimetres
+      {"bad_camera_rate", "go_feap/DepthCamera", "depth_camera/rate"},          // 30 Hz on 20 Hz odometry: came at 20 in silence
       {"bad_command_limit", "go_feap/QuadrotorSim", "simulation/max_command_acceleration"},  // NaN
       {"bad_input_speed", "go_feap/TrajectoryPlanner", "planner/max_input_speed"},  // NaN: no speed refused
       {"bad_command_timeout", "go_feap/TrajectoryPlanner", "planner/command_timeout"},  // 0: no command recent

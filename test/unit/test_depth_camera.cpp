@@ -242,6 +242,8 @@ TEST(DepthCameraConfig, ValidateNamesTheBadKey) {
   const std::vector<Case> cases = {
       {[](DepthCameraConfig& c) { c.width = 0; }, "width"},
       {[](DepthCameraConfig& c) { c.height = -1; }, "height"},
+      {[](DepthCameraConfig& c) { c.width = 100000; }, "width"},  // 40 GB an image
+      {[](DepthCameraConfig& c) { c.height = DepthCameraConfig::kMaxSide + 1; }, "height"},
       {[](DepthCameraConfig& c) { c.hfov_deg = 180.0; }, "hfov_deg"},
       {[](DepthCameraConfig& c) { c.vfov_deg = 0.0; }, "vfov_deg"},
       {[](DepthCameraConfig& c) { c.cx = 320.0; }, "fx"},

@@ -25,8 +25,9 @@ struct CameraIntrinsics {
 };
 
 struct DepthCameraConfig {
-  int width = 640;         ///< image width (pixels)
-  int height = 480;        ///< image height (pixels)
+  static constexpr int kMaxSide = 8192;  ///< pixels, the most validate() accepts for width and height
+  int width = 640;         ///< image width (pixels), in [1, kMaxSide]
+  int height = 480;        ///< image height (pixels), in [1, kMaxSide]
   double hfov_deg = 80.0;  ///< horizontal field of view (deg), used when fx..cy are all 0
   double vfov_deg = 60.0;  ///< vertical field of view (deg), used when fx..cy are all 0
   double fx = 0.0, fy = 0.0, cx = 0.0, cy = 0.0;  ///< pixels; all 0 -> derived from the FOV
