@@ -18,6 +18,7 @@
 #include "go_feap/PositionCommand.h"
 #include "go_feap/common/config_groups.h"
 #include "go_feap/ros/guarded.h"
+#include "go_feap/ros/message_checks.h"
 #include "go_feap/ros/params.h"
 #include "go_feap/sim/vehicle.h"
 #include "go_feap/world/scene.h"
@@ -112,12 +113,15 @@ class QuadrotorSim : public nodelet::Nodelet {
     ref.acceleration = Eigen::Vector3d(msg->acceleration.x, msg->acceleration.y, msg->acceleration.z);
     ref.yaw = msg->yaw;
     ref.yaw_dot = msg->yaw_dot;
-    const common::Status st = sim::checkReference(ref, bounds_, max_cmd_acc_, max_cmd_out_, max_cmd_speed_, max_cmd_yaw_rate_);
+    // A command in another frame (a planner on 'map' or 'odom') used to be flown as if in the world frame.
+    std::string bad = ros_check::positionCommandProblem(*msg, world_frame_);
+    if (bad.empty())
+      bad = sim::checkReference(ref, bounds_, max_cmd_acc_, max_cmd_out_, max_cmd_speed_, max_cmd_yaw_rate_).message();
     std::lock_guard<std::mutex> lock(mutex_);
-    if (!st.ok()) {
+    if (!bad.empty()) {
       ++refused_;
       NODELET_WARN_STREAM_THROTTLE(1.0, getName() << ": refused " << refused_ << " position_cmd so far (latest: "
-                                                  << st.message() << "); holding the last valid command");
+                                                  << bad << "); holding the last valid command");
       return;
     }
     command_ = ref;

@@ -125,7 +125,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
   void onCommand(const PositionCommand::ConstPtr& msg) {
     // The command is the next plan's start: one that is not finite is refused (the last usable one goes
     // stale, and the plan then starts from the odometry).
-    std::string bad = ros_check::positionCommandProblem(*msg);
+    std::string bad = ros_check::positionCommandProblem(*msg, world_frame_);
     if (bad.empty())
       bad = ros_conv::velocityProblem(common::Vec3(msg->velocity.x, msg->velocity.y, msg->velocity.z), max_input_speed_,
                                       speed_limit_name_);

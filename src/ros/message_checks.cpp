@@ -164,7 +164,9 @@ bool ExplorationGate::update(const ExplorationStatus& msg, const std::string& no
   return !open;
 }
 
-std::string positionCommandProblem(const PositionCommand& msg) {
+std::string positionCommandProblem(const PositionCommand& msg, const std::string& world_frame) {
+  if (msg.header.frame_id != world_frame)
+    return "the command is in frame '" + msg.header.frame_id + "', not '" + world_frame + "' (world_frame)";
   if (!finite(msg.position)) return "position " + point(msg.position) + " is not finite";
   if (!finite(msg.velocity) || !finite(msg.acceleration)) return "velocity or acceleration is not finite";
   if (!std::isfinite(msg.yaw) || !std::isfinite(msg.yaw_dot)) return "yaw or yaw_dot is not finite";

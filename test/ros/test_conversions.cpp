@@ -426,21 +426,27 @@ TEST(MessageChecks, ToursLayersMapUpdatesAndStatusesThatAreMalformedAreNamed) {
   EXPECT_TRUE(says(explorationStatusProblem(bad_status), "coverage")) << explorationStatusProblem(bad_status);
 
   go_feap::PositionCommand cmd;
+  cmd.header.frame_id = "world";
   cmd.position = point(1, 2, 1.5);
   cmd.velocity.x = 0.5, cmd.acceleration.z = -0.2, cmd.yaw = 0.3, cmd.yaw_dot = 0.1;
-  EXPECT_EQ(positionCommandProblem(cmd), "");
+  EXPECT_EQ(positionCommandProblem(cmd, "world"), "");
   go_feap::PositionCommand bad_cmd = cmd;
+  bad_cmd.header.frame_id = "map";
+  EXPECT_EQ(positionCommandProblem(bad_cmd, "world"), "the command is in frame 'map', not 'world' (world_frame)");
+  bad_cmd.header.frame_id = "";
+  EXPECT_TRUE(says(positionCommandProblem(bad_cmd, "world"), "frame ''")) << positionCommandProblem(bad_cmd, "world");
+  bad_cmd = cmd;
   bad_cmd.position.z = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_TRUE(says(positionCommandProblem(bad_cmd), "position")) << positionCommandProblem(bad_cmd);
+  EXPECT_TRUE(says(positionCommandProblem(bad_cmd, "world"), "position")) << positionCommandProblem(bad_cmd, "world");
   bad_cmd = cmd;
   bad_cmd.velocity.y = std::numeric_limits<double>::infinity();
-  EXPECT_TRUE(says(positionCommandProblem(bad_cmd), "velocity")) << positionCommandProblem(bad_cmd);
+  EXPECT_TRUE(says(positionCommandProblem(bad_cmd, "world"), "velocity")) << positionCommandProblem(bad_cmd, "world");
   bad_cmd = cmd;
   bad_cmd.acceleration.x = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_TRUE(says(positionCommandProblem(bad_cmd), "acceleration")) << positionCommandProblem(bad_cmd);
+  EXPECT_TRUE(says(positionCommandProblem(bad_cmd, "world"), "acceleration")) << positionCommandProblem(bad_cmd, "world");
   bad_cmd = cmd;
   bad_cmd.yaw_dot = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_TRUE(says(positionCommandProblem(bad_cmd), "yaw")) << positionCommandProblem(bad_cmd);
+  EXPECT_TRUE(says(positionCommandProblem(bad_cmd, "world"), "yaw")) << positionCommandProblem(bad_cmd, "world");
 }
 
 // ros_guard: an exception a nodelet's callback throws stays in the callback (roscpp would pass it to

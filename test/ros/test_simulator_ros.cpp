@@ -144,6 +144,12 @@ TEST_F(SimulatorTest, CommandMovesOdomCameraStampsMatchNanIsIgnored) {
     cmd_pub_.publish(bad);
     spinSim(0.05);
   }
+  go_feap::PositionCommand elsewhere = go_feap::test::holdCommand(target + Eigen::Vector3d(0.5, 0.0, 0.0), 0.5);
+  elsewhere.header.frame_id = "map";  // another frame: refused, it was flown as if in the world frame
+  for (int i = 0; i < 20; ++i) {
+    cmd_pub_.publish(elsewhere);
+    spinSim(0.05);
+  }
   command(target + Eigen::Vector3d(0, 0, 0), 0.5, /*ax=*/1000.0);  // absurd acceleration: refused too
   go_feap::PositionCommand fast = go_feap::test::holdCommand(target, 0.5);
   fast.velocity.z = 1e308;  // finite: it made the controller's state NaN for good, and odometry stopped

@@ -67,8 +67,8 @@ class ExplorationGate {
   bool open_ = false;
 };
 
-/// Position, velocity, acceleration, yaw and yaw rate all finite (the trajectory planner starts its next
-/// plan from the command).
-std::string positionCommandProblem(const PositionCommand& msg);
+/// In `world_frame`, with position, velocity, acceleration, yaw and yaw rate all finite (the trajectory
+/// planner starts its next plan from the command; the simulator flies it).
+std::string positionCommandProblem(const PositionCommand& msg, const std::string& world_frame);
 
 }  // namespace go_feap::ros_check
