@@ -228,10 +228,12 @@ class LocalPlanner : public nodelet::Nodelet {
   }
   // A failed attempt on the current target's frontier (the trajectory planner found no way there): drop
   // the target, as go_feap_bench does, so that the next tour chooses again. Kept, it was repeated for
-  // ever, and each repeat failed again (the frontier, blacklisted, was no longer in any tour).
+  // ever, and each repeat failed again (the frontier, blacklisted, was no longer in any tour). A turn in
+  // place (frontier id 0) that failed is dropped too: kept, it was repeated at every tour and look round
+  // request, and the tours' frontiers, reported only when idle, were never blacklisted.
   void onFailed(const std_msgs::UInt32::ConstPtr& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (!target_ || target_frontier_ == 0 || msg->data != target_frontier_) return;
+    if (!target_ || msg->data != target_frontier_) return;
     target_.reset();
     last_out_.reset();
     target_quicker_ = false;

@@ -3,10 +3,12 @@
 // look_around) and the local planner turns the vehicle in place, round every heading, before the run
 // ends FINISHED(complete). Without the look round it ended after about 2 s without turning.
 // A second local planner, fed only by this test, checks that its turn-in-place target is repeated while
-// the look round is asked for (a first publication the trajectory planner missed left the vehicle still).
+// the look round is asked for (a first publication the trajectory planner missed left the vehicle still),
+// and dropped when the trajectory planner reports it failed.
 #include <gtest/gtest.h>
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
+#include <std_msgs/UInt32.h>
 
 #include <cmath>
 #include <optional>
@@ -123,11 +125,24 @@ TEST(LookRound, AnUnreachedTurnInPlaceIsRepeatedWhileALookRoundIsAsked) {
     EXPECT_EQ(t->target_seq, first.target_seq);
     EXPECT_DOUBLE_EQ(t->yaws.at(0), first.yaws[0]);
   }
-  // Reached: the next turn, numbered anew.
-  yaw = first.yaws[0];
+  // Failed (the trajectory planner found no way to turn there, and reports frontier id 0): dropped, and
+  // the next request turns anew from the same heading. Kept, it was repeated for ever and failed again
+  // each time, while the tours that would blacklist their frontiers waited for it.
+  auto failed_pub = nh.advertise<std_msgs::UInt32>("probe/frontier_failed", 10);
+  ASSERT_TRUE(spinPublishing([&] { return failed_pub.getNumSubscribers() > 0; }, 10.0));
+  std_msgs::UInt32 failed;
+  failed.data = 0;
+  failed_pub.publish(failed);
   ASSERT_TRUE(spinPublishing([&] { return targets.back()->target_seq != first.target_seq; }, 10.0))
-      << "no next turn once the first was reached";
-  EXPECT_EQ(targets.back()->target_seq, first.target_seq + 1);
+      << "the failed turn was still repeated";
+  const go_feap::ViewpointPath second = *targets.back();
+  EXPECT_EQ(second.target_seq, first.target_seq + 1);
+  EXPECT_NEAR(second.yaws.at(0), scan_step, 1e-6);
+  // Reached: the next turn, numbered anew.
+  yaw = second.yaws[0];
+  ASSERT_TRUE(spinPublishing([&] { return targets.back()->target_seq != second.target_seq; }, 10.0))
+      << "no next turn once the second was reached";
+  EXPECT_EQ(targets.back()->target_seq, second.target_seq + 1);
   EXPECT_NEAR(std::remainder(targets.back()->yaws.at(0) - 2.0 * scan_step, 2.0 * M_PI), 0.0, 1e-6);
 }
 
