@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -46,6 +47,7 @@ struct CloudHeader {
   std::string data_word;   ///< PCD: the word after DATA, as written
   bool data_line = false;  ///< PCD: a DATA line came
   bool fields = false;     ///< PCD: a FIELDS line came before DATA
+  std::string bad_line;    ///< PCD: the first header line that is no PCD header line, with its number ("" if none)
   std::vector<PlyElement> elements;  ///< PLY
 };
 
@@ -97,6 +99,15 @@ CloudHeader readCloudHeader(const std::string& path, const std::string& kind) {
     std::string key;
     words >> key;
     if (kind == "PCD") {
+      // Every line before DATA empty, a comment or one of PCD's keywords, exactly. PCL's header reader stops
+      // at any other line and reads the points from the file's first byte (a 'FOO bar' line gave points at
+      // the origin), and it matches keys by their prefix ('POINTS_ 1e8' sized its buffer at 1.2 GB).
+      static const std::set<std::string> kKeys = {"VERSION", "FIELDS", "SIZE",   "TYPE", "COUNT",
+                                                  "WIDTH",   "HEIGHT", "VIEWPOINT", "POINTS", "DATA"};
+      if (!line.empty() && key.rfind('#', 0) != 0 && kKeys.count(key) == 0) {
+        h.bad_line = "line " + std::to_string(i + 1) + " '" + line.substr(0, 40) + "'";
+        break;
+      }
       if (key == "FIELDS") h.fields = true;
       else if (key == "SIZE") sizes = numbers(words);
       else if (key == "COUNT") counts = numbers(words);
@@ -350,6 +361,10 @@ common::Result<std::vector<Vec3>> loadPointCloud(const std::string& path) {
       // PCL's binary reader maps the file and trusts the header (a truncated file
       // crashes it), so check the header against the file size first.
       header = readCloudHeader(path, kind);
+      if (!header.bad_line.empty())
+        return R::Error(path + ": corrupt PCD file (header " + header.bad_line +
+                        " is no PCD header line: expected a comment or VERSION, FIELDS, SIZE, TYPE, COUNT, WIDTH, "
+                        "HEIGHT, VIEWPOINT, POINTS or DATA)");
       // PCL's header parser accepts text that is no PCD header at all; require the keywords.
       if (!header.fields || !header.data_line) return R::Error(path + ": corrupt PCD file (no FIELDS/DATA header)");
       if (const std::string e = pcdDataWordProblem(path, header); !e.empty()) return R::Error(e);

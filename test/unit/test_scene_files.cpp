@@ -922,6 +922,27 @@ TEST(BadInput, PcdDataWordAndSurplusBinaryData) {
   expectErrorMentions(e.message(), {"extra.pcd", "12 bytes after the 12"});
 }
 
+// A header line before DATA that is no PCD keyword: PCL's reader stops its header there and reads the points
+// from the file's first byte (points at the origin, loaded without a word), or matches the key by its prefix
+// ('POINTS_ 1e8' sized a 1.2 GB buffer). Empty lines and comments are PCL's too, and load.
+TEST(BadInput, PcdHeaderLinesThatAreNoKeyword) {
+  TempDir d;
+  const std::vector<PcdField> xyz = {{"x", 4, 'F', 1}, {"y", 4, 'F', 1}, {"z", 4, 'F', 1}};
+  const std::string header = pcdHeader(xyz, 2, "ascii");
+  const std::size_t data_at = header.find("DATA");
+  auto withLine = [&](const std::string& line) { return header.substr(0, data_at) + line + header.substr(data_at); };
+  const std::string rows = "5 5 5\n6 6 6\n";
+  for (const std::string& line : {std::string("FOO bar\n"), std::string("POINTS_ 100000000\n"), std::string(" \n"),
+                                  std::string("COUNTS 1 1 1\n")}) {
+    writeText(d.file("odd.pcd"), withLine(line) + rows);
+    auto r = loadPointCloud(d.file("odd.pcd"));
+    ASSERT_FALSE(r) << line << ": " << r->size() << " points, the first at " << r->front().transpose();
+    expectErrorMentions(r.message(), {"odd.pcd", "line 11 '" + line.substr(0, line.size() - 1) + "' is no PCD header line"});
+  }
+  writeText(d.file("fine.pcd"), withLine("\n# a comment\n") + rows);
+  expectPoints(d.file("fine.pcd"), {Vec3(5, 5, 5), Vec3(6, 6, 6)});
+}
+
 // Extensions are matched whatever their case, by the cloud loader as by the scene loader.
 TEST(PointCloud, UpperCaseExtensions) {
   TempDir d;
