@@ -1,5 +1,7 @@
 #include <octomap/OcTree.h>
 
+#include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -52,6 +54,44 @@ std::string nestingProblem(const std::string& bytes, std::size_t data_start) {
   return "";
 }
 
+// Where the tree data begins, after the header lines that follow the first: each empty, a comment, 'id X',
+// 'size N' or 'res R' (R > 0), and last a line 'data'. OctoMap reads the header word by word ('id' takes
+// the next word, on the next line if need be), so a header outside these lines could make it start the
+// data elsewhere than this check walked: 'id' alone on its line took the 'data' below as its value.
+// Sets `problem` and returns npos on a line that is none of these.
+std::size_t treeDataStart(const std::string& bytes, std::string& problem) {
+  std::size_t at = bytes.find('\n');  // the first line was checked
+  for (int number = 2; at != std::string::npos; ++number) {
+    const std::size_t begin = at + 1;
+    const std::size_t end = bytes.find('\n', begin);
+    if (end == std::string::npos) break;
+    std::string line = bytes.substr(begin, end - begin);
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    std::istringstream words(line);
+    std::vector<std::string> w;
+    for (std::string word; words >> word;) w.push_back(word);
+    at = end;
+    if (w.empty() || w[0][0] == '#') continue;
+    if (w.size() == 1 && w[0] == "data") return end + 1;
+    const bool keyed = w.size() == 2 && (w[0] == "id" || w[0] == "size" || w[0] == "res");
+    if (keyed && w[0] == "res") {
+      char* rest = nullptr;
+      const double res = std::strtod(w[1].c_str(), &rest);
+      if (*rest != '\0' || !(res > 0.0) || !std::isfinite(res)) {
+        problem = "res '" + w[1] + "' on header line " + std::to_string(number) + " is no resolution > 0";
+        return std::string::npos;
+      }
+    }
+    if (!keyed) {
+      problem = "header line " + std::to_string(number) + " '" + line.substr(0, 40) +
+                "' is none of a comment, 'id X', 'size N', 'res R' or 'data'";
+      return std::string::npos;
+    }
+  }
+  problem = "no 'data' line";
+  return std::string::npos;
+}
+
 }  // namespace
 
 common::Result<std::vector<OccupiedCube>> loadOctomap(const std::string& path) {
@@ -66,9 +106,10 @@ common::Result<std::vector<OccupiedCube>> loadOctomap(const std::string& path) {
   in.seekg(0);
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   if (in.bad()) return R::Error(path + ": read error");
-  const std::size_t data_line = bytes.find("\ndata\n");
-  if (data_line == std::string::npos) return R::Error(path + ": corrupt OctoMap file (no 'data' line)");
-  if (const std::string e = nestingProblem(bytes, data_line + 6); !e.empty())
+  std::string header_problem;
+  const std::size_t data_start = treeDataStart(bytes, header_problem);
+  if (data_start == std::string::npos) return R::Error(path + ": corrupt OctoMap file (" + header_problem + ")");
+  if (const std::string e = nestingProblem(bytes, data_start); !e.empty())
     return R::Error(path + ": corrupt OctoMap file (" + e + ")");
   // OctoMap's reader reports problems on std::cerr and returns false; read into a tree
   // first and check the stream, so truncated files are caught as well.

@@ -713,6 +713,29 @@ TEST(BadInput, CorruptAndTruncatedOctomap) {
   auto c = loadOctomap(d.file("deep.bt"));
   ASSERT_FALSE(c);
   expectErrorMentions(c.message(), {"deep.bt", "deeper than 16 levels"});
+  // The same bytes behind a header whose data OctoMap starts elsewhere than at the first 'data' line ('id'
+  // alone takes the 'data' below as its value; a 'data junk' line): the depth check walked harmless bytes,
+  // and OctoMap overflowed the stack. Each is refused by its header line, as is a resolution of 0.
+  const std::string first = bytes.substr(0, bytes.find('\n') + 1);
+  const std::string deep(200000, '\xff');
+  const std::vector<std::pair<std::string, std::string>> headers = {
+      {"id\ndata\n#AAA\nres 0.1\nsize 1\ndata\n", "header line 2 'id' is none of"},
+      {"id OcTree\ndata junk\n#A\ndata\n", "header line 3 'data junk' is none of"},
+      {"id OcTree\nsize 1\nres 0\ndata\n", "res '0' on header line 4 is no resolution > 0"},
+      {"id OcTree\nsize 1\nres 0.1\n", "no 'data' line"}};
+  for (const auto& [lines, why] : headers) {
+    writeText(d.file("header.bt"), first + lines + deep);
+    auto h = loadOctomap(d.file("header.bt"));
+    ASSERT_FALSE(h) << lines;
+    expectErrorMentions(h.message(), {"header.bt", why});
+  }
+  // Comments, empty lines and CR line ends are OctoMap's too.
+  std::string crlf_header = "# comment\n\n" + header.substr(first.size());
+  for (std::size_t at = 0; (at = crlf_header.find('\n', at)) != std::string::npos; at += 2) crlf_header.insert(at, "\r");
+  writeText(d.file("crlf.bt"), first + crlf_header + bytes.substr(header.size()));
+  auto crlf = loadOctomap(d.file("crlf.bt"));
+  ASSERT_TRUE(crlf) << crlf.message();
+  EXPECT_EQ(crlf->size(), 20u);
   auto ok = loadOctomap(d.file("ok.bt"));
   ASSERT_TRUE(ok) << ok.message();
   EXPECT_EQ(ok->size(), 20u);
