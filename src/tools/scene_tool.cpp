@@ -65,7 +65,13 @@ int main(int argc, char** argv) {
     std::cerr << "go_feap_scene: " << st.message() << "\n";
     return 1;
   }
-  if (!cv::imwrite(dir + "scene.png", world::renderSceneImage(*scene))) {
+  bool pictured = false;
+  try {
+    pictured = cv::imwrite(dir + "scene.png", world::renderSceneImage(*scene));
+  } catch (const cv::Exception& e) {  // OpenCV throws as well as returning false
+    std::cerr << "go_feap_scene: " << e.what() << "\n";
+  }
+  if (!pictured) {
     std::cerr << "go_feap_scene: cannot write " << dir << "scene.png\n";
     return 1;
   }
@@ -95,7 +101,13 @@ int main(int argc, char** argv) {
                  {"observable_occupied", observable.occupied_count}};
   j["load_time_s"] = load_s;
   j["observable_time_s"] = observable_s;
-  std::ofstream(dir + "scene.json") << j.dump(2) << "\n";
+  // The source path as given, with U+FFFD for bytes that are no UTF-8 (dump() threw on them).
+  std::ofstream json(dir + "scene.json");
+  json << j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
+  if (!json.flush()) {
+    std::cerr << "go_feap_scene: cannot write " << dir << "scene.json\n";
+    return 1;
+  }
 
   std::cout << "scene '" << scene->name << "' (seed " << scene->seed << "): " << occ << " occupied, " << free
             << " free voxels in the box, " << observable.total() << " observable; built in " << load_s

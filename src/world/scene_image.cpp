@@ -1,6 +1,7 @@
 #include "go_feap/world/scene_image.h"
 
 #include <algorithm>
+#include <vector>
 #include <opencv2/imgproc.hpp>
 
 namespace go_feap::world {
@@ -33,33 +34,41 @@ cv::Mat renderSceneImage(const Scene& scene, int target_width, double side_view_
   geo.centreRange(scene.box, lo, hi);
   const Index3 n = hi - lo;
   const double res = geo.resolution();
-  const int ppv = std::max(1, static_cast<int>(std::lround(target_width / std::max(1, n.x()))));  // pixels per voxel
+  // The scale from the box's longest side, so that no side of either view is more than about target_width
+  // pixels: whole pixels per voxel (ppv), or for a side longer than target_width voxels whole voxels per
+  // pixel (vpp). It came from the x side alone: a box 1 voxel by 20,000 gave 900 pixels a voxel, an image
+  // of 18,000,000 rows that OpenCV refused (48.6 GB) and the tool aborted.
+  const int longest = std::max({1, n.x(), n.y(), n.z()});
+  const int width = std::max(1, target_width);
+  const int ppv = std::max(1, width / longest);
+  const int vpp = (longest + width - 1) / width;  // 1 up to target_width voxels
+  const Index3 cells((n.x() + vpp - 1) / vpp, (n.y() + vpp - 1) / vpp, (n.z() + vpp - 1) / vpp);  // pixel blocks
   const HeightColours colour(scene.box.min.z(), scene.box.max.z());
   // A lowest layer that is (almost) all occupied is a floor: leave it white in the views.
   const int floor_k = [&] {
     std::size_t occ = 0;
     for (int y = lo.y(); y < hi.y(); ++y)
       for (int x = lo.x(); x < hi.x(); ++x) occ += scene.occupied.at(Index3(x, y, lo.z())) != 0;
-    return occ >= 0.9 * n.x() * n.y() ? lo.z() : -1;
+    return static_cast<double>(occ) >= 0.9 * n.x() * n.y() ? lo.z() : -1;
   }();
 
-  // Both views walk the grid in memory order (x fastest), layer by layer, and paint each pixel from the
-  // first occupied voxel met: a column-by-column walk touched a new cache line per voxel, minutes for a
+  // Both views walk the grid in memory order (x fastest), layer by layer, and paint each pixel block from
+  // the first occupied voxel met: a column-by-column walk touched a new cache line per voxel, minutes for a
   // mostly empty 1e9-voxel scene.
-  cv::Mat3b top(n.y() * ppv, n.x() * ppv, cv::Vec3b(255, 255, 255));
-  std::vector<char> painted(static_cast<std::size_t>(n.x()) * n.y(), 0);
+  cv::Mat3b top(cells.y() * ppv, cells.x() * ppv, cv::Vec3b(255, 255, 255));
+  std::vector<char> painted(static_cast<std::size_t>(cells.x()) * cells.y(), 0);
   for (int z = hi.z() - 1; z >= lo.z() && z != floor_k; --z) {
     const cv::Vec3b c = colour(geo.indexToCoord(Index3(lo.x(), lo.y(), z)).z());
     for (int y = lo.y(); y < hi.y(); ++y)
       for (int x = lo.x(); x < hi.x(); ++x) {
-        char& done = painted[static_cast<std::size_t>(y - lo.y()) * n.x() + (x - lo.x())];
+        const int u = (x - lo.x()) / vpp, v = (hi.y() - 1 - y) / vpp;  // image rows grow downwards, world y upwards
+        char& done = painted[static_cast<std::size_t>(v) * cells.x() + u];
         if (done || !scene.occupied.at(Index3(x, y, z))) continue;
         done = 1;
-        // Image rows grow downwards, world y upwards.
-        top(cv::Rect((x - lo.x()) * ppv, (hi.y() - 1 - y) * ppv, ppv, ppv)) = c;
+        top(cv::Rect(u * ppv, v * ppv, ppv, ppv)) = c;
       }
   }
-  const double ppm = ppv / res;
+  const double ppm = ppv / (vpp * res);
   auto to_px = [&](const Vec3& p) {
     return cv::Point(static_cast<int>((p.x() - geo.origin().x() - lo.x() * res) * ppm),
                      static_cast<int>((hi.y() * res - (p.y() - geo.origin().y())) * ppm));
@@ -76,20 +85,24 @@ cv::Mat renderSceneImage(const Scene& scene, int target_width, double side_view_
 
   if (scene.box.size().z() < side_view_min_height) return top;
 
-  cv::Mat3b side(n.z() * ppv, n.x() * ppv, cv::Vec3b(255, 255, 255));
+  cv::Mat3b side(cells.z() * ppv, cells.x() * ppv, cv::Vec3b(255, 255, 255));
+  std::vector<char> done(static_cast<std::size_t>(cells.x()), 0);
+  int done_v = -1;  // the row of pixel blocks `done` is for
   for (int z = lo.z(); z < hi.z(); ++z) {
     if (z == floor_k) continue;
+    const int v = (hi.z() - 1 - z) / vpp;
+    if (v != done_v) std::fill(done.begin(), done.end(), 0), done_v = v;
     const cv::Vec3b base = colour(geo.indexToCoord(Index3(lo.x(), lo.y(), z)).z());
-    std::vector<char> done(static_cast<std::size_t>(n.x()), 0);
     for (int y = lo.y(); y < hi.y(); ++y)
       for (int x = lo.x(); x < hi.x(); ++x) {
-        if (done[x - lo.x()] || !scene.occupied.at(Index3(x, y, z))) continue;
-        done[x - lo.x()] = 1;
+        const int u = (x - lo.x()) / vpp;
+        if (done[u] || !scene.occupied.at(Index3(x, y, z))) continue;
+        done[u] = 1;
         // Shade by depth along y (near = dark), colour by height.
         cv::Vec3b c = base;
         const double shade = 0.55 + 0.45 * (y - lo.y()) / std::max(1, n.y() - 1);
         for (int k = 0; k < 3; ++k) c[k] = static_cast<unsigned char>(c[k] * shade);
-        side(cv::Rect((x - lo.x()) * ppv, (hi.z() - 1 - z) * ppv, ppv, ppv)) = c;
+        side(cv::Rect(u * ppv, v * ppv, ppv, ppv)) = c;
       }
   }
   cv::putText(side, "side view (looking along +y)", cv::Point(8, 22), cv::FONT_HERSHEY_SIMPLEX, 0.6,

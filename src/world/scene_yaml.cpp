@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdint>
 #include <filesystem>
 #include <initializer_list>
 #include <set>
@@ -89,9 +90,38 @@ bool nearlySingular(Eigen::Matrix3d m) {
   return !(std::abs(m.determinant()) >= 1e-9);
 }
 
-// The value of `scene.name`: a non-empty string.
+// Whether `s` is UTF-8 text without control characters (bytes below 0x20, and 0x7f): a scene's name goes
+// into JSON, table.md and the pictures' titles.
+bool printableUtf8(const std::string& s) {
+  for (std::size_t i = 0; i < s.size();) {
+    const auto b = static_cast<unsigned char>(s[i]);
+    if (b < 0x80) {
+      if (b < 0x20 || b == 0x7f) return false;
+      ++i;
+      continue;
+    }
+    // The length of the sequence from its lead byte, and the least code point it may hold (no overlong form).
+    const int len = b >= 0xf0 && b <= 0xf4 ? 4 : b >= 0xe0 ? 3 : b >= 0xc2 && b < 0xe0 ? 2 : 0;
+    if (len == 0 || i + len > s.size()) return false;
+    std::uint32_t code = b & (0x7f >> len);
+    for (int k = 1; k < len; ++k) {
+      const auto c = static_cast<unsigned char>(s[i + k]);
+      if ((c & 0xc0) != 0x80) return false;
+      code = (code << 6) | (c & 0x3f);
+    }
+    const std::uint32_t least = len == 2 ? 0x80 : len == 3 ? 0x800 : 0x10000;
+    if (code < least || code > 0x10ffff || (code >= 0xd800 && code <= 0xdfff)) return false;
+    i += len;
+  }
+  return true;
+}
+
+// The value of `scene.name`: a non-empty string of printable UTF-8 (a Latin-1 byte aborted go_feap_scene
+// when it wrote scene.json).
 std::string sceneName(const YAML::Node& n) {
   if (!n.IsScalar() || n.Scalar().empty()) throw KeyError{"key 'scene.name' must be a non-empty string"};
+  if (!printableUtf8(n.Scalar()))
+    throw KeyError{"key 'scene.name' must be UTF-8 text without control characters"};
   return n.Scalar();
 }
 

@@ -16,6 +16,7 @@
 
 #include "go_feap/world/generators.h"
 #include "go_feap/world/scene_files.h"
+#include "go_feap/world/scene_image.h"
 
 using namespace go_feap::world;
 using go_feap::common::Index3;
@@ -382,6 +383,55 @@ TEST(RoundTrip, MazeThroughPcdAndBtKeepsTheOccupiedSet) {
     EXPECT_EQ(back->geometry().dims(), maze->geometry().dims());
     EXPECT_EQ(occupiedSet(*back), occupiedSet(*maze)) << f;
   }
+}
+
+// The scene picture's top view against the grid: a pixel block is white exactly where no voxel of its
+// column is occupied above the floor layer (away from the title and the start's disc). The scale comes from
+// the box's longest side: a box 1 voxel wide and 20,000 long asked OpenCV for 18,000,000 rows (48.6 GB).
+TEST(SceneImage, TopViewShowsEveryOccupiedColumnAndLongBoxesFit) {
+  auto maze = generateMaze(MazeConfig(), 1);
+  ASSERT_TRUE(maze) << maze.message();
+  const auto& geo = maze->geometry();
+  Index3 lo, hi;
+  geo.centreRange(maze->box, lo, hi);
+  const Index3 n = hi - lo;
+  const int ppv = 900 / std::max({n.x(), n.y(), n.z()});
+  ASSERT_GE(ppv, 2);
+  const cv::Mat image = renderSceneImage(*maze, 900, 1e9);  // the top view only
+  ASSERT_EQ(image.cols, n.x() * ppv);
+  ASSERT_EQ(image.rows, n.y() * ppv);
+  const cv::Point start(static_cast<int>((maze->start.position.x() - geo.origin().x() - lo.x() * geo.resolution()) /
+                                         geo.resolution() * ppv),
+                        static_cast<int>((hi.y() * geo.resolution() - (maze->start.position.y() - geo.origin().y())) /
+                                         geo.resolution() * ppv));
+  std::size_t shown = 0, checked = 0;
+  for (int y = lo.y(); y < hi.y(); ++y)
+    for (int x = lo.x(); x < hi.x(); ++x) {
+      const cv::Point px((x - lo.x()) * ppv + ppv / 2, (hi.y() - 1 - y) * ppv + ppv / 2);
+      if (px.y < 30 || cv::norm(px - start) < 40.0) continue;  // the title, the start's disc and heading
+      bool occupied = false;
+      for (int z = lo.z() + 1; z < hi.z(); ++z) occupied = occupied || maze->occupied.at(Index3(x, y, z));
+      const cv::Vec3b c = image.at<cv::Vec3b>(px);
+      EXPECT_EQ(c != cv::Vec3b(255, 255, 255), occupied) << "column " << x << ", " << y;
+      shown += occupied;
+      ++checked;
+    }
+  EXPECT_GT(shown, checked / 20) << "too few walls to compare";
+  Aabb long_box;
+  long_box.min = Vec3(0, 0, 0);
+  long_box.max = Vec3(0.1, 2000.0, 0.1);
+  Scene thin = makeEmptyScene("thin", long_box, 0.1, 0.0);
+  ASSERT_TRUE(markOccupied(thin, Vec3(0.05, 1000.05, 0.05)));
+  const cv::Mat long_image = renderSceneImage(thin, 900, 1e9);
+  EXPECT_LE(std::max(long_image.rows, long_image.cols), 900);
+  EXPECT_EQ(long_image.rows, 20000 / 23 + 1);  // 23 voxels a pixel: the fewest that fit 20,000 in 900
+  Index3 thin_lo, thin_hi;
+  thin.geometry().centreRange(thin.box, thin_lo, thin_hi);
+  ASSERT_EQ(thin_hi.y() - thin_lo.y(), 20000);
+  const int wall_y = thin.geometry().clampedIndex(Vec3(0.05, 1000.05, 0.05)).y();
+  const int wall_row = (thin_hi.y() - 1 - wall_y) / 23;
+  for (int row = 0; row < long_image.rows - 10; ++row)  // (the start's disc is drawn at the bottom)
+    EXPECT_EQ(long_image.at<cv::Vec3b>(row, 0) != cv::Vec3b(255, 255, 255), row == wall_row) << "row " << row;
 }
 
 TEST(SceneYaml, GroundPlaneFillsTheBoxFloorLayer) {
@@ -1042,6 +1092,10 @@ TEST(BadInput, GeneratedMazeYamlUnknownRepeatedOrWronglyTypedKeys) {
       {"  name: m\n", "  name: m\n  file: p.pcd\n", "unknown key 'scene.file' ('scene' takes name, generator, maze)"},
       {"  name: m\n", "  name: m\n  name: n\n", "key 'scene.name' is given more than once"},
       {"name: m", "name: {a: 1}", "key 'scene.name' must be a non-empty string"},
+      // Not UTF-8 (a Latin-1 byte aborted go_feap_scene at scene.json), a control character, an overlong form.
+      {"name: m", "name: \"caf\xe9\"", "key 'scene.name' must be UTF-8 text without control characters"},
+      {"name: m", "name: \"a\\tb\"", "key 'scene.name' must be UTF-8 text without control characters"},
+      {"name: m", "name: \"\xc0\xaf\"", "key 'scene.name' must be UTF-8 text without control characters"},
   };
   for (const auto& [from, to, expect] : cases) {
     std::string y = maze;
@@ -1051,6 +1105,12 @@ TEST(BadInput, GeneratedMazeYamlUnknownRepeatedOrWronglyTypedKeys) {
     ASSERT_FALSE(s) << "accepted: " << y;
     expectErrorMentions(s.message(), {"badmaze.yaml", expect});
   }
+  std::string utf8 = maze;
+  utf8.replace(utf8.find("name: m"), 7, "name: \"caf\xc3\xa9 \xe2\x82\xac \xf0\x9f\x99\x82\"");  // é, €, an emoji
+  writeText(d.file("utf8.yaml"), utf8);
+  auto u = makeScene(d.file("utf8.yaml"), 0);
+  ASSERT_TRUE(u) << u.message();
+  EXPECT_EQ(u->name, "caf\xc3\xa9 \xe2\x82\xac \xf0\x9f\x99\x82");
 }
 
 // Singular means columns (nearly) dependent, whatever the scale: a millimetre mesh turned 45 degrees
