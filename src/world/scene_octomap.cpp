@@ -136,7 +136,17 @@ common::Status saveSceneBt(const Scene& scene, const std::string& path) {
   for (std::size_t l = 0; l < scene.occupied.size(); ++l) {
     if (!scene.occupied[l]) continue;
     const Vec3 c = geo.indexToCoord(geo.unlinear(l));
-    tree.updateNode(octomap::point3d(c.x(), c.y(), c.z()), true, /*lazy_eval=*/true);
+    // OctoMap's keys reach 2^15 voxels either side of the origin (3.3 km at 0.1 m): updateNode() dropped a
+    // voxel beyond, in silence, and an empty tree was written.
+    octomap::OcTreeKey key;
+    if (!tree.coordToKeyChecked(octomap::point3d(c.x(), c.y(), c.z()), key)) {
+      std::ostringstream why;
+      why << path << ": scene '" << scene.name << "' has an occupied voxel at (" << c.transpose()
+          << "), beyond OctoMap's reach of " << 32768 * scene.resolution() << " m from the origin at "
+          << scene.resolution() << " m";
+      return common::Status::Error(why.str());
+    }
+    tree.updateNode(key, true, /*lazy_eval=*/true);
     ++n;
   }
   if (n == 0) return common::Status::Error(path + ": scene '" + scene.name + "' has no occupied voxels to write");

@@ -434,6 +434,27 @@ TEST(SceneImage, TopViewShowsEveryOccupiedColumnAndLongBoxesFit) {
     EXPECT_EQ(long_image.at<cv::Vec3b>(row, 0) != cv::Vec3b(255, 255, 255), row == wall_row) << "row " << row;
 }
 
+// A scene beyond OctoMap's keys (2^15 voxels from the origin: 3.3 km at 0.1 m) is refused by saveSceneBt,
+// naming the voxel: every voxel was dropped in silence, and an empty tree written.
+TEST(RoundTrip, BtOfASceneBeyondOctomapsReachIsRefused) {
+  TempDir d;
+  Aabb far_box;
+  far_box.min = Vec3(5000.0, 0.0, 0.0);
+  far_box.max = Vec3(5001.0, 1.0, 1.0);
+  Scene far = makeEmptyScene("far", far_box, 0.1, 0.0);
+  ASSERT_TRUE(markOccupied(far, Vec3(5000.55, 0.55, 0.55)));
+  const go_feap::common::Status st = saveSceneBt(far, d.file("far.bt"));
+  ASSERT_FALSE(st);
+  expectErrorMentions(st.message(), {"far.bt", "scene 'far' has an occupied voxel at (5000.55", "beyond OctoMap's reach of 3276.8 m"});
+  Scene near = makeEmptyScene("near", Aabb{Vec3(3000.0, 0.0, 0.0), Vec3(3001.0, 1.0, 1.0)}, 0.1, 0.0);
+  ASSERT_TRUE(markOccupied(near, Vec3(3000.55, 0.55, 0.55)));
+  ASSERT_TRUE(saveSceneBt(near, d.file("near.bt")));
+  auto back = loadOctomap(d.file("near.bt"));
+  ASSERT_TRUE(back) << back.message();
+  ASSERT_EQ(back->size(), 1u);
+  EXPECT_LT((back->front().centre - Vec3(3000.55, 0.55, 0.55)).norm(), 1e-3);
+}
+
 TEST(SceneYaml, GroundPlaneFillsTheBoxFloorLayer) {
   TempDir d;
   pcl::PointCloud<pcl::PointXYZ> cloud;
