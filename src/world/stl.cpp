@@ -1,3 +1,5 @@
+#include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -31,8 +33,16 @@ R parseBinary(const std::string& path, const std::string& bytes, std::uint32_t c
   return mesh;
 }
 
-// The words of an ASCII STL, each with the number of the line it stands on. STL separates its words by any
-// white space, so a facet may span lines or share one.
+// `word` in lower case (ASCII letters only).
+std::string lowered(std::string word) {
+  for (char& c : word)
+    if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
+  return word;
+}
+
+// The words of an ASCII STL, each with the number of the line it stands on. STL separates its
+// words by any white space, so a facet may span lines or share one; some writers put its keywords in upper
+// case (SOLID, FACET NORMAL): keywords are compared in lower case.
 class StlWords {
  public:
   explicit StlWords(const std::string& text) : text_(text) {}
@@ -56,8 +66,8 @@ class StlWords {
   void skipName(const char* stop) {
     std::string word;
     while (words_ >> word)
-      if (word == stop) {
-        pending_ = std::move(word);
+      if (lowered(word) == stop) {
+        pending_ = stop;
         return;  // the rest of the line follows it
       }
   }
@@ -94,29 +104,30 @@ R parseAscii(const std::string& path, const std::string& text) {
     return R::Error(path + ": truncated ASCII STL (it ends inside facet " + std::to_string(mesh.triangleCount()) +
                     " or before 'endsolid')");
   };
+  auto is = [&](const std::string& keyword) { return lowered(word) == keyword; };  // SOLID as solid
   auto got = [&](const std::string& want) { return "expected " + want + ", got '" + word + "'"; };
   while (words.next(word)) {
-    if (word != "solid") return corrupt(got(mesh.vertices.empty() ? "'solid'" : "'solid' or the end of the file"));
+    if (!is("solid")) return corrupt(got(mesh.vertices.empty() ? "'solid'" : "'solid' or the end of the file"));
     words.skipName("facet");
     while (true) {
       if (!words.next(word)) return truncated();
-      if (word == "endsolid") break;
-      if (word != "facet") return corrupt(got("'facet' or 'endsolid'"));
+      if (is("endsolid")) break;
+      if (!is("facet")) return corrupt(got("'facet' or 'endsolid'"));
       const std::size_t facet = mesh.triangleCount();
       double normal = 0.0;  // not used: the triangle's winding is what the voxelizer needs, not its normal
       for (const std::string want : {"normal", "", "", "", "outer", "loop"}) {
         if (!words.next(word)) return truncated();
         if (want.empty()) {
           if (std::string e = numberProblem(word, normal); !e.empty()) return corrupt("facet " + std::to_string(facet) + " has " + e);
-        } else if (word != want) {
+        } else if (!is(want)) {
           return corrupt(got("'" + want + "'"));
         }
       }
       for (int k = 0; k < 3; ++k) {
         if (!words.next(word)) return truncated();
-        if (word == "endloop")
+        if (is("endloop"))
           return corrupt("facet " + std::to_string(facet) + " has " + std::to_string(k) + " vertices, expected 3");
-        if (word != "vertex") return corrupt(got("'vertex'"));
+        if (!is("vertex")) return corrupt(got("'vertex'"));
         Vec3 p;
         for (int a = 0; a < 3; ++a) {
           if (!words.next(word)) return truncated();
@@ -130,9 +141,9 @@ R parseAscii(const std::string& path, const std::string& text) {
       }
       for (const char* want : {"endloop", "endfacet"}) {
         if (!words.next(word)) return truncated();
-        if (word == "vertex" && std::string(want) == "endloop")
+        if (is("vertex") && std::string(want) == "endloop")
           return corrupt("facet " + std::to_string(facet) + " has more than 3 vertices, expected 3");
-        if (word != want) return corrupt(got("'" + std::string(want) + "'"));
+        if (!is(want)) return corrupt(got("'" + std::string(want) + "'"));
       }
     }
     words.skipName("solid");
@@ -159,11 +170,18 @@ common::Result<TriangleMesh> loadStl(const std::string& path) {
       return result;
     }
   }
-  // Not a well-formed binary file: ASCII if it says so, else a broken binary file.
+  // Not a well-formed binary file: ASCII if it says so and is text (no control bytes but white space), else a
+  // broken binary file. (A binary file's 80-byte header may start with 'solid' too; an ASCII one was
+  // recognised by 'facet' in it, so an empty solid was "too short" and a binary header saying 'solid ...
+  // facet' gave "truncated ASCII STL".)
   const auto first = bytes.find_first_not_of(" \t\r\n");
-  if (first != std::string::npos && bytes.compare(first, 5, "solid") == 0 &&
-      bytes.find("facet") != std::string::npos) {
-    result = parseAscii(path, bytes);
+  const std::size_t text_end = bytes.find_last_not_of('\0') + 1;  // NUL padding after the text is no binary sign
+  const bool text = std::none_of(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(text_end), [](char c) {
+    const auto b = static_cast<unsigned char>(c);
+    return (b < 0x20 && !std::isspace(b)) || b == 0x7f;
+  });
+  if (first != std::string::npos && lowered(bytes.substr(first, 5)) == "solid" && text) {
+    result = parseAscii(path, bytes.substr(0, text_end));
   } else if (bytes.size() >= 84) {
     std::uint32_t count = 0;
     std::memcpy(&count, bytes.data() + 80, 4);

@@ -600,6 +600,30 @@ TEST(BadInput, TruncatedAndCorruptStl) {
   auto j = loadStl(d.file("ajunk.stl"));
   ASSERT_FALSE(j);
   expectErrorMentions(j.message(), {"ajunk.stl", "non-numeric"});
+  // A binary STL whose header says 'solid ... facet', cut short: a binary file's problem, not ASCII's.
+  writeBinaryStl(d.file("solidbin.stl"), cubeTriangles(0, 1), "solid cube facet");
+  {
+    std::ifstream in(d.file("solidbin.stl"), std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  writeText(d.file("solidbin.stl"), bytes.substr(0, bytes.size() - 30));
+  auto sb = loadStl(d.file("solidbin.stl"));
+  ASSERT_FALSE(sb);
+  expectErrorMentions(sb.message(), {"solidbin.stl", "truncated or corrupt binary STL", "12 triangles"});
+  // An empty solid has no triangles (it was "too short for an STL file").
+  writeText(d.file("empty.stl"), "solid x\nendsolid x\n");
+  auto es = loadStl(d.file("empty.stl"));
+  ASSERT_FALSE(es);
+  expectErrorMentions(es.message(), {"empty.stl", "the mesh has no triangles"});
+  // Keywords in upper case load as in lower case (they were read as a binary file of 1.3e9 triangles).
+  std::string upper = ascii;
+  for (char& ch : upper) ch = static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
+  writeText(d.file("upper.stl"), upper);
+  auto up = loadStl(d.file("upper.stl"));
+  ASSERT_TRUE(up) << up.message();
+  auto low = loadStl(d.file("full.stl"));
+  ASSERT_TRUE(low) << low.message();
+  EXPECT_EQ(up->vertices, low->vertices);
   auto tri = cubeTriangles(0, 1);
   tri[4].y() = std::numeric_limits<double>::quiet_NaN();
   writeBinaryStl(d.file("nan.stl"), tri);
