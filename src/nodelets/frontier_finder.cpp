@@ -38,7 +38,7 @@ class FrontierFinder : public nodelet::Nodelet {
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
     for (const common::Status& st : {config_.validate(), omission_.validate()})
       ros_params::requireOrThrow(st.ok(), getName(), st.message());
-    ros_params::requireOrThrow(box_.valid(), getName(), "parameter 'exploration_box' needs min < max");
+    ros_params::requireBox(box_, p, getName());
     // A finder loaded before this one under the same name (the nodelet reloaded into a running system)
     // reserved the ids below ~id_reserved: this one's begin there.
     int reserved = 0;

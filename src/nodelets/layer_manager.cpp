@@ -45,7 +45,7 @@ class LayerManager : public nodelet::Nodelet {
     config::readBox(p, box_);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
     ros_params::requireOrThrow(config_.validate().ok(), getName(), config_.validate().message());
-    ros_params::requireOrThrow(box_.valid(), getName(), "parameter 'exploration_box' needs min < max");
+    ros_params::requireBox(box_, p, getName());
     ros_params::requireOrThrow(rate_ > 0.0 && rate_ <= 1000.0, getName(),
                                "parameter '" + p.fullName("layers/rate") + "' must be in (0, 1000] Hz");
     ros_params::requireOrThrow(max_odom_step_ > 0.0 && std::isfinite(max_odom_step_), getName(),

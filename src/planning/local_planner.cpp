@@ -30,7 +30,7 @@ bool samePose(const Vec3& p, double yaw, const Viewpoint& vp, const LocalPlanner
 
 Status LocalPlannerConfig::validate() const {
   auto err = [](const char* key, const char* why) {
-    return Status::Error(std::string("local_planner: ") + key + " " + why);
+    return Status::Error(std::string("local: ") + key + " " + why);  // the keys are local/*
   };
   if (k_frontiers < 1) return err("k_frontiers", "must be >= 1");
   if (top_k < 1) return err("top_k", "must be >= 1");

@@ -68,6 +68,12 @@ void requireOrThrow(bool ok, const std::string& nodelet, const std::string& what
   throw std::runtime_error(nodelet + ": " + what);
 }
 
+void requireBox(const common::Aabb& box, const ParamReader& p, const std::string& nodelet) {
+  requireOrThrow(box.valid() && box.min.allFinite() && box.max.allFinite(), nodelet,
+                 "parameters '" + p.fullName("exploration_box/min") + "' and '" + p.fullName("exploration_box/max") +
+                     "' must be finite, with min < max in every axis");
+}
+
 void stopManager(const std::string& nodelet, const std::string& what) {
   ROS_FATAL_STREAM(nodelet << ": " << what << "; the parameters of this nodelet and of the map's mapper conflict: "
                            << "stopping the nodelet manager");

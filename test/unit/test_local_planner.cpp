@@ -52,7 +52,7 @@ TEST(LocalPlannerConfig, ValidateNamesTheBadKey) {
     mutate(c);
     const auto s = c.validate();
     EXPECT_FALSE(s.ok()) << key;
-    EXPECT_NE(s.message().find(key), std::string::npos) << s.message();
+    EXPECT_EQ(s.message().rfind(std::string("local: ") + key + " ", 0), 0u) << s.message();  // as local/<key>
   };
   expectBad("k_frontiers", [](LocalPlannerConfig& c) { c.k_frontiers = 0; });
   expectBad("top_k", [](LocalPlannerConfig& c) { c.top_k = 0; });

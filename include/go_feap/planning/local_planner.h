@@ -74,7 +74,7 @@ struct LocalPlannerConfig {
   /// is free, a right angle costs |v| / a_max, turning back 2 |v| / a_max (0 = the velocity is ignored).
   double a_max = 0.0;
 
-  /// Checks every key; the message names the bad one, e.g. "local_planner: top_k must be >= 1".
+  /// Checks every key; the message names the bad one, e.g. "local: top_k must be >= 1".
   common::Status validate() const;
 };
 

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "go_feap/common/grid.h"
+
 namespace go_feap::ros_params {
 
 class ParamReader {
@@ -49,6 +51,10 @@ class ParamReader {
 /// Throws std::runtime_error with `what` (after logging it as fatal) when `ok` is false:
 /// a nodelet whose parameters are wrong does not start.
 void requireOrThrow(bool ok, const std::string& nodelet, const std::string& what);
+
+/// requireOrThrow() for the exploration box read by `p`: finite, with min < max in every axis. An infinite
+/// one passed min < max, and the layer manager's bands came out NaN, which every nodelet refused.
+void requireBox(const common::Aabb& box, const ParamReader& p, const std::string& nodelet);
 
 /// For a parameter found wrong only when another nodelet's values come (a reader's clearance past the
 /// mapper's esdf/max_distance, known once the map arrives): logs `what` as fatal and shuts this process's
