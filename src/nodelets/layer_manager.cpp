@@ -51,6 +51,7 @@ class LayerManager : public nodelet::Nodelet {
     ros_params::requireOrThrow(max_odom_step_ > 0.0 && std::isfinite(max_odom_step_), getName(),
                                "parameter '" + p.fullName("metrics/max_odom_step") + "' must be finite and > 0");
 
+    pending_trigger_ = auto_start_;  // before any callback can run (they read it under the mutex)
     layer_pub_ = nh.advertise<LayerBounds>("layer", 1, /*latch=*/true);
     status_pub_ = nh.advertise<ExplorationStatus>("status", 5, /*latch=*/true);
     blacklist_pub_ = nh.advertise<std_msgs::UInt32MultiArray>("blacklist", 1, /*latch=*/true);
@@ -62,7 +63,6 @@ class LayerManager : public nodelet::Nodelet {
     goal_sub_ = ros_guard::subscribe(nh, getName(), "move_base_simple/goal", 1, &LayerManager::onGoal, this);
     trigger_srv_ = ros_guard::service(nh, getName(), "trigger", &LayerManager::onTrigger, this);
     timer_ = ros_guard::timer(nh, getName(), ros::Duration(1.0 / rate_), &LayerManager::onTimer, this);
-    if (auto_start_) pending_trigger_ = true;
   }
 
   void onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
