@@ -113,6 +113,12 @@ std::vector<std::size_t> occupiedSet(const Scene& s) {
   return v;
 }
 
+// The whole of the file at `path`.
+std::string fileBytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
 void expectErrorMentions(const std::string& message, const std::vector<std::string>& words) {
   for (const auto& w : words) EXPECT_NE(message.find(w), std::string::npos) << "'" << w << "' not in: " << message;
 }
@@ -570,11 +576,7 @@ TEST(BadInput, MissingFileAndUnknownExtension) {
 TEST(BadInput, TruncatedAndCorruptStl) {
   TempDir d;
   writeBinaryStl(d.file("full.stl"), cubeTriangles(0, 1), "binary header");
-  std::string bytes;
-  {
-    std::ifstream in(d.file("full.stl"), std::ios::binary);
-    bytes.assign(std::istreambuf_iterator<char>(in), {});
-  }
+  std::string bytes = fileBytes(d.file("full.stl"));
   writeText(d.file("trunc.stl"), bytes.substr(0, bytes.size() - 30));
   auto a = loadStl(d.file("trunc.stl"));
   ASSERT_FALSE(a);
@@ -602,10 +604,7 @@ TEST(BadInput, TruncatedAndCorruptStl) {
   expectErrorMentions(j.message(), {"ajunk.stl", "non-numeric"});
   // A binary STL whose header says 'solid ... facet', cut short: a binary file's problem, not ASCII's.
   writeBinaryStl(d.file("solidbin.stl"), cubeTriangles(0, 1), "solid cube facet");
-  {
-    std::ifstream in(d.file("solidbin.stl"), std::ios::binary);
-    bytes.assign(std::istreambuf_iterator<char>(in), {});
-  }
+  bytes = fileBytes(d.file("solidbin.stl"));
   writeText(d.file("solidbin.stl"), bytes.substr(0, bytes.size() - 30));
   auto sb = loadStl(d.file("solidbin.stl"));
   ASSERT_FALSE(sb);
@@ -637,11 +636,7 @@ TEST(BadInput, TruncatedCorruptNanAndEmptyClouds) {
   pcl::PointCloud<pcl::PointXYZ> cloud;
   for (int i = 0; i < 100; ++i) cloud.push_back(pcl::PointXYZ(0.1f * i, 0.f, 1.f));
   pcl::io::savePCDFileBinary(d.file("ok.pcd"), cloud);
-  std::string bytes;
-  {
-    std::ifstream in(d.file("ok.pcd"), std::ios::binary);
-    bytes.assign(std::istreambuf_iterator<char>(in), {});
-  }
+  std::string bytes = fileBytes(d.file("ok.pcd"));
   writeText(d.file("trunc.pcd"), bytes.substr(0, bytes.size() - 200));
   auto a = loadPointCloud(d.file("trunc.pcd"));
   ASSERT_FALSE(a);
@@ -788,11 +783,7 @@ TEST(BadInput, CorruptAndTruncatedOctomap) {
   octomap::OcTree tree(0.1);
   for (double x = 0.05; x < 2.0; x += 0.1) tree.updateNode(octomap::point3d(x, 0.37, 0.71), true);
   ASSERT_TRUE(tree.writeBinary(d.file("ok.bt")));
-  std::string bytes;
-  {
-    std::ifstream in(d.file("ok.bt"), std::ios::binary);
-    bytes.assign(std::istreambuf_iterator<char>(in), {});
-  }
+  std::string bytes = fileBytes(d.file("ok.bt"));
   writeText(d.file("trunc.bt"), bytes.substr(0, bytes.size() - 20));
   auto a = loadOctomap(d.file("trunc.bt"));
   ASSERT_FALSE(a);
