@@ -48,6 +48,7 @@ struct CloudHeader {
   bool data_line = false;  ///< PCD: a DATA line came
   bool fields = false;     ///< PCD: a FIELDS line came before DATA
   std::string bad_line;    ///< PCD: the first header line that is no PCD header line, with its number ("" if none)
+  std::vector<std::pair<char, int>> columns;  ///< PCD: each value of a row's TYPE and SIZE (fields by COUNT)
   std::vector<PlyElement> elements;  ///< PLY
 };
 
@@ -87,6 +88,7 @@ CloudHeader readCloudHeader(const std::string& path, const std::string& kind) {
   std::string line;
   double width = 0.0, height = 1.0;
   std::vector<double> sizes, counts;
+  std::vector<char> types;
   auto numbers = [](std::istringstream& s) {
     std::vector<double> out;
     double v = 0.0;
@@ -109,6 +111,7 @@ CloudHeader readCloudHeader(const std::string& path, const std::string& kind) {
         break;
       }
       if (key == "FIELDS") h.fields = true;
+      else if (key == "TYPE") for (std::string t; words >> t;) types.push_back(t.size() == 1 ? t[0] : '?');
       else if (key == "SIZE") sizes = numbers(words);
       else if (key == "COUNT") counts = numbers(words);
       else if (key == "WIDTH") words >> width;
@@ -150,6 +153,9 @@ CloudHeader readCloudHeader(const std::string& path, const std::string& kind) {
       const double count = f < counts.size() ? counts[f] : 1.0;
       h.per_point += sizes[f] * count;
       h.values += count;
+      for (double c = 0.0; c < count && h.columns.size() < 4096; c += 1.0)  // (a row of more is refused anyway)
+        h.columns.emplace_back(f < types.size() ? types[f] : '?',
+                               sizes[f] >= 1.0 && sizes[f] <= 8.0 ? static_cast<int>(sizes[f]) : 0);
     }
   }
   const double header_end = in ? static_cast<double>(in.tellg()) : file_size;
@@ -158,11 +164,15 @@ CloudHeader readCloudHeader(const std::string& path, const std::string& kind) {
   return h;
 }
 
+// Whether the value `v` of a row's `column` fits its type: "" when it does, else why not. Nothing checked: "".
+using ValueCheck = std::function<std::string(std::size_t column, double v)>;
+
 // Walks the non-blank text rows from `start`, handing `row` each row's index, its number of words and its
-// first word that is no number ("" when all are). Stops at the first problem `row` returns, and returns
-// it; "" when every row passed, with their number in `rows`.
+// first word that is no number, or no value `check` takes, quoted with why ("" when all are good). Stops at
+// the first problem `row` returns, and returns it; "" when every row passed, with their number in `rows`.
 std::string scanRows(const std::string& path, std::streamoff start, std::size_t& rows,
-                     const std::function<std::string(std::size_t, double, const std::string&)>& row) {
+                     const std::function<std::string(std::size_t, double, const std::string&)>& row,
+                     const ValueCheck& check = nullptr) {
   std::ifstream in(path, std::ios::binary);
   in.seekg(start);
   std::string line, word;
@@ -175,8 +185,10 @@ std::string scanRows(const std::string& path, std::streamoff start, std::size_t&
     std::string bad;
     while (words >> word) {
       char* end = nullptr;
-      std::strtod(word.c_str(), &end);
-      if (bad.empty() && end != word.c_str() + word.size()) bad = word;
+      const double v = std::strtod(word.c_str(), &end);
+      if (bad.empty() && end != word.c_str() + word.size()) bad = "'" + word + "', not a number";
+      if (bad.empty() && check)
+        if (const std::string why = check(static_cast<std::size_t>(n), v); !why.empty()) bad = "'" + word + "', " + why;
       n += 1.0;
     }
     if (std::string problem = row(rows, n, bad); !problem.empty()) return problem;
@@ -185,12 +197,12 @@ std::string scanRows(const std::string& path, std::streamoff start, std::size_t&
   return "";
 }
 
-// A text row's problem: `bad` (its first word that is no number) or a count `n` of words other than
+// A text row's problem: `bad` (its first bad word, quoted with why) or a count `n` of words other than
 // `want`, named as `prefix` + `index`; "" for a good row (the message is built only for a bad one).
 std::string rowProblem(const std::string& prefix, long long index, double n, const std::string& bad, double want) {
   if (bad.empty() && n == want) return "";
   const std::string where = prefix + std::to_string(index) + " has ";
-  if (!bad.empty()) return where + "'" + bad + "', not a number)";
+  if (!bad.empty()) return where + bad + ")";
   return where + std::to_string(std::llround(n)) + " values, the header " + std::to_string(std::llround(want)) + ")";
 }
 
@@ -201,9 +213,23 @@ std::string asciiRowsProblem(const std::string& path, const CloudHeader& h) {
   if (h.data != "ascii" || h.data_start < 0) return "";
   const std::string prefix = path + ": corrupt PCD file (row ";
   std::size_t rows = 0;
-  const std::string problem = scanRows(path, h.data_start, rows, [&](std::size_t r, double n, const std::string& bad) {
-    return rowProblem(prefix, static_cast<long long>(r) + 1, n, bad, h.values);
-  });
+  // Integer fields take whole numbers in their range: PCL wrapped 300 in a U1 field to 44 and cut 2.7 to 2.
+  const ValueCheck fits = [&](std::size_t column, double v) -> std::string {
+    if (column >= h.columns.size()) return "";
+    const auto [type, size] = h.columns[column];
+    if ((type != 'U' && type != 'I') || size == 0) return "";
+    const double bits = 8.0 * size;
+    const double lo = type == 'U' ? 0.0 : -std::pow(2.0, bits - 1.0);
+    const double hi = type == 'U' ? std::pow(2.0, bits) - 1.0 : std::pow(2.0, bits - 1.0) - 1.0;
+    if (v == std::floor(v) && v >= lo && v <= hi) return "";
+    return std::string("not a whole number in the range of its field's type ") + type + std::to_string(size);
+  };
+  const std::string problem = scanRows(
+      path, h.data_start, rows,
+      [&](std::size_t r, double n, const std::string& bad) {
+        return rowProblem(prefix, static_cast<long long>(r) + 1, n, bad, h.values);
+      },
+      fits);
   if (!problem.empty()) return problem;
   if (static_cast<double>(rows) != h.points)
     return path + ": corrupt PCD file (its header declares " + std::to_string(std::llround(h.points)) + " points, it has " +

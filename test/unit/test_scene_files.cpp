@@ -708,6 +708,23 @@ TEST(BadInput, CloudHeadersDeclaringMorePointsThanTheFileHolds) {
   auto words = loadPointCloud(d.file("words.pcd"));
   ASSERT_FALSE(words);
   expectErrorMentions(words.message(), {"words.pcd", "row 2 has 'foo', not a number"});
+  // Integer fields take whole numbers within their type: PCL wrapped 300 in a U1 field to 44, cut 2.7 to 2.
+  const std::string int_head = pcd_head + "SIZE 1 2 4\nTYPE U I I\nCOUNT 1 1 1\nWIDTH 2\nHEIGHT 1\n"
+                                          "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA ascii\n";
+  for (const auto& [row, why] : std::vector<std::pair<std::string, std::string>>{
+           {"300 1 1", "'300', not a whole number in the range of its field's type U1"},
+           {"2.7 1 1", "'2.7', not a whole number in the range of its field's type U1"},
+           {"-1 1 1", "'-1', not a whole number in the range of its field's type U1"},
+           {"1 40000 1", "'40000', not a whole number in the range of its field's type I2"}}) {
+    writeText(d.file("ints.pcd"), int_head + "1 -2 3\n" + row + "\n");
+    auto ints = loadPointCloud(d.file("ints.pcd"));
+    ASSERT_FALSE(ints) << row << ": " << ints->back().transpose();
+    expectErrorMentions(ints.message(), {"ints.pcd", "row 2 has " + why});
+  }
+  writeText(d.file("ints.pcd"), int_head + "1 -2 3\n255 -32768 2147483647\n");
+  auto good = loadPointCloud(d.file("ints.pcd"));
+  ASSERT_TRUE(good) << good.message();
+  EXPECT_EQ(*good, (std::vector<Vec3>{Vec3(1, -2, 3), Vec3(255, -32768, 2147483647)}));
   writeText(d.file("short.pcd"), pcd_head + "SIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 3\nHEIGHT 1\n"
                                             "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 3\nDATA ascii\n1.00 1.00 1.00\n2.00 2.00 2.00\n");
   auto few = loadPointCloud(d.file("short.pcd"));
