@@ -16,20 +16,28 @@ using common::Status;
 
 Status GlobalPlannerConfig::validate() const {
   auto err = [](const char* key, const char* why) {
-    return Status::Error(std::string("exploration: ") + key + " " + why);
+    return Status::Error(std::string("global: ") + key + " " + why);  // the keys are global/*
   };
   if (!(s_near > 0.0 && std::isfinite(s_near))) return err("s_near", "must be > 0");
   if (n_min_tsp < 1) return err("n_min_tsp", "must be >= 1");
   if (n_max_tsp < n_min_tsp) return err("n_max_tsp", "must be >= n_min_tsp");
   if (!(lambda >= 0.0 && std::isfinite(lambda))) return err("lambda", "must be >= 0");
   if (!(v_max > 0.0 && std::isfinite(v_max))) return err("v_max", "must be > 0");
-  if (!(reuse_cell >= 0.0 && std::isfinite(reuse_cell))) return err("reuse_cell", "must be finite and >= 0");
+  // 0 (off) or at least a millimetre: a cell of 1e-310 m made cell indices of inf, cast to integers.
+  if (!(reuse_cell == 0.0 || (reuse_cell >= 1e-3 && std::isfinite(reuse_cell))))
+    return err("reuse_cell", "must be 0 or finite and >= 0.001");
   if (!(reuse_time >= 0.0 && std::isfinite(reuse_time))) return err("reuse_time", "must be finite and >= 0");
   if (!(rest_weight >= 0.0 && std::isfinite(rest_weight))) return err("rest_weight", "must be finite and >= 0");
   if (rest_frontiers < 1) return err("rest_frontiers", "must be >= 1");
   if (max_exact < 0 || max_exact > kMaxExactFrontiers)
     return err("max_exact", ("must be in [0, " + std::to_string(kMaxExactFrontiers) + "]").c_str());
-  if (Status s = omission.validate(); !s) return Status::Error("exploration/" + s.message());
+  // The rest leg's node is solved with the candidates: 16 of them and it were 17, past the exact solver,
+  // and every tour went to the heuristic without a word.
+  if (rest_weight > 0.0 && max_exact > kMaxExactFrontiers - 1)
+    return err("max_exact", ("must be <= " + std::to_string(kMaxExactFrontiers - 1) +
+                             " with a rest leg (rest_weight > 0): its node is solved with the candidates")
+                                .c_str());
+  if (Status s = omission.validate(); !s) return s;  // "omission: ...", as its keys omission/*
   return Status::Ok();
 }
 

@@ -100,16 +100,22 @@ TEST(GlobalPlannerConfig, ValidateNamesTheKey) {
     const char* message;
   };
   const Row rows[] = {
-      {[](GlobalPlannerConfig& c) { c.s_near = 0.0; }, "exploration: s_near must be > 0"},
-      {[](GlobalPlannerConfig& c) { c.n_min_tsp = 0; }, "exploration: n_min_tsp must be >= 1"},
-      {[](GlobalPlannerConfig& c) { c.n_max_tsp = 2; }, "exploration: n_max_tsp must be >= n_min_tsp"},
-      {[](GlobalPlannerConfig& c) { c.lambda = -0.1; }, "exploration: lambda must be >= 0"},
-      {[](GlobalPlannerConfig& c) { c.v_max = 0.0; }, "exploration: v_max must be > 0"},
-      {[](GlobalPlannerConfig& c) { c.max_exact = 17; }, "exploration: max_exact must be in [0, 16]"},
-      {[](GlobalPlannerConfig& c) { c.rest_weight = -1.0; }, "exploration: rest_weight must be finite and >= 0"},
-      {[](GlobalPlannerConfig& c) { c.rest_weight = std::nan(""); }, "exploration: rest_weight must be finite and >= 0"},
-      {[](GlobalPlannerConfig& c) { c.rest_frontiers = 0; }, "exploration: rest_frontiers must be >= 1"},
-      {[](GlobalPlannerConfig& c) { c.omission.t_max = -1.0; }, "exploration/omission: t_max must be > 0"},
+      {[](GlobalPlannerConfig& c) { c.s_near = 0.0; }, "global: s_near must be > 0"},
+      {[](GlobalPlannerConfig& c) { c.n_min_tsp = 0; }, "global: n_min_tsp must be >= 1"},
+      {[](GlobalPlannerConfig& c) { c.n_max_tsp = 2; }, "global: n_max_tsp must be >= n_min_tsp"},
+      {[](GlobalPlannerConfig& c) { c.lambda = -0.1; }, "global: lambda must be >= 0"},
+      {[](GlobalPlannerConfig& c) { c.v_max = 0.0; }, "global: v_max must be > 0"},
+      {[](GlobalPlannerConfig& c) { c.max_exact = 17; }, "global: max_exact must be in [0, 16]"},
+      {[](GlobalPlannerConfig& c) {  // with a rest leg: 17 nodes
+         c.max_exact = 16;
+         c.rest_weight = 1.0;
+       },
+       "global: max_exact must be <= 15 with a rest leg (rest_weight > 0): its node is solved with the candidates"},
+      {[](GlobalPlannerConfig& c) { c.reuse_cell = 1e-310; }, "global: reuse_cell must be 0 or finite and >= 0.001"},
+      {[](GlobalPlannerConfig& c) { c.rest_weight = -1.0; }, "global: rest_weight must be finite and >= 0"},
+      {[](GlobalPlannerConfig& c) { c.rest_weight = std::nan(""); }, "global: rest_weight must be finite and >= 0"},
+      {[](GlobalPlannerConfig& c) { c.rest_frontiers = 0; }, "global: rest_frontiers must be >= 1"},
+      {[](GlobalPlannerConfig& c) { c.omission.t_max = -1.0; }, "omission: t_max must be > 0"},
   };
   for (const Row& r : rows) {
     GlobalPlannerConfig c;
@@ -449,5 +455,5 @@ TEST(PlanTour, EmptyAndBadInput) {
   c.lambda = -1.0;
   result = planTour(fy.frontiers, fy.distances(), c);
   ASSERT_FALSE(result.ok());
-  EXPECT_EQ(result.message(), "exploration: lambda must be >= 0");
+  EXPECT_EQ(result.message(), "global: lambda must be >= 0");
 }

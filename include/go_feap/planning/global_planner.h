@@ -35,8 +35,8 @@ struct GlobalPlannerConfig {
   int rest_frontiers = 3;  ///< frontiers outside the candidates the rest leg may end at (>= 1)
   OmissionConfig omission;
 
-  /// Checks every key; the message names the bad one, e.g. "exploration: lambda must be >= 0"
-  /// or "exploration/omission: t_max must be > 0".
+  /// Checks every key; the message names the bad one as its section does, e.g. "global: lambda must be
+  /// >= 0" or "omission: t_max must be > 0".
   common::Status validate() const;
 };
 
