@@ -64,6 +64,8 @@ common::Status OccupancyConfig::validate() const {
   if (!(min_range >= 0.0)) return bad("min_range", "must be >= 0");
   if (!(max_range > min_range && std::isfinite(max_range))) return bad("max_range", "must be finite and > min_range");
   if (skip_pixel < 1) return bad("skip_pixel", "must be >= 1");
+  if (!(max_plausible_depth > max_range && std::isfinite(max_plausible_depth)))
+    return bad("max_plausible_depth", "must be finite and > max_range");
   // One byte per voxel: log-odds * 50 must fit in [-127, 127].
   if (logit(p_max) * OccupancyMap::kScaleLimit() > 127.0 || logit(p_min) * OccupancyMap::kScaleLimit() < -127.0)
     return bad("p_min/p_max", "must lie within [0.08, 0.92] (one byte of log-odds per voxel)");
@@ -134,6 +136,23 @@ common::Status OccupancyMap::checkFrame(const cv::Mat& depth, const DepthIntrins
   if (depth.cols != K.width || depth.rows != K.height)
     return common::Status::Error("depth image is " + std::to_string(depth.cols) + "x" + std::to_string(depth.rows) +
                                  " but camera_info says " + std::to_string(K.width) + "x" + std::to_string(K.height));
+  if (depth.type() == CV_32FC1) {
+    std::size_t measured = 0, beyond = 0;
+    for (int v = 0; v < depth.rows; v += 8)
+      for (int u = 0; u < depth.cols; u += 8) {
+        const float d = depth.at<float>(v, u);
+        if (!(d > 0.0f) || !std::isfinite(d)) continue;
+        ++measured;
+        beyond += d > config_.max_plausible_depth;
+      }
+    if (2 * beyond > measured) {
+      std::ostringstream why;
+      why << "depth image: " << beyond << " of " << measured << " sampled depths are beyond "
+          << config_.max_plausible_depth << " m (occupancy/max_plausible_depth): millimetres in a 32FC1 image, "
+          << "which holds metres (REP 118)?";
+      return common::Status::Error(why.str());
+    }
+  }
   return K.validate();
 }
 

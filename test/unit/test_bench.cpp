@@ -225,7 +225,8 @@ TEST(Bench, ResultsFoldersHoldEachRunOnceAndTheTablesWhole) {
                                            "  box: {min: [-5, -3, 0], max: [5, 3, 3]}\n"
                                            "  start: {position: [" << s.x() << ", " << s.y() << ", " << s.z()
                                         << "], yaw: 0}\n  ground_plane: false\n";
-  std::ofstream(dir / "named.yaml") << "scene:\n  name: caf\xe9\n  generator: maze\n"
+  // A name in UTF-8 (a Latin-1 byte is refused by the scene loader: it aborted go_feap_scene's JSON).
+  std::ofstream(dir / "named.yaml") << "scene:\n  name: caf\xc3\xa9\n  generator: maze\n"
                                        "  maze: {size_x: 10.0, size_y: 6.0, height: 3.0, cell_size: 2.0}\n";
   const std::string bench = GO_FEAP_BENCH_BIN, out = (dir / "out").string();
   const auto [rc, said] = runCommand("timeout 300 " + bench + " --scene " + (dir / "from_file.yaml").string() + "," +
@@ -245,7 +246,7 @@ TEST(Bench, ResultsFoldersHoldEachRunOnceAndTheTablesWhole) {
   EXPECT_NE(table.find("\"scene\": \"from_file\""), std::string::npos) << table;
   EXPECT_NE(table.find("\"runs\": 1"), std::string::npos) << table;
   EXPECT_NE(table.find("\"runs\": 2"), std::string::npos) << table;
-  EXPECT_NE(table.find("caf\xef\xbf\xbd"), std::string::npos) << "the bad byte replaced by U+FFFD";
+  EXPECT_NE(table.find("\"scene\": \"caf\xc3\xa9\""), std::string::npos) << table;
   EXPECT_TRUE(fs::is_regular_file(fs::path(out) / "table.md"));
   EXPECT_TRUE(fs::is_regular_file(fs::path(out) / "comparison.json"));
   // Into the same folder with one planner: nothing compared, no comparison.json left over. One run with two

@@ -299,6 +299,20 @@ TEST(OccupancyMap, BadFramesAreRefusedAndChangeNothing) {
   cv::Mat ok(cam.height, cam.width, CV_32FC1, cv::Scalar(2.0f));
   auto c = m.integrate(ok, K, bad);
   ASSERT_FALSE(c);
+  // Millimetres in a 32FC1 image (REP 118 says metres): every pixel past max_range was cast free through
+  // the walls. Refused when most finite depths are beyond occupancy/max_plausible_depth, even with holes;
+  // +inf (no return) is no depth and does not count.
+  cv::Mat millimetres(cam.height, cam.width, CV_32FC1, cv::Scalar(2000.0f));
+  millimetres(cv::Rect(0, 0, cam.width / 3, cam.height)) = 0.0f;
+  auto mm = m.integrate(millimetres, K, T);
+  ASSERT_FALSE(mm);
+  EXPECT_NE(mm.message().find("beyond 100 m (occupancy/max_plausible_depth): millimetres in a 32FC1 image"),
+            std::string::npos)
+      << mm.message();
+  cv::Mat open_view(cam.height, cam.width, CV_32FC1, cv::Scalar(std::numeric_limits<float>::infinity()));
+  open_view(cv::Rect(0, 0, 8, 8)) = 2.0f;
+  map::VoxelMap open_map(mapConfig(), empty.box);
+  EXPECT_TRUE(open_map.integrate(open_view, K, T));
   // Intrinsics that cannot describe the image: named, and the frame changes nothing.
   for (auto [field, broken] : std::vector<std::pair<std::string, std::function<void(map::DepthIntrinsics&)>>>{
            {"0x0", [](map::DepthIntrinsics& k) { k.width = 0, k.height = 0; }},

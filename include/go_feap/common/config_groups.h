@@ -34,6 +34,7 @@ void readOccupancy(R& p, map::OccupancyConfig& o) {
   p.get("occupancy/p_max", o.p_max).get("occupancy/p_occupied", o.p_occupied);
   p.get("occupancy/min_range", o.min_range).get("occupancy/max_range", o.max_range);
   p.get("occupancy/skip_pixel", o.skip_pixel).get("occupancy/invalid_as_free", o.invalid_as_free);
+  p.get("occupancy/max_plausible_depth", o.max_plausible_depth);
 }
 
 template <class R>

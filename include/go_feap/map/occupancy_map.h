@@ -30,6 +30,9 @@ struct OccupancyConfig {
   double min_range = 0.1;    ///< m, depth below (and -inf): a surface too near to measure, skipped
   double max_range = 4.5;    ///< m, depth beyond (and +inf): free up to max_range, no return
   int skip_pixel = 2;        ///< integrate every skip_pixel-th pixel in u and v
+  /// m: a 32FC1 frame whose finite depths are mostly beyond this is refused (millimetres sent as metres,
+  /// against REP 118: every pixel read past max_range and was cast free through the walls). > max_range.
+  double max_plausible_depth = 100.0;
   bool invalid_as_free = false;  ///< 0/NaN pixels: skipped (REP 117: no measurement), or free up to max_range (a 16UC1 source whose 0 also means nothing in range)
 
   common::Status validate() const;
@@ -76,7 +79,8 @@ class OccupancyMap {
   double probability(const Index3& idx) const;
 
   /// Checks a depth image before integration: CV_32FC1 (m) or CV_16UC1 (mm), size equal to
-  /// the intrinsics', finite positive focal lengths.
+  /// the intrinsics', finite positive focal lengths; a 32FC1 one whose finite positive depths (sampled
+  /// every 8th pixel each way) are more than half beyond max_plausible_depth is refused.
   common::Status checkFrame(const cv::Mat& depth, const DepthIntrinsics& K) const;
 
   /// Integrates one depth image taken from T_W_C (camera optical frame to world). Returns
