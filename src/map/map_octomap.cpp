@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include "go_feap/map/voxel_map.h"
 
@@ -19,16 +20,37 @@ common::Status VoxelMap::saveBt(const std::string& path) const {
         const VoxelState s = occupancy_.state(idx);
         if (s == VoxelState::kUnknown) continue;
         const Vec3 c = geo.indexToCoord(idx);
-        tree.setNodeValue(octomap::point3d(c.x(), c.y(), c.z()), s == VoxelState::kOccupied ? occ : fre,
-                          /*lazy_eval=*/true);
+        // OctoMap's keys reach 2^15 voxels either side of the origin (3.3 km at 0.1 m): a voxel beyond was
+        // dropped and the file written as if whole.
+        octomap::OcTreeKey key;
+        if (!tree.coordToKeyChecked(octomap::point3d(c.x(), c.y(), c.z()), key)) {
+          std::ostringstream why;
+          why << path << ": the map's voxel at (" << c.transpose() << ") lies beyond OctoMap's reach of "
+              << 32768 * geo.resolution() << " m from the origin; nothing written";
+          return common::Status::Error(why.str());
+        }
+        tree.setNodeValue(key, s == VoxelState::kOccupied ? occ : fre, /*lazy_eval=*/true);
       }
     if (z % 16 == 15) tree.prune();  // keeps memory bounded on large maps
   }
   tree.updateInnerOccupancy();
   tree.prune();
-  std::ofstream out(path, std::ios::binary);
-  if (!out || !tree.writeBinary(out) || !out.flush())
-    return common::Status::Error(path + ": cannot write OctoMap file");
+  // Written beside and renamed over: a write that fails half way leaves an earlier file whole.
+  const std::string part = path + ".part";
+  {
+    std::ofstream out(part, std::ios::binary);
+    if (!out || !tree.writeBinary(out) || !out.flush()) {
+      std::error_code ec;
+      std::filesystem::remove(part, ec);
+      return common::Status::Error(path + ": cannot write OctoMap file");
+    }
+  }
+  std::error_code ec;
+  std::filesystem::rename(part, path, ec);
+  if (ec) {
+    std::filesystem::remove(part, ec);
+    return common::Status::Error(path + ": cannot write OctoMap file (" + ec.message() + ")");
+  }
   return common::Status::Ok();
 }
 

@@ -265,7 +265,12 @@ class EsdfMapper : public nodelet::Nodelet {
     last_position_ = T_W_C.translation();
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     ros_conv::publishComputeTime(compute_pub_, "mapping", t0);
-    if (info->frame.pixels_invalid > 0)
+    if (info->frame.pixels_used == 0)  // a covered lens, an emitter off, the wrong topic: mapping has stopped
+      NODELET_WARN_STREAM_THROTTLE(warn_period_, getName() << ": no usable depth pixel in the frame stamped "
+                                                           << msg->header.stamp.toSec() << " s (all "
+                                                           << info->frame.pixels_invalid
+                                                           << " sampled were 0, NaN or nearer than min_range): nothing mapped");
+    else if (info->frame.pixels_invalid > 0)
       NODELET_DEBUG_STREAM_THROTTLE(warn_period_, getName() << ": " << info->frame.pixels_invalid
                                                             << " invalid depth pixels in the latest frame");
 

@@ -336,6 +336,27 @@ TEST(OccupancyMap, BadFramesAreRefusedAndChangeNothing) {
   EXPECT_EQ(m.occupancy().knownCount(), 0u);
 }
 
+// A map beyond OctoMap's keys (2^15 voxels from the origin: 3.3 km at 0.1 m) is not saved: its voxels were
+// dropped and the file written as if whole. A file already at the path is left as it was.
+TEST(OccupancyMap, OctomapSaveOfAMapBeyondItsReachIsRefused) {
+  world::Scene far = world::makeEmptyScene("far", {Vec3(4997, -3, 0), Vec3(5003, 3, 3)}, 0.1, 0.0);
+  sim::DepthCameraConfig cam;
+  map::VoxelMap m(mapConfig(), far.box);
+  const cv::Mat wall(cam.height, cam.width, CV_32FC1, cv::Scalar(2.0f));
+  ASSERT_TRUE(m.integrate(wall, intrinsicsOf(cam.intrinsics()), cameraPose(Vec3(4999, 0, 1.5), 0.0)));
+  ASSERT_GT(m.occupancy().knownCount(), 0u);
+  const std::string path =
+      (std::filesystem::temp_directory_path() / ("go_feap_far_" + std::to_string(::getpid()) + ".bt")).string();
+  std::ofstream(path) << "an earlier map";
+  const common::Status st = m.saveBt(path);
+  ASSERT_FALSE(st);
+  EXPECT_NE(st.message().find("beyond OctoMap's reach of 3276.8 m"), std::string::npos) << st.message();
+  std::ifstream in(path);
+  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(in), {}), "an earlier map");
+  EXPECT_FALSE(std::filesystem::exists(path + ".part"));
+  std::filesystem::remove(path);
+}
+
 TEST(OccupancyMap, OctomapRoundTripKeepsStates) {
   const Fixture f = mazeFixture();
   const sim::DepthRenderer renderer(f.camera, f.scene);
