@@ -313,6 +313,16 @@ class LocalPlanner : public nodelet::Nodelet {
       repeatTarget();
       return;
     }
+    // A tour planned on an older frontier list, none of whose frontiers is in this one (the finder moved on
+    // while the global planner worked): nothing is evaluated, so no attempt fails and no look round starts
+    // (each of its frontiers was reported failed and the vehicle turned in place). The next tour is wanted.
+    if (!tour->frontier_ids.empty() && tour_frontiers.empty()) {
+      map_lock.unlock();
+      NODELET_DEBUG_STREAM(getName() << ": no frontier of the tour is in the latest frontier list: waiting for the next");
+      publishWanted(true);
+      repeatTarget();
+      return;
+    }
     last_plan_ = now;
     // Planned against: tour_wanted answers for the state the plan leaves (a target just chosen or kept is
     // held), or the global planner would plan one more tour before it heard that none is wanted.

@@ -72,6 +72,22 @@ class FrontierPlannerTest : public ::testing::Test {
     target_ = m;
     target_tour_ = tour_;
   }
+  /// Publishes the chain's latest tour (its frontiers exist), changed by `change`, on `pub` every 0.1 s of
+  /// the clock, until `seconds` of it have passed or `done()`.
+  template <class Change, class Done>
+  bool feedTours(ros::Publisher& pub, Change change, double seconds, Done done) {
+    const ros::Time start = ros::Time::now();
+    ros::Time last;
+    return spinUntil([&] {
+      if (last.isZero() || (ros::Time::now() - last).toSec() >= 0.1) {
+        go_feap::GlobalTour tour = *tour_;
+        change(tour);
+        pub.publish(tour);
+        last = ros::Time::now();
+      }
+      return (ros::Time::now() - start).toSec() >= seconds || done();
+    }, 60.0);
+  }
 
   ros::NodeHandle nh_;
   ros::Subscriber frontier_sub_, tour_sub_, odom_sub_, status_sub_, layer_sub_, target_sub_;
@@ -351,17 +367,9 @@ TEST_F(FrontierPlannerTest, LocalPlannerNeverPlansAgainstARepeatedTour) {
     return tour_ && tour_pub.getNumSubscribers() >= 1 && want.getNumPublishers() >= 1 && times.getNumPublishers() >= 1;
   }, 90.0)) << "no tour to feed the probe";
   auto feed = [&](bool repeated, double seconds) {
-    const ros::Time start = ros::Time::now();
-    ros::Time last;
-    return spinUntil([&] {
-      if (last.isZero() || (ros::Time::now() - last).toSec() >= 0.1) {
-        go_feap::GlobalTour tour = *tour_;  // the chain's latest: its frontiers exist
-        tour.repeated = repeated;
-        tour_pub.publish(tour);
-        last = ros::Time::now();
-      }
-      return (ros::Time::now() - start).toSec() >= seconds || (!repeated && probe_target);
-    }, 60.0);
+    return feedTours(
+        tour_pub, [&](go_feap::GlobalTour& tour) { tour.repeated = repeated; }, seconds,
+        [&] { return !repeated && probe_target; });
   };
   ASSERT_TRUE(feed(true, 1.5));
   EXPECT_GE(wanted, 5) << "the probe did not take up the repeated tours";
@@ -372,6 +380,59 @@ TEST_F(FrontierPlannerTest, LocalPlannerNeverPlansAgainstARepeatedTour) {
   // look around should none have one from here; either way a plan was made).
   ASSERT_TRUE(feed(false, 10.0));
   ASSERT_TRUE(probe_target) << "no target from the same tour unmarked";
+  EXPECT_GE(computed, 1);
+}
+
+// A tour none of whose frontiers is in the latest frontier list (planned on an older one) is skipped: no
+// attempt fails and no look round starts (each of its frontiers was reported failed, and the vehicle turned
+// in place), and the next tour is wanted. The chain's own tour is then planned against.
+TEST_F(FrontierPlannerTest, LocalPlannerSkipsATourWhoseFrontiersAreAllGone) {
+  int wanted = 0, computed = 0, failed = 0;
+  go_feap::ViewpointPath::ConstPtr probe_target;
+  ros::Subscriber want = nh_.subscribe<std_msgs::Bool>("probe/tour_wanted", 50, [&](const std_msgs::Bool::ConstPtr& m) {
+    if (m->data) ++wanted;
+  });
+  ros::Subscriber times = nh_.subscribe<go_feap::ComputeTime>("probe/compute_time", 50, [&](const go_feap::ComputeTime::ConstPtr& m) {
+    if (m->block == "local") ++computed;
+  });
+  ros::Subscriber fails = nh_.subscribe<std_msgs::UInt32>("probe/frontier_failed", 50,
+                                                          [&](const std_msgs::UInt32::ConstPtr&) { ++failed; });
+  ros::Subscriber targets = nh_.subscribe<go_feap::ViewpointPath>(
+      "probe/local_target", 5, [&](const go_feap::ViewpointPath::ConstPtr& m) { probe_target = m; });
+  ros::Publisher tour_pub = nh_.advertise<go_feap::GlobalTour>("probe/global_tour", 10);
+  ASSERT_TRUE(spinUntil([&] {
+    return tour_ && tour_pub.getNumSubscribers() >= 1 && want.getNumPublishers() >= 1 &&
+           times.getNumPublishers() >= 1 && fails.getNumPublishers() >= 1;
+  }, 90.0)) << "no tour to feed the probe";
+  auto feed = [&](bool gone, double seconds) {
+    return feedTours(
+        tour_pub,
+        [&](go_feap::GlobalTour& tour) {
+          if (gone)
+            for (std::uint32_t& id : tour.frontier_ids) id += 4000000000u;  // ids no frontier has had
+        },
+        seconds, [&] { return !gone && probe_target; });
+  };
+  ASSERT_FALSE(tour_->frontier_ids.empty());
+  // A target the probe holds (from an earlier test, or chosen now from the chain's tour) is dropped first,
+  // reported failed, so that the stale tours meet a probe with nothing in hand.
+  ros::Publisher failed_pub = nh_.advertise<std_msgs::UInt32>("probe/frontier_failed", 10);
+  ASSERT_TRUE(feed(false, 10.0));
+  ASSERT_TRUE(probe_target) << "no target from the chain's tour";
+  ASSERT_TRUE(spinUntil([&] { return failed_pub.getNumSubscribers() >= 2; }, 10.0));  // the probe, and `fails`
+  std_msgs::UInt32 drop;
+  drop.data = probe_target->frontier_ids.at(0);
+  failed_pub.publish(drop);
+  spinUntil([] { return false; }, 0.5);
+  probe_target.reset();
+  wanted = computed = failed = 0;
+  ASSERT_TRUE(feed(true, 1.5));
+  EXPECT_GE(wanted, 5) << "the probe did not ask again for a tour";
+  EXPECT_EQ(failed, 0) << "frontiers of a stale tour reported failed";
+  EXPECT_FALSE(probe_target) << "a target (a look round) from a stale tour";
+  EXPECT_EQ(computed, 0) << "planning against a stale tour";
+  ASSERT_TRUE(feed(false, 10.0));
+  ASSERT_TRUE(probe_target) << "no target from the chain's tour";
   EXPECT_GE(computed, 1);
 }
 
