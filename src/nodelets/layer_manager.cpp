@@ -78,10 +78,12 @@ class LayerManager : public nodelet::Nodelet {
     const bool flying = manager_ && (manager_->state() == planning::ExplorationState::kExplore ||
                                      manager_->state() == planning::ExplorationState::kFinalPass);
     if (flying) {
-      if (const std::optional<double> step = ros_conv::flownStep(last_position_, p, max_odom_step_))
+      if (const std::optional<double> step = ros_conv::flownStep(last_position_, p, max_odom_step_)) {
         distance_ += *step;
-      else
+      } else {
         NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": " << ros_conv::odometryJump(*last_position_, p));
+        relocalised_ = true;  // the next step measures progress from here
+      }
     }
     last_position_ = p;
     yaw_ = ros_conv::yawOf(msg->pose.pose.orientation);
@@ -144,6 +146,8 @@ class LayerManager : public nodelet::Nodelet {
     const planning::Band band = current_band_;
     in.frontiers_known = frontiers_ != nullptr;
     in.position = last_position_;
+    in.relocalised = relocalised_;
+    relocalised_ = false;
     if (!frontiers_ && (manager_->state() == planning::ExplorationState::kExplore ||
                         manager_->state() == planning::ExplorationState::kFinalPass))
       NODELET_WARN_STREAM_THROTTLE(5.0, getName() << ": no frontiers yet (from the frontier finder): no band counts as "
@@ -273,6 +277,7 @@ class LayerManager : public nodelet::Nodelet {
   std::optional<double> last_clock_;  ///< s, the ROS clock at the last step
   double clock_offset_ = 0.0;         ///< s the ROS clock went back in all
   std::optional<common::Vec3> last_position_;
+  bool relocalised_ = false;  ///< the odometry jumped since the last step (LayerInputs::relocalised)
   std::optional<double> yaw_;
   bool look_around_ = false;
   double distance_ = 0.0;

@@ -145,6 +145,7 @@ LayerOutputs LayerManager::step(const LayerInputs& in, double t) {
   if (state_ == ExplorationState::kExplore || state_ == ExplorationState::kFinalPass) {
     // Progress: the map changed, or the vehicle got progress_travel from where it was at the last
     // progress (a long transit through mapped space changes no voxel; jitter in place does not count).
+    if (in.relocalised && in.position) progress_position_ = in.position;
     const bool flown = in.position && progress_position_ && config_.progress_travel > 0.0 &&
                        (*in.position - *progress_position_).norm() >= config_.progress_travel;
     const bool progress = in.map_progress != last_progress_ || flown;

@@ -298,6 +298,37 @@ TEST(LayerManager, AFlightIsProgressJitterIsNot) {
   }
 }
 
+// An odometry that relocalises (jumps of 2 m, each reported) is no flight: with the map unchanged the run
+// ends stuck stuck_timeout after the trigger, however often it jumps. Unreported, each jump counted as
+// progress_travel flown, and the stuck check never fired.
+TEST(LayerManager, ARelocalisationIsNoProgress) {
+  for (bool reported : {true, false}) {
+    LayerManagerConfig c = config();
+    c.stuck_timeout = 5.0;
+    c.progress_travel = 1.0;
+    LayerManager m(c, kBox, 0.5);
+    LayerInputs in = frontiers({1}, {1}, 42);  // the map never changes
+    in.trigger = true;
+    in.position = Vec3(0.0, 0.0, 0.5);
+    m.step(in, 0.0);
+    in.trigger = false;
+    LayerOutputs out;
+    double t = 0.0;
+    for (int k = 1; k <= 40 && out.state != ExplorationState::kFinished; ++k) {  // 20 s, a jump every 1 s
+      const bool jump = k % 2 == 0;
+      in.position = Vec3(jump ? 2.0 * (k / 2 % 2) : in.position->x(), 0.0, 0.5);
+      in.relocalised = reported && jump;
+      out = m.step(in, t += 0.5);
+    }
+    if (reported) {
+      EXPECT_EQ(out.reason, FinishReason::kStuck);
+      EXPECT_NEAR(t, 5.0, 1e-9);
+    } else {
+      EXPECT_EQ(out.state, ExplorationState::kExplore) << "unreported jumps are taken for flight";
+    }
+  }
+}
+
 TEST(LayerManager, ValidateNamesKeys) {
   LayerManagerConfig c = config();
   c.layer_height = 0.0;

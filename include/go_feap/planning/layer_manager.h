@@ -53,6 +53,10 @@ struct LayerInputs {
   /// ended the run "complete" after the look round)
   bool frontiers_known = true;
   std::optional<common::Vec3> position;    ///< m, the vehicle's position now (none while unknown)
+  /// The position jumped since the last step (odometry relocalised, beyond metrics/max_odom_step): where it
+  /// landed is where progress is measured from, not progress itself (a VIO that kept relocalising held the
+  /// stuck check off for good).
+  bool relocalised = false;
 };
 
 struct Transition {
