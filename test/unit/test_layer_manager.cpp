@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <limits>
+#include <memory>
 
 #include "go_feap/planning/layer_manager.h"
 
@@ -264,37 +265,47 @@ TEST(LayerManager, TimeLimitAndStuckTerminate) {
 // "stuck" with frontiers left at its end): 20 s at 1 m/s with the map unchanged is not stuck; jitter
 // within progress_travel is, stuck_timeout after the flight; with progress_travel 0 the flight counts
 // for nothing.
+constexpr double kStuckTimeout = 5.0;  // s, of stillManager()
+
+// A manager with stuck_timeout kStuckTimeout and `progress_travel`, triggered at t = 0 at (0, 0, 0.5) with
+// `in` (one frontier, the map never changing), ready for the next step.
+std::unique_ptr<LayerManager> stillManager(double progress_travel, LayerInputs& in) {
+  LayerManagerConfig c = config();
+  c.stuck_timeout = kStuckTimeout;
+  c.progress_travel = progress_travel;
+  auto m = std::make_unique<LayerManager>(c, kBox, 0.5);
+  in = frontiers({1}, {1}, 42);
+  in.trigger = true;
+  in.position = Vec3(0.0, 0.0, 0.5);
+  m->step(in, 0.0);
+  in.trigger = false;
+  return m;
+}
+
 TEST(LayerManager, AFlightIsProgressJitterIsNot) {
   for (double travel : {1.0, 0.0}) {
-    LayerManagerConfig c = config();
-    c.stuck_timeout = 5.0;
-    c.progress_travel = travel;
-    LayerManager m(c, kBox, 0.5);
-    LayerInputs in = frontiers({1}, {1}, 42);  // the map never changes
-    in.trigger = true;
-    in.position = Vec3(0.0, 0.0, 0.5);
-    m.step(in, 0.0);
-    in.trigger = false;
+    LayerInputs in;
+    auto m = stillManager(travel, in);
     LayerOutputs out;
     double t = 0.0;
     for (int k = 1; k <= 40 && out.state != ExplorationState::kFinished; ++k) {  // 20 s, 0.5 m a step
       in.position = Vec3(0.5 * k, 0.0, 0.5);
-      out = m.step(in, t += 0.5);
+      out = m->step(in, t += 0.5);
     }
     if (travel == 0.0) {
       EXPECT_EQ(out.reason, FinishReason::kStuck) << "the flight counted with progress_travel 0";
-      EXPECT_NEAR(t, 5.0, 1e-9);
+      EXPECT_NEAR(t, kStuckTimeout, 1e-9);
       continue;
     }
     ASSERT_EQ(out.state, ExplorationState::kExplore) << "stuck while flying, at " << t << " s";
     const double flown_until = t;
     for (int k = 0; k < 40 && out.state != ExplorationState::kFinished; ++k) {  // jitter of 0.9 m at most
       in.position = Vec3(20.0 + 0.45 * (k % 3 - 1), 0.0, 0.5);
-      out = m.step(in, t += 0.5);
+      out = m->step(in, t += 0.5);
     }
     EXPECT_EQ(out.reason, FinishReason::kStuck);
     // Stuck stuck_timeout after the last metre's progress (the flight's last steps), not later.
-    EXPECT_LE(t - flown_until, c.stuck_timeout + 1e-9);
+    EXPECT_LE(t - flown_until, kStuckTimeout + 1e-9);
   }
 }
 
@@ -303,26 +314,19 @@ TEST(LayerManager, AFlightIsProgressJitterIsNot) {
 // progress_travel flown, and the stuck check never fired.
 TEST(LayerManager, ARelocalisationIsNoProgress) {
   for (bool reported : {true, false}) {
-    LayerManagerConfig c = config();
-    c.stuck_timeout = 5.0;
-    c.progress_travel = 1.0;
-    LayerManager m(c, kBox, 0.5);
-    LayerInputs in = frontiers({1}, {1}, 42);  // the map never changes
-    in.trigger = true;
-    in.position = Vec3(0.0, 0.0, 0.5);
-    m.step(in, 0.0);
-    in.trigger = false;
+    LayerInputs in;
+    auto m = stillManager(1.0, in);
     LayerOutputs out;
     double t = 0.0;
     for (int k = 1; k <= 40 && out.state != ExplorationState::kFinished; ++k) {  // 20 s, a jump every 1 s
       const bool jump = k % 2 == 0;
       in.position = Vec3(jump ? 2.0 * (k / 2 % 2) : in.position->x(), 0.0, 0.5);
       in.relocalised = reported && jump;
-      out = m.step(in, t += 0.5);
+      out = m->step(in, t += 0.5);
     }
     if (reported) {
       EXPECT_EQ(out.reason, FinishReason::kStuck);
-      EXPECT_NEAR(t, 5.0, 1e-9);
+      EXPECT_NEAR(t, kStuckTimeout, 1e-9);
     } else {
       EXPECT_EQ(out.state, ExplorationState::kExplore) << "unreported jumps are taken for flight";
     }
