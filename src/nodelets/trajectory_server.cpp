@@ -187,6 +187,15 @@ class TrajectoryServer : public nodelet::Nodelet {
       hold_position_ = Eigen::Vector3d(p.x, p.y, p.z);
       hold_yaw_ = ros_conv::yawOf(q);
       hold_ = true;
+    } else if (!current_ && (*odom_position_ - hold_position_).norm() > max_start_offset_) {
+      // No trajectory runs, and the vehicle is farther than server/max_start_offset from the held reference
+      // (its odometry jumped, a VIO re-initialised, or it was moved by hand): held where it is now. The old
+      // reference pulled it the whole way at once, and every plan, starting from that command, was refused
+      // as starting too far from the odometry, until the vehicle had flown back.
+      NODELET_WARN_STREAM(getName() << ": the vehicle is " << (*odom_position_ - hold_position_).norm()
+                                    << " m from the held reference with no trajectory running: holding where it is");
+      hold_position_ = *odom_position_;
+      hold_yaw_ = ros_conv::yawOf(q);
     }
   }
 

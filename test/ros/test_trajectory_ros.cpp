@@ -416,6 +416,26 @@ TEST(TrajectoryServerOdometry, UnusableOdometryIsRefusedAndTheFirstGoodPoseIsHel
     EXPECT_LT((Vec3(c->position.x, c->position.y, c->position.z) - held).norm(), 1e-9);
     EXPECT_EQ(c->trajectory_flag, go_feap::PositionCommand::TRAJECTORY_STATUS_EMPTY);
   }
+  // With no trajectory running, odometry within server/max_start_offset of the held pose leaves it held;
+  // farther (a jump, a VIO re-initialised, the vehicle moved by hand) the pose is held where the vehicle is.
+  // The old hold pulled the vehicle the whole way back, and every plan from that command was refused.
+  double max_start_offset = 0.0;
+  ASSERT_TRUE(ros::param::get("/probe_trajectory_server/server/max_start_offset", max_start_offset));
+  // The odometry `m` at 20 Hz for 1 s of the clock (no gap: after one the server holds wherever the odometry
+  // comes back), and the last command of its second half.
+  auto holdAfter = [&](const nav_msgs::Odometry& m) {
+    Every again(0.05);
+    spinSimUntil(0.5, [&] { if (again.due()) odom_pub.publish(m); }, [] { return false; }, 30.0);
+    commands.clear();
+    spinSimUntil(0.5, [&] { if (again.due()) odom_pub.publish(m); }, [] { return false; }, 30.0);
+    return commands.empty() ? Vec3(nan, nan, nan)
+                            : Vec3(commands.back()->position.x, commands.back()->position.y, commands.back()->position.z);
+  };
+  const Vec3 near = held + Vec3(0.0, 0.9 * max_start_offset, 0.0);
+  EXPECT_LT((holdAfter(odometry(near, 1.0, 0.0, 0.0, 0.0)) - held).norm(), 1e-9) << "a drift moved the hold";
+  const Vec3 jumped = held + Vec3(1.2 * max_start_offset, 0.0, 0.0);
+  EXPECT_LT((holdAfter(odometry(jumped, 1.0, 0.0, 0.0, 0.0)) - jumped).norm(), 1e-9) << "the hold stayed after a jump";
+  EXPECT_NEAR(commands.back()->yaw, 0.0, 1e-9);
 }
 
 // The probe server (probe/...) as the tests below drive it: odometry at `vehicle` at 20 Hz while it hovers,
