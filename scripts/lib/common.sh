@@ -50,8 +50,10 @@ install_dependencies() {
   fi
   log "installing ${#missing[@]} missing packages with apt (a few minutes on a fresh machine): ${missing[*]}"
   export DEBIAN_FRONTEND=noninteractive
-  "${sudo[@]}" apt-get update -q >/dev/null || { log "apt-get update failed"; return 1; }
-  "${sudo[@]}" apt-get install -y -q --no-install-recommends "${missing[@]}" >/dev/null ||
+  # Waiting up to 10 minutes for the dpkg lock: right after boot apt-daily or unattended-upgrades hold it.
+  local lock=(-o DPkg::Lock::Timeout=600)
+  "${sudo[@]}" apt-get "${lock[@]}" update -q >/dev/null || { log "apt-get update failed"; return 1; }
+  "${sudo[@]}" apt-get "${lock[@]}" install -y -q --no-install-recommends "${missing[@]}" >/dev/null ||
     { log "apt-get install failed for: ${missing[*]}"; return 1; }
   log "dependencies installed"
 }
@@ -76,27 +78,40 @@ build_package() {
   log "build ok"
 }
 
+# Kills (KILL) every process whose environment holds GO_FEAP_SESSION_TOKEN=$1.
+kill_token_holders() {
+  local pids
+  pids=$(grep -lzx "GO_FEAP_SESSION_TOKEN=$1" /proc/[0-9]*/environ 2>/dev/null | cut -d/ -f3 || true)
+  # shellcheck disable=SC2086
+  if [ -n "$pids" ]; then kill -KILL $pids 2>/dev/null || true; fi
+}
+
 # Runs a command (a roslaunch under `timeout`) in a session of its own and, once it has exited, kills
-# whatever is left of that session: a roslaunch killed in the middle of its shutdown leaves its master
-# and nodelet manager running, and they hold its output pipe open, so a reader of that pipe (tee, the
-# progress filter) would wait for ever. An INT or TERM to the caller is passed on to the whole session,
-# as a terminal's Ctrl-C reaches roslaunch and its nodes. Returns the command's exit status.
+# whatever is left of it: a roslaunch killed in the middle of its shutdown leaves its master and nodelet
+# manager running, and they hold its output pipe open, so a reader of that pipe (tee, the progress
+# filter) would wait for ever. roslaunch starts the master and every node in a session of their own
+# (setsid), so they are found by a token in their environment, which they inherit. An INT, TERM or HUP
+# to the caller is passed on to the command's session, as a terminal's Ctrl-C reaches roslaunch and its
+# nodes. Returns the command's exit status.
 run_in_own_session() {
-  local sid_file child status sid
+  local sid_file child status sid token
   sid_file=$(mktemp)
+  token="$$-${RANDOM}-$(date +%s%N)"
   # In the background (so that `wait` below can be interrupted by the trap), which leaves SIGINT ignored
   # in the command: env restores it, or neither Ctrl-C nor timeout's INT would stop roslaunch.
-  setsid -w env --default-signal=INT sh -c 'echo $$ > "$0"; exec "$@"' "$sid_file" "$@" &
+  setsid -w env --default-signal=INT GO_FEAP_SESSION_TOKEN="$token" sh -c 'echo $$ > "$0"; exec "$@"' \
+    "$sid_file" "$@" &
   child=$!
   # shellcheck disable=SC2064
-  trap "pkill -INT -s \"\$(cat '$sid_file' 2>/dev/null)\" 2>/dev/null" INT TERM
+  trap "pkill -INT -s \"\$(cat '$sid_file' 2>/dev/null)\" 2>/dev/null" INT TERM HUP
   # `wait` returns early when a trapped signal arrives: wait again until the command has exited, then
   # once more for its exit status.
   while kill -0 "$child" 2>/dev/null; do wait "$child" || true; done
   if wait "$child"; then status=0; else status=$?; fi
-  trap - INT TERM
+  trap - INT TERM HUP
   sid=$(cat "$sid_file" 2>/dev/null || true)
   if [ -n "$sid" ] && [ "$sid" -gt 1 ]; then pkill -KILL -s "$sid" 2>/dev/null || true; fi
+  kill_token_holders "$token"
   rm -f "$sid_file"
   return "$status"
 }

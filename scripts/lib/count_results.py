@@ -1,8 +1,10 @@
 #!/usr/bin/env python3
-"""Counts gtest/rostest JUnit XML results under a folder; prints failures and a final
-'N passed, N failed[, N skipped]' line; exits 1 on any failure or when nothing ran. An optional
-second argument is make run_tests' exit status: non-zero (make stopped before every test ran)
-counts one failure more."""
+"""Counts gtest/rostest JUnit XML results under a folder; prints failures, the skipped count (when any)
+on a line of its own, and a final 'N passed, N failed' line; exits 1 on any failure or when nothing ran.
+A test skipped with no reason given counts as failed: gtest writes every test of a suite whose
+SetUpTestSuite failed as skipped, with no message and no failure anywhere (this project's GTEST_SKIPs all
+say why). An optional second argument is make run_tests' exit status: non-zero (make stopped, or
+timed out, before every test ran) counts one failure more."""
 import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -29,7 +31,15 @@ def main(root: Path, make_status: int = 0) -> int:
                 node = case.find("failure") if case.find("failure") is not None else case.find("error")
                 msg = (node.get("message") or node.text or "").strip().splitlines()
                 failures.append(f"{name}: {msg[0] if msg else 'failed'}")
-            elif case.find("skipped") is not None or case.get("status") == "notrun":
+            elif case.find("skipped") is not None:
+                node = case.find("skipped")
+                why = (node.get("message") or node.text or "").strip().splitlines()[1:]  # after "file:line"
+                if any(line.strip() for line in why):
+                    skipped += 1
+                else:
+                    failed += 1
+                    failures.append(f"{name}: skipped with no reason given (a failing SetUpTestSuite?)")
+            elif case.get("status") == "notrun":
                 skipped += 1
             else:
                 passed += 1
@@ -38,7 +48,9 @@ def main(root: Path, make_status: int = 0) -> int:
     if passed + failed == 0:
         print("no test results found under", root)
         failed = 1
-    print(f"{passed} passed, {failed} failed" + (f", {skipped} skipped" if skipped else ""))
+    if skipped:
+        print(f"{skipped} skipped")
+    print(f"{passed} passed, {failed} failed")
     return 1 if failed else 0
 
 
