@@ -61,6 +61,13 @@ class OdometryTf : public nodelet::Nodelet {
                                                            << " refused so far)");
       return;
     }
+    if (msg->header.stamp.isZero()) {  // (it equalled the unset last_stamp_: "stamp 0 s repeated", no TF ever)
+      ++refused_;
+      NODELET_WARN_STREAM_THROTTLE(warn_period_, getName() << ": odometry refused: header.stamp is unset (0): a TF "
+                                                           << "at time 0 dates no depth frame (" << refused_
+                                                           << " refused so far)");
+      return;
+    }
     const auto& p = msg->pose.pose.position;
     const auto& q = msg->pose.pose.orientation;
     const Eigen::Vector3d position(p.x, p.y, p.z);

@@ -202,6 +202,16 @@ class TrajectoryServer : public nodelet::Nodelet {
   void onTimer(const ros::TimerEvent&) {
     std::lock_guard<std::mutex> lock(mutex_);
     const ros::Time now = ros::Time::now();
+    // A clock that went back (a bag played again, a simulator restarted): the trajectories' times are void.
+    // Kept, one started over once the clock came back to its start, from where the vehicle had been, with
+    // none of the checks a trajectory taken over gets.
+    if (!last_tick_.isZero() && now < last_tick_ && (current_ || pending_)) {
+      current_.reset();
+      pending_.reset();
+      NODELET_WARN_STREAM(getName() << ": the clock went back " << (last_tick_ - now).toSec()
+                                    << " s: trajectory dropped, holding the last reference");
+    }
+    last_tick_ = now;
     if (!last_odom_.isZero() && !odom_gap_ && (now - last_odom_).toSec() > odom_timeout_) {
       odom_gap_ = true;
       current_.reset();  // hold_position_ is where the reference was
@@ -242,6 +252,7 @@ class TrajectoryServer : public nodelet::Nodelet {
   double rate_ = 100.0, odom_timeout_ = 0.5, max_start_offset_ = 1.5, max_speed_ = 30.0, max_acceleration_ = 50.0,
          max_yaw_rate_ = 20.0;
   ros::Time last_odom_;
+  ros::Time last_tick_;  ///< the clock at the last timer call
   std::optional<Eigen::Vector3d> odom_position_;  ///< m, of the latest usable odometry
   bool odom_gap_ = false;
   std::string world_frame_;
