@@ -63,7 +63,10 @@ TEST(Chain, FliesToAViewpointWithoutCollision) {
       if ((path.back() - t).norm() < 0.4) return true;
     return false;
   };
-  ASSERT_TRUE(spinUntil(reached, 200.0)) << targets.size() << " targets, " << trajectories << " trajectories; vehicle at "
+  // Reached, and 20 command pairs seen to judge the reference by: exploration starts by itself, and on a
+  // loaded machine this node may first hear the chain when the vehicle is already at a target (once in a
+  // full suite: 0 pairs).
+  ASSERT_TRUE(spinUntil([&] { return reached() && scored >= 20; }, 200.0)) << scored << " command pairs, " << targets.size() << " targets, " << trajectories << " trajectories; vehicle at "
                                          << (path.empty() ? Vec3::Zero() : path.back()).transpose() << "\n"
                                          << node_log.str();
   double min_clearance = 1.0;
