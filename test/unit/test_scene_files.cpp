@@ -123,6 +123,16 @@ void expectErrorMentions(const std::string& message, const std::vector<std::stri
   for (const auto& w : words) EXPECT_NE(message.find(w), std::string::npos) << "'" << w << "' not in: " << message;
 }
 
+// Writes `bytes` to `path` and expects loadStl to refuse it with a message naming the file and each of `words`.
+void expectStlRefused(const std::string& path, const std::string& bytes, const std::vector<std::string>& words) {
+  writeText(path, bytes);
+  auto r = loadStl(path);
+  ASSERT_FALSE(r) << path << ": " << r->triangleCount() << " triangles";
+  std::vector<std::string> all{path};
+  all.insert(all.end(), words.begin(), words.end());
+  expectErrorMentions(r.message(), all);
+}
+
 }  // namespace
 
 TEST(PointCloud, PcdBinaryAndAsciiAndPly) {
@@ -576,44 +586,24 @@ TEST(BadInput, MissingFileAndUnknownExtension) {
 TEST(BadInput, TruncatedAndCorruptStl) {
   TempDir d;
   writeBinaryStl(d.file("full.stl"), cubeTriangles(0, 1), "binary header");
-  std::string bytes = fileBytes(d.file("full.stl"));
-  writeText(d.file("trunc.stl"), bytes.substr(0, bytes.size() - 30));
-  auto a = loadStl(d.file("trunc.stl"));
-  ASSERT_FALSE(a);
-  expectErrorMentions(a.message(), {"trunc.stl", "binary STL", "12 triangles"});
-  writeText(d.file("short.stl"), "abc");
-  auto b = loadStl(d.file("short.stl"));
-  ASSERT_FALSE(b);
-  expectErrorMentions(b.message(), {"short.stl", "too short"});
+  const std::string bytes = fileBytes(d.file("full.stl"));
+  expectStlRefused(d.file("trunc.stl"), bytes.substr(0, bytes.size() - 30), {"binary STL", "12 triangles"});
+  expectStlRefused(d.file("short.stl"), "abc", {"too short"});
   const std::string ascii = asciiStl(cubeTriangles(0, 1));
-  writeText(d.file("atrunc.stl"), ascii.substr(0, ascii.size() / 2));
-  auto c = loadStl(d.file("atrunc.stl"));
-  ASSERT_FALSE(c);
-  expectErrorMentions(c.message(), {"atrunc.stl", "truncated ASCII STL"});
+  expectStlRefused(d.file("atrunc.stl"), ascii.substr(0, ascii.size() / 2), {"truncated ASCII STL"});
   std::string bad = ascii;
   bad.replace(bad.find("vertex 0 0 0") + 7, 1, "x");
-  writeText(d.file("abad.stl"), bad);
-  auto e = loadStl(d.file("abad.stl"));
-  ASSERT_FALSE(e);
-  expectErrorMentions(e.message(), {"abad.stl", "non-numeric"});
+  expectStlRefused(d.file("abad.stl"), bad, {"non-numeric"});
   std::string junk = ascii;  // a number with junk after it: std::stod read "0abc" as 0
   junk.replace(junk.find("vertex 0 0 0") + 7, 1, "0abc");
-  writeText(d.file("ajunk.stl"), junk);
-  auto j = loadStl(d.file("ajunk.stl"));
-  ASSERT_FALSE(j);
-  expectErrorMentions(j.message(), {"ajunk.stl", "non-numeric"});
+  expectStlRefused(d.file("ajunk.stl"), junk, {"non-numeric"});
   // A binary STL whose header says 'solid ... facet', cut short: a binary file's problem, not ASCII's.
   writeBinaryStl(d.file("solidbin.stl"), cubeTriangles(0, 1), "solid cube facet");
-  bytes = fileBytes(d.file("solidbin.stl"));
-  writeText(d.file("solidbin.stl"), bytes.substr(0, bytes.size() - 30));
-  auto sb = loadStl(d.file("solidbin.stl"));
-  ASSERT_FALSE(sb);
-  expectErrorMentions(sb.message(), {"solidbin.stl", "truncated or corrupt binary STL", "12 triangles"});
+  const std::string solid_bytes = fileBytes(d.file("solidbin.stl"));
+  expectStlRefused(d.file("solidbin.stl"), solid_bytes.substr(0, solid_bytes.size() - 30),
+                   {"truncated or corrupt binary STL", "12 triangles"});
   // An empty solid has no triangles (it was "too short for an STL file").
-  writeText(d.file("empty.stl"), "solid x\nendsolid x\n");
-  auto es = loadStl(d.file("empty.stl"));
-  ASSERT_FALSE(es);
-  expectErrorMentions(es.message(), {"empty.stl", "the mesh has no triangles"});
+  expectStlRefused(d.file("empty.stl"), "solid x\nendsolid x\n", {"the mesh has no triangles"});
   // Keywords in upper case load as in lower case (they were read as a binary file of 1.3e9 triangles).
   std::string upper = ascii;
   for (char& ch : upper) ch = static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
@@ -1294,12 +1284,7 @@ TEST(BadInput, AsciiStlSolidsAndMalformedLines) {
     EXPECT_EQ(r->vertices[1], Vec3(1.5, 1, 0.5)) << name;
   }
   auto refused = [&](const std::string& name, const std::string& text, const std::vector<std::string>& words) {
-    writeText(d.file(name), text);
-    auto r = loadStl(d.file(name));
-    ASSERT_FALSE(r) << name << ": " << r->triangleCount() << " triangles";
-    std::vector<std::string> all{name};
-    all.insert(all.end(), words.begin(), words.end());
-    expectErrorMentions(r.message(), all);
+    expectStlRefused(d.file(name), text, words);
   };
   std::string four = "solid x\n" + a + "endsolid x\n";
   four.replace(four.find("1 1.5 0.5"), 9, "1 1.5 0.5 7");
