@@ -26,10 +26,12 @@
 #include <string>
 
 #include "go_feap/world/scene_files.h"
+#include "free_port.h"
 
 namespace {
 
 namespace fs = std::filesystem;
+using go_feap::test::freeTcpPort;
 
 class Replay : public ::testing::Test {
  protected:
@@ -38,13 +40,13 @@ class Replay : public ::testing::Test {
     fs::create_directories(dir_);
   }
   void TearDown() override { fs::remove_all(dir_); }
-  // roslaunch with a private master on `port`, logs under dir_; returns its output (stdout and stderr).
+  // roslaunch with a private master on a free port, logs under dir_; returns its output (stdout and stderr).
   // It runs as scripts/run runs it, through run_in_own_session (scripts/lib/common.sh), written to a file
   // rather than a pipe: when the timeout has to kill roslaunch in the middle of its shutdown (seen on a
   // loaded machine), the master and manager it had not stopped yet would hold a pipe open (the test read
   // it for ever); the session's leftovers are killed and the file read.
-  std::string launch(int port, const std::string& args, int timeout_s) {
-    const std::string tag = std::to_string(port);
+  std::string launch(const std::string& args, int timeout_s) {
+    const std::string tag = std::to_string(freeTcpPort());
     const fs::path out = dir_ / ("launch_" + tag + ".out");
     const std::string env = "ROS_MASTER_URI=http://localhost:" + tag + " ROS_HOME=" + dir_.string() +
                             " ROS_LOG_DIR=" + dir_.string() + "/log ROSCONSOLE_STDOUT_LINE_BUFFERED=1";
@@ -86,7 +88,7 @@ TEST_F(Replay, TheMapperCastsZeroDepthFreeOnlyForSixteenBitSimulation) {
 
 TEST_F(Replay, RecordedFlightRebuildsTheWallsItSaw) {
   const std::string bag = (dir_ / "flight.bag").string(), bt = (dir_ / "replay.bt").string();
-  const std::string rec = launch(11821, "record_flight.launch bag:=" + bag + " duration:=12", 240);
+  const std::string rec = launch("record_flight.launch bag:=" + bag + " duration:=12", 240);
   ASSERT_TRUE(fs::exists(bag)) << rec.substr(rec.size() > 3000 ? rec.size() - 3000 : 0);
   {
     // A flight, not a hover: the chain heard the simulator under the onboard names and flew. (Remapped
@@ -107,7 +109,7 @@ TEST_F(Replay, RecordedFlightRebuildsTheWallsItSaw) {
     EXPECT_GT(farthest, 1.0) << "the recorded vehicle stayed within 1 m of its start";
   }
   const fs::path results = dir_ / "replay_results";
-  const std::string rep = launch(11822, "replay.launch bag:=" + bag + " save_map:=" + bt + " invalid_as_free:=true output_dir:=" + results.string(), 240);
+  const std::string rep = launch("replay.launch bag:=" + bag + " save_map:=" + bt + " invalid_as_free:=true output_dir:=" + results.string(), 240);
   ASSERT_NE(rep.find("replay: save_map: wrote"), std::string::npos) << rep.substr(rep.size() > 3000 ? rep.size() - 3000 : 0);
   ASSERT_TRUE(fs::exists(bt));
   // The replayed exploration did not finish within 12 s of flight: the recorder wrote what it had when the
@@ -156,7 +158,7 @@ TEST_F(Replay, ABagWithoutDepthIsRefusedNamingTheMissingTopic) {
       out.write("/vins_estimator/odometry", odom.header.stamp, odom);
     }
   }
-  const std::string rep = launch(11823, "replay.launch bag:=" + bag, 120);
+  const std::string rep = launch("replay.launch bag:=" + bag, 120);
   EXPECT_NE(rep.find("lacks the topic(s) /camera/depth/image_rect_raw, /camera/depth/camera_info"), std::string::npos)
       << rep.substr(rep.size() > 3000 ? rep.size() - 3000 : 0);
 }
@@ -184,7 +186,7 @@ TEST_F(Replay, ABagWithTopicsOfTheWrongTypeIsRefusedNamingThem) {
       out.write("/tf_static", t, tf);
     }
   }
-  const std::string rep = launch(11824, "replay.launch bag:=" + bag, 120);
+  const std::string rep = launch("replay.launch bag:=" + bag, 120);
   EXPECT_NE(rep.find("has topics of the wrong type: /camera/depth/image_rect_raw is sensor_msgs/CompressedImage, not "
                      "sensor_msgs/Image; /vins_estimator/odometry is geometry_msgs/PoseStamped, not nav_msgs/Odometry"),
             std::string::npos)

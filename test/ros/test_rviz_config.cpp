@@ -10,6 +10,8 @@
 #include <memory>
 #include <string>
 
+#include "free_port.h"
+
 #ifndef GO_FEAP_SOURCE_DIR
 #error "GO_FEAP_SOURCE_DIR must name the package's source directory"
 #endif
@@ -31,10 +33,11 @@ std::pair<int, std::string> run(const std::string& command) {
 TEST(RvizConfig, LoadsUnderXvfbWithoutErrors) {
   const fs::path dir = fs::temp_directory_path() / ("go_feap_rviz_test_" + std::to_string(::getpid()));
   fs::create_directories(dir);
-  const std::string env = "ROS_MASTER_URI=http://localhost:11841 ROS_HOME=" + dir.string() + " ROS_LOG_DIR=" +
+  const std::string port = std::to_string(go_feap::test::freeTcpPort());
+  const std::string env = "ROS_MASTER_URI=http://localhost:" + port + " ROS_HOME=" + dir.string() + " ROS_LOG_DIR=" +
                           dir.string() + "/log";
   // A private master for the duration of the check.
-  ASSERT_EQ(std::system((env + " roscore -p 11841 >" + dir.string() + "/roscore.log 2>&1 & echo $! >" + dir.string() +
+  ASSERT_EQ(std::system((env + " roscore -p " + port + " >" + dir.string() + "/roscore.log 2>&1 & echo $! >" + dir.string() +
                          "/roscore.pid")
                             .c_str()),
             0);
