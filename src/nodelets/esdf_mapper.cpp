@@ -150,6 +150,7 @@ class EsdfMapper : public nodelet::Nodelet {
       return;
     }
     intrinsics_ = K;
+    intrinsics_frame_ = info->header.frame_id;
   }
 
   // The synchroniser's callback, under ros_guard like every other.
@@ -229,11 +230,20 @@ class EsdfMapper : public nodelet::Nodelet {
 
   void integrate(const sensor_msgs::Image::ConstPtr& msg, const Eigen::Isometry3d& T_W_C) {
     std::optional<map::DepthIntrinsics> K;
+    std::string K_frame;
     {
       std::lock_guard<std::mutex> lock(input_mutex_);
       K = intrinsics_;
+      K_frame = intrinsics_frame_;
     }
     if (!K) return skip("camera_info", "no camera_info received yet");
+    // Intrinsics of another camera with the same image size (the depth camera's camera_info beside a depth
+    // image aligned to the colour camera) would project every ray wrongly: said, not refused, as a driver
+    // may name the two frames differently for the same camera.
+    if (!K_frame.empty() && !msg->header.frame_id.empty() && K_frame != msg->header.frame_id)
+      NODELET_WARN_STREAM_THROTTLE(warn_period_, getName() << ": camera_info is in frame '" << K_frame
+                                                           << "' but the depth image in '" << msg->header.frame_id
+                                                           << "': are the intrinsics this camera's? (integrated)");
     if (!T_W_C.matrix().allFinite() ||
         !T_W_C.linear().isApprox(Eigen::Quaterniond(T_W_C.linear()).normalized().toRotationMatrix(), 1e-3))
       return skip("pose", "camera pose is not finite or not a rotation");
@@ -387,6 +397,7 @@ class EsdfMapper : public nodelet::Nodelet {
   int unpaired_ = 0;                     // depth images since the last pair
   std::mutex input_mutex_;
   std::optional<map::DepthIntrinsics> intrinsics_;
+  std::string intrinsics_frame_;  // frame_id of the camera_info intrinsics_ came from
   std::map<std::string, std::size_t> skipped_;
   std::map<std::string, ros::WallTime> last_warn_;
   std::optional<common::Vec3> last_position_;

@@ -302,6 +302,37 @@ TEST_F(MapperTest, ACameraInfoThatCannotBeUsedIsRefusedAndTheLastValidOneStays) 
   }
 }
 
+// A camera_info in another frame than the depth image's (the depth camera's intrinsics beside a depth image
+// aligned to the colour camera, of the same size) is used, and said: the warning names both frames.
+TEST_F(MapperTest, ACameraInfoInAnotherFrameThanTheDepthImageIsNamedInAWarning) {
+  Probe probe;
+  ASSERT_TRUE(probe.connect());
+  std::vector<std::string> warnings;
+  ros::Subscriber log_sub = nh_.subscribe<rosgraph_msgs::Log>("/rosout", 100, [&](const rosgraph_msgs::Log::ConstPtr& m) {
+    if (m->level == rosgraph_msgs::Log::WARN) warnings.push_back(m->msg);
+  });
+  ASSERT_TRUE(spinUntil([&] { return log_sub.getNumPublishers() > 0; }, 30.0));
+  auto warned = [&] {
+    return std::any_of(warnings.begin(), warnings.end(), [&](const std::string& w) {
+      return w.find("camera_info is in frame 'colour_optical' but the depth image in '" +
+                    probe.depth->header.frame_id + "'") != std::string::npos;
+    });
+  };
+  probe.info_pub.publish(*probe.info);
+  ASSERT_TRUE(probe.sendRealUntilIntegrated());
+  spinUntil([] { return false; }, 1.0);
+  EXPECT_FALSE(warned()) << "warned with the camera_info in the image's own frame";
+  sensor_msgs::CameraInfo colour = *probe.info;
+  colour.header.frame_id = "colour_optical";
+  ASSERT_NE(colour.header.frame_id, probe.depth->header.frame_id);
+  probe.info_pub.publish(colour);
+  spinUntil([] { return false; }, 0.3);
+  const std::size_t before = probe.updates;
+  probe.sendReal();
+  EXPECT_TRUE(spinUntil([&] { return probe.updates > before; }, 10.0)) << "the frame was not integrated";
+  EXPECT_TRUE(spinUntil(warned, 10.0)) << "no warning naming both frames";
+}
+
 // Frames that would put wrong data in the map, or read past an image's buffer, are skipped and the mapper
 // takes the next real frame: a camera_pose whose orientation is unset (all zero, which tf2 reads as no
 // rotation) or given in another frame than the map's, and an image whose 480 rows of 8947852 bytes wrap
