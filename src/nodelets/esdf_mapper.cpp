@@ -20,15 +20,20 @@
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/message_filter.h>
 #include <tf2_ros/transform_listener.h>
+#include <tf2_msgs/TFMessage.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <iomanip>
 #include <limits>
 #include <map>
 #include <mutex>
 #include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
 
 #include "go_feap/MapUpdate.h"
 #include "go_feap/SaveMap.h"
@@ -39,6 +44,7 @@
 #include "go_feap/ros/message_checks.h"
 #include "go_feap/ros/params.h"
 #include "go_feap/ros/shared_map.h"
+#include "go_feap/ros/tf_gaps.h"
 
 namespace go_feap {
 
@@ -57,7 +63,7 @@ class EsdfMapper : public nodelet::Nodelet {
     p.get("mapper/sync_mode", sync_mode_).get("mapper/pose_tolerance", pose_tolerance_);
     p.get("mapper/max_pose_jump", max_pose_jump_).getFrame("mapper/world_frame", world_frame_);
     p.get("mapper/cloud_period", cloud_period_).get("mapper/esdf_slice_height", slice_height_);
-    p.get("mapper/warn_period", warn_period_).get("mapper/tf_queue", tf_queue_);
+    p.get("mapper/warn_period", warn_period_).get("mapper/tf_queue", tf_queue_).get("mapper/max_tf_gap", max_tf_gap_);
     common::Aabb box;
     config::readBox(p, box);
     ros_params::requireOrThrow(p.ok(), me, p.error());
@@ -73,6 +79,8 @@ class EsdfMapper : public nodelet::Nodelet {
                                "parameter '" + p.fullName("mapper/cloud_period") + "' must be finite and >= 0");
     ros_params::requireOrThrow(tf_queue_ >= 1 && tf_queue_ <= 1000, me,
                                "parameter '" + p.fullName("mapper/tf_queue") + "' must be in [1, 1000] frames");
+    ros_params::requireOrThrow(std::isfinite(max_tf_gap_) && max_tf_gap_ > 0.0, me,
+                               "parameter '" + p.fullName("mapper/max_tf_gap") + "' must be finite and > 0");
     ros_params::requireOrThrow(std::isfinite(warn_period_) && warn_period_ > 0.0, me,
                                "parameter '" + p.fullName("mapper/warn_period") + "' must be finite and > 0");
     ros_params::requireOrThrow(std::isfinite(slice_height_), me,
@@ -93,6 +101,9 @@ class EsdfMapper : public nodelet::Nodelet {
       // it out; a wait inside the callback stalled it, and save_map, for ever once the clock stopped.
       tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
       tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, nh);
+      // The stamps of the moving links' samples, heard beside the listener (mapper/max_tf_gap). /tf is
+      // global, as the listener's own subscription.
+      tf_samples_sub_ = ros_guard::subscribe(nh, getName(), "/tf", 200, &EsdfMapper::onTfSamples, this);
       tf_filter_ = std::make_unique<tf2_ros::MessageFilter<sensor_msgs::Image>>(
           depth_sub_, *tf_buffer_, world_frame_, static_cast<std::uint32_t>(tf_queue_), nh);
       tf_filter_->registerCallback(&EsdfMapper::onDepthTransformable, this);
@@ -224,8 +235,40 @@ class EsdfMapper : public nodelet::Nodelet {
     } catch (const tf2::TransformException& e) {
       return skip("tf", std::string("no transform ") + world_frame_ + " <- " + depth->header.frame_id + ": " + e.what());
     }
+    if (const std::string gap = interpolatedAcrossGap(depth->header.frame_id, depth->header.stamp); !gap.empty())
+      return skip("tf_gap", gap);
     const auto& t = tf.transform.translation;
     integrate(depth, ros_conv::rigidPose(t.x, t.y, t.z, tf.transform.rotation));
+  }
+
+  void onTfSamples(const tf2_msgs::TFMessage::ConstPtr& msg) {
+    std::lock_guard<std::mutex> lock(tf_samples_mutex_);
+    for (const geometry_msgs::TransformStamped& t : msg->transforms) tf_samples_.add(t.child_frame_id, t.header.stamp);
+  }
+
+  /// Why the pose of `frame` at `stamp` is not to be trusted, or "": a moving link of the chain
+  /// world <- frame whose samples round the stamp are more than mapper/max_tf_gap apart, between which
+  /// tf2 put the pose on a straight line (an odometry gap).
+  std::string interpolatedAcrossGap(const std::string& frame, const ros::Time& stamp) {
+    std::vector<std::string> chain;
+    try {
+      tf_buffer_->_chainAsVector(world_frame_, stamp, frame, stamp, world_frame_, chain);
+    } catch (const tf2::TransformException&) {
+      return "";  // the lookup just passed; a chain tf2 cannot name now is left to it
+    }
+    std::lock_guard<std::mutex> lock(tf_samples_mutex_);
+    for (const std::string& link : chain) {
+      if (link == world_frame_) continue;  // its own parent link is not in the chain
+      const auto bracket = tf_samples_.around(link, stamp);
+      if (!bracket || !(bracket->span() > max_tf_gap_)) continue;
+      std::ostringstream why;
+      why << "the pose at " << std::fixed << std::setprecision(3) << stamp.toSec() << " s is interpolated between '"
+          << link << "' samples at " << bracket->before.toSec() << " and " << bracket->after.toSec() << " s, "
+          << bracket->span() << " s apart (more than mapper/max_tf_gap, " << max_tf_gap_
+          << " s): a gap in the odometry";
+      return why.str();
+    }
+    return "";
   }
 
   void integrate(const sensor_msgs::Image::ConstPtr& msg, const Eigen::Isometry3d& T_W_C) {
@@ -393,6 +436,10 @@ class EsdfMapper : public nodelet::Nodelet {
   std::string sync_mode_, world_frame_;
   double pose_tolerance_ = 0.02, max_pose_jump_ = 1.0, cloud_period_ = 1.0, slice_height_ = 1.0, warn_period_ = 2.0;
   int tf_queue_ = 10;
+  double max_tf_gap_ = 0.5;
+  std::mutex tf_samples_mutex_;
+  ros_tf::SampleLog tf_samples_;
+  ros::Subscriber tf_samples_sub_;
   static constexpr int kSyncQueue = 20;  // frames the synchroniser keeps waiting for their pair
   int unpaired_ = 0;                     // depth images since the last pair
   std::mutex input_mutex_;

@@ -472,6 +472,21 @@ TEST_F(MapperTest, InTfModeAFrameWaitsForALateTransformAndOneWithoutNeverBlocksT
   EXPECT_TRUE(spinUntil([&] { return updates == 4; }, 10.0)) << updates - 1 << " of the 3 frames after it integrated";
   spinUntil([] { return false; }, 0.5);
   EXPECT_EQ(updates, 4u);
+
+  // An odometry gap: samples 1 s apart (mapper/max_tf_gap 0.5 s). tf2 gives a pose inside the gap on the
+  // straight line between them; the frame there is skipped. One at the sample after the gap, and one
+  // between samples 0.3 s apart, are integrated.
+  tf_pub.sendTransform(transformAt(s0 + ros::Duration(1.0), "tf_probe_camera"));
+  tf_pub.sendTransform(transformAt(s0 + ros::Duration(2.0), "tf_probe_camera"));
+  tf_pub.sendTransform(transformAt(s0 + ros::Duration(2.3), "tf_probe_camera"));
+  spinUntil([] { return false; }, 0.5);
+  depth_pub.publish(frameAt(s0 + ros::Duration(1.5), "tf_probe_camera"));
+  spinUntil([] { return false; }, 1.0);
+  EXPECT_EQ(updates, 4u) << "a frame whose pose was interpolated across a 1 s gap was integrated";
+  depth_pub.publish(frameAt(s0 + ros::Duration(2.0), "tf_probe_camera"));
+  EXPECT_TRUE(spinUntil([&] { return updates == 5; }, 10.0)) << "the frame at the sample after the gap";
+  depth_pub.publish(frameAt(s0 + ros::Duration(2.15), "tf_probe_camera"));
+  EXPECT_TRUE(spinUntil([&] { return updates == 6; }, 10.0)) << "a frame between samples 0.3 s apart";
 }
 
 }  // namespace
