@@ -32,13 +32,12 @@ void YamlReader::fail(const std::string& key, const std::string& why) {
   error_ = files + ": parameter '" + key + "' " + why;
 }
 
-template <typename T>
-YamlReader& YamlReader::read(const std::string& key, T& out) {
-  if (!error_.empty()) return *this;
-  // Walk "a/b/c" through nested maps of each file, the last file first. Lookups go through const
-  // handles (which never create keys) and reset() rebinds the handle instead of assigning through it.
-  std::optional<YAML::Node> found;
-  for (auto f = impl_->files.rbegin(); f != impl_->files.rend() && !found; ++f) {
+namespace {
+
+// The node at "a/b/c" in the last of `files` that has it. Lookups go through const handles (which never
+// create keys) and reset() rebinds the handle instead of assigning through it.
+std::optional<YAML::Node> lookup(const std::vector<std::pair<std::string, YAML::Node>>& files, const std::string& key) {
+  for (auto f = files.rbegin(); f != files.rend(); ++f) {
     YAML::Node node;
     node.reset(f->second);
     std::stringstream parts(key);
@@ -46,15 +45,27 @@ YamlReader& YamlReader::read(const std::string& key, T& out) {
     bool present = true;
     while (present && std::getline(parts, part, '/')) {
       const YAML::Node& here = node;
-      const YAML::Node child = here.IsMap() ? here[part] : YAML::Node();
-      if (!child) {
+      // YAML::Node() is a defined null node, not an absent one: a key under a scalar is tested apart.
+      const YAML::Node child = here.IsMap() ? here[part] : YAML::Node(YAML::NodeType::Undefined);
+      if (!here.IsMap() || !child) {
         present = false;
       } else {
         node.reset(child);
       }
     }
-    if (present) found = node;
+    if (present) return node;
   }
+  return std::nullopt;
+}
+
+}  // namespace
+
+bool YamlReader::has(const std::string& key) const { return lookup(impl_->files, key).has_value(); }
+
+template <typename T>
+YamlReader& YamlReader::read(const std::string& key, T& out) {
+  if (!error_.empty()) return *this;
+  const std::optional<YAML::Node> found = lookup(impl_->files, key);
   if (!found) {
     fail(key, "is missing");
     return *this;

@@ -405,10 +405,21 @@ TEST(YamlReader, ReadsNestedKeysOverlaysAndNamesBadOnes) {
   EXPECT_TRUE(flag);
   EXPECT_EQ(s, "word");
   EXPECT_EQ(v, Eigen::Vector3d(1, 2, 3));
+  // has(): a section or a key of any type, in any file; never a key under a scalar.
+  EXPECT_TRUE(r.has("a"));
+  EXPECT_TRUE(r.has("a/s"));
+  EXPECT_TRUE(r.has("flag"));
+  EXPECT_FALSE(r.has("b"));
+  EXPECT_FALSE(r.has("a/missing"));
+  EXPECT_FALSE(r.has("flag/x"));
+  EXPECT_TRUE(r.ok()) << "has() is no failed read";
   double missing = 0;
   r.get("a/missing", missing);
   EXPECT_FALSE(r.ok());
   EXPECT_NE(r.error().find("parameter 'a/missing' is missing"), std::string::npos) << r.error();
+  go_feap::common::YamlReader under_scalar((dir / "base.yaml").string());
+  under_scalar.get("flag/x", missing);  // was read as the null under true: "has the wrong type"
+  EXPECT_NE(under_scalar.error().find("parameter 'flag/x' is missing"), std::string::npos) << under_scalar.error();
   go_feap::common::YamlReader typed((dir / "base.yaml").string());
   int wrong = 0;
   typed.get("a/s", wrong);

@@ -30,6 +30,9 @@ class YamlReader {
   YamlReader& getVec3(const std::string& key, Eigen::Vector3d& out);
   YamlReader& getMatrix4(const std::string& key, Eigen::Matrix4d& out);
 
+  /// Whether any of the files has `key` ("group" or "group/key"), of whatever type.
+  bool has(const std::string& key) const;
+
   bool ok() const { return error_.empty(); }
   /// "config/x.yaml: parameter 'group/key' is missing" (the first problem found), or empty.
   const std::string& error() const { return error_; }
