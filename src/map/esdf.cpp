@@ -52,9 +52,6 @@ Status EsdfConfig::validate() const {
   };
   if (!(max_distance > 0.0 && std::isfinite(max_distance)))
     return err("max_distance", "must be finite and > 0");
-  if (!(uav_radius >= 0.0 && std::isfinite(uav_radius))) return err("uav_radius", "must be finite and >= 0");
-  if (!(uav_radius < max_distance))
-    return err("uav_radius", "must be < max_distance (distances are truncated at max_distance)");
   return Status::Ok();
 }
 
@@ -65,6 +62,11 @@ Status EsdfConfig::validate(const GridGeometry& geometry) const {
   if (geometry.size() > std::numeric_limits<std::uint32_t>::max())
     return Status::Error("esdf: the grid has " + std::to_string(geometry.size()) +
                          " voxels, more than 2^32 - 1");
+  // Below a voxel the field holds the obstacles alone (and below 3e-5 voxels no distance at all: the
+  // buckets were sized 0 and the first obstacle was written past them).
+  if (!(max_distance >= geometry.resolution()))
+    return Status::Error("esdf: max_distance must be >= the map's resolution (one voxel), got " +
+                         std::to_string(max_distance) + " m at " + std::to_string(geometry.resolution()) + " m");
   if (maxKey(max_distance, geometry.resolution()) > kMaxStorableKey)
     return Status::Error("esdf: max_distance must be <= 127 voxels (max_distance / resolution), got " +
                          std::to_string(max_distance / geometry.resolution()));
@@ -327,12 +329,6 @@ double Esdf::distanceAndGradient(const Vec3& p, Vec3& gradient) const {
          tz * (uy * (ux * c[4] + tx * c[5]) + ty * (ux * c[6] + tx * c[7]));
 }
 
-bool Esdf::isInflatedObstacle(const Vec3& p) const {
-  if (!geometry_.bounds().contains(p)) return true;  // also before coordToIndex() could overflow
-  const Index3 idx = geometry_.coordToIndex(p);
-  if (!geometry_.inside(idx) || isObstacle(idx)) return true;
-  return distance(p) < config_.uav_radius;
-}
 
 std::size_t Esdf::memoryBytes() const {
   std::size_t bytes = sizeof(*this) + offsets_.capacity() * sizeof(Offset) +

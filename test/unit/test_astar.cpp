@@ -47,7 +47,6 @@ OccupancyConfig occupancyConfig() {
 EsdfConfig esdfConfig() {
   EsdfConfig c;
   c.max_distance = 1.0;
-  c.uav_radius = 0.2;
   return c;
 }
 

@@ -62,7 +62,6 @@ struct Rng {
 EsdfConfig esdfConfig() {
   EsdfConfig c;
   c.max_distance = 1.0;
-  c.uav_radius = 0.2;
   return c;
 }
 

@@ -28,10 +28,9 @@ GridGeometry smallGrid(double resolution = kRes) {
 // One voxel diagonal.
 double tolerance(const GridGeometry& g) { return std::sqrt(3.0) * g.resolution(); }
 
-EsdfConfig configWith(double max_distance, double uav_radius = 0.2) {
+EsdfConfig configWith(double max_distance) {
   EsdfConfig c;
   c.max_distance = max_distance;
-  c.uav_radius = std::min(uav_radius, 0.5 * max_distance);
   return c;
 }
 
@@ -220,11 +219,16 @@ TEST(EsdfConfig, ValidateNamesTheBadKey) {
   EXPECT_NE(c.validate().message().find("esdf: max_distance"), std::string::npos) << c.validate().message();
   c.max_distance = NAN;
   EXPECT_NE(c.validate().message().find("max_distance"), std::string::npos);
-  c = EsdfConfig();
-  c.uav_radius = -0.1;
-  EXPECT_NE(c.validate().message().find("esdf: uav_radius"), std::string::npos);
-  c.uav_radius = 3.0;  // beyond max_distance
-  EXPECT_NE(c.validate().message().find("uav_radius"), std::string::npos);
+  // Below one voxel: at 1e-6 m the buckets were sized 0 and the first obstacle written past them.
+  for (double tiny : {1e-6, 0.099}) {
+    c = configWith(tiny);
+    EXPECT_TRUE(c.validate().ok());
+    EXPECT_NE(c.validate(smallGrid()).message().find("esdf: max_distance must be >= the map's resolution"),
+              std::string::npos)
+        << c.validate(smallGrid()).message();
+    EXPECT_THROW(Esdf(smallGrid(), c), std::invalid_argument);
+  }
+  EXPECT_TRUE(configWith(0.1).validate(smallGrid()).ok());
   c = EsdfConfig();
   c.max_distance = 12.8;  // 128 voxels at 0.1 m
   EXPECT_TRUE(c.validate().ok());
@@ -258,9 +262,6 @@ TEST(Esdf, OutsideTheGrid) {
   EXPECT_FALSE(esdf.nearestObstacle(Index3(30, 0, 0), o));
   EXPECT_EQ(esdf.distance(Vec3(1e9, 0, 0)), 0.8);
   EXPECT_EQ(esdf.distance(Vec3(NAN, 0, 0)), 0.8);
-  EXPECT_TRUE(esdf.isInflatedObstacle(g.origin() - Vec3::Constant(0.01)));
-  EXPECT_TRUE(esdf.isInflatedObstacle(Vec3(-1e12, 1e12, 0)));
-  EXPECT_TRUE(esdf.isInflatedObstacle(Vec3(NAN, 1, 1)));
   // Just outside the grid, next to the obstacle voxel in its corner, the interpolant blends the
   // obstacle with max_distance beyond the grid.
   const double d = esdf.distance(Vec3(g.origin() - Vec3::Constant(0.02)));
@@ -326,21 +327,6 @@ TEST(Esdf, TrilinearMatchesCentresAndGradientMatchesFiniteDifferences) {
     if (gradient.norm() > 0.1) ++checked;
   }
   EXPECT_GT(checked, 500);  // the field was not flat where it was checked
-}
-
-TEST(Esdf, InflatedObstacleUsesUavRadius) {
-  Esdf esdf(smallGrid(), configWith(1.0, 0.3));
-  const GridGeometry& g = esdf.geometry();
-  const Index3 c(15, 12, 10);
-  esdf.update({g.linear(c)}, {});
-  const Vec3 centre = g.indexToCoord(c);
-  EXPECT_TRUE(esdf.isInflatedObstacle(centre));
-  EXPECT_TRUE(esdf.isInflatedObstacle(centre + Vec3(0.049, 0.049, 0.049)));  // in the obstacle voxel
-  EXPECT_TRUE(esdf.isInflatedObstacle(centre + Vec3(0.25, 0.0, 0.0)));
-  EXPECT_TRUE(esdf.isInflatedObstacle(centre + Vec3(0.0, -0.29, 0.0)));
-  EXPECT_FALSE(esdf.isInflatedObstacle(centre + Vec3(0.31, 0.0, 0.0)));
-  EXPECT_FALSE(esdf.isInflatedObstacle(centre + Vec3(0.0, 0.0, -0.5)));
-  EXPECT_FALSE(esdf.isInflatedObstacle(centre + Vec3(0.2, 0.2, 0.2)));  // 0.346 m away
 }
 
 TEST(Esdf, UpdateCountsOnlyRealChanges) {

@@ -40,7 +40,7 @@ void readOccupancy(R& p, map::OccupancyConfig& o) {
 template <class R>
 void readMap(R& p, map::MapConfig& c) {
   readOccupancy(p, c.occupancy);
-  p.get("esdf/max_distance", c.esdf.max_distance).get("esdf/uav_radius", c.esdf.uav_radius);
+  p.get("esdf/max_distance", c.esdf.max_distance);
 }
 
 template <class R>

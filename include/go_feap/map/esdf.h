@@ -14,7 +14,6 @@ namespace go_feap::map {
 
 struct EsdfConfig {
   double max_distance = 2.0;  ///< m; distances are truncated here (cost of an update is bounded by it)
-  double uav_radius = 0.2;    ///< m; inflation radius used by Esdf::isInflatedObstacle()
 
   /// Checks every key; the message names the bad one, e.g. "esdf: max_distance must be > 0".
   common::Status validate() const;
@@ -72,8 +71,6 @@ class Esdf {
   /// distance(p), and in `gradient` the exact gradient of that trilinear interpolant (a one-sided
   /// derivative where p lies on a face between interpolation cells).
   double distanceAndGradient(const common::Vec3& p, common::Vec3& gradient) const;
-  /// True when p lies outside the grid, in an obstacle voxel, or where distance(p) < uav_radius.
-  bool isInflatedObstacle(const common::Vec3& p) const;
 
   /// Bytes held by this map, scratch included (for benchmarks).
   std::size_t memoryBytes() const;
