@@ -119,8 +119,9 @@ nlohmann::json toJson(const Summary& s) {
   j["exploration_time_s"] = s.exploration_time_s;
   j["flight_distance_m"] = s.flight_distance_m;
   // Figures that need a scene to compare with are null without one (onboard, replay): 0 m from an
-  // obstacle, no collision and a coverage of -1 read as measured.
-  j["coverage"] = s.ground_truth ? nlohmann::json(s.coverage) : nlohmann::json(nullptr);
+  // obstacle, no collision and a coverage of -1 read as measured. So is a coverage never measured with
+  // one (-1: a recorder that heard no map before the run ended).
+  j["coverage"] = s.ground_truth && s.coverage >= 0.0 ? nlohmann::json(s.coverage) : nlohmann::json(nullptr);
   j["collisions"] = s.ground_truth ? nlohmann::json(s.collisions) : nlohmann::json(nullptr);
   j["blacklisted_frontiers"] = s.blacklisted_frontiers;
   j["min_obstacle_distance_m"] = s.ground_truth ? nlohmann::json(s.min_obstacle_distance_m) : nlohmann::json(nullptr);

@@ -3,6 +3,7 @@
 // per-run results and the aggregate tables of the paper (Tables II–IV).
 #include <pthread.h>
 #include <sys/resource.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
@@ -146,10 +147,16 @@ int main(int argc, char** argv) {
   const std::string config_dir = args.count("--config") ? args["--config"] : GO_FEAP_CONFIG_DIR;
   std::string out_dir = args["--out"];
   if (out_dir.empty()) {
+    // A folder of this call's own: two calls started in the same second took the same name (the first
+    // had written nothing yet, so the second was not even warned), and the last to end kept the tables.
     const std::time_t now = std::time(nullptr);
     std::ostringstream name;
     name << "results/bench-" << std::put_time(std::gmtime(&now), "%Y%m%dT%H%M%SZ");
+    std::error_code ec;
+    std::filesystem::create_directories("results", ec);
     out_dir = name.str();
+    for (int k = 2; k < 1000 && !std::filesystem::create_directory(out_dir, ec) && !ec; ++k)
+      out_dir = name.str() + "-" + std::to_string(k);
   }
   const bool perf = args.count("--perf") > 0;
   // The results folder first: a file in its place used to end the bench with an uncaught exception once
@@ -219,9 +226,16 @@ int main(int argc, char** argv) {
   std::vector<double> sim_time(jobs, 0.0);
   const auto wall0 = std::chrono::steady_clock::now();
   auto last_report = std::chrono::steady_clock::now() - std::chrono::seconds(1);
-  auto report = [&](bool force = false) {
+  // On a terminal a line redrawn in place twice a second; elsewhere (a log file, CI) a line per run
+  // ended, as carriage returns made one endless line of a log.
+  const bool terminal = ::isatty(STDERR_FILENO) == 1;
+  auto report = [&](const std::string& ended = "") {
     const auto now = std::chrono::steady_clock::now();
-    if (!force && now - last_report < std::chrono::milliseconds(500)) return;
+    if (!terminal) {
+      if (!ended.empty()) std::cerr << "[" << done.load() << "/" << queue.size() << " runs] " << ended << "\n";
+      return;
+    }
+    if (ended.empty() && now - last_report < std::chrono::milliseconds(500)) return;
     last_report = now;
     std::ostringstream line;
     line << "\r[" << done.load() << "/" << queue.size() << " runs]";
@@ -284,7 +298,13 @@ int main(int argc, char** argv) {
       }
       ++done;
       std::lock_guard<std::mutex> lock(print_mutex);
-      report(true);
+      std::ostringstream ended;
+      ended << job.scene_spec << " / " << job.planner << " / seed " << job.seed << ": ";
+      if (out.ok)
+        ended << out.summary.finish_reason << " at " << std::fixed << std::setprecision(1) << out.summary.exploration_time_s << " s";
+      else
+        ended << "failed";
+      report(ended.str());
     }
   };
   std::vector<std::thread> threads;
@@ -292,7 +312,7 @@ int main(int argc, char** argv) {
   for (auto& t : threads) t.join();
   all_done = true;
   signal_thread.join();
-  std::cerr << "\n";
+  if (terminal) std::cerr << "\n";
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
 
   std::vector<metrics::Summary> summaries;

@@ -332,10 +332,13 @@ TEST(Metrics, FiguresWithoutGroundTruthAreNull) {
   for (const char* key : {"coverage", "collisions", "min_obstacle_distance_m"}) EXPECT_TRUE(j[key].is_null()) << key;
   EXPECT_DOUBLE_EQ(j["exploration_time_s"].get<double>(), 10.0);
   EXPECT_DOUBLE_EQ(j["flight_distance_m"].get<double>(), 12.5);
+  // With a scene but no map heard before the end (the mapper down), coverage is -1: not measured, null.
   s.ground_truth = true;
   const nlohmann::json k = nlohmann::json::parse(metrics::summaryJson(s));
-  EXPECT_DOUBLE_EQ(k["coverage"].get<double>(), -1.0);
+  EXPECT_TRUE(k["coverage"].is_null()) << k.dump();
   EXPECT_EQ(k["collisions"].get<int>(), 0);
+  s.coverage = 0.0;
+  EXPECT_DOUBLE_EQ(nlohmann::json::parse(metrics::summaryJson(s))["coverage"].get<double>(), 0.0);
 }
 
 TEST(Metrics, RecorderWritesSummaryCsvAndPlot) {
