@@ -55,6 +55,13 @@ common::Status ExplorationConfig::validate() const {
     return common::Status::Error("planner: rate must be in (0, 1000] Hz");
   if (!common::isRigidTransform(T_B_C.matrix()))
     return common::Status::Error("depth_camera: T_B_C must be a finite rigid transform");
+  // Each stage runs at most once a control step: a faster one ran at the control rate without a word.
+  for (const auto& [key, r] : {std::make_pair("depth_camera: rate", camera_rate), std::make_pair("global: rate", loop.plan_rate),
+                               std::make_pair("planner: rate", planner_rate), std::make_pair("layers: rate", layer_rate),
+                               std::make_pair("metrics: sample_rate", loop.sample_rate)})
+    if (r > loop.control_rate)
+      return common::Status::Error(std::string(key) + " must be at most loop: control_rate (" +
+                                   std::to_string(loop.control_rate) + " Hz) in go_feap_bench: each stage runs at most once a control step");
   return common::Status::Ok();
 }
 

@@ -294,6 +294,13 @@ TEST(Bench, ConfigErrorsNameTheModeOrKey) {
   ASSERT_FALSE(fast);
   EXPECT_NE(fast.message().find("global: rate must be in (0, 1000] Hz"), std::string::npos) << fast.message();
   std::filesystem::remove_all(fast_dir);
+  // Faster than the control loop (100 Hz in bench.yaml): it ran at 100 Hz without a word.
+  const std::filesystem::path over_dir = configWithMode("over", "global:\n  rate: 200.0\n");
+  auto over = bench::loadExplorationConfig(over_dir.string(), "over");
+  ASSERT_FALSE(over);
+  EXPECT_NE(over.message().find("global: rate must be at most loop: control_rate (100.000000 Hz)"), std::string::npos)
+      << over.message();
+  std::filesystem::remove_all(over_dir);
   // Every mode is measured alike: a mode setting the collision rule is refused.
   const std::filesystem::path rule_dir = configWithMode("lenient", "metrics:\n  collision_distance: 0.01\n");
   auto lenient = bench::loadExplorationConfig(rule_dir.string(), "lenient");
