@@ -40,10 +40,9 @@ double obstacleDistance(const world::Scene& scene, const common::Vec3& p, double
 bool CollisionMonitor::update(const common::Vec3& p) {
   last_ = obstacleDistance(scene_, p, kHorizon);
   closest_ = std::min(closest_, last_);
-  const bool colliding = last_ < collision_distance_;
-  const bool entered = colliding && !inside_;
+  const bool entered = !inside_ && last_ < collision_distance_;
   collisions_ += entered;
-  inside_ = colliding;
+  inside_ = inside_ ? last_ < release_distance_ : entered;
   return entered;
 }
 

@@ -229,7 +229,8 @@ TEST(Metrics, ObstacleDistanceMatchesBruteForceOverVoxelCubes) {
 TEST(Metrics, CollisionMonitorCountsEachEntryAndKeepsTheClosestApproach) {
   auto scene = smallMaze(3);
   ASSERT_TRUE(scene) << scene.message();
-  // Along a line that crosses walls: every entry into the 0.1 m zone is one collision.
+  // Along a line that crosses walls: every entry into the 0.1 m zone is one collision, which ends once
+  // the clearance is back to 0.15 m.
   metrics::CollisionMonitor monitor(*scene, 0.1);
   int entries = 0;
   bool inside = false;
@@ -239,16 +240,45 @@ TEST(Metrics, CollisionMonitorCountsEachEntryAndKeepsTheClosestApproach) {
     const Vec3 p(-2.9 + 0.01 * (k % 581), -1.5 + (k / 581), 1.0);
     const double d = metrics::obstacleDistance(*scene, p, metrics::CollisionMonitor::kHorizon);
     closest = std::min(closest, d);
-    const bool now = d < 0.1;
-    const bool entered = now && !inside;
+    const bool entered = !inside && d < 0.1;
     entries += entered;
-    inside = now;
+    inside = inside ? d < 0.15 : entered;
     EXPECT_EQ(monitor.update(p), entered) << p.transpose();
     EXPECT_DOUBLE_EQ(monitor.lastClearance(), d);
   }
   EXPECT_GT(entries, 0) << "the line must cross a wall in this fixture";
   EXPECT_EQ(monitor.collisions(), entries);
   EXPECT_DOUBLE_EQ(monitor.closestApproach(), closest);
+
+  // Scraping along a wall, the clearance jittering between 0.09 and 0.12 m: one collision. Away to
+  // 0.2 m and back: a second. Points at a given clearance: from a point on the line inside a wall,
+  // out along an axis to open space (0.25 m clear 0.3 m out), bisected.
+  Vec3 wall_point, out;
+  bool found = false;
+  for (int k = 0; k < 4 * 581 && !found; ++k) {
+    wall_point = Vec3(-2.9 + 0.01 * (k % 581), -1.5 + (k / 581), 1.0);
+    if (metrics::obstacleDistance(*scene, wall_point, 0.6) > 0.0) continue;
+    for (const Vec3& dir : {Vec3(1, 0, 0), Vec3(-1, 0, 0), Vec3(0, 1, 0), Vec3(0, -1, 0)})
+      if (!found && metrics::obstacleDistance(*scene, wall_point + 0.3 * dir, 0.6) >= 0.25) {
+        out = dir;
+        found = true;
+      }
+  }
+  ASSERT_TRUE(found) << "no wall point with open space beside it on the lines";
+  const auto at = [&](double clearance) {
+    double lo = 0.0, hi = 0.3;
+    for (int i = 0; i < 60; ++i) {
+      const double mid = 0.5 * (lo + hi);
+      (metrics::obstacleDistance(*scene, wall_point + mid * out, 0.6) < clearance ? lo : hi) = mid;
+    }
+    return Vec3(wall_point + hi * out);
+  };
+  metrics::CollisionMonitor scrape(*scene, 0.1);
+  for (int k = 0; k < 20; ++k) scrape.update(at(k % 2 ? 0.09 : 0.12));
+  EXPECT_EQ(scrape.collisions(), 1) << "a scrape with jitter round 0.1 m";
+  scrape.update(at(0.2));
+  scrape.update(at(0.09));
+  EXPECT_EQ(scrape.collisions(), 2) << "away to 0.2 m and back";
 }
 
 TEST(Metrics, CoverageTrackerEqualsTheWorldDefinition) {

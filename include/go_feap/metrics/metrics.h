@@ -3,6 +3,7 @@
 // summary.json, metrics.csv and coverage.png. Used by the MetricsRecorder nodelet and the bench.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <map>
 #include <functional>
@@ -32,8 +33,13 @@ class CollisionMonitor {
   static bool validDistance(double collision_distance) {
     return collision_distance > 0.0 && collision_distance <= kHorizon;
   }
+  /// A collision ends once the clearance is back to kReleaseFactor x collision_distance (at most
+  /// kHorizon): a vehicle scraping along a wall, its clearance jittering round the distance, is one
+  /// collision, not one per sample that dipped below it.
+  static constexpr double kReleaseFactor = 1.5;
   CollisionMonitor(const world::Scene& scene, double collision_distance)
-      : scene_(scene), collision_distance_(collision_distance) {}
+      : scene_(scene), collision_distance_(collision_distance),
+        release_distance_(std::min(kHorizon, kReleaseFactor * collision_distance)) {}
   /// Checks the next position of the path; true when it starts a new collision.
   bool update(const common::Vec3& p);
   int collisions() const { return collisions_; }
@@ -42,7 +48,7 @@ class CollisionMonitor {
 
  private:
   const world::Scene& scene_;
-  double collision_distance_;
+  double collision_distance_, release_distance_;
   int collisions_ = 0;
   double closest_ = kHorizon, last_ = kHorizon;
   bool inside_ = false;
