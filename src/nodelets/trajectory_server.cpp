@@ -1,6 +1,8 @@
 // TrajectoryServer: samples the current B-spline trajectory into position commands at a
 // fixed rate. In: bspline, odom. Out: position_cmd (go_feap/PositionCommand). Holds the
-// position where the last trajectory ended, or where the vehicle was, when none is active.
+// position where the last trajectory ended, or where the vehicle was, when none is active. Before the
+// first trajectory it sends nothing (the flight stack hovers the vehicle where the pilot took it), or,
+// with server/hold_before_trajectory, holds the first pose.
 // When odometry stops for longer than server/odom_timeout the current trajectory is dropped
 // and the reference holds where it was; a trajectory that arrives before odometry is back is refused
 // (its start was checked against nothing but a stale pose), and the next one after resumes (the planner
@@ -41,7 +43,7 @@ class TrajectoryServer : public nodelet::Nodelet {
     p.get("server/rate", rate_).get("server/odom_timeout", odom_timeout_).getFrame("world_frame", world_frame_);
     p.get("server/max_start_offset", max_start_offset_);
     p.get("server/max_speed", max_speed_).get("server/max_acceleration", max_acceleration_);
-    p.get("server/max_yaw_rate", max_yaw_rate_);
+    p.get("server/max_yaw_rate", max_yaw_rate_).get("server/hold_before_trajectory", hold_before_trajectory_);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
     ros_params::requireOrThrow(std::isfinite(max_speed_) && max_speed_ > 0.0, getName(),
                                "parameter '" + p.fullName("server/max_speed") + "' must be > 0");
@@ -235,11 +237,15 @@ class TrajectoryServer : public nodelet::Nodelet {
       cmd.trajectory_id = static_cast<std::uint32_t>(current_->id);
       hold_position_ = p;  // where to hold if the trajectory is dropped
       hold_yaw_ = yaw;
-    } else if (hold_) {
+      flown_ = true;
+    } else if (hold_ && (flown_ || hold_before_trajectory_)) {
       p = hold_position_;
       cmd.trajectory_flag = PositionCommand::TRAJECTORY_STATUS_EMPTY;
     } else {
-      return;  // nothing known yet
+      // Nothing known yet, or no trajectory flown yet: a hold of the pose at launch, on the ground, would
+      // pull a vehicle the pilot then took off by hand back down when the bridge took the commands, and the
+      // first plan would start from it.
+      return;
     }
     cmd.position.x = p.x(), cmd.position.y = p.y(), cmd.position.z = p.z();
     cmd.velocity.x = v.x(), cmd.velocity.y = v.y(), cmd.velocity.z = v.z();
@@ -260,6 +266,8 @@ class TrajectoryServer : public nodelet::Nodelet {
   std::optional<ros_traj::Trajectory> current_;
   std::optional<ros_traj::Trajectory> pending_;  ///< received, its start time still ahead
   bool hold_ = false;
+  bool hold_before_trajectory_ = false;
+  bool flown_ = false;  ///< a trajectory has been followed
   Eigen::Vector3d hold_position_ = Eigen::Vector3d::Zero();
   double hold_yaw_ = 0.0;
   ros::Publisher cmd_pub_;

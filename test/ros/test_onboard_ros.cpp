@@ -103,6 +103,8 @@ TEST(Onboard, RunsTheChainOnD435iDepthAndVioOdometry) {
   EXPECT_EQ(tours + targets + trajectories, 0u)
       << tours << " global_tour, " << targets << " local_target and " << trajectories << " bspline before the trigger";
   EXPECT_EQ(following, 0u) << "position commands following a trajectory before the trigger";
+  EXPECT_EQ(commands, 0u) << "position commands before the first trajectory (a hold of the pose at launch, on the "
+                             "ground on a real drone, would pull one taken off by hand back down)";
   const auto& a = waiting->pose.pose.position;
   const auto& b = odom->pose.pose.position;
   EXPECT_LT(std::hypot(a.x - b.x, a.y - b.y, a.z - b.z), 0.05) << "the vehicle moved before the trigger";

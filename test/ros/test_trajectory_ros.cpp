@@ -442,10 +442,10 @@ TEST(TrajectoryServerOdometry, UnusableOdometryIsRefusedAndTheFirstGoodPoseIsHel
 // straight-line trajectories, and the latest command it sent.
 class ProbeServer {
  public:
-  ProbeServer() {
-    odom_pub_ = nh_.advertise<nav_msgs::Odometry>("probe/odom", 10);
-    bspline_pub_ = nh_.advertise<go_feap::Bspline>("probe/bspline", 10);
-    cmd_sub_ = nh_.subscribe<go_feap::PositionCommand>("probe/position_cmd", 200, [this](const go_feap::PositionCommand::ConstPtr& m) {
+  explicit ProbeServer(const std::string& prefix = "probe/") {
+    odom_pub_ = nh_.advertise<nav_msgs::Odometry>(prefix + "odom", 10);
+    bspline_pub_ = nh_.advertise<go_feap::Bspline>(prefix + "bspline", 10);
+    cmd_sub_ = nh_.subscribe<go_feap::PositionCommand>(prefix + "position_cmd", 200, [this](const go_feap::PositionCommand::ConstPtr& m) {
       command = m;
       history.push_back(m);
       if (history.size() > 1000) history.pop_front();
@@ -498,6 +498,36 @@ class ProbeServer {
   ros::Subscriber cmd_sub_;
   Every send_{0.05};
 };
+
+// The server as shipped (server/hold_before_trajectory false: quiet/...) sends nothing before its first
+// trajectory, however long the odometry comes: a hold of the pose at launch, on the ground, pulled a vehicle
+// the pilot then took off by hand back down once the bridge took the commands. The first trajectory is
+// followed; after its end, and through an odometry gap, the server holds as before.
+TEST(TrajectoryServerFirstCommand, NothingIsSentBeforeTheFirstTrajectoryThenItIsFollowedAndHeld) {
+  ProbeServer quiet("quiet/");
+  quiet.vehicle = Vec3(0.5, 0.5, 0.1);  // on the ground
+  ASSERT_TRUE(quiet.connected()) << "the quiet trajectory server is not connected";
+  quiet.hover(2.0);
+  quiet.vehicle = Vec3(0.5, 0.5, 1.2);  // taken off by hand
+  quiet.hover(1.0);
+  EXPECT_TRUE(quiet.history.empty()) << quiet.history.size() << " commands before the first trajectory, the first at z "
+                                     << quiet.history.front()->position.z;
+  const Vec3 end = quiet.vehicle + Vec3(1.0, 0.0, 0.0);
+  quiet.fly(quiet.vehicle, end, 77, ros::Time::now());
+  ASSERT_TRUE(spinUntil([&] { return quiet.hover(0.05) && quiet.command->trajectory_id == 77u; }, 20.0))
+      << "the first trajectory was not followed";
+  EXPECT_GT(quiet.command->position.z, 1.0) << "it started from the ground";
+  quiet.vehicle = end;
+  quiet.hover(4.0);  // past its 3 s
+  EXPECT_EQ(quiet.command->trajectory_flag, go_feap::PositionCommand::TRAJECTORY_STATUS_COMPLETED);
+  const Vec3 held = quiet.commanded();  // its end (fly()'s spline ends short of `end` by a few cm)
+  EXPECT_LT((held - end).norm(), 0.1) << "not held at the trajectory's end";
+  double odom_timeout = 0.0;
+  ASSERT_TRUE(ros::param::get("/quiet_trajectory_server/server/odom_timeout", odom_timeout));
+  quiet.hover(2.0 * odom_timeout, true);
+  EXPECT_EQ(quiet.command->trajectory_flag, go_feap::PositionCommand::TRAJECTORY_STATUS_EMPTY);
+  EXPECT_LT((quiet.commanded() - held).norm(), 1e-9) << "not holding through the odometry gap";
+}
 
 // Each test below starts with the probe server connected and holding the vehicle's pose.
 class ProbeServerTest : public ::testing::Test {
