@@ -1,7 +1,8 @@
 // LayerManager: runs the exploration state machine and steers the chain band by band.
 // In: frontiers, map_update (progress), frontier_failed (std_msgs/UInt32 from planners),
 // trigger (std_srvs/Trigger service, or a goal on move_base_simple/goal from rviz's 2D Nav
-// Goal, or layers/auto_start). Out: layer (go_feap/LayerBounds), status
+// Goal, or layers/auto_start), stop (std_srvs/Trigger service: FINISHED(aborted) at once; the trajectory
+// planner then brakes the flight in progress to rest). Out: layer (go_feap/LayerBounds), status
 // (go_feap/ExplorationStatus), blacklist (std_msgs/UInt32MultiArray, latched: frontiers the
 // planners must skip), layer_marker (the band as a translucent slab for rviz). Every
 // transition is logged.
@@ -62,6 +63,7 @@ class LayerManager : public nodelet::Nodelet {
     odom_sub_ = ros_guard::subscribe(nh, getName(), "odom", 2, &LayerManager::onOdom, this);
     goal_sub_ = ros_guard::subscribe(nh, getName(), "move_base_simple/goal", 1, &LayerManager::onGoal, this);
     trigger_srv_ = ros_guard::service(nh, getName(), "trigger", &LayerManager::onTrigger, this);
+    stop_srv_ = ros_guard::service(nh, getName(), "stop", &LayerManager::onStop, this);
     timer_ = ros_guard::timer(nh, getName(), ros::Duration(1.0 / rate_), &LayerManager::onTimer, this);
   }
 
@@ -134,12 +136,29 @@ class LayerManager : public nodelet::Nodelet {
     return true;
   }
 
+  bool onStop(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (manager_ && manager_->state() == planning::ExplorationState::kFinished) {
+      res.success = false;
+      res.message = std::string("already finished (") + planning::toString(manager_->reason()) + ")";
+      return true;
+    }
+    pending_stop_ = true;
+    pending_trigger_ = false;  // a trigger kept for the first odometry is void
+    res.success = true;
+    res.message = manager_ ? "exploration stops: the flight in progress brakes to rest"
+                           : "no odometry yet: the exploration finishes (aborted) when it arrives";
+    return true;
+  }
+
   void onTimer(const ros::TimerEvent&) {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!manager_) return;
     planning::LayerInputs in;
     in.trigger = pending_trigger_;
     pending_trigger_ = false;
+    in.abort = pending_stop_;
+    pending_stop_ = false;
     in.failed.swap(failed_);
     in.map_progress = progress_;
     in.yaw = yaw_;
@@ -272,7 +291,7 @@ class LayerManager : public nodelet::Nodelet {
   FrontierArray::ConstPtr frontiers_;
   std::vector<std::uint32_t> failed_;
   std::uint64_t progress_ = 0;
-  bool pending_trigger_ = false, published_ = false;
+  bool pending_trigger_ = false, pending_stop_ = false, published_ = false;
   std::optional<double> t_start_;     ///< coreTime() when the exploration started
   std::optional<double> last_clock_;  ///< s, the ROS clock at the last step
   double clock_offset_ = 0.0;         ///< s the ROS clock went back in all
@@ -284,7 +303,7 @@ class LayerManager : public nodelet::Nodelet {
   ros::Publisher layer_pub_, status_pub_, blacklist_pub_, marker_pub_;
   std::set<std::uint32_t> blacklisted_;  ///< as last published
   ros::Subscriber frontier_sub_, update_sub_, failed_sub_, odom_sub_, goal_sub_;
-  ros::ServiceServer trigger_srv_;
+  ros::ServiceServer trigger_srv_, stop_srv_;
   ros::Timer timer_;
 };
 

@@ -3,8 +3,10 @@
 // a yaw spline; replans on a new target, little time left or a predicted collision, and
 // stops safely when planning fails, and plans again when the server dropped the trajectory (its
 // position_cmd names another or none) or when the odometry is far from the trajectory's reference (a jump:
-// the next plan starts from the odometry). In: local_target, odom, position_cmd (continuity),
-// map_handle. Out: bspline (go_feap/Bspline), trajectory_marker, frontier_failed.
+// the next plan starts from the odometry). Once the status says FINISHED(aborted) (the layer manager's stop
+// service) the target is dropped and the flight in progress brakes to rest. In: local_target, odom,
+// position_cmd (continuity), map_handle, status. Out: bspline (go_feap/Bspline), trajectory_marker,
+// frontier_failed.
 #include <nav_msgs/Odometry.h>
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
@@ -15,6 +17,7 @@
 #include <mutex>
 #include <optional>
 
+#include "go_feap/ExplorationStatus.h"
 #include "go_feap/PositionCommand.h"
 #include "go_feap/ViewpointPath.h"
 #include "go_feap/ros/conversions.h"
@@ -71,6 +74,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     odom_sub_ = ros_guard::subscribe(nh, getName(), "odom", 5, &TrajectoryPlanner::onOdom, this);
     cmd_sub_ = ros_guard::subscribe(nh, getName(), "position_cmd", 5, &TrajectoryPlanner::onCommand, this);
     target_sub_ = ros_guard::subscribe(nh, getName(), "local_target", 2, &TrajectoryPlanner::onTarget, this);
+    status_sub_ = ros_guard::subscribe(nh, getName(), "status", 2, &TrajectoryPlanner::onStatus, this);
     timer_ = ros_guard::timer(nh, getName(), ros::Duration(1.0 / rate_), &TrajectoryPlanner::onTimer, this);
   }
 
@@ -136,8 +140,22 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     std::lock_guard<std::mutex> lock(mutex_);
     command_ = msg;
   }
+  // FINISHED(aborted), once: the flight in progress brakes (the next timer call). Other endings fly the
+  // flight in progress to its end, at rest at its viewpoint.
+  void onStatus(const ExplorationStatus::ConstPtr& msg) {
+    if (const std::string bad = ros_check::explorationStatusProblem(*msg); !bad.empty()) {
+      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": status refused: " << bad);
+      return;
+    }
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (msg->state == ExplorationStatus::FINISHED && msg->finish_reason == "aborted" && !aborted_) {
+      aborted_ = true;
+      brake_pending_ = true;
+    }
+  }
   void onTarget(const ViewpointPath::ConstPtr& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
+    if (aborted_) return;  // stopped: nothing is flown to any more
     if (msg->positions.empty()) return;
     if (msg->yaws.size() != msg->positions.size()) {
       NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": local_target refused: " << msg->positions.size()
@@ -168,6 +186,18 @@ class TrajectoryPlanner : public nodelet::Nodelet {
 
   void onTimer(const ros::TimerEvent&) {
     std::lock_guard<std::mutex> lock(mutex_);
+    if (brake_pending_) {
+      brake_pending_ = false;
+      target_.reset();
+      if (current_ && odom_position_) {
+        trajectory::PlanRequest stop;
+        const ros::Time start_time = startState(ros::Time::now(), stop);
+        publish(ros::Time::now(), start_time, trajectory::stopTrajectory(stop.start, stop.velocity, stop.yaw, optimizer_));
+        NODELET_WARN_STREAM(getName() << ": exploration stopped: braking to rest from " << stop.velocity.norm()
+                                      << " m/s");
+      }
+      return;
+    }
     if (!shared_ || !target_ || !odom_position_) return;
     const ros::Time now = ros::Time::now();
     // An odometry gap: the server holds position; plan nothing until odometry is back, then start
@@ -366,6 +396,8 @@ class TrajectoryPlanner : public nodelet::Nodelet {
   double rate_ = 10.0, odom_timeout_ = 0.5, drop_grace_ = 0.5, max_tracking_error_ = 1.0, max_input_speed_ = 20.0;
   double command_timeout_ = 0.1;  ///< s, planner/command_timeout
   std::string speed_limit_name_;  ///< planner/max_input_speed's full name, for the messages
+  bool aborted_ = false;        ///< the status said FINISHED(aborted): no target is taken any more
+  bool brake_pending_ = false;  ///< and the flight in progress is to brake at the next timer call
   bool from_odometry_ = false;  ///< the next plan starts from the odometry: it was far from the reference
   common::Vec3 odom_velocity_ = common::Vec3::Zero();  ///< world frame
   ros::Time odom_time_;
@@ -388,7 +420,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
   ros::Time sent_time_;  ///< when current_ was published
   ros::Publisher compute_pub_;
   ros::Publisher bspline_pub_, marker_pub_, failed_pub_;
-  ros::Subscriber handle_sub_, odom_sub_, cmd_sub_, target_sub_;
+  ros::Subscriber handle_sub_, odom_sub_, cmd_sub_, target_sub_, status_sub_;
   ros::Timer timer_;
 };
 

@@ -38,6 +38,7 @@ const char* toString(FinishReason r) {
     case FinishReason::kComplete: return "complete";
     case FinishReason::kTimeLimit: return "time_limit";
     case FinishReason::kStuck: return "stuck";
+    case FinishReason::kAborted: return "aborted";
   }
   return "?";
 }
@@ -124,6 +125,8 @@ LayerOutputs LayerManager::step(const LayerInputs& in, double t) {
     if (++failures_[id] >= config_.max_retries) blacklist_.insert(id);
   forgetGoneFrontiers(in.all_frontiers);
 
+  // A stop request ends the exploration at once, from any state but FINISHED (a trigger with it is void).
+  if (in.abort && state_ != ExplorationState::kFinished) finish(FinishReason::kAborted, "stopped on request");
   if (state_ == ExplorationState::kWaitTrigger) {
     if (in.trigger) {
       t_trigger_ = t;

@@ -1,11 +1,14 @@
 // rostest: simulator + the whole planner chain. The vehicle must fly from the start to a
 // viewpoint the local planner chose, never closer than 0.1 m to a ground-truth obstacle,
-// with a continuous position command.
+// with a continuous position command. Then the layer manager's stop service ends the exploration
+// (FINISHED(aborted)) and the vehicle comes to rest, with no target after.
 #include <gtest/gtest.h>
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
+#include <std_srvs/Trigger.h>
 
 #include "go_feap/Bspline.h"
+#include "go_feap/ExplorationStatus.h"
 #include "go_feap/PositionCommand.h"
 #include "go_feap/ViewpointPath.h"
 #include "go_feap/world/scene_files.h"
@@ -32,9 +35,14 @@ TEST(Chain, FliesToAViewpointWithoutCollision) {
   auto target_sub = nh.subscribe<go_feap::ViewpointPath>("local_target", 5, [&](const go_feap::ViewpointPath::ConstPtr& m) {
     if (!m->positions.empty()) targets.emplace_back(m->positions[0].x, m->positions[0].y, m->positions[0].z);
   });
+  double speed = 0.0;
   auto odom_sub = nh.subscribe<nav_msgs::Odometry>("odom", 100, [&](const nav_msgs::Odometry::ConstPtr& m) {
     path.emplace_back(m->pose.pose.position.x, m->pose.pose.position.y, m->pose.pose.position.z);
+    speed = std::hypot(m->twist.twist.linear.x, m->twist.twist.linear.y, m->twist.twist.linear.z);
   });
+  go_feap::ExplorationStatus::ConstPtr status;
+  auto status_sub = nh.subscribe<go_feap::ExplorationStatus>(
+      "status", 5, [&](const go_feap::ExplorationStatus::ConstPtr& m) { status = m; });
   auto cmd_sub = nh.subscribe<go_feap::PositionCommand>("position_cmd", 200, [&](const go_feap::PositionCommand::ConstPtr& m) {
     if (last_cmd) {
       const Vec3 a(last_cmd->position.x, last_cmd->position.y, last_cmd->position.z);
@@ -80,6 +88,39 @@ TEST(Chain, FliesToAViewpointWithoutCollision) {
   // changes it by far less than these bounds).
   EXPECT_LT(max_cmd_jump, 0.03);
   EXPECT_LT(max_cmd_vel_jump, 0.3);
+
+  // Stopped on request while exploring: FINISHED(aborted), no target after, the vehicle at rest and held.
+  ASSERT_TRUE(status && status->state != go_feap::ExplorationStatus::FINISHED) << "the exploration ended before the stop";
+  std_srvs::Trigger stop;
+  ASSERT_TRUE(ros::service::waitForService("stop", ros::Duration(10.0)));
+  ASSERT_TRUE(ros::service::call("stop", stop));
+  EXPECT_TRUE(stop.response.success) << stop.response.message;
+  ASSERT_TRUE(spinUntil([&] { return status->state == go_feap::ExplorationStatus::FINISHED; }, 10.0))
+      << "still " << status->state_name << " after the stop";
+  EXPECT_EQ(status->finish_reason, "aborted");
+  const std::size_t targets_then = targets.size();
+  const int trajectories_then = trajectories;
+  const ros::Time stopped = ros::Time::now();
+  const Vec3 stopped_at = path.back();
+  const double speed_then = speed;
+  EXPECT_TRUE(spinUntil([&] { return (ros::Time::now() - stopped).toSec() > 4.0; }, 60.0));
+  EXPECT_LT(speed, 0.05) << "not at rest 4 s (simulated) after the stop";
+  // Braked: within the braking distance at optimizer/a_max, plus 0.5 s at the speed then (the layer
+  // manager's step, 5 Hz, and the planner's, 10 Hz), of where the vehicle was when the status came; not
+  // flown on to its viewpoint. A brake trajectory was sent if it was moving.
+  double a_max = 0.0;
+  ASSERT_TRUE(ros::param::get("/trajectory_planner/optimizer/a_max", a_max));
+  const double allowed = 0.5 * speed_then + speed_then * speed_then / (2.0 * a_max) + 0.1;
+  EXPECT_LT((path.back() - stopped_at).norm(), allowed) << "flew on after the stop at " << speed_then << " m/s";
+  if (speed_then > 0.1) {
+    EXPECT_GT(trajectories, trajectories_then) << "no brake trajectory after the stop";
+  }
+  EXPECT_EQ(targets.size(), targets_then) << "a target after the stop";
+  ASSERT_TRUE(last_cmd);
+  EXPECT_LT(std::hypot(last_cmd->velocity.x, last_cmd->velocity.y, last_cmd->velocity.z), 1e-6)
+      << "the reference still moves";
+  ASSERT_TRUE(ros::service::call("stop", stop));
+  EXPECT_FALSE(stop.response.success) << "a second stop: " << stop.response.message;
 }
 
 }  // namespace

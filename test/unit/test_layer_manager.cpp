@@ -454,3 +454,47 @@ TEST(LayerManager, FinalPassEndsAtOnceWhenTheBoxHasAlreadySettled) {
   EXPECT_EQ(out.state, ExplorationState::kFinished);
   EXPECT_EQ(out.reason, FinishReason::kComplete);
 }
+
+// A stop request ends the exploration at once, from any state but FINISHED, as FINISHED(aborted); a trigger
+// after it (or with it) is ignored, and a finished run keeps its reason.
+TEST(LayerManager, AStopRequestFinishesAsAbortedFromAnyState) {
+  LayerInputs stop = frontiers({1}, {1}, 0);
+  stop.abort = true;
+  {  // waiting for the trigger; the trigger in the same step is void
+    LayerManager m(config(), kBox, 0.5);
+    LayerInputs both = stop;
+    both.trigger = true;
+    const LayerOutputs out = m.step(both, 1.0);
+    EXPECT_EQ(out.state, ExplorationState::kFinished);
+    EXPECT_EQ(out.reason, FinishReason::kAborted);
+    EXPECT_STREQ(toString(out.reason), "aborted");
+    ASSERT_EQ(out.transitions.size(), 1u);
+    EXPECT_EQ(out.transitions[0].why, "stopped on request");
+    EXPECT_TRUE(out.trigger_ignored);
+    LayerInputs trigger = frontiers({1}, {1}, 0);
+    trigger.trigger = true;
+    EXPECT_EQ(m.step(trigger, 2.0).state, ExplorationState::kFinished);
+  }
+  {  // exploring a band, with frontiers left
+    LayerManager m(config(), kBox, 0.5);
+    LayerInputs trigger = frontiers({1}, {1}, 0);
+    trigger.trigger = true;
+    ASSERT_EQ(m.step(trigger, 0.0).state, ExplorationState::kExplore);
+    EXPECT_EQ(m.step(frontiers({1}, {1}, 1), 1.0).state, ExplorationState::kExplore);
+    const LayerOutputs out = m.step(stop, 2.0);
+    EXPECT_EQ(out.state, ExplorationState::kFinished);
+    EXPECT_EQ(out.reason, FinishReason::kAborted);
+  }
+  {  // already finished (time limit): the reason stays
+    LayerManagerConfig c = config();
+    c.time_limit = 1.0;
+    LayerManager m(c, kBox, 0.5);
+    LayerInputs trigger = frontiers({1}, {1}, 0);
+    trigger.trigger = true;
+    m.step(trigger, 0.0);
+    ASSERT_EQ(m.step(frontiers({1}, {1}, 1), 2.0).reason, FinishReason::kTimeLimit);
+    const LayerOutputs out = m.step(stop, 3.0);
+    EXPECT_EQ(out.reason, FinishReason::kTimeLimit);
+    EXPECT_TRUE(out.transitions.empty());
+  }
+}

@@ -28,7 +28,7 @@ struct LayerManagerConfig {
 };
 
 enum class ExplorationState { kWaitTrigger, kExplore, kFinalPass, kFinished };
-enum class FinishReason { kNone, kComplete, kTimeLimit, kStuck };
+enum class FinishReason { kNone, kComplete, kTimeLimit, kStuck, kAborted };
 const char* toString(ExplorationState s);
 const char* toString(FinishReason r);
 
@@ -43,6 +43,7 @@ struct Band {
 /// What the chain reports at a step.
 struct LayerInputs {
   bool trigger = false;                    ///< a start request arrived (repeats are ignored)
+  bool abort = false;                      ///< a stop request arrived: FINISHED(aborted) at once, from any state
   std::vector<std::uint32_t> band_frontiers;  ///< ids of frontiers in the current band
   std::vector<std::uint32_t> all_frontiers;   ///< ids of every frontier in the box
   std::vector<std::uint32_t> failed;       ///< frontiers the planners failed to reach since the last step
@@ -97,6 +98,7 @@ class LayerManager {
   std::size_t failureRecords() const { return failures_.size(); }
   bool isBlacklisted(std::uint32_t id) const { return blacklist_.count(id) > 0; }
   ExplorationState state() const { return state_; }
+  FinishReason reason() const { return reason_; }
   /// The heading has been in every octant since the trigger (a start facing a wall has not).
   bool lookedAround() const { return headings_seen_ == 0xFFu; }
 
