@@ -42,6 +42,13 @@ void lookRound(LayerManager& m, double t) {
   ASSERT_TRUE(m.lookedAround());
 }
 
+// Frontier 1 in the band and the box, with the trigger.
+LayerInputs triggerInput() {
+  LayerInputs in = frontiers({1}, {1}, 0);
+  in.trigger = true;
+  return in;
+}
+
 }  // namespace
 
 TEST(LayerManager, BandsGoUpFromTheStartBandThenDown) {
@@ -471,14 +478,12 @@ TEST(LayerManager, AStopRequestFinishesAsAbortedFromAnyState) {
     ASSERT_EQ(out.transitions.size(), 1u);
     EXPECT_EQ(out.transitions[0].why, "stopped on request");
     EXPECT_TRUE(out.trigger_ignored);
-    LayerInputs trigger = frontiers({1}, {1}, 0);
-    trigger.trigger = true;
+    const LayerInputs trigger = triggerInput();
     EXPECT_EQ(m.step(trigger, 2.0).state, ExplorationState::kFinished);
   }
   {  // exploring a band, with frontiers left
     LayerManager m(config(), kBox, 0.5);
-    LayerInputs trigger = frontiers({1}, {1}, 0);
-    trigger.trigger = true;
+    const LayerInputs trigger = triggerInput();
     ASSERT_EQ(m.step(trigger, 0.0).state, ExplorationState::kExplore);
     EXPECT_EQ(m.step(frontiers({1}, {1}, 1), 1.0).state, ExplorationState::kExplore);
     const LayerOutputs out = m.step(stop, 2.0);
@@ -489,8 +494,7 @@ TEST(LayerManager, AStopRequestFinishesAsAbortedFromAnyState) {
     LayerManagerConfig c = config();
     c.time_limit = 1.0;
     LayerManager m(c, kBox, 0.5);
-    LayerInputs trigger = frontiers({1}, {1}, 0);
-    trigger.trigger = true;
+    const LayerInputs trigger = triggerInput();
     m.step(trigger, 0.0);
     ASSERT_EQ(m.step(frontiers({1}, {1}, 1), 2.0).reason, FinishReason::kTimeLimit);
     const LayerOutputs out = m.step(stop, 3.0);
