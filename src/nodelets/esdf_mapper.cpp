@@ -62,6 +62,7 @@ class EsdfMapper : public nodelet::Nodelet {
     config::readMap(p, c);
     p.get("mapper/sync_mode", sync_mode_).get("mapper/pose_tolerance", pose_tolerance_);
     p.get("mapper/max_pose_jump", max_pose_jump_).getFrame("mapper/world_frame", world_frame_);
+    p.get("mapper/max_rotation_jump", max_rotation_jump_);
     p.get("mapper/cloud_period", cloud_period_).get("mapper/esdf_slice_height", slice_height_);
     p.get("mapper/warn_period", warn_period_).get("mapper/tf_queue", tf_queue_).get("mapper/max_tf_gap", max_tf_gap_);
     common::Aabb box;
@@ -75,6 +76,8 @@ class EsdfMapper : public nodelet::Nodelet {
                                "parameter '" + p.fullName("mapper/pose_tolerance") + "' must be in [0, 1] s");
     ros_params::requireOrThrow(std::isfinite(max_pose_jump_) && max_pose_jump_ > 0.0, me,
                                "parameter '" + p.fullName("mapper/max_pose_jump") + "' must be finite and > 0");
+    ros_params::requireOrThrow(max_rotation_jump_ > 0.0 && max_rotation_jump_ <= M_PI, me,
+                               "parameter '" + p.fullName("mapper/max_rotation_jump") + "' must be in (0, pi] rad");
     ros_params::requireOrThrow(std::isfinite(cloud_period_) && cloud_period_ >= 0.0, me,
                                "parameter '" + p.fullName("mapper/cloud_period") + "' must be finite and >= 0");
     ros_params::requireOrThrow(tf_queue_ >= 1 && tf_queue_ <= 1000, me,
@@ -290,8 +293,18 @@ class EsdfMapper : public nodelet::Nodelet {
     if (!T_W_C.matrix().allFinite() ||
         !T_W_C.linear().isApprox(Eigen::Quaterniond(T_W_C.linear()).normalized().toRotationMatrix(), 1e-3))
       return skip("pose", "camera pose is not finite or not a rotation");
+    // A turn between two integrated frames larger than mapper/max_rotation_jump is a relocalisation too (a
+    // VIO restarted at its own origin keeps the position and resets the heading to 0).
+    const double turned = last_rotation_ ? Eigen::AngleAxisd(last_rotation_->transpose() * T_W_C.linear()).angle() : 0.0;
+    if (last_position_ && turned > max_rotation_jump_) {
+      last_position_ = T_W_C.translation();
+      last_rotation_ = T_W_C.linear();
+      return skip("pose_jump", "camera pose turned by " + std::to_string(turned) + " rad since the last frame (more than "
+                                   "mapper/max_rotation_jump, " + std::to_string(max_rotation_jump_) + " rad: relocalisation?)");
+    }
     if (last_position_ && (T_W_C.translation() - *last_position_).norm() > max_pose_jump_) {
       last_position_ = T_W_C.translation();  // accept the new pose as the reference from now on
+      last_rotation_ = T_W_C.linear();
       return skip("pose_jump", "camera pose jumped by more than " + std::to_string(max_pose_jump_) +
                                    " m since the last frame (relocalisation?)");
     }
@@ -316,6 +329,7 @@ class EsdfMapper : public nodelet::Nodelet {
     }
     if (!info) return skip("frame", info.message());
     last_position_ = T_W_C.translation();
+    last_rotation_ = T_W_C.linear();
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     ros_conv::publishComputeTime(compute_pub_, "mapping", t0);
     if (info->frame.pixels_used == 0)  // a covered lens, an emitter off, the wrong topic: mapping has stopped
@@ -436,7 +450,7 @@ class EsdfMapper : public nodelet::Nodelet {
   std::string sync_mode_, world_frame_;
   double pose_tolerance_ = 0.02, max_pose_jump_ = 1.0, cloud_period_ = 1.0, slice_height_ = 1.0, warn_period_ = 2.0;
   int tf_queue_ = 10;
-  double max_tf_gap_ = 0.5;
+  double max_tf_gap_ = 0.5, max_rotation_jump_ = 0.5;
   std::mutex tf_samples_mutex_;
   ros_tf::SampleLog tf_samples_;
   ros::Subscriber tf_samples_sub_;
@@ -448,6 +462,7 @@ class EsdfMapper : public nodelet::Nodelet {
   std::map<std::string, std::size_t> skipped_;
   std::map<std::string, ros::WallTime> last_warn_;
   std::optional<common::Vec3> last_position_;
+  std::optional<Eigen::Matrix3d> last_rotation_;  ///< of the last integrated frame (or the last jump's)
   ros::Time last_cloud_;
   ros::Publisher compute_pub_;
   ros::Publisher update_pub_, handle_pub_, cloud_pub_, slice_pub_;

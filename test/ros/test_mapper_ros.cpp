@@ -11,6 +11,7 @@
 #include <sensor_msgs/PointCloud2.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
 #include <tf2_ros/transform_broadcaster.h>
+#include <Eigen/Geometry>
 
 #include <algorithm>
 #include <cstdint>
@@ -150,11 +151,17 @@ TEST_F(MapperTest, TurningInPlaceMapsTheWallsBadFramesAreSkippedSaveMapWorks) {
       "map_update", 50, [&](const go_feap::MapUpdate::ConstPtr& m) { stamps.push_back(m->header.stamp); });
   ASSERT_TRUE(spinUntil([&] { return u.getNumPublishers() > 0; }, 10.0));
   const auto updated = [&](const ros::Time& t) { return std::count(stamps.begin(), stamps.end(), t) > 0; };
-  auto sendShifted = [&](double dx) {
+  // The real frame with its pose moved dx along x and turned `yaw` about the vertical.
+  auto sendShifted = [&](double dx, double yaw = 0.0) {
     sensor_msgs::Image d = *real_depth;
     geometry_msgs::PoseStamped q = *real_pose;
     d.header.stamp = q.header.stamp = ros::Time::now() + ros::Duration(0.0005);
     q.pose.position.x += dx;
+    const auto& o = q.pose.orientation;
+    const Eigen::Quaterniond turned = Eigen::Quaterniond(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ())) *
+                                      Eigen::Quaterniond(o.w, o.x, o.y, o.z);
+    q.pose.orientation.w = turned.w(), q.pose.orientation.x = turned.x();
+    q.pose.orientation.y = turned.y(), q.pose.orientation.z = turned.z();
     pose_pub_.publish(q);
     depth_pub_.publish(d);
     return d.header.stamp;
@@ -168,6 +175,18 @@ TEST_F(MapperTest, TurningInPlaceMapsTheWallsBadFramesAreSkippedSaveMapWorks) {
   EXPECT_FALSE(updated(jumped)) << "a frame 1.5 m from the last was integrated";
   const ros::Time near = sendShifted(0.05);
   EXPECT_TRUE(spinUntil([&] { return updated(near); }, 30.0)) << "a frame 0.05 m from the last was not integrated";
+  // Turned by 1 rad in place (more than mapper/max_rotation_jump: a VIO restarted with its heading at 0) is
+  // skipped too; by 0.1 rad it is taken.
+  double max_turn = 0.0;
+  ASSERT_TRUE(ros::param::get("/esdf_mapper/mapper/max_rotation_jump", max_turn));
+  ASSERT_LT(max_turn, 1.0);
+  const ros::Time turned = sendShifted(0.0, 1.0);
+  ASSERT_TRUE(spinUntil([&] { return std::count_if(stamps.begin(), stamps.end(), [&](const ros::Time& t) { return t > turned; }) >= 3; },
+                        30.0))
+      << "no map_update after the turn";
+  EXPECT_FALSE(updated(turned)) << "a frame turned 1 rad from the last was integrated";
+  const ros::Time slight = sendShifted(0.0, 0.1);
+  EXPECT_TRUE(spinUntil([&] { return updated(slight); }, 30.0)) << "a frame turned 0.1 rad from the last was not integrated";
   sensor_msgs::Image far_depth = *real_depth;
   geometry_msgs::PoseStamped far_pose = *real_pose;
   far_depth.header.stamp = far_pose.header.stamp = ros::Time(4000000000u, 0);
