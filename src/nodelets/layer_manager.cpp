@@ -154,6 +154,10 @@ class LayerManager : public nodelet::Nodelet {
   void onTimer(const ros::TimerEvent&) {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!manager_) return;
+    // The band order starts where the vehicle is at the trigger, not where its first odometry put it (on
+    // the ground, before the pilot took off): nothing the manager holds before the trigger is lost.
+    if (pending_trigger_ && manager_->state() == planning::ExplorationState::kWaitTrigger && last_position_)
+      manager_ = std::make_unique<planning::LayerManager>(config_, box_, last_position_->z());
     planning::LayerInputs in;
     in.trigger = pending_trigger_;
     pending_trigger_ = false;
