@@ -163,7 +163,8 @@ common::Status Recorder::writeCsv(const std::string& path) const {
   if (!out) return common::Status::Error(path + ": cannot be written");
   out << "t,coverage,explored_m3,distance,layer,frontiers,x,y,z\n" << std::fixed;
   for (const Sample& s : samples_)
-    out << std::setprecision(2) << s.t << "," << std::setprecision(5) << s.coverage << "," << std::setprecision(3)
+    // Time to the millisecond: metrics/sample_rate may reach 1000 Hz, and rows to 0.01 s repeated their t.
+    out << std::setprecision(3) << s.t << "," << std::setprecision(5) << s.coverage << "," << std::setprecision(3)
         << s.explored_m3 << "," << s.distance << "," << s.layer << "," << s.frontiers << "," << s.position.x() << ","
         << s.position.y() << "," << s.position.z() << "\n";
   out.close();

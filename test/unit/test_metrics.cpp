@@ -400,6 +400,21 @@ TEST(Metrics, RecorderWritesSummaryCsvAndPlot) {
   int rows = 0;
   while (std::getline(csv, line)) ++rows;
   EXPECT_EQ(rows, 11);
+  {  // samples 1 ms apart (metrics/sample_rate up to 1000 Hz) keep their own times
+    metrics::Recorder fast;
+    for (int i = 0; i < 3; ++i) {
+      metrics::Sample s;
+      s.t = 10.0 + 0.001 * i;
+      fast.addSample(s);
+    }
+    const fs::path fast_csv = fs::temp_directory_path() / "go_feap_test_fast.csv";
+    ASSERT_TRUE(fast.writeCsv(fast_csv.string()).ok());
+    std::ifstream in(fast_csv);
+    std::vector<std::string> times;
+    for (std::getline(in, line); std::getline(in, line);) times.push_back(line.substr(0, line.find(',')));
+    EXPECT_EQ(times, (std::vector<std::string>{"10.000", "10.001", "10.002"}));
+    fs::remove(fast_csv);
+  }
   const cv::Mat plot = cv::imread((dir / "coverage.png").string());
   EXPECT_EQ(plot.cols, 800);
   EXPECT_EQ(plot.rows, 500);
