@@ -1,7 +1,7 @@
 // LayerManager: runs the exploration state machine and steers the chain band by band.
 // In: frontiers, map_update (progress), frontier_failed (std_msgs/UInt32 from planners),
 // trigger (std_srvs/Trigger service, or a goal on move_base_simple/goal from rviz's 2D Nav
-// Goal, or layers/auto_start), stop (std_srvs/Trigger service: FINISHED(aborted) at once; the trajectory
+// Goal with layers/goal_trigger, or layers/auto_start), stop (std_srvs/Trigger service: FINISHED(aborted) at once; the trajectory
 // planner then brakes the flight in progress to rest). Out: layer (go_feap/LayerBounds), status
 // (go_feap/ExplorationStatus), blacklist (std_msgs/UInt32MultiArray, latched: frontiers the
 // planners must skip), layer_marker (the band as a translucent slab for rviz). Every
@@ -42,7 +42,7 @@ class LayerManager : public nodelet::Nodelet {
     ros_params::ParamReader p(getPrivateNodeHandle());
     config::readLayers(p, config_);
     p.get("layers/rate", rate_).get("metrics/max_odom_step", max_odom_step_);
-    p.get("layers/auto_start", auto_start_).getFrame("world_frame", world_frame_);
+    p.get("layers/auto_start", auto_start_).get("layers/goal_trigger", goal_trigger_).getFrame("world_frame", world_frame_);
     config::readBox(p, box_);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
     ros_params::requireOrThrow(config_.validate().ok(), getName(), config_.validate().message());
@@ -61,7 +61,8 @@ class LayerManager : public nodelet::Nodelet {
     update_sub_ = ros_guard::subscribe(nh, getName(), "map_update", 20, &LayerManager::onMapUpdate, this);
     failed_sub_ = ros_guard::subscribe(nh, getName(), "frontier_failed", 100, &LayerManager::onFailed, this);
     odom_sub_ = ros_guard::subscribe(nh, getName(), "odom", 2, &LayerManager::onOdom, this);
-    goal_sub_ = ros_guard::subscribe(nh, getName(), "move_base_simple/goal", 1, &LayerManager::onGoal, this);
+    if (goal_trigger_)
+      goal_sub_ = ros_guard::subscribe(nh, getName(), "move_base_simple/goal", 1, &LayerManager::onGoal, this);
     trigger_srv_ = ros_guard::service(nh, getName(), "trigger", &LayerManager::onTrigger, this);
     stop_srv_ = ros_guard::service(nh, getName(), "stop", &LayerManager::onStop, this);
     timer_ = ros_guard::timer(nh, getName(), ros::Duration(1.0 / rate_), &LayerManager::onTimer, this);
@@ -288,6 +289,7 @@ class LayerManager : public nodelet::Nodelet {
   double rate_ = 5.0;
   double max_odom_step_ = 1.0;  ///< m, a longer step between odometry messages is a jump, not flight
   bool auto_start_ = false;
+  bool goal_trigger_ = true;  ///< layers/goal_trigger: a 2D Nav Goal triggers too
   std::string world_frame_;
   std::mutex mutex_;
   std::unique_ptr<planning::LayerManager> manager_;

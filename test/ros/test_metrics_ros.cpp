@@ -14,7 +14,6 @@
 #include <ros/ros.h>
 #include <rosgraph_msgs/Clock.h>
 #include <std_msgs/UInt32.h>
-#include <std_srvs/Trigger.h>
 #include <std_msgs/UInt32MultiArray.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
@@ -382,17 +381,20 @@ nav_msgs::Odometry odometryAtTheCamera() {
 // times: at the next step 5 leaves the blacklist as 6 joins it. The list changes and keeps its size, and
 // it is sent again (it used to be sent only when its size changed, and it kept ids that were gone).
 // The wait layer manager hears its first odometry on the ground (band 0 of two 3 m bands), then the
-// vehicle is taken up to 4.5 m (band 1) before the trigger: exploration starts in band 1, where the vehicle
-// is. The band order used to be fixed at the first odometry, on the ground.
+// vehicle is taken up to 4.5 m (band 1) before the trigger, a 2D Nav Goal (layers/goal_trigger, as
+// shipped): exploration starts in band 1, where the vehicle is. The band order used to be fixed at the
+// first odometry, on the ground.
 TEST(LayerManager, TheStartBandIsWhereTheVehicleIsAtTheTrigger) {
   ros::NodeHandle nh;
   auto clock_pub = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
   auto odom_pub = nh.advertise<nav_msgs::Odometry>("wait/odom", 20);
+  auto goal_pub = nh.advertise<geometry_msgs::PoseStamped>("wait/goal", 1);
   std::vector<go_feap::LayerBounds> layers;
   go_feap::ExplorationStatus::ConstPtr state;
   auto layer_sub = nh.subscribe<go_feap::LayerBounds>("wait/layer", 20, [&](const go_feap::LayerBounds::ConstPtr& m) { layers.push_back(*m); });
   auto status_sub = nh.subscribe<go_feap::ExplorationStatus>("wait/status", 20, [&](const go_feap::ExplorationStatus::ConstPtr& m) { state = m; });
-  ASSERT_TRUE(spinUntil([&] { return odom_pub.getNumSubscribers() > 0 && layer_sub.getNumPublishers() > 0; }, 30.0))
+  ASSERT_TRUE(spinUntil([&] { return odom_pub.getNumSubscribers() > 0 && goal_pub.getNumSubscribers() > 0 &&
+                                     layer_sub.getNumPublishers() > 0; }, 30.0))
       << "the wait layer manager is not connected";
   double now = ros::Time::now().toSec();
   double z = 0.2;
@@ -411,8 +413,10 @@ TEST(LayerManager, TheStartBandIsWhereTheVehicleIsAtTheTrigger) {
   EXPECT_EQ(layers.back().index, 0u) << "on the ground: band 0";
   for (z = 0.2; z < 4.5; z += 0.05) playClock(clock_pub, now, 0.05, 0.05, 0.005, send);  // taken up by hand
   playClock(clock_pub, now, 0.5, 0.05, 0.01, send);
-  std_srvs::Trigger trigger;
-  ASSERT_TRUE(ros::service::call("wait/trigger", trigger));
+  geometry_msgs::PoseStamped goal;
+  goal.header.frame_id = "world";
+  goal.pose.orientation.w = 1.0;
+  goal_pub.publish(goal);
   layers.clear();
   playClock(clock_pub, now, 1.0, 0.05, 0.01, send);
   ASSERT_TRUE(spinUntil([&] { return state->state == go_feap::ExplorationStatus::EXPLORE && !layers.empty(); }, 10.0))

@@ -5,6 +5,7 @@
 // frontiers in view or not), then position commands flow and the metrics
 // recorder publishes the flown path. The simulator's topics are under /vehicle, which onboard.test names
 // in onboard.launch's arguments.
+#include <geometry_msgs/PoseStamped.h>
 #include <gtest/gtest.h>
 #include <nav_msgs/Odometry.h>
 #include <nav_msgs/Path.h>
@@ -97,6 +98,14 @@ TEST(Onboard, RunsTheChainOnD435iDepthAndVioOdometry) {
   // Frontiers in view, and 3 s more (30 global planner periods): still nothing planned, targeted or flown,
   // and the vehicle where it was (the planners used to act before the trigger: only the layer manager
   // waited for it).
+  // A 2D Nav Goal from an rviz on the master meanwhile: no trigger on board (layers/goal_trigger false).
+  ros::Publisher goal_pub = nh.advertise<geometry_msgs::PoseStamped>("/move_base_simple/goal", 1);
+  spinUntil([] { return false; }, 1.0);
+  EXPECT_EQ(goal_pub.getNumSubscribers(), 0u) << "the layer manager listens to move_base_simple/goal on board";
+  geometry_msgs::PoseStamped goal;
+  goal.header.frame_id = "world";
+  goal.pose.orientation.w = 1.0;
+  goal_pub.publish(goal);
   const nav_msgs::Odometry::ConstPtr waiting = odom;
   spinUntil([] { return false; }, 3.0);
   EXPECT_EQ(status->state, go_feap::ExplorationStatus::WAIT_TRIGGER);
