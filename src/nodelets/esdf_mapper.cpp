@@ -246,12 +246,15 @@ class EsdfMapper : public nodelet::Nodelet {
 
   void onTfSamples(const tf2_msgs::TFMessage::ConstPtr& msg) {
     std::lock_guard<std::mutex> lock(tf_samples_mutex_);
-    for (const geometry_msgs::TransformStamped& t : msg->transforms) tf_samples_.add(t.child_frame_id, t.header.stamp);
+    for (const geometry_msgs::TransformStamped& t : msg->transforms)
+      tf_samples_.add(t.child_frame_id, t.header.stamp, t.transform);
   }
 
-  /// Why the pose of `frame` at `stamp` is not to be trusted, or "": a moving link of the chain
-  /// world <- frame whose samples round the stamp are more than mapper/max_tf_gap apart, between which
-  /// tf2 put the pose on a straight line (an odometry gap).
+  /// Why the pose of `frame` at `stamp` is not to be trusted, or "": a link of the chain world <- frame
+  /// that moved between its samples round the stamp, more than mapper/max_tf_gap apart, between which tf2
+  /// put the pose on a straight line (an odometry gap). With no sample after the stamp logged yet (the one
+  /// that let tf2 answer is still on its way here), the last before it more than max_tf_gap back is a gap
+  /// as long at least.
   std::string interpolatedAcrossGap(const std::string& frame, const ros::Time& stamp) {
     std::vector<std::string> chain;
     try {
@@ -263,12 +266,17 @@ class EsdfMapper : public nodelet::Nodelet {
     for (const std::string& link : chain) {
       if (link == world_frame_) continue;  // its own parent link is not in the chain
       const auto bracket = tf_samples_.around(link, stamp);
-      if (!bracket || !(bracket->span() > max_tf_gap_)) continue;
+      if (!bracket) continue;
+      const double span = (bracket->after ? bracket->after->toSec() : stamp.toSec()) - bracket->before.toSec();
+      if (!(span > max_tf_gap_) || (bracket->after && !bracket->moved)) continue;
       std::ostringstream why;
       why << "the pose at " << std::fixed << std::setprecision(3) << stamp.toSec() << " s is interpolated between '"
-          << link << "' samples at " << bracket->before.toSec() << " and " << bracket->after.toSec() << " s, "
-          << bracket->span() << " s apart (more than mapper/max_tf_gap, " << max_tf_gap_
-          << " s): a gap in the odometry";
+          << link << "' samples at " << bracket->before.toSec() << " s and ";
+      if (bracket->after)
+        why << bracket->after->toSec() << " s, " << span;
+      else
+        why << "a later one, at least " << span;
+      why << " s apart (more than mapper/max_tf_gap, " << max_tf_gap_ << " s): a gap in the odometry";
       return why.str();
     }
     return "";

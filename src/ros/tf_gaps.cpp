@@ -4,30 +4,39 @@
 
 namespace go_feap::ros_tf {
 
-void SampleLog::add(const std::string& child, const ros::Time& stamp) {
+namespace {
+
+std::string keyOf(const std::string& child) {
+  return !child.empty() && child.front() == '/' ? child.substr(1) : child;  // tf2 strips it too
+}
+
+}  // namespace
+
+void SampleLog::add(const std::string& child, const ros::Time& stamp, const geometry_msgs::Transform& pose) {
   if (stamp.isZero()) return;
-  std::string key = child;
-  if (!key.empty() && key.front() == '/') key.erase(0, 1);  // tf2 strips it too
-  std::deque<ros::Time>& stamps = links_[key];
+  std::deque<Sample>& samples = links_[keyOf(child)];
   // Stamps compared as seconds: ros::Time subtraction throws beyond 2^31 s.
-  if (!stamps.empty() && stamp.toSec() < stamps.back().toSec() - keep_s_) stamps.clear();
-  const auto at = std::lower_bound(stamps.begin(), stamps.end(), stamp);
-  if (at != stamps.end() && *at == stamp) return;  // repeated
-  stamps.insert(at, stamp);
-  while (stamps.front().toSec() < stamps.back().toSec() - keep_s_) stamps.pop_front();
+  if (!samples.empty() && stamp.toSec() < samples.back().stamp.toSec() - keep_s_) samples.clear();
+  const auto at = std::lower_bound(samples.begin(), samples.end(), stamp,
+                                   [](const Sample& s, const ros::Time& t) { return s.stamp < t; });
+  if (at != samples.end() && at->stamp == stamp) return;  // repeated
+  const Eigen::Quaterniond q(pose.rotation.w, pose.rotation.x, pose.rotation.y, pose.rotation.z);
+  samples.insert(at, Sample{stamp, Eigen::Vector3d(pose.translation.x, pose.translation.y, pose.translation.z), q});
+  while (samples.front().stamp.toSec() < samples.back().stamp.toSec() - keep_s_) samples.pop_front();
 }
 
 std::optional<SampleLog::Bracket> SampleLog::around(const std::string& child, const ros::Time& stamp) const {
-  std::string key = child;
-  if (!key.empty() && key.front() == '/') key.erase(0, 1);
-  const auto link = links_.find(key);
+  const auto link = links_.find(keyOf(child));
   if (link == links_.end() || link->second.empty()) return std::nullopt;
-  const std::deque<ros::Time>& stamps = link->second;
-  const auto after = std::lower_bound(stamps.begin(), stamps.end(), stamp);
-  if (after == stamps.end()) return std::nullopt;
-  if (*after == stamp) return Bracket{stamp, stamp};
-  if (after == stamps.begin()) return std::nullopt;
-  return Bracket{*std::prev(after), *after};
+  const std::deque<Sample>& samples = link->second;
+  const auto after = std::lower_bound(samples.begin(), samples.end(), stamp,
+                                      [](const Sample& s, const ros::Time& t) { return s.stamp < t; });
+  if (after != samples.end() && after->stamp == stamp) return Bracket{stamp, stamp, false};
+  if (after == samples.begin()) return std::nullopt;
+  const Sample& b = *std::prev(after);
+  if (after == samples.end()) return Bracket{b.stamp, std::nullopt, false};
+  const bool moved = (after->t - b.t).norm() > 1e-3 || b.q.angularDistance(after->q) > 1e-3;
+  return Bracket{b.stamp, after->stamp, moved};
 }
 
 }  // namespace go_feap::ros_tf

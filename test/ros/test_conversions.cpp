@@ -557,40 +557,57 @@ TEST(SharedMap, AHandleToAnotherMapIsNamed) {
 }
 
 // The samples round a stamp, as tf2 interpolates between them: the sample itself at its stamp, the two
-// neighbours inside, none outside the stamps kept or for a link never heard; out-of-order samples take
-// their place, a clock gone back by more than the kept window starts afresh, old samples are dropped.
+// neighbours inside (moved or not), the last before with none after yet past the newest, none before the
+// oldest or for a link never heard; out-of-order samples take their place, a clock gone back by more than
+// the kept window starts afresh, old samples are dropped.
 TEST(TfSampleLog, GivesTheSamplesRoundAStampAsTf2InterpolatesBetweenThem) {
   go_feap::ros_tf::SampleLog log(10.0);
   const auto t = [](double s) { return ros::Time(s); };
-  for (double s : {100.0, 100.1, 100.2, 101.5}) log.add("body", t(s));
-  log.add("/body", t(100.05));  // out of order, and named with tf's old leading '/'
+  const auto at = [](double x, double yaw = 0.0) {
+    geometry_msgs::Transform p;
+    p.translation.x = x;
+    p.rotation.w = std::cos(0.5 * yaw), p.rotation.z = std::sin(0.5 * yaw);
+    return p;
+  };
+  for (double s : {100.0, 100.1, 100.2}) log.add("body", t(s), at(s - 100.0));
+  log.add("body", t(101.5), at(0.2));                       // still since 100.2
+  log.add("body", t(103.0), at(0.2, 0.1));                  // turned
+  log.add("/body", t(100.05), at(0.05));                    // out of order, named with tf's old leading '/'
   EXPECT_FALSE(log.around("camera", t(100.1)).has_value()) << "a link never heard";
   EXPECT_FALSE(log.around("body", t(99.0)).has_value()) << "before the first sample";
-  EXPECT_FALSE(log.around("body", t(102.0)).has_value()) << "after the last";
-  auto b = log.around("body", t(100.1));
+  auto b = log.around("body", t(104.0));  // past the newest: the last before, none after yet
   ASSERT_TRUE(b);
+  EXPECT_EQ(b->before, t(103.0));
+  EXPECT_FALSE(b->after.has_value());
+  b = log.around("body", t(100.1));
+  ASSERT_TRUE(b && b->after);
   EXPECT_EQ(b->before, t(100.1));
-  EXPECT_EQ(b->after, t(100.1));
+  EXPECT_EQ(*b->after, t(100.1));
+  EXPECT_FALSE(b->moved);
   b = log.around("/body", t(100.07));
-  ASSERT_TRUE(b);
+  ASSERT_TRUE(b && b->after);
   EXPECT_EQ(b->before, t(100.05));
-  EXPECT_EQ(b->after, t(100.1));
-  b = log.around("body", t(101.0));  // in the gap
-  ASSERT_TRUE(b);
+  EXPECT_EQ(*b->after, t(100.1));
+  EXPECT_TRUE(b->moved);
+  b = log.around("body", t(101.0));  // a gap the link held still across: interpolated exactly
+  ASSERT_TRUE(b && b->after);
   EXPECT_EQ(b->before, t(100.2));
-  EXPECT_EQ(b->after, t(101.5));
-  EXPECT_NEAR(b->span(), 1.3, 1e-9);
-  log.add("body", t(111.0));  // 100.x now more than 10 s behind: dropped
+  EXPECT_EQ(*b->after, t(101.5));
+  EXPECT_FALSE(b->moved);
+  b = log.around("body", t(102.0));  // a gap it turned across
+  ASSERT_TRUE(b && b->after);
+  EXPECT_TRUE(b->moved);
+  log.add("body", t(111.0), at(0.0));  // 100.x and 101.5 now more than 10 s behind: dropped
   EXPECT_FALSE(log.around("body", t(100.1)).has_value());
   b = log.around("body", t(105.0));
   ASSERT_TRUE(b);
-  EXPECT_EQ(b->before, t(101.5));
-  log.add("body", t(50.0));  // a clock gone back (a bag played again): the link starts afresh
-  EXPECT_FALSE(log.around("body", t(105.0)).has_value());
+  EXPECT_EQ(b->before, t(103.0));
+  log.add("body", t(50.0), at(0.0));  // a clock gone back (a bag played again): the link starts afresh
+  EXPECT_FALSE(log.around("body", t(49.0)).has_value());
   b = log.around("body", t(50.0));
-  ASSERT_TRUE(b);
-  EXPECT_EQ(b->after, t(50.0));
-  log.add("body", t(0.0));  // a stamp of 0 is no sample
+  ASSERT_TRUE(b && b->after);
+  EXPECT_EQ(*b->after, t(50.0));
+  log.add("body", t(0.0), at(0.0));  // a stamp of 0 is no sample
   EXPECT_FALSE(log.around("body", t(0.0)).has_value());
 }
 

@@ -445,12 +445,13 @@ TEST_F(MapperTest, InTfModeAFrameWaitsForALateTransformAndOneWithoutNeverBlocksT
   info_pub.publish(*probe.info);
   spinUntil([] { return false; }, 0.5);
   tf2_ros::TransformBroadcaster tf_pub;
-  auto transformAt = [&](const ros::Time& stamp, const std::string& frame) {
+  // The probe's camera pose, moved dx along x.
+  auto transformAt = [&](const ros::Time& stamp, const std::string& frame, double dx = 0.0) {
     geometry_msgs::TransformStamped tf;
     tf.header.stamp = stamp;
     tf.header.frame_id = probe.pose->header.frame_id;
     tf.child_frame_id = frame;
-    tf.transform.translation.x = probe.pose->pose.position.x;
+    tf.transform.translation.x = probe.pose->pose.position.x + dx;
     tf.transform.translation.y = probe.pose->pose.position.y;
     tf.transform.translation.z = probe.pose->pose.position.z;
     tf.transform.rotation = probe.pose->pose.orientation;
@@ -492,12 +493,14 @@ TEST_F(MapperTest, InTfModeAFrameWaitsForALateTransformAndOneWithoutNeverBlocksT
   spinUntil([] { return false; }, 0.5);
   EXPECT_EQ(updates, 4u);
 
-  // An odometry gap: samples 1 s apart (mapper/max_tf_gap 0.5 s). tf2 gives a pose inside the gap on the
-  // straight line between them; the frame there is skipped. One at the sample after the gap, and one
-  // between samples 0.3 s apart, are integrated.
+  // An odometry gap: samples 1 s apart (mapper/max_tf_gap 0.5 s), the camera 0.3 m further on at the
+  // second. tf2 gives a pose inside the gap on the straight line between them; the frame there is
+  // skipped. One at the sample after the gap, and one between samples 0.3 s apart, are integrated; so is
+  // one between samples 1 s apart of a camera that held still (interpolated exactly).
   tf_pub.sendTransform(transformAt(s0 + ros::Duration(1.0), "tf_probe_camera"));
-  tf_pub.sendTransform(transformAt(s0 + ros::Duration(2.0), "tf_probe_camera"));
-  tf_pub.sendTransform(transformAt(s0 + ros::Duration(2.3), "tf_probe_camera"));
+  tf_pub.sendTransform(transformAt(s0 + ros::Duration(2.0), "tf_probe_camera", 0.3));
+  tf_pub.sendTransform(transformAt(s0 + ros::Duration(2.3), "tf_probe_camera", 0.35));
+  tf_pub.sendTransform(transformAt(s0 + ros::Duration(3.3), "tf_probe_camera", 0.35));
   spinUntil([] { return false; }, 0.5);
   depth_pub.publish(frameAt(s0 + ros::Duration(1.5), "tf_probe_camera"));
   spinUntil([] { return false; }, 1.0);
@@ -506,6 +509,8 @@ TEST_F(MapperTest, InTfModeAFrameWaitsForALateTransformAndOneWithoutNeverBlocksT
   EXPECT_TRUE(spinUntil([&] { return updates == 5; }, 10.0)) << "the frame at the sample after the gap";
   depth_pub.publish(frameAt(s0 + ros::Duration(2.15), "tf_probe_camera"));
   EXPECT_TRUE(spinUntil([&] { return updates == 6; }, 10.0)) << "a frame between samples 0.3 s apart";
+  depth_pub.publish(frameAt(s0 + ros::Duration(2.8), "tf_probe_camera"));
+  EXPECT_TRUE(spinUntil([&] { return updates == 7; }, 10.0)) << "a frame between samples 1 s apart of a still camera";
 }
 
 }  // namespace
