@@ -103,6 +103,7 @@ class TrajectoryServer : public nodelet::Nodelet {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!t) {
       NODELET_WARN_STREAM_THROTTLE(1.0, getName() << ": trajectory " << msg->traj_id << " refused: " << t.message());
+      commanding_ = commanding_ || hold_;
       return;
     }
     std::string bad = ros_traj::motionProblem(*t, max_speed_, max_acceleration_, max_yaw_rate_);
@@ -115,6 +116,7 @@ class TrajectoryServer : public nodelet::Nodelet {
     if (!bad.empty()) {
       NODELET_WARN_STREAM_THROTTLE(1.0, getName() << ": trajectory " << msg->traj_id << " refused: " << bad
                                                   << "; the reference stays as it was");
+      commanding_ = commanding_ || hold_;
       return;
     }
     if (later) {
@@ -135,6 +137,7 @@ class TrajectoryServer : public nodelet::Nodelet {
     } else {
       NODELET_WARN_STREAM_THROTTLE(1.0, getName() << ": trajectory " << pending_->id << " refused at its start: "
                                                   << bad << "; the reference stays as it was");
+      commanding_ = commanding_ || hold_;
     }
     pending_.reset();
   }
@@ -185,7 +188,10 @@ class TrajectoryServer : public nodelet::Nodelet {
       NODELET_WARN_STREAM(getName() << ": odometry is back, " << (*odom_position_ - hold_position_).norm()
                                     << " m from the held reference; holding there, following the next trajectory");
     }
-    if (!hold_) {  // first pose, or the first after a gap: hold it until a trajectory arrives
+    if (!hold_ || (!commanding_ && !hold_before_trajectory_)) {
+      // The first pose, or the first after a gap: held until a trajectory arrives. Before any command is
+      // sent (server/hold_before_trajectory false) the hold follows the vehicle, wherever the pilot takes
+      // it, so that a hold sent after a refused first trajectory is where the vehicle is.
       hold_position_ = Eigen::Vector3d(p.x, p.y, p.z);
       hold_yaw_ = ros_conv::yawOf(q);
       hold_ = true;
@@ -237,8 +243,8 @@ class TrajectoryServer : public nodelet::Nodelet {
       cmd.trajectory_id = static_cast<std::uint32_t>(current_->id);
       hold_position_ = p;  // where to hold if the trajectory is dropped
       hold_yaw_ = yaw;
-      flown_ = true;
-    } else if (hold_ && (flown_ || hold_before_trajectory_)) {
+      commanding_ = true;
+    } else if (hold_ && (commanding_ || hold_before_trajectory_)) {
       p = hold_position_;
       cmd.trajectory_flag = PositionCommand::TRAJECTORY_STATUS_EMPTY;
     } else {
@@ -267,7 +273,9 @@ class TrajectoryServer : public nodelet::Nodelet {
   std::optional<ros_traj::Trajectory> pending_;  ///< received, its start time still ahead
   bool hold_ = false;
   bool hold_before_trajectory_ = false;
-  bool flown_ = false;  ///< a trajectory has been followed
+  /// A trajectory has been followed, or refused: commands flow from then on (a planner whose first
+  /// trajectory was refused learns it from the hold's EMPTY flag, and plans again)
+  bool commanding_ = false;
   Eigen::Vector3d hold_position_ = Eigen::Vector3d::Zero();
   double hold_yaw_ = 0.0;
   ros::Publisher cmd_pub_;

@@ -501,8 +501,10 @@ class ProbeServer {
 
 // The server as shipped (server/hold_before_trajectory false: quiet/...) sends nothing before its first
 // trajectory, however long the odometry comes: a hold of the pose at launch, on the ground, pulled a vehicle
-// the pilot then took off by hand back down once the bridge took the commands. The first trajectory is
-// followed; after its end, and through an odometry gap, the server holds as before.
+// the pilot then took off by hand back down once the bridge took the commands. A refused first trajectory
+// starts the commands, holding where the vehicle is then (the planner learns of the refusal from the
+// hold's EMPTY flag; with no command it never did). The next is followed; after its end, and through an
+// odometry gap, the server holds as before.
 TEST(TrajectoryServerFirstCommand, NothingIsSentBeforeTheFirstTrajectoryThenItIsFollowedAndHeld) {
   ProbeServer quiet("quiet/");
   quiet.vehicle = Vec3(0.5, 0.5, 0.1);  // on the ground
@@ -512,6 +514,10 @@ TEST(TrajectoryServerFirstCommand, NothingIsSentBeforeTheFirstTrajectoryThenItIs
   quiet.hover(1.0);
   EXPECT_TRUE(quiet.history.empty()) << quiet.history.size() << " commands before the first trajectory, the first at z "
                                      << quiet.history.front()->position.z;
+  quiet.fly(quiet.vehicle + Vec3(3.0, 0.0, 0.0), quiet.vehicle + Vec3(4.0, 0.0, 0.0), 76, ros::Time::now());  // refused
+  ASSERT_TRUE(spinUntil([&] { return quiet.hover(0.05) != nullptr; }, 20.0)) << "no command after a refused trajectory";
+  EXPECT_EQ(quiet.command->trajectory_flag, go_feap::PositionCommand::TRAJECTORY_STATUS_EMPTY);
+  EXPECT_LT((quiet.commanded() - quiet.vehicle).norm(), 1e-9) << "not held where the vehicle is";
   const Vec3 end = quiet.vehicle + Vec3(1.0, 0.0, 0.0);
   quiet.fly(quiet.vehicle, end, 77, ros::Time::now());
   ASSERT_TRUE(spinUntil([&] { return quiet.hover(0.05) && quiet.command->trajectory_id == 77u; }, 20.0))
