@@ -28,7 +28,11 @@ TEST(Chain, FliesToAViewpointWithoutCollision) {
   go_feap::test::NodeLog node_log(nh);
   std::vector<Vec3> targets, path;
   int trajectories = 0;
-  auto bspline_sub = nh.subscribe<go_feap::Bspline>("bspline", 5, [&](const go_feap::Bspline::ConstPtr&) { ++trajectories; });
+  go_feap::Bspline::ConstPtr last_bspline;
+  auto bspline_sub = nh.subscribe<go_feap::Bspline>("bspline", 5, [&](const go_feap::Bspline::ConstPtr& m) {
+    ++trajectories;
+    last_bspline = m;
+  });
   go_feap::PositionCommand::ConstPtr last_cmd;
   double max_cmd_jump = 0.0, max_cmd_vel_jump = 0.0;
   int scored = 0;  // command pairs at most 30 ms apart
@@ -89,7 +93,17 @@ TEST(Chain, FliesToAViewpointWithoutCollision) {
   EXPECT_LT(max_cmd_jump, 0.03);
   EXPECT_LT(max_cmd_vel_jump, 0.3);
 
-  // Stopped on request while exploring: FINISHED(aborted), no target after, the vehicle at rest and held.
+  // Stopped on request mid-flight (faster than 0.8 m/s, the trajectory's end more than 1.5 m on; stopped
+  // near a viewpoint, the flight ended there at rest without any brake): FINISHED(aborted), no target
+  // after, the vehicle braked to rest short of the trajectory's end, and held.
+  const auto trajectoryEnd = [&] {
+    const auto& q = last_bspline->pos_pts.back();
+    return Vec3(q.x, q.y, q.z);
+  };
+  ASSERT_TRUE(spinUntil([&] { return last_bspline && !path.empty() && speed > 0.8 && (trajectoryEnd() - path.back()).norm() > 1.5; },
+                        120.0))
+      << "never faster than 0.8 m/s with 1.5 m to go";
+  const Vec3 end_then = trajectoryEnd();
   ASSERT_TRUE(status && status->state != go_feap::ExplorationStatus::FINISHED) << "the exploration ended before the stop";
   std_srvs::Trigger stop;
   ASSERT_TRUE(ros::service::waitForService("stop", ros::Duration(10.0)));
@@ -112,6 +126,7 @@ TEST(Chain, FliesToAViewpointWithoutCollision) {
   ASSERT_TRUE(ros::param::get("/trajectory_planner/optimizer/a_max", a_max));
   const double allowed = 0.5 * speed_then + speed_then * speed_then / (2.0 * a_max) + 0.1;
   EXPECT_LT((path.back() - stopped_at).norm(), allowed) << "flew on after the stop at " << speed_then << " m/s";
+  EXPECT_GT((path.back() - end_then).norm(), 0.3) << "flown to the trajectory's end";
   if (speed_then > 0.1) {
     EXPECT_GT(trajectories, trajectories_then) << "no brake trajectory after the stop";
   }
