@@ -41,7 +41,7 @@ class TrajectoryServer : public nodelet::Nodelet {
     ros::NodeHandle& nh = getNodeHandle();
     ros_params::ParamReader p(getPrivateNodeHandle());
     p.get("server/rate", rate_).get("server/odom_timeout", odom_timeout_).getFrame("world_frame", world_frame_);
-    p.get("server/max_start_offset", max_start_offset_);
+    p.get("server/max_start_offset", max_start_offset_).get("server/max_start_yaw_offset", max_start_yaw_offset_);
     p.get("server/max_speed", max_speed_).get("server/max_acceleration", max_acceleration_);
     p.get("server/max_yaw_rate", max_yaw_rate_).get("server/hold_before_trajectory", hold_before_trajectory_);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
@@ -53,6 +53,8 @@ class TrajectoryServer : public nodelet::Nodelet {
                                "parameter '" + p.fullName("server/max_yaw_rate") + "' must be > 0");
     ros_params::requireOrThrow(std::isfinite(max_start_offset_) && max_start_offset_ > 0.0, getName(),
                                "parameter '" + p.fullName("server/max_start_offset") + "' must be > 0");
+    ros_params::requireOrThrow(max_start_yaw_offset_ > 0.0 && max_start_yaw_offset_ <= M_PI, getName(),
+                               "parameter '" + p.fullName("server/max_start_yaw_offset") + "' must be in (0, pi] rad");
     ros_params::requireOrThrow(rate_ >= 10.0 && rate_ <= 1000.0, getName(),
                                "parameter '" + p.fullName("server/rate") + "' must be in [10, 1000] Hz");
     ros_params::requireOrThrow(std::isfinite(odom_timeout_) && odom_timeout_ > 0.0, getName(),
@@ -157,12 +159,20 @@ class TrajectoryServer : public nodelet::Nodelet {
     }
     if (!where) return "";
     const double from = std::max(0.0, now.toSec() - t.start_time.toSec());
-    const Eigen::Vector3d p = trajectory::sampleTrajectory(t, from).position;
-    const double offset = (p - *odom_position_).norm();
+    const trajectory::TrajectorySample sample = trajectory::sampleTrajectory(t, from);
+    const double offset = (sample.position - *odom_position_).norm();
     if (!(offset <= max_start_offset_)) {
       std::ostringstream why;
       why << "its reference " << from << " s after its start is " << offset << " m from the odometry (more than "
           << "server/max_start_offset " << max_start_offset_ << " m)";
+      return why.str();
+    }
+    // Likewise its heading: the controller would spin the vehicle round at once.
+    const double turn = std::abs(std::remainder(sample.yaw - odom_yaw_, 2.0 * M_PI));
+    if (!(turn <= max_start_yaw_offset_)) {
+      std::ostringstream why;
+      why << "its heading " << from << " s after its start is " << turn << " rad from the odometry's (more than "
+          << "server/max_start_yaw_offset " << max_start_yaw_offset_ << " rad)";
       return why.str();
     }
     return "";
@@ -179,6 +189,7 @@ class TrajectoryServer : public nodelet::Nodelet {
     std::lock_guard<std::mutex> lock(mutex_);
     last_odom_ = ros::Time::now();
     odom_position_ = Eigen::Vector3d(p.x, p.y, p.z);
+    odom_yaw_ = ros_conv::yawOf(q);
     if (odom_gap_) {
       // Held where the odometry is now, not where the reference was before the gap: the vehicle flew
       // blind meanwhile, or its odometry came back in another place (a VIO re-initialised), and the old
@@ -266,6 +277,8 @@ class TrajectoryServer : public nodelet::Nodelet {
   ros::Time last_odom_;
   ros::Time last_tick_;  ///< the clock at the last timer call
   std::optional<Eigen::Vector3d> odom_position_;  ///< m, of the latest usable odometry
+  double odom_yaw_ = 0.0;                         ///< rad, its heading
+  double max_start_yaw_offset_ = 1.0;
   bool odom_gap_ = false;
   std::string world_frame_;
   std::mutex mutex_;

@@ -474,9 +474,9 @@ class ProbeServer {
         seconds, [&] { if (send_.due() && !silent) publish_odometry(); }, [] { return false; }, 30.0);
     return command;
   }
-  // A straight flight from a to b over 3 s (7 control points, 0.75 s knot span), heading 0.
-  void fly(const Vec3& a, const Vec3& b, std::int64_t id, const ros::Time& start) {
-    Eigen::MatrixXd q(3, 7), y = Eigen::MatrixXd::Zero(1, 4);
+  // A straight flight from a to b over 3 s (7 control points, 0.75 s knot span), heading `yaw`.
+  void fly(const Vec3& a, const Vec3& b, std::int64_t id, const ros::Time& start, double yaw = 0.0) {
+    Eigen::MatrixXd q(3, 7), y = Eigen::MatrixXd::Constant(1, 4, yaw);
     for (int i = 0; i < 7; ++i) q.col(i) = a + (b - a) * std::clamp((i - 1) / 4.0, 0.0, 1.0);
     go_feap::ros_traj::Trajectory t;
     t.position = go_feap::trajectory::UniformBspline(q, 3, 0.75);
@@ -576,6 +576,21 @@ TEST_F(ProbeServerTest, TrajectoriesStartingFarFromTheOdometryAreRefused) {
       << "a trajectory 0.5 m away was refused";
   EXPECT_LT((probe.commanded() - near).norm(), 0.15) << "not followed from its start";
   EXPECT_EQ(probe.command->trajectory_flag, go_feap::PositionCommand::TRAJECTORY_STATUS_READY);
+}
+
+// Likewise for the heading (server/max_start_yaw_offset): one starting where the vehicle is but facing
+// 2 rad from its heading (odometry yaw 0) is refused, one 0.3 rad off is followed.
+TEST_F(ProbeServerTest, TrajectoriesStartingAtAnotherHeadingAreRefused) {
+  const double max_turn = param("server/max_start_yaw_offset");
+  ASSERT_LT(max_turn, 2.0);
+  ASSERT_GT(max_turn, 0.3);
+  const Vec3 vehicle = probe.vehicle;
+  probe.fly(vehicle, vehicle + Vec3(1.0, 0.0, 0.0), 921, ros::Time::now(), -2.0);
+  probe.hover(1.0);
+  EXPECT_NE(probe.command->trajectory_id, 921u) << "a trajectory facing 2 rad off was taken";
+  probe.fly(vehicle, vehicle + Vec3(1.0, 0.0, 0.0), 922, ros::Time::now(), 0.3);
+  EXPECT_TRUE(spinUntil([&] { return probe.hover(0.05)->trajectory_id == 922u; }, 20.0))
+      << "a trajectory facing 0.3 rad off was refused";
 }
 
 // A trajectory that reaches the server while its odometry is silent (one planned just before the odometry
