@@ -565,8 +565,13 @@ TEST_F(FrontierPlannerTest, OmissionLikelyFrontierComesFirstThroughTheNodelet) {
     return f;
   };
   // Publishes A and B with these attributes (0.15 s apart: global/rate lets one through per 0.1 s) until
-  // the tour planned from one of them comes; returns its order.
+  // the tour planned from one of them comes; returns its order. Each call's stamps come after every stamp
+  // of the calls before (the clock ticks in 10 ms: a call's first message could share the last stamp of
+  // the one before, whose tour, planned from the other attributes, was then taken for this call's).
+  ros::Time last_sent;
   auto orderFor = [&](const Omission& a, const Omission& b) {
+    spinUntil([&] { return ros::Time::now() > last_sent; }, 10.0);
+    tours.clear();
     go_feap::FrontierArray msg;
     msg.header.frame_id = "world";
     msg.frontiers = {frontier(id_a, uav + Vec3(0.0, 0.0, 0.5), a), frontier(id_b, uav + Vec3(0.0, 0.0, -0.6), b)};
@@ -580,7 +585,9 @@ TEST_F(FrontierPlannerTest, OmissionLikelyFrontierComesFirstThroughTheNodelet) {
         }
       if (last.isZero() || (ros::WallTime::now() - last).toSec() >= 0.15) {
         msg.header.stamp = ros::Time::now();
+        if (msg.header.stamp <= last_sent) return false;  // the clock has not ticked since
         frontier_pub.publish(msg);
+        last_sent = msg.header.stamp;
         last = ros::WallTime::now();
       }
       return false;
