@@ -301,20 +301,21 @@ class EsdfMapper : public nodelet::Nodelet {
     if (!T_W_C.matrix().allFinite() ||
         !T_W_C.linear().isApprox(Eigen::Quaterniond(T_W_C.linear()).normalized().toRotationMatrix(), 1e-3))
       return skip("pose", "camera pose is not finite or not a rotation");
-    // A turn between two integrated frames larger than mapper/max_rotation_jump is a relocalisation too (a
-    // VIO restarted at its own origin keeps the position and resets the heading to 0).
-    const double turned = last_rotation_ ? Eigen::AngleAxisd(last_rotation_->transpose() * T_W_C.linear()).angle() : 0.0;
-    if (last_position_ && turned > max_rotation_jump_) {
-      last_position_ = T_W_C.translation();
-      last_rotation_ = T_W_C.linear();
-      return skip("pose_jump", "camera pose turned by " + std::to_string(turned) + " rad since the last frame (more than "
-                                   "mapper/max_rotation_jump, " + std::to_string(max_rotation_jump_) + " rad: relocalisation?)");
-    }
-    if (last_position_ && (T_W_C.translation() - *last_position_).norm() > max_pose_jump_) {
-      last_position_ = T_W_C.translation();  // accept the new pose as the reference from now on
-      last_rotation_ = T_W_C.linear();
-      return skip("pose_jump", "camera pose jumped by more than " + std::to_string(max_pose_jump_) +
-                                   " m since the last frame (relocalisation?)");
+    // A jump between integrated frames, farther than mapper/max_pose_jump or turned more than
+    // mapper/max_rotation_jump (a VIO restarted at its own origin resets the heading), is a relocalisation:
+    // the frame is skipped and its pose is the reference from now on.
+    if (last_position_) {
+      const double moved = (T_W_C.translation() - *last_position_).norm();
+      const double turned = Eigen::AngleAxisd(last_rotation_->transpose() * T_W_C.linear()).angle();
+      if (moved > max_pose_jump_ || turned > max_rotation_jump_) {
+        last_position_ = T_W_C.translation();
+        last_rotation_ = T_W_C.linear();
+        std::ostringstream why;
+        why << "camera pose moved " << moved << " m and turned " << turned << " rad since the last frame (more than "
+            << "mapper/max_pose_jump, " << max_pose_jump_ << " m, or mapper/max_rotation_jump, " << max_rotation_jump_
+            << " rad): relocalisation?";
+        return skip("pose_jump", why.str());
+      }
     }
     const std::string bad = ros_check::depthImageProblem(*msg);
     if (!bad.empty()) return skip("image", "depth image refused: " + bad);

@@ -173,6 +173,31 @@ std::pair<int, std::string> runCommand(const std::string& command) {
   return {WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status), out};
 }
 
+// Without --out, two calls started together get folders of their own (a shared one kept only the last
+// call's tables); off a terminal the progress is a line per run ended, with no carriage return (a log held
+// one endless line).
+TEST(Bench, CallsWithoutOutGetTheirOwnFoldersAndLogOneLinePerRun) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("go_feap_bench_default_out_" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string call = std::string(GO_FEAP_BENCH_BIN) + " --scene maze --planner nearest --runs 1 --max-sim-time 1";
+  const auto [rc, said] = runCommand("cd " + dir.string() + " && (timeout 120 " + call + " > a.out 2> a.err & timeout 120 " +
+                                     call + " > b.out 2> b.err; wait) && cat a.err b.err");
+  EXPECT_EQ(rc, 0) << said;
+  std::vector<std::string> folders;
+  for (const auto& entry : fs::directory_iterator(dir / "results")) {
+    folders.push_back(entry.path().filename().string());
+    EXPECT_TRUE(fs::exists(entry.path() / "table.json")) << entry.path();
+  }
+  EXPECT_EQ(folders.size(), 2u) << said;
+  EXPECT_EQ(said.find('\r'), std::string::npos) << "carriage returns in a log";
+  std::size_t lines = 0;
+  for (std::size_t at = 0; (at = said.find("[1/1 runs] maze / nearest / seed 0: ", at)) != std::string::npos; ++at) ++lines;
+  EXPECT_EQ(lines, 2u) << said;
+  fs::remove_all(dir);
+}
+
 // Command-line values the tools refuse up front, naming the argument: 1e12 jobs or runs aborted the
 // bench with bad_alloc, a file in --out's place aborted it after every run had been flown, and a
 // --skip-pixel of 2^32 wrapped to 0 in go_feap_map_perf (a loop for ever).
