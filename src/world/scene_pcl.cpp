@@ -369,14 +369,15 @@ double readNumber(const std::uint8_t* at, std::uint8_t datatype) {
 
 }  // namespace
 
-common::Result<std::vector<Vec3>> loadPointCloud(const std::string& path) {
-  using R = common::Result<std::vector<Vec3>>;
+common::Result<PointCloudFile> loadPointCloudFile(const std::string& path) {
+  using R = common::Result<PointCloudFile>;
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) return R::Error(path + ": file not found");
   const std::string ext = lowerExtension(path);
   // PCL prints its own diagnostics; we return one message instead.
   pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
   pcl::PCLPointCloud2 blob;
+  std::vector<pcl::Vertices> faces;  // PLY
   CloudHeader header;
   int rc = -1;
   std::string kind;
@@ -407,7 +408,11 @@ common::Result<std::vector<Vec3>> loadPointCloud(const std::string& path) {
       header = readCloudHeader(path, kind);
       if (const std::string e = declaredSizeProblem(path, kind, header); !e.empty()) return R::Error(e);
       if (const std::string e = plyDataProblem(path, header); !e.empty()) return R::Error(e);
-      rc = reader.read(path, blob);
+      // Read as a mesh: its faces (none for a plain cloud) come with the vertices.
+      pcl::PolygonMesh mesh;
+      rc = reader.read(path, mesh);
+      blob = std::move(mesh.cloud);
+      faces = std::move(mesh.polygons);
     } else {
       return R::Error(path + ": unknown point cloud extension '" + fs::path(path).extension().string() +
                       "' (expected .pcd or .ply, in any case)");
@@ -442,7 +447,8 @@ common::Result<std::vector<Vec3>> loadPointCloud(const std::string& path) {
   if (blob.row_step < width * blob.point_step || blob.data.size() < (height - 1) * blob.row_step + width * blob.point_step)
     return R::Error(path + ": truncated " + kind + " file (header declares " + std::to_string(width * height) +
                     " points, data holds fewer)");
-  std::vector<Vec3> points;
+  PointCloudFile out;
+  std::vector<Vec3>& points = out.points;
   points.reserve(width * height);
   for (std::size_t r = 0; r < height; ++r)
     for (std::size_t c = 0; c < width; ++c) {
@@ -452,7 +458,26 @@ common::Result<std::vector<Vec3>> loadPointCloud(const std::string& path) {
       if (!p.allFinite()) return R::Error(path + ": point " + std::to_string(points.size()) + " is NaN or Inf");
       points.push_back(p);
     }
-  return points;
+  // Each face as a fan of triangles round its first vertex (a convex polygon, as meshes write them).
+  for (std::size_t f = 0; f < faces.size(); ++f) {
+    const pcl::Indices& v = faces[f].vertices;
+    const std::string face = path + ": PLY file's face " + std::to_string(f);
+    if (v.size() < 3)
+      return R::Error(face + " has " + std::to_string(v.size()) + " vertices (a face needs 3 at least)");
+    for (const auto i : v)
+      if (i < 0 || static_cast<std::size_t>(i) >= points.size())
+        return R::Error(face + " names vertex " + std::to_string(i) + ", but the file has " +
+                        std::to_string(points.size()) + " vertices (indices count from 0)");
+    const auto at = [&](std::size_t k) { return static_cast<std::uint32_t>(v[k]); };
+    for (std::size_t k = 1; k + 1 < v.size(); ++k) out.triangles.push_back({at(0), at(k), at(k + 1)});
+  }
+  return out;
+}
+
+common::Result<std::vector<Vec3>> loadPointCloud(const std::string& path) {
+  auto file = loadPointCloudFile(path);
+  if (!file) return file.status();
+  return std::move(file->points);
 }
 
 common::Status saveScenePcd(const Scene& scene, const std::string& path) {

@@ -222,13 +222,18 @@ common::Result<Scene> loadSceneFile(const SceneFileSpec& spec) {
   const Eigen::Affine3d T(spec.T_world_file);
   const std::string ext = lowerExtension(spec.file);
   if (ext == ".pcd" || ext == ".ply") {
-    auto points = loadPointCloud(spec.file);
-    if (!points) return points.status();
-    for (std::size_t i = 0; i < points->size(); ++i) {
-      const Vec3 p = T * (*points)[i];
-      if (!p.allFinite()) return R::Error(spec.file + ": point " + std::to_string(i) + " is not finite once placed by T_world_file");
-      markOccupied(scene, p);
+    auto cloud = loadPointCloudFile(spec.file);
+    if (!cloud) return cloud.status();
+    std::vector<Vec3> placed(cloud->points.size());
+    for (std::size_t i = 0; i < placed.size(); ++i) {
+      placed[i] = T * cloud->points[i];
+      if (!placed[i].allFinite())
+        return R::Error(spec.file + ": point " + std::to_string(i) + " is not finite once placed by T_world_file");
+      markOccupied(scene, placed[i]);
     }
+    // A PLY mesh's faces mark every voxel they overlap, as an STL's triangles do: its vertices alone
+    // left the walls between them open.
+    for (const auto& [a, b, c] : cloud->triangles) voxelizeTriangle(scene, placed[a], placed[b], placed[c]);
   } else if (ext == ".stl") {
     auto mesh = loadStl(spec.file);
     if (!mesh) return mesh.status();

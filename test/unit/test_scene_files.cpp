@@ -185,6 +185,68 @@ TEST(Stl, BinaryStartingWithSolidAndAsciiGiveTheSameWatertightShell) {
   EXPECT_FALSE(sb->isOccupied(Vec3(0.45, 0.8, 0.8)));
 }
 
+// A PLY mesh's faces mark the voxels they overlap, as the same surface in an STL does: the cube [0.23, 1.37]^3
+// as 8 vertices and 6 quads (ASCII, fanned into triangles) and as 12 triangles (PCL's binary writer) gives the
+// STL's sealed shell. Its vertices alone mark 8 voxels.
+TEST(PlyMesh, FacesMarkTheVoxelsTheyOverlapAsAnStlDoes) {
+  TempDir d;
+  const double lo = 0.23, hi = 1.37;
+  writeBinaryStl(d.file("cube.stl"), cubeTriangles(lo, hi));
+  std::ostringstream quads;
+  quads << "ply\nformat ascii 1.0\nelement vertex 8\nproperty double x\nproperty double y\nproperty double z\n"
+           "element face 6\nproperty list uchar int vertex_indices\nend_header\n";
+  for (int i = 0; i < 8; ++i) quads << (i & 1 ? hi : lo) << " " << (i & 2 ? hi : lo) << " " << (i & 4 ? hi : lo) << "\n";
+  quads << "4 0 1 3 2\n4 4 5 7 6\n4 0 1 5 4\n4 2 3 7 6\n4 0 2 6 4\n4 1 3 7 5\n";
+  writeText(d.file("quads.ply"), quads.str());
+  pcl::PolygonMesh mesh;
+  pcl::PointCloud<pcl::PointXYZ> corners;
+  const std::vector<Vec3> tri = cubeTriangles(lo, hi);
+  for (const Vec3& v : tri) corners.push_back(pcl::PointXYZ(v.x(), v.y(), v.z()));  // 36 vertices, 3 a face
+  pcl::toPCLPointCloud2(corners, mesh.cloud);
+  for (int t = 0; t < 12; ++t) {
+    pcl::Vertices f;
+    f.vertices = {3 * t, 3 * t + 1, 3 * t + 2};
+    mesh.polygons.push_back(f);
+  }
+  pcl::io::savePLYFileBinary(d.file("triangles.ply"), mesh);
+
+  writeText(d.file("cube.yaml"), sceneYaml("cube.stl", "ground_plane: false", "[-0.55, -0.55, -0.55]"));
+  auto stl = loadSceneYaml(d.file("cube.yaml"));
+  ASSERT_TRUE(stl) << stl.message();
+  for (const char* f : {"quads.ply", "triangles.ply"}) {
+    auto file = loadPointCloudFile(d.file(f));
+    ASSERT_TRUE(file) << f << ": " << file.message();
+    EXPECT_EQ(file->triangles.size(), 12u) << f;
+    writeText(d.file("ply.yaml"), sceneYaml(f, "ground_plane: false", "[-0.55, -0.55, -0.55]"));
+    auto ply = loadSceneYaml(d.file("ply.yaml"));
+    ASSERT_TRUE(ply) << f << ": " << ply.message();
+    EXPECT_EQ(occupiedSet(*ply), occupiedSet(*stl)) << f;
+    EXPECT_TRUE(sealed(*ply, ply->geometry().coordToIndex(Vec3::Constant(0.8)))) << f;
+    EXPECT_TRUE(ply->isOccupied(Vec3(0.25, 0.8, 0.8))) << f;  // the middle of a face, far from any vertex
+  }
+  EXPECT_GT(occupiedSet(*stl).size(), 500u);
+
+  // Faces that are no faces are refused by number; so are rows a face list does not fill.
+  const std::string head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                           "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                           "0 0 0\n1 0 0\n0 1 0\n";
+  auto refused = [&](const std::string& name, const std::string& text, const std::vector<std::string>& words) {
+    writeText(d.file(name), text);
+    auto r = loadPointCloudFile(d.file(name));
+    ASSERT_FALSE(r) << name << ": " << r->triangles.size() << " triangles";
+    std::vector<std::string> all{name};
+    all.insert(all.end(), words.begin(), words.end());
+    expectErrorMentions(r.message(), all);
+  };
+  refused("edge.ply", head + "2 0 1\n", {"face 0 has 2 vertices"});
+  refused("beyond.ply", head + "3 0 1 3\n", {"face 0 names vertex 3", "has 3 vertices"});
+  refused("negative.ply", head + "3 0 -1 2\n", {"face 0 names vertex -1"});
+  refused("short.ply", head + "3 0 1\n", {"PLY"});
+  refused("long.ply", head + "3 0 1 2 1\n", {"PLY"});
+  const std::string binary = fileBytes(d.file("triangles.ply"));
+  refused("cut.ply", binary.substr(0, binary.size() - 20), {"PLY"});
+}
+
 TEST(Stl, ThinTiltedWallHasNoHoles) {
   TempDir d;
   // A single-sided quad, tilted about two axes, spanning the whole grid cross-section.

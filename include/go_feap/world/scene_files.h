@@ -4,6 +4,8 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <array>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -26,8 +28,19 @@ struct OccupiedCube {
 /// The extension of `path` in lower case (".pcd" for "UP.PCD"): every loader matches extensions this way.
 std::string lowerExtension(const std::string& path);
 
+/// A point cloud file's points and, for a PLY mesh, its faces as triangles of point indices.
+struct PointCloudFile {
+  std::vector<Vec3> points;
+  std::vector<std::array<std::uint32_t, 3>> triangles;  ///< each face fanned round its first vertex
+};
+
 /// Reads x, y, z of every point of a .pcd or .ply file (PCL readers), each in its own type (float32, float64
-/// or an integer type, COUNT 1). Fails on missing, truncated or corrupt files, NaN/Inf points, and empty clouds.
+/// or an integer type, COUNT 1), and a PLY's faces (`vertex_indices` or `vertex_index` lists). Fails on
+/// missing, truncated or corrupt files, NaN/Inf points, empty clouds, and faces of fewer than 3 vertices or
+/// naming a vertex the file does not have.
+common::Result<PointCloudFile> loadPointCloudFile(const std::string& path);
+
+/// loadPointCloudFile's points.
 common::Result<std::vector<Vec3>> loadPointCloud(const std::string& path);
 
 /// Reads a binary or ASCII STL. A file is binary when its size equals 84 + 50 n for the
@@ -54,7 +67,7 @@ struct SceneFileSpec {
 common::Result<SceneFileSpec> parseSceneYaml(const std::string& yaml_path);
 
 /// Loads the geometry named by `spec` and voxelises it in the world frame: points mark
-/// their voxel, triangles every voxel they overlap, octree leaves every voxel they overlap
+/// their voxel, triangles (STL, and a PLY's faces) every voxel they overlap, octree leaves every voxel they overlap
 /// (voxelizeParallelepiped).
 /// Geometry outside the grid (box + margin) is dropped.
 common::Result<Scene> loadSceneFile(const SceneFileSpec& spec);
