@@ -39,12 +39,13 @@ std::vector<TableRow> aggregate(const std::vector<Summary>& runs) {
     row.scene = scene;
     row.planner = planner;
     std::vector<double> time, distance, coverage;
-    std::map<std::string, std::vector<double>> blocks;
+    std::map<std::string, BlockTime> blocks;
     for (const Summary& s : runs) {
       if (s.scene != scene || s.planner != planner) continue;
       ++row.runs;
       const bool finished = s.finish_reason == "complete";
       row.finished += finished;
+      ++row.finish_reasons[s.finish_reason];
       row.finished_with_blacklisted += finished && s.blacklisted_frontiers > 0;
       // The time and distance of a run that did not finish (stopped at the time limit, stuck, diverged,
       // interrupted) measure where it stopped, not an exploration: a run stuck early would have looked fast.
@@ -54,8 +55,10 @@ std::vector<TableRow> aggregate(const std::vector<Summary>& runs) {
       }
       coverage.push_back(s.coverage);
       row.collisions += s.collisions;
-      for (const auto& [name, b] : s.compute)
-        if (b.count > 0) blocks[name].push_back(b.mean());
+      for (const auto& [name, b] : s.compute) {
+        blocks[name].total_ms += b.total_ms;
+        blocks[name].count += b.count;
+      }
     }
     row.exploration_time_s = stats(time);
     row.flight_distance_m = stats(distance);
@@ -63,11 +66,12 @@ std::vector<TableRow> aggregate(const std::vector<Summary>& runs) {
     row.coverage_avg = c.avg;
     row.coverage_min = c.min;
     double total = 0.0;
-    for (const auto& [name, values] : blocks) {
-      // Over the runs that ran the block (a run ended before its first plan does not pull the mean down).
-      const double mean = std::accumulate(values.begin(), values.end(), 0.0) / static_cast<double>(values.size());
-      row.compute_ms[name] = mean;
-      if (isPlanningBlock(name)) total += mean;
+    for (const auto& [name, b] : blocks) {
+      // Per call, over every call of the row's runs (as --perf prints it): a long run weighs by its calls, and a
+      // run ended before its first plan adds none.
+      if (b.count == 0) continue;
+      row.compute_ms[name] = b.mean();
+      if (isPlanningBlock(name)) total += b.mean();
     }
     row.compute_ms["total"] = total;
     rows.push_back(std::move(row));
@@ -152,6 +156,7 @@ std::string tableJson(const std::vector<TableRow>& rows) {
     j["runs"] = r.runs;
     j["finished"] = r.finished;
     j["finished_with_blacklisted"] = r.finished_with_blacklisted;
+    j["finish_reasons"] = r.finish_reasons;
     j["exploration_time_s"] = st(r.exploration_time_s);
     j["flight_distance_m"] = st(r.flight_distance_m);
     j["coverage"] = {{"avg", r.coverage_avg}, {"min", r.coverage_min}};
@@ -193,6 +198,15 @@ std::string tableMarkdown(const std::vector<TableRow>& rows, const std::vector<C
   }
   md << "\nTime and distance over the finished runs (std: population standard deviation); coverage and collisions "
         "over all runs.\n";
+  for (const TableRow& r : rows) {
+    if (r.finished == r.runs) continue;
+    md << "\n" << r.scene << ", " << r.planner << ": " << r.runs - r.finished << " of " << r.runs
+       << " runs did not finish (";
+    const char* sep = "";
+    for (const auto& [reason, n] : r.finish_reasons)
+      if (reason != "complete") md << sep << n << " " << reason, sep = ", ";
+    md << ").\n";
+  }
   md << "\n### Compute per call, ms (Table IV)\n\n"
      << "| scene | planner | mapping | frontier | global | local | trajectory | total |\n"
      << "|---|---|---|---|---|---|---|---|\n";

@@ -87,8 +87,32 @@ TEST(Table, AggregatesPerSceneAndPlannerWithPopulationStd) {
   EXPECT_DOUBLE_EQ(j[0]["coverage"]["min"].get<double>(), 0.97);
   EXPECT_EQ(j[0]["collisions"], 2);
   EXPECT_DOUBLE_EQ(j[0]["compute_ms"]["total"].get<double>(), 4.0);
+  // Every run is counted by how it ended, the time-limit one (FINISHED too, not finished) included.
+  EXPECT_EQ(j[0]["finish_reasons"], nlohmann::json({{"complete", 2}, {"time_limit", 1}}));
+  EXPECT_EQ(j[1]["finish_reasons"], nlohmann::json({{"complete", 1}}));
   const std::string md = metrics::tableMarkdown(rows);
   EXPECT_NE(md.find("| maze | go_feap | 3 | 2 | 105.0 | 5.0 | 110.0 | 100.0 | 205.0 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("maze, go_feap: 1 of 3 runs did not finish (1 time_limit)."), std::string::npos) << md;
+  EXPECT_EQ(md.find("maze, fuel:"), std::string::npos) << md;
+}
+
+// Compute per call pools the calls of every run, as --perf does: a run of 1 call at 10 ms and one of 3 calls at
+// 2 ms make 4 ms a call (16 ms over 4 calls), not the 6 ms of their two means.
+TEST(Table, ComputeIsAMeanPerCallOverEveryCallOfTheRuns) {
+  std::vector<metrics::Summary> runs = {summary("maze", "go_feap", 100, 200, 0.99, 0, "complete", 1.0),
+                                        summary("maze", "go_feap", 110, 210, 0.99, 0, "complete", 1.0)};
+  for (metrics::Summary& s : runs) s.compute.clear();
+  runs[0].compute["local"].add(10.0);
+  for (int i = 0; i < 3; ++i) runs[1].compute["local"].add(2.0);
+  runs[1].compute["frontier"].add(1.0);
+  const auto rows = metrics::aggregate(runs);
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_DOUBLE_EQ(rows[0].compute_ms.at("local"), 4.0);
+  EXPECT_DOUBLE_EQ(rows[0].compute_ms.at("frontier"), 1.0);  // the one run that called it
+  EXPECT_DOUBLE_EQ(rows[0].compute_ms.at("total"), 5.0);
+  EXPECT_EQ(rows[0].compute_ms.count("global"), 0u);  // no run called it: no figure ("–")
+  EXPECT_NE(metrics::tableMarkdown(rows).find("| maze | go_feap | – | 1.00 | – | 4.00 | – | 5.00 |"), std::string::npos)
+      << metrics::tableMarkdown(rows);
 }
 
 // A row whose runs all stopped unfinished has no time or distance (null, "–"), and a block a run never ran (it

@@ -23,12 +23,16 @@ struct TableRow {
   int runs = 0;
   int finished = 0;  ///< runs that reached FINISHED(complete)
   int finished_with_blacklisted = 0;  ///< of those, runs that left blacklisted frontiers unexplored
+  /// runs per finish_reason: "complete" (the finished ones), and the FINISHED states and stops that are not
+  /// (time_limit, stuck, aborted; max_sim_time, diverged, interrupted from the bench)
+  std::map<std::string, int> finish_reasons;
   /// Over the finished runs only (NaN without any): a run that stopped otherwise (time limit, stuck,
   /// diverged, interrupted) did not explore the scene in that time.
   Stats exploration_time_s, flight_distance_m;
   double coverage_avg = 0.0, coverage_min = 0.0;  ///< over all runs
   int collisions = 0;                      ///< total over the runs
-  /// per block: mean, over the runs that ran the block, of each run's mean; "total" (the planning blocks' sum) too
+  /// per block: mean per call over every call of the runs (runs weigh by their calls); "total" (the planning
+  /// blocks' sum: per replan) too. A block no run called has no entry.
   std::map<std::string, double> compute_ms;
 };
 
@@ -55,8 +59,9 @@ struct Comparison {
 /// that scene, over the seeds both ran; in order of first appearance. Empty where a scene has one planner.
 std::vector<Comparison> compare(const std::vector<Summary>& runs);
 
-/// table.json: a list with one object per row: scene, planner, runs, finished, exploration_time_s and
-/// flight_distance_m ({avg, std, max, min}), coverage ({avg, min}), collisions, compute_ms.
+/// table.json: a list with one object per row: scene, planner, runs, finished, finished_with_blacklisted,
+/// finish_reasons ({reason: runs}), exploration_time_s and flight_distance_m ({avg, std, max, min}), coverage
+/// ({avg, min}), collisions, compute_ms.
 std::string tableJson(const std::vector<TableRow>& rows);
 /// table.md: the same as Markdown tables (Tables II/III: time and distance; Table IV: compute), and
 /// with `comparisons` a third table of them (paired by seed).
