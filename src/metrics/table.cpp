@@ -66,14 +66,15 @@ std::vector<TableRow> aggregate(const std::vector<Summary>& runs) {
     row.coverage_avg = c.avg;
     row.coverage_min = c.min;
     double total = 0.0;
+    bool planned = false;
     for (const auto& [name, b] : blocks) {
       // Per call, over every call of the row's runs (as --perf prints it): a long run weighs by its calls, and a
       // run ended before its first plan adds none.
       if (b.count == 0) continue;
       row.compute_ms[name] = b.mean();
-      if (isPlanningBlock(name)) total += b.mean();
+      if (isPlanningBlock(name)) total += b.mean(), planned = true;
     }
-    row.compute_ms["total"] = total;
+    if (planned) row.compute_ms["total"] = total;  // none without a planning call (no 0 ms figure)
     rows.push_back(std::move(row));
   }
   return rows;

@@ -33,6 +33,7 @@ struct PlyElement {
   double values = 0.0;     ///< properties
   bool list = false;       ///< a list property: instances vary in length
   bool known = true;       ///< every property type is one PLY defines
+  std::string face_list;   ///< face: its vertex_indices (or vertex_index) list's count and index types, "uchar int"
 };
 
 // What a point cloud's header declares, read without PCL (which allocates what a header declares before
@@ -134,8 +135,11 @@ CloudHeader readCloudHeader(const std::string& path, const std::string& kind) {
         std::string type, length_type;
         words >> type;
         if (type == "list") {
-          words >> length_type;
+          std::string index_type, name;
+          words >> length_type >> index_type >> name;
           e.list = true;
+          if (e.name == "face" && (name == "vertex_indices" || name == "vertex_index"))
+            e.face_list = length_type + " " + index_type;
           type = length_type;
         }
         const double bytes = plyTypeBytes(type);
@@ -254,6 +258,32 @@ std::string surplusProblem(const std::string& path, const std::string& kind, con
 // count; a byte or two of padding is not). "" when the data matches.
 std::string plyDataProblem(const std::string& path, const CloudHeader& h) {
   if (h.data_start < 0 || h.elements.empty()) return "";
+  // PCL (1.13) reads a face's indices only from these lists: of any other types it hands back empty faces.
+  for (const PlyElement& e : h.elements) {
+    if (e.face_list.empty()) continue;
+    std::istringstream types(e.face_list);
+    std::string count, index;
+    types >> count >> index;
+    const bool wide = count == "int" || count == "uint" || count == "int32" || count == "uint32";
+    const bool byte_count = count == "uchar" || count == "uint8";
+    const bool int_index = index == "int" || index == "uint" || index == "int32" || index == "uint32";
+    if (!(wide || (byte_count && int_index)))
+      return path + ": PLY file's face list is 'list " + e.face_list +
+             "', which cannot be read (faces are read as lists of int or uint indices counted by a uchar, or "
+             "of any indices counted by an int or uint)";
+  }
+  // Every element's least bytes (a list's length field each; its entries may be none), against the file:
+  // PCL reserves the faces a header declares before it reads one (1e9 faces declared in 200 bytes: 24 GB).
+  if (h.data.rfind("binary", 0) == 0) {
+    double least = 0.0;
+    for (const PlyElement& e : h.elements) least += e.count * e.bytes;
+    if (least > h.room) {
+      std::ostringstream why;
+      why << path << ": corrupt or truncated PLY file (its header declares elements that need at least " << least
+          << " bytes of data, but the file holds " << h.room << ")";
+      return why.str();
+    }
+  }
   double declared = 0.0, bytes = 0.0;
   bool exact = true;
   for (const PlyElement& e : h.elements) {
@@ -369,6 +399,57 @@ double readNumber(const std::uint8_t* at, std::uint8_t datatype) {
 
 }  // namespace
 
+namespace {
+
+// Appends the triangles of the face `polygon` (indices into `points`): its fan round the first vertex when every
+// fan triangle turns the way the face does (the fan then covers the face exactly), else ear clipping in the
+// plane of the face's Newell normal (O(n^2) per ear; faces are short). A degenerate face (no normal) is fanned.
+void triangulateFace(const std::vector<Vec3>& points, const std::vector<std::uint32_t>& polygon,
+                     std::vector<std::array<std::uint32_t, 3>>& triangles) {
+  const std::size_t n = polygon.size();
+  Vec3 normal = Vec3::Zero();  // Newell's: twice the face's vector area
+  for (std::size_t i = 0; i < n; ++i) normal += points[polygon[i]].cross(points[polygon[(i + 1) % n]]);
+  const auto turn = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+    return (points[b] - points[a]).cross(points[c] - points[a]).dot(normal);
+  };
+  bool fan = normal.squaredNorm() == 0.0;
+  if (!fan) {
+    fan = true;
+    for (std::size_t k = 1; k + 1 < n && fan; ++k) fan = turn(polygon[0], polygon[k], polygon[k + 1]) >= 0.0;
+  }
+  if (fan) {
+    for (std::size_t k = 1; k + 1 < n; ++k) triangles.push_back({polygon[0], polygon[k], polygon[k + 1]});
+    return;
+  }
+  // Ear clipping: a corner that turns the face's way and holds no other remaining vertex is cut off.
+  std::vector<std::uint32_t> rest = polygon;
+  const auto inside = [&](std::uint32_t p, std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+    return turn(a, b, p) >= 0.0 && turn(b, c, p) >= 0.0 && turn(c, a, p) >= 0.0;
+  };
+  while (rest.size() > 3) {
+    const std::size_t m = rest.size();
+    bool cut = false;
+    for (std::size_t i = 0; i < m && !cut; ++i) {
+      const std::uint32_t a = rest[(i + m - 1) % m], b = rest[i], c = rest[(i + 1) % m];
+      if (!(turn(a, b, c) > 0.0)) continue;
+      bool empty = true;
+      for (std::size_t j = 0; j < m && empty; ++j) {
+        const std::uint32_t p = rest[j];
+        if (p != a && p != b && p != c && points[p] != points[a] && points[p] != points[b] && points[p] != points[c])
+          empty = !inside(p, a, b, c);
+      }
+      if (!empty) continue;
+      triangles.push_back({a, b, c});
+      rest.erase(rest.begin() + static_cast<std::ptrdiff_t>(i));
+      cut = true;
+    }
+    if (!cut) break;  // no ear (a self-crossing face): the rest is fanned
+  }
+  for (std::size_t k = 1; k + 1 < rest.size(); ++k) triangles.push_back({rest[0], rest[k], rest[k + 1]});
+}
+
+}  // namespace
+
 common::Result<PointCloudFile> loadPointCloudFile(const std::string& path) {
   using R = common::Result<PointCloudFile>;
   std::error_code ec;
@@ -458,7 +539,8 @@ common::Result<PointCloudFile> loadPointCloudFile(const std::string& path) {
       if (!p.allFinite()) return R::Error(path + ": point " + std::to_string(points.size()) + " is NaN or Inf");
       points.push_back(p);
     }
-  // Each face as a fan of triangles round its first vertex (a convex polygon, as meshes write them).
+  // Each face as triangles: a fan round its first vertex where that covers it (a convex face), else by ear
+  // clipping in its plane (a concave one: a fan would fill in a doorway cut into a wall face).
   for (std::size_t f = 0; f < faces.size(); ++f) {
     const pcl::Indices& v = faces[f].vertices;
     const std::string face = path + ": PLY file's face " + std::to_string(f);
@@ -468,8 +550,8 @@ common::Result<PointCloudFile> loadPointCloudFile(const std::string& path) {
       if (i < 0 || static_cast<std::size_t>(i) >= points.size())
         return R::Error(face + " names vertex " + std::to_string(i) + ", but the file has " +
                         std::to_string(points.size()) + " vertices (indices count from 0)");
-    const auto at = [&](std::size_t k) { return static_cast<std::uint32_t>(v[k]); };
-    for (std::size_t k = 1; k + 1 < v.size(); ++k) out.triangles.push_back({at(0), at(k), at(k + 1)});
+    std::vector<std::uint32_t> polygon(v.begin(), v.end());
+    triangulateFace(points, polygon, out.triangles);
   }
   return out;
 }

@@ -224,16 +224,20 @@ common::Result<Scene> loadSceneFile(const SceneFileSpec& spec) {
   if (ext == ".pcd" || ext == ".ply") {
     auto cloud = loadPointCloudFile(spec.file);
     if (!cloud) return cloud.status();
-    std::vector<Vec3> placed(cloud->points.size());
+    std::vector<Vec3>& placed = cloud->points;
     for (std::size_t i = 0; i < placed.size(); ++i) {
-      placed[i] = T * cloud->points[i];
+      placed[i] = T * placed[i];
       if (!placed[i].allFinite())
         return R::Error(spec.file + ": point " + std::to_string(i) + " is not finite once placed by T_world_file");
-      markOccupied(scene, placed[i]);
     }
-    // A PLY mesh's faces mark every voxel they overlap, as an STL's triangles do: its vertices alone
-    // left the walls between them open.
-    for (const auto& [a, b, c] : cloud->triangles) voxelizeTriangle(scene, placed[a], placed[b], placed[c]);
+    // A PLY mesh's faces mark every voxel they overlap, as an STL's triangles do (its vertices alone left
+    // the walls between them open); a vertex no face uses is left out (meshes keep such strays after editing).
+    // A cloud without faces marks its points.
+    if (cloud->triangles.empty()) {
+      for (const Vec3& p : placed) markOccupied(scene, p);
+    } else {
+      for (const auto& [a, b, c] : cloud->triangles) voxelizeTriangle(scene, placed[a], placed[b], placed[c]);
+    }
   } else if (ext == ".stl") {
     auto mesh = loadStl(spec.file);
     if (!mesh) return mesh.status();

@@ -252,18 +252,25 @@ TEST(LayerManager, TimeLimitAndStuckTerminate) {
   a.step(trig, 100.0);
   LayerOutputs out;
   std::uint64_t p = 0;
-  for (double t = 100.0; t < 115.0 && out.state != ExplorationState::kFinished; t += 0.5)
+  double ended = -1.0;  // the step that finished
+  for (double t = 100.0; t < 115.0 && out.state != ExplorationState::kFinished; t += 0.5) {
     out = a.step(frontiers({1}, {1}, ++p), t);
+    ended = t;
+  }
   EXPECT_EQ(out.reason, FinishReason::kTimeLimit);
+  EXPECT_DOUBLE_EQ(ended, 110.0);  // time_limit after the trigger (at 100 s), not after t = 0 nor later
 
   c.time_limit = 1000.0;
   c.stuck_timeout = 5.0;
   LayerManager b(c, kBox, 0.5);
   b.step(trig, 0.0);
   out = LayerOutputs();
-  for (double t = 0.5; t < 20.0 && out.state != ExplorationState::kFinished; t += 0.5)
+  for (double t = 0.5; t < 20.0 && out.state != ExplorationState::kFinished; t += 0.5) {
     out = b.step(frontiers({1}, {1}, 42), t);  // the map stops growing
+    ended = t;
+  }
   EXPECT_EQ(out.reason, FinishReason::kStuck);
+  EXPECT_DOUBLE_EQ(ended, 5.5);  // stuck_timeout after the last progress (the map changed at 0.5 s)
   ASSERT_FALSE(out.transitions.empty());
   EXPECT_NE(out.transitions.back().why.find("no map progress"), std::string::npos);
 }

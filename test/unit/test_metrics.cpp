@@ -113,6 +113,13 @@ TEST(Table, ComputeIsAMeanPerCallOverEveryCallOfTheRuns) {
   EXPECT_EQ(rows[0].compute_ms.count("global"), 0u);  // no run called it: no figure ("–")
   EXPECT_NE(metrics::tableMarkdown(rows).find("| maze | go_feap | – | 1.00 | – | 4.00 | – | 5.00 |"), std::string::npos)
       << metrics::tableMarkdown(rows);
+  // Runs that never planned (stopped at once) have no total either, rather than 0 ms.
+  for (metrics::Summary& s : runs) s.compute.clear();
+  runs[0].compute["mapping"].add(3.0);
+  const auto unplanned = metrics::aggregate(runs);
+  EXPECT_EQ(unplanned[0].compute_ms.count("total"), 0u);
+  EXPECT_NE(metrics::tableMarkdown(unplanned).find("| maze | go_feap | 3.00 | – | – | – | – | – |"), std::string::npos)
+      << metrics::tableMarkdown(unplanned);
 }
 
 // A row whose runs all stopped unfinished has no time or distance (null, "–"), and a block a run never ran (it

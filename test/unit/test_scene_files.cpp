@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <regex>
 #include <sstream>
 
 #include "go_feap/world/generators.h"
@@ -84,6 +85,12 @@ std::string sceneYaml(const std::string& file, const std::string& extra = "groun
   return "scene:\n  name: t\n  file: " + file +
          "\n  T_world_file: [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]\n  resolution: 0.1\n"
          "  box: {min: [-1, -1, -1], max: [2, 2, 2]}\n  start: {position: " + start + ", yaw: 0}\n  " + extra + "\n";
+}
+
+// Loads `file` (in `d`) through a scene YAML of its own, with the start in the grid's corner.
+go_feap::common::Result<Scene> loadWithCornerStart(const TempDir& d, const std::string& file) {
+  writeText(d.file(file + ".yaml"), sceneYaml(file, "ground_plane: false", "[-0.55, -0.55, -0.55]"));
+  return loadSceneYaml(d.file(file + ".yaml"));
 }
 
 // True when no 6-connected path of free voxels links the grid's outside layer to `inside`.
@@ -167,10 +174,8 @@ TEST(Stl, BinaryStartingWithSolidAndAsciiGiveTheSameWatertightShell) {
   EXPECT_EQ(b->triangleCount(), 12u);
   EXPECT_EQ(a->triangleCount(), 12u);
 
-  writeText(d.file("bin.yaml"), sceneYaml("bin.stl", "ground_plane: false", "[-0.55, -0.55, -0.55]"));
-  writeText(d.file("ascii.yaml"), sceneYaml("ascii.stl", "ground_plane: false", "[-0.55, -0.55, -0.55]"));
-  auto sb = loadSceneYaml(d.file("bin.yaml"));
-  auto sa = loadSceneYaml(d.file("ascii.yaml"));
+  auto sb = loadWithCornerStart(d, "bin.stl");
+  auto sa = loadWithCornerStart(d, "ascii.stl");
   ASSERT_TRUE(sb) << sb.message();
   ASSERT_TRUE(sa) << sa.message();
   EXPECT_EQ(occupiedSet(*sb), occupiedSet(*sa));
@@ -186,16 +191,18 @@ TEST(Stl, BinaryStartingWithSolidAndAsciiGiveTheSameWatertightShell) {
 }
 
 // A PLY mesh's faces mark the voxels they overlap, as the same surface in an STL does: the cube [0.23, 1.37]^3
-// as 8 vertices and 6 quads (ASCII, fanned into triangles) and as 12 triangles (PCL's binary writer) gives the
-// STL's sealed shell. Its vertices alone mark 8 voxels.
+// as 8 vertices and 6 quads (ASCII, fanned into triangles; a ninth vertex no face uses, a stray, marks
+// nothing) and as 12 triangles (PCL's binary writer) gives the STL's sealed shell. Its vertices alone mark 8
+// voxels.
 TEST(PlyMesh, FacesMarkTheVoxelsTheyOverlapAsAnStlDoes) {
   TempDir d;
   const double lo = 0.23, hi = 1.37;
   writeBinaryStl(d.file("cube.stl"), cubeTriangles(lo, hi));
   std::ostringstream quads;
-  quads << "ply\nformat ascii 1.0\nelement vertex 8\nproperty double x\nproperty double y\nproperty double z\n"
+  quads << "ply\nformat ascii 1.0\nelement vertex 9\nproperty double x\nproperty double y\nproperty double z\n"
            "element face 6\nproperty list uchar int vertex_indices\nend_header\n";
   for (int i = 0; i < 8; ++i) quads << (i & 1 ? hi : lo) << " " << (i & 2 ? hi : lo) << " " << (i & 4 ? hi : lo) << "\n";
+  quads << "-0.55 -0.55 1.75\n";  // the stray
   quads << "4 0 1 3 2\n4 4 5 7 6\n4 0 1 5 4\n4 2 3 7 6\n4 0 2 6 4\n4 1 3 7 5\n";
   writeText(d.file("quads.ply"), quads.str());
   pcl::PolygonMesh mesh;
@@ -210,15 +217,13 @@ TEST(PlyMesh, FacesMarkTheVoxelsTheyOverlapAsAnStlDoes) {
   }
   pcl::io::savePLYFileBinary(d.file("triangles.ply"), mesh);
 
-  writeText(d.file("cube.yaml"), sceneYaml("cube.stl", "ground_plane: false", "[-0.55, -0.55, -0.55]"));
-  auto stl = loadSceneYaml(d.file("cube.yaml"));
+  auto stl = loadWithCornerStart(d, "cube.stl");
   ASSERT_TRUE(stl) << stl.message();
   for (const char* f : {"quads.ply", "triangles.ply"}) {
     auto file = loadPointCloudFile(d.file(f));
     ASSERT_TRUE(file) << f << ": " << file.message();
     EXPECT_EQ(file->triangles.size(), 12u) << f;
-    writeText(d.file("ply.yaml"), sceneYaml(f, "ground_plane: false", "[-0.55, -0.55, -0.55]"));
-    auto ply = loadSceneYaml(d.file("ply.yaml"));
+    auto ply = loadWithCornerStart(d, f);
     ASSERT_TRUE(ply) << f << ": " << ply.message();
     EXPECT_EQ(occupiedSet(*ply), occupiedSet(*stl)) << f;
     EXPECT_TRUE(sealed(*ply, ply->geometry().coordToIndex(Vec3::Constant(0.8)))) << f;
@@ -245,6 +250,52 @@ TEST(PlyMesh, FacesMarkTheVoxelsTheyOverlapAsAnStlDoes) {
   refused("long.ply", head + "3 0 1 2 1\n", {"PLY"});
   const std::string binary = fileBytes(d.file("triangles.ply"));
   refused("cut.ply", binary.substr(0, binary.size() - 20), {"PLY"});
+  // PCL reads no indices from these lists (it hands back empty faces): refused by their types, before it reads.
+  refused("ushort.ply", std::regex_replace(head, std::regex("uchar int"), "uchar ushort") + "3 0 1 2\n",
+          {"face list is 'list uchar ushort'"});
+  for (const char* types : {"uchar uint", "uint ushort", "int int"}) {
+    const std::string name = std::string("ok_") + types[1] + ".ply";
+    writeText(d.file(name), std::regex_replace(head, std::regex("uchar int"), types) + "3 0 1 2\n");
+    auto r = loadPointCloudFile(d.file(name));
+    ASSERT_TRUE(r) << types << ": " << r.message();
+    EXPECT_EQ(r->triangles.size(), 1u) << types;
+  }
+  // A binary header declaring more faces than the file can hold (a length byte each at least): PCL would
+  // reserve them all first.
+  refused("many.ply", std::regex_replace(binary, std::regex("element face 12"), "element face 1000000000"),
+          {"need at least 1e+09 bytes"});
+}
+
+// A concave face (a wall with a doorway cut into it, one 8-sided face) is cut into triangles that keep the
+// doorway open, either way round: the same voxels as the wall written as six triangles. A fan round the
+// first vertex filled the doorway in.
+TEST(PlyMesh, AConcaveFaceKeepsItsOpening) {
+  TempDir d;
+  const double x = 0.55;
+  const double u[8][2] = {{0, 0}, {1.5, 0}, {1.5, 1.5}, {1.0, 1.5}, {1.0, 0.5}, {0.5, 0.5}, {0.5, 1.5}, {0, 1.5}};
+  for (const bool reversed : {false, true}) {
+    std::ostringstream ply;
+    ply << "ply\nformat ascii 1.0\nelement vertex 8\nproperty double x\nproperty double y\nproperty double z\n"
+           "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    for (const auto& p : u) ply << x << " " << p[0] << " " << p[1] << "\n";
+    ply << (reversed ? "8 7 6 5 4 3 2 1 0\n" : "8 0 1 2 3 4 5 6 7\n");
+    writeText(d.file("door.ply"), ply.str());
+    auto at = [&](double y, double z) { return Vec3(x, y, z); };
+    // Bottom strip, left and right posts, as triangles.
+    const std::vector<Vec3> pieces = {at(0, 0),   at(1.5, 0),   at(1.5, 0.5), at(0, 0),   at(1.5, 0.5), at(0, 0.5),
+                                      at(0, 0.5), at(0.5, 0.5), at(0.5, 1.5), at(0, 0.5), at(0.5, 1.5), at(0, 1.5),
+                                      at(1.0, 0.5), at(1.5, 0.5), at(1.5, 1.5), at(1.0, 0.5), at(1.5, 1.5), at(1.0, 1.5)};
+    writeBinaryStl(d.file("door.stl"), pieces);
+    auto ply_scene = loadWithCornerStart(d, "door.ply");
+    auto stl_scene = loadWithCornerStart(d, "door.stl");
+    ASSERT_TRUE(ply_scene) << ply_scene.message();
+    ASSERT_TRUE(stl_scene) << stl_scene.message();
+    EXPECT_FALSE(ply_scene->isOccupied(at(0.75, 1.0))) << "the doorway is filled in (reversed " << reversed << ")";
+    EXPECT_TRUE(ply_scene->isOccupied(at(0.25, 1.0)));
+    EXPECT_TRUE(ply_scene->isOccupied(at(1.25, 1.0)));
+    EXPECT_TRUE(ply_scene->isOccupied(at(0.75, 0.25)));
+    EXPECT_EQ(occupiedSet(*ply_scene), occupiedSet(*stl_scene)) << "reversed " << reversed;
+  }
 }
 
 TEST(Stl, ThinTiltedWallHasNoHoles) {
