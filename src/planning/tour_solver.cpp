@@ -578,6 +578,23 @@ TourResult solveHeuristic(const Eigen::MatrixXd& cost, const std::vector<double>
   return fromPath(best, false, cost, xi, lambda);
 }
 
+TourResult improveTour(const Eigen::MatrixXd& cost, const std::vector<double>& xi, double lambda,
+                       const std::vector<int>& order) {
+  if (Status s = checkTourProblem(cost, xi, lambda); !s) return failure(s);
+  const int n = static_cast<int>(xi.size());
+  std::vector<char> seen(n + 1, 0);
+  bool permutation = static_cast<int>(order.size()) == n;
+  for (int v : order) permutation = permutation && v >= 1 && v <= n && !seen[v]++;
+  if (!permutation) return failure(Status::Error("improveTour: the order must visit each of the nodes 1..N once"));
+  std::vector<int> p{0};
+  p.insert(p.end(), order.begin(), order.end());
+  const std::vector<double> x = nodeXi(xi);  // OpenPath keeps a reference
+  OpenPath path(cost, x, lambda);
+  path.assign(p);
+  if (n > 0) improve(path, nearestNeighbours(cost));
+  return fromPath(path.path(), false, cost, xi, lambda);
+}
+
 TourResult solve(const Eigen::MatrixXd& cost, const std::vector<double>& xi, double lambda, int max_exact,
                  const std::vector<int>& hint) {
   if (static_cast<int>(xi.size()) <= std::min(max_exact, kMaxExactFrontiers))

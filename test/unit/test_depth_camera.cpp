@@ -603,17 +603,62 @@ TEST(DepthRendererNoise, FullDropoutLeavesNoMeasurement) {
   EXPECT_EQ(countEqual(depth, std::numeric_limits<float>::quiet_NaN()), 640 * 480);  // REP 117: no measurement
 }
 
+// A wall 0.2 m thick whose face lies `wall_x` ahead of a camera at (0, 0, 1) looking along x: its clean
+// rendering, and the same with `config`'s noise drawn from `seed`.
+void renderNoisyWall(double wall_x, const DepthCameraConfig& config, unsigned seed, cv::Mat& clean, cv::Mat& noisy) {
+  const DepthRenderer renderer(config, sceneWithBoxes({{Vec3(wall_x, -6.0, -4.0), Vec3(wall_x + 0.2, 6.0, 6.0)}}, 0.1));
+  renderer.render(cameraPose(Vec3(0.0, 0.0, 1.0), 0.0), clean);
+  noisy = clean.clone();
+  std::mt19937_64 rng(seed);
+  renderer.addNoise(noisy, rng);
+}
+
+// A noisy depth beyond max_range is no return (+inf), one nearer than min_range a surface too near (-inf),
+// as REP 117 says: a wall 4.4 m off with sigma 2 %/m (8.8 cm) puts P(z > 0.1 / 0.088) of its pixels past
+// 4.5 m, and one 0.2 m off with sigma 50 %/m (10 cm) P(z < -1) of them under 0.1 m. No finite value lies
+// outside the range, and every other pixel keeps its noisy return.
+TEST(DepthRendererNoise, ValuesPushedOutOfRangeAreNoReturns) {
+  struct Case {
+    double wall_x, sigma_per_m;
+    bool beyond;  // past max_range (else under min_range)
+  };
+  for (const Case c : {Case{4.4, 0.02, true}, Case{0.2, 0.5, false}}) {
+    DepthCameraConfig config;
+    config.noise_stddev_per_m = c.sigma_per_m;
+    cv::Mat clean, noisy;
+    renderNoisyWall(c.wall_x, config, 7, clean, noisy);
+    int returns = 0, out = 0, other = 0;
+    for (int v = 0; v < noisy.rows; ++v)
+      for (int u = 0; u < noisy.cols; ++u) {
+        const float before = clean.at<float>(v, u), after = noisy.at<float>(v, u);
+        if (!isReturn(before)) continue;
+        ASSERT_NEAR(before, c.wall_x, 1e-4);
+        ++returns;
+        if (std::isfinite(after)) {
+          ASSERT_GE(after, config.min_range);
+          ASSERT_LE(after, config.max_range);
+        } else if (after == (c.beyond ? 1.0f : -1.0f) * std::numeric_limits<float>::infinity()) {
+          ++out;
+        } else {
+          ++other;  // NaN, or the other infinity
+        }
+      }
+    ASSERT_GT(returns, 100000);
+    const double sigma = c.sigma_per_m * c.wall_x;
+    const double a = c.beyond ? (config.max_range - c.wall_x) / sigma : (c.wall_x - config.min_range) / sigma;
+    const double expected = 0.5 * std::erfc(a / std::sqrt(2.0));
+    EXPECT_NEAR(static_cast<double>(out) / returns, expected, 0.01) << "wall at " << c.wall_x;
+    EXPECT_GT(expected, 0.1);
+    EXPECT_EQ(other, 0);
+  }
+}
+
 TEST(DepthRendererNoise, StatisticsMatchTheModelOnAFlatWall) {
-  const world::Scene scene = sceneWithBoxes({{Vec3(2.0, -4.0, -2.0), Vec3(2.2, 4.0, 4.0)}}, 0.1);
   DepthCameraConfig config;
   config.noise_stddev_per_m = 0.01;  // sigma = 2 cm at 2 m
   config.dropout_probability = 0.2;
-  const DepthRenderer renderer(config, scene);
-  cv::Mat clean;
-  renderer.render(cameraPose(Vec3(0.0, 0.0, 1.0), 0.0), clean);
-  cv::Mat noisy = clean.clone();
-  std::mt19937_64 rng(42);
-  renderer.addNoise(noisy, rng);
+  cv::Mat clean, noisy;
+  renderNoisyWall(2.0, config, 42, clean, noisy);
   double sum = 0.0, sum_sq = 0.0;
   int valid = 0;
   for (int v = 0; v < noisy.rows; ++v)
@@ -631,8 +676,7 @@ TEST(DepthRendererNoise, StatisticsMatchTheModelOnAFlatWall) {
   EXPECT_NEAR(sigma, 0.02, 0.001);
 
   // The same rng state gives the same image.
-  cv::Mat again = clean.clone();
-  std::mt19937_64 rng2(42);
-  renderer.addNoise(again, rng2);
+  cv::Mat clean_again, again;
+  renderNoisyWall(2.0, config, 42, clean_again, again);
   EXPECT_TRUE(sameBits(again, noisy));
 }

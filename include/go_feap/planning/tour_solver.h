@@ -66,6 +66,13 @@ TourResult solveExact(const Eigen::MatrixXd& cost, const std::vector<double>& xi
 TourResult solveHeuristic(const Eigen::MatrixXd& cost, const std::vector<double>& xi, double lambda,
                           const std::vector<int>& hint = {});
 
+/// solveHeuristic()'s local search alone from `order` (a permutation of 1..N, else an error): 2-opt,
+/// Or-opt and window moves, each taken when its O(1) change of J is negative, until none is; no other
+/// start and no kicks. The result is never worse than `order`, and up to 40 frontiers a local optimum
+/// of every 2-opt and Or-opt move.
+TourResult improveTour(const Eigen::MatrixXd& cost, const std::vector<double>& xi, double lambda,
+                       const std::vector<int>& order);
+
 /// solveExact() when N <= max_exact (at most kMaxExactFrontiers), solveHeuristic() (with `hint`)
 /// otherwise.
 TourResult solve(const Eigen::MatrixXd& cost, const std::vector<double>& xi, double lambda, int max_exact,
