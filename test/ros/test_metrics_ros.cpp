@@ -28,6 +28,7 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <set>
 #include <vector>
 
 #include "go_feap/Bspline.h"
@@ -519,6 +520,30 @@ TEST(GlobalPlanner, PlansAgainAtOnceWhenTheClockGoesBack) {
   int planned = 0;
   for (const go_feap::GlobalTour& t : tours) planned += !t.repeated && t.header.stamp.toSec() < 30.0;
   EXPECT_GE(planned, 5) << tours.size() << " tours in 2 s after the clock went back 80 s";
+
+  // The blacklist (from the layer manager) keeps a frontier out of the tours until it leaves the list.
+  // Frontier 2 is frontier 1 moved 0.4 m aside.
+  go_feap::Frontier second = frontiers.frontiers.front();
+  second.id = 2;
+  for (geometry_msgs::Point* c : {&second.average, &second.aabb_min, &second.aabb_max}) c->y += 0.4;
+  for (geometry_msgs::Point& c : second.cells) c.y += 0.4;
+  frontiers.frontiers.push_back(second);
+  ros::Publisher blacklist_pub = nh.advertise<std_msgs::UInt32MultiArray>("probe/gp/blacklist", 1, /*latch=*/true);
+  ASSERT_TRUE(spinUntil([&] { return blacklist_pub.getNumSubscribers() > 0; }, 10.0));
+  auto tourIds = [&](const std::vector<std::uint32_t>& listed) {  // the ids of the tours planned after it
+    std_msgs::UInt32MultiArray blacklist;
+    blacklist.data = listed;
+    blacklist_pub.publish(blacklist);
+    spinUntil([] { return false; }, 0.3);
+    tours.clear();
+    run(1.0);
+    std::set<std::uint32_t> ids;
+    for (const go_feap::GlobalTour& t : tours) ids.insert(t.frontier_ids.begin(), t.frontier_ids.end());
+    EXPECT_GE(tours.size(), 3u) << "no tours with the blacklist " << ::testing::PrintToString(listed);
+    return ids;
+  };
+  EXPECT_EQ(tourIds({1}), std::set<std::uint32_t>{2}) << "a blacklisted frontier in a tour";
+  EXPECT_EQ(tourIds({}), (std::set<std::uint32_t>{1, 2})) << "a frontier off the blacklist left out";
 }
 
 // A local planner in the fuel mode (probe/lp/... in metrics.test) takes a viewpoint of the test's frontier

@@ -98,6 +98,12 @@ TEST(Onboard, RunsTheChainOnD435iDepthAndVioOdometry) {
   // Frontiers in view, and 3 s more (30 global planner periods): still nothing planned, targeted or flown,
   // and the vehicle where it was (the planners used to act before the trigger: only the layer manager
   // waited for it).
+  // Every planner's output and the command stream heard, so that the counts below cannot be zero for want of a
+  // connection.
+  ASSERT_TRUE(spinUntil([&] {
+    return tour_sub.getNumPublishers() > 0 && target_sub.getNumPublishers() > 0 &&
+           bspline_sub.getNumPublishers() > 0 && cmd_sub.getNumPublishers() > 0;
+  }, 20.0)) << "global_tour, local_target, bspline or vehicle/position_cmd not connected";
   // A 2D Nav Goal from an rviz on the master meanwhile: no trigger on board (layers/goal_trigger false).
   ros::Publisher goal_pub = nh.advertise<geometry_msgs::PoseStamped>("/move_base_simple/goal", 1);
   spinUntil([] { return false; }, 1.0);

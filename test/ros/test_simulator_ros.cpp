@@ -134,14 +134,20 @@ TEST_F(SimulatorTest, CommandMovesOdomCameraStampsMatchNanIsIgnored) {
   const auto& cp = poses_.back()->pose.position;
   EXPECT_NEAR(std::hypot(cp.x - position().x(), cp.y - position().y()), 0.1, 0.02);
 
-  // A NaN command must not move the vehicle or stop the simulator.
-  go_feap::PositionCommand bad;
-  bad.position.x = std::numeric_limits<double>::quiet_NaN();
-  bad.position.y = target.y();
-  bad.position.z = target.z();
+  // A NaN command (position or yaw), or one turning faster than simulation/max_command_yaw_rate, must not move
+  // or turn the vehicle or stop the simulator. Each is a world-frame hold but for its one bad value, so only
+  // the value check can refuse it.
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::vector<go_feap::PositionCommand> bad(3, go_feap::test::holdCommand(target, 0.5));
+  bad[0].position.x = nan;
+  bad[1].yaw = nan;
+  bad[2] = go_feap::test::holdCommand(target, 0.5, 1e3);
+  double max_yaw_rate = 0.0;
+  ASSERT_TRUE(ros::param::get("quadrotor_sim/simulation/max_command_yaw_rate", max_yaw_rate));
+  ASSERT_LT(max_yaw_rate, 1e3);
   const std::size_t before = odom_count_;
-  for (int i = 0; i < 20; ++i) {
-    cmd_pub_.publish(bad);
+  for (int i = 0; i < 30; ++i) {
+    cmd_pub_.publish(bad[i % 3]);
     spinSim(0.05);
   }
   go_feap::PositionCommand elsewhere = go_feap::test::holdCommand(target + Eigen::Vector3d(0.5, 0.0, 0.0), 0.5);
@@ -157,6 +163,9 @@ TEST_F(SimulatorTest, CommandMovesOdomCameraStampsMatchNanIsIgnored) {
   spinSim(1.0);
   EXPECT_GT(odom_count_, before + 50);
   EXPECT_LT((position() - target).norm(), 0.05) << "at " << position().transpose();
+  const auto& q = last_odom_->pose.pose.orientation;
+  const double yaw = std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
+  EXPECT_LT(std::abs(std::remainder(yaw - 0.5, 2.0 * M_PI)), 0.05) << "turned to " << yaw << " rad";
 
   // One odometry message stamped far ahead (4e9 s, a clock gone wrong) must not hold the camera back until
   // then: frames follow the simulator's odometry again at once.

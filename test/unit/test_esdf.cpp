@@ -263,10 +263,11 @@ TEST(Esdf, OutsideTheGrid) {
   EXPECT_EQ(esdf.distance(Vec3(1e9, 0, 0)), 0.8);
   EXPECT_EQ(esdf.distance(Vec3(NAN, 0, 0)), 0.8);
   // Just outside the grid, next to the obstacle voxel in its corner, the interpolant blends the
-  // obstacle with max_distance beyond the grid.
+  // obstacle (0) with max_distance beyond the grid: 0.3 of a voxel pitch from the outer centres along
+  // each axis gives the obstacle a weight of 0.3^3.
+  ASSERT_DOUBLE_EQ(g.resolution(), 0.1);
   const double d = esdf.distance(Vec3(g.origin() - Vec3::Constant(0.02)));
-  EXPECT_GT(d, 0.1);
-  EXPECT_LT(d, 0.8);
+  EXPECT_NEAR(d, 0.8 * (1.0 - 0.3 * 0.3 * 0.3), 1e-12);
 }
 
 TEST(Esdf, SingleObstacleIsExactAndItsGradientPointsAway) {
