@@ -10,6 +10,7 @@
 #include <nav_msgs/Odometry.h>
 #include <nav_msgs/Path.h>
 #include <ros/ros.h>
+#include <rosgraph_msgs/Log.h>
 #include <sensor_msgs/Image.h>
 #include <std_srvs/Trigger.h>
 #include <tf2_eigen/tf2_eigen.h>
@@ -196,6 +197,32 @@ TEST(Onboard, RunsTheChainOnD435iDepthAndVioOdometry) {
     EXPECT_EQ(unmatched(), 0u) << "flown_path poses that are no odometry position, of " << shown->poses.size();
     for (const auto& q : shown->poses) EXPECT_EQ(q.header.frame_id, "world");
   }
+  // The local planner hears the onboard depth topic too (its obstacle window judges the clutter): an rgb8
+  // image sent there is refused by it, by name. Unconnected, nothing would be said and the window would stay
+  // empty, silently.
+  std::vector<std::string> warnings;
+  ros::Subscriber log_sub = nh.subscribe<rosgraph_msgs::Log>("/rosout", 100, [&](const rosgraph_msgs::Log::ConstPtr& m) {
+    if (m->level == rosgraph_msgs::Log::WARN) warnings.push_back(m->msg);
+  });
+  ros::Publisher rgb_pub = nh.advertise<sensor_msgs::Image>("vehicle/depth", 1);
+  ASSERT_TRUE(spinUntil([&] { return log_sub.getNumPublishers() > 0 && rgb_pub.getNumSubscribers() >= 2; }, 20.0))
+      << "vehicle/depth has " << rgb_pub.getNumSubscribers() << " subscribers (the mapper, the local planner, this test)";
+  sensor_msgs::Image rgb = *depth;
+  rgb.encoding = "rgb8";
+  rgb.step = rgb.width * 3;
+  rgb.data.assign(std::size_t{rgb.step} * rgb.height, 0);
+  // Sent again past the warning's 5 s throttle until heard: /rosout's connections to the nodes come one by one.
+  ros::WallTime sent;
+  EXPECT_TRUE(spinUntil([&] {
+    if (sent.isZero() || (ros::WallTime::now() - sent).toSec() > 6.0) {
+      rgb.header.stamp = ros::Time::now();
+      rgb_pub.publish(rgb);
+      sent = ros::WallTime::now();
+    }
+    return std::any_of(warnings.begin(), warnings.end(), [](const std::string& w) {
+      return w.find("/local_planner: depth image refused") != std::string::npos;
+    });
+  }, 40.0)) << "the local planner said nothing of an rgb8 image on the onboard depth topic";
 }
 
 }  // namespace
