@@ -18,6 +18,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <tuple>
 #include <vector>
 
 #include "go_feap/MapUpdate.h"
@@ -241,10 +242,14 @@ struct Probe {
         depth_pub(nh.advertise<sensor_msgs::Image>(prefix + "depth", 5)),
         pose_pub(nh.advertise<geometry_msgs::PoseStamped>(prefix + "camera_pose", 5)),
         update_sub(nh.subscribe<go_feap::MapUpdate>(prefix + "map_update", 10,
-                                                    [this](const go_feap::MapUpdate::ConstPtr&) { ++updates; })) {}
+                                                    [this](const go_feap::MapUpdate::ConstPtr& m) {
+                                                      ++updates;
+                                                      last_update = m;
+                                                    })) {}
   ros::NodeHandle nh;
   ros::Publisher info_pub, depth_pub, pose_pub;
   std::size_t updates = 0;
+  go_feap::MapUpdate::ConstPtr last_update;
   ros::Subscriber update_sub;
   sensor_msgs::CameraInfo::ConstPtr info;
   sensor_msgs::Image::ConstPtr depth;
@@ -526,6 +531,8 @@ TEST_F(MapperTest, InTfModeAFrameWaitsForALateTransformAndOneWithoutNeverBlocksT
 TEST_F(MapperTest, ARelocalisationMovesTheReferenceLaterFramesAreJudgedBy) {
   Probe probe;
   ASSERT_TRUE(probe.connect());
+  double max_range = 0.0;
+  ASSERT_TRUE(ros::param::get("/probe_mapper/occupancy/max_range", max_range));
   probe.info_pub.publish(*probe.info);
   ASSERT_TRUE(probe.sendRealUntilIntegrated());
   struct Jump {
@@ -538,10 +545,29 @@ TEST_F(MapperTest, ARelocalisationMovesTheReferenceLaterFramesAreJudgedBy) {
     for (std::size_t i = 0; i < 4; ++i) {
       const auto [pose, integrated] = steps[i];
       const std::size_t before = probe.updates;
+      ASSERT_TRUE(probe.last_update);
+      const std::uint64_t sequence = probe.last_update->sequence;
       probe.send(*probe.depth, *pose);
       if (integrated) spinUntil([&] { return probe.updates > before; }, 3.0);
       EXPECT_EQ(probe.updates > before, integrated)
           << "frame " << i << " of the jump of " << jump.dx << " m and " << jump.yaw << " rad";
+      if (!integrated || probe.updates == before) continue;
+      // Its map_update: the frame's stamp, the next sequence number, and the changed voxels (a new view: some)
+      // in a box within the sensor's reach of the camera.
+      const go_feap::MapUpdate& u = *probe.last_update;
+      EXPECT_EQ(u.header.stamp, probe.depth->header.stamp + ros::Duration(0.001 * probe.frame));
+      EXPECT_EQ(u.sequence, sequence + 1);
+      if (i != 1) continue;
+      ASSERT_GT(u.changed_voxels, 0u) << "a view from 1.5 m off (or turned 1 rad) changed nothing";
+      const auto& c = pose->pose.position;
+      const double reach = max_range + u.resolution;
+      for (const auto& [lo, hi, at] : {std::tuple{u.changed_min.x, u.changed_max.x, c.x},
+                                      std::tuple{u.changed_min.y, u.changed_max.y, c.y},
+                                      std::tuple{u.changed_min.z, u.changed_max.z, c.z}}) {
+        EXPECT_LE(lo, hi);
+        EXPECT_GE(lo, at - reach);
+        EXPECT_LE(hi, at + reach);
+      }
     }
   }
 }
