@@ -117,9 +117,15 @@ TEST_F(MapperTest, TurningInPlaceMapsTheWallsBadFramesAreSkippedSaveMapWorks) {
   EXPECT_EQ(before.directions, 4);
   EXPECT_GT(last_update_->sequence, 50u);
 
-  // Bad frames: wrong encoding, and a camera pose 30 m away (relocalisation): skipped.
+  // Bad frames: wrong encoding, and a camera pose 30 m away (relocalisation): skipped, so no map_update
+  // carries their stamps (all-zero images change no voxel, so only the stamps can tell).
+  std::vector<ros::Time> bad_stamps, update_stamps;
+  ros::Subscriber updates = nh_.subscribe<go_feap::MapUpdate>(
+      "map_update", 50, [&](const go_feap::MapUpdate::ConstPtr& m) { update_stamps.push_back(m->header.stamp); });
+  ASSERT_TRUE(spinUntil([&] { return updates.getNumPublishers() > 0; }, 10.0));
   for (int i = 0; i < 5; ++i) {
     const ros::Time stamp = ros::Time::now() + ros::Duration(0.001 * (i + 1));
+    bad_stamps.push_back(stamp);
     sensor_msgs::Image img;
     img.header.stamp = stamp;
     img.header.frame_id = "camera";
@@ -139,6 +145,12 @@ TEST_F(MapperTest, TurningInPlaceMapsTheWallsBadFramesAreSkippedSaveMapWorks) {
     depth_pub_.publish(img);
     spinUntil([] { return false; }, 0.2);
   }
+  // Frames after them are integrated (so the map_updates were heard), none of theirs.
+  const ros::Time last_bad = bad_stamps.back();
+  EXPECT_TRUE(spinUntil([&] { return !update_stamps.empty() && update_stamps.back() > last_bad; }, 30.0));
+  for (const ros::Time& t : bad_stamps)
+    EXPECT_EQ(std::count(update_stamps.begin(), update_stamps.end(), t), 0) << "a bad frame was integrated";
+  updates.shutdown();
   // A real frame and its pose again, stamped at 4e9 s (a sender's clock gone wrong): ros::Time arithmetic on
   // it throws, and once brought the nodelet manager down; a throttle stamped that far ahead must not stop
   // the clouds for good either.
