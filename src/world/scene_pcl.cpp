@@ -276,7 +276,14 @@ std::string plyDataProblem(const std::string& path, const CloudHeader& h) {
   // PCL reserves the faces a header declares before it reads one (1e9 faces declared in 200 bytes: 24 GB).
   if (h.data.rfind("binary", 0) == 0) {
     double least = 0.0;
-    for (const PlyElement& e : h.elements) least += e.count * e.bytes;
+    for (const PlyElement& e : h.elements) {
+      // An element without properties takes no bytes, however many it declares: PCL loops over (and for faces
+      // reserves) them all.
+      if (e.count > 0.0 && e.values == 0.0)
+        return path + ": corrupt PLY file (its element '" + e.name + "' declares " + std::to_string(std::llround(e.count)) +
+               " instances but no property)";
+      least += e.count * e.bytes;
+    }
     if (least > h.room) {
       std::ostringstream why;
       why << path << ": corrupt or truncated PLY file (its header declares elements that need at least " << least
@@ -403,12 +410,15 @@ namespace {
 
 // Appends the triangles of the face `polygon` (indices into `points`): its fan round the first vertex when every
 // fan triangle turns the way the face does (the fan then covers the face exactly), else ear clipping in the
-// plane of the face's Newell normal (O(n^2) per ear; faces are short). A degenerate face (no normal) is fanned.
+// plane of the face's Newell normal. A degenerate face (no normal) is fanned.
 void triangulateFace(const std::vector<Vec3>& points, const std::vector<std::uint32_t>& polygon,
                      std::vector<std::array<std::uint32_t, 3>>& triangles) {
   const std::size_t n = polygon.size();
-  Vec3 normal = Vec3::Zero();  // Newell's: twice the face's vector area
-  for (std::size_t i = 0; i < n; ++i) normal += points[polygon[i]].cross(points[polygon[(i + 1) % n]]);
+  // Newell's normal (twice the face's vector area), from the first vertex: far from the origin (a georeferenced
+  // mesh) absolute coordinates would drown a small face's area in rounding.
+  const Vec3 o = points[polygon[0]];
+  Vec3 normal = Vec3::Zero();
+  for (std::size_t i = 0; i < n; ++i) normal += (points[polygon[i]] - o).cross(points[polygon[(i + 1) % n]] - o);
   const auto turn = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
     return (points[b] - points[a]).cross(points[c] - points[a]).dot(normal);
   };
@@ -426,10 +436,12 @@ void triangulateFace(const std::vector<Vec3>& points, const std::vector<std::uin
   const auto inside = [&](std::uint32_t p, std::uint32_t a, std::uint32_t b, std::uint32_t c) {
     return turn(a, b, p) >= 0.0 && turn(b, c, p) >= 0.0 && turn(c, a, p) >= 0.0;
   };
+  std::size_t from = 0;  // where the search for the next ear starts: beside the last one cut, not at the start
   while (rest.size() > 3) {
     const std::size_t m = rest.size();
     bool cut = false;
-    for (std::size_t i = 0; i < m && !cut; ++i) {
+    for (std::size_t step = 0; step < m && !cut; ++step) {
+      const std::size_t i = (from + step) % m;
       const std::uint32_t a = rest[(i + m - 1) % m], b = rest[i], c = rest[(i + 1) % m];
       if (!(turn(a, b, c) > 0.0)) continue;
       bool empty = true;
@@ -441,6 +453,7 @@ void triangulateFace(const std::vector<Vec3>& points, const std::vector<std::uin
       if (!empty) continue;
       triangles.push_back({a, b, c});
       rest.erase(rest.begin() + static_cast<std::ptrdiff_t>(i));
+      from = i == 0 ? 0 : i - 1;
       cut = true;
     }
     if (!cut) break;  // no ear (a self-crossing face): the rest is fanned

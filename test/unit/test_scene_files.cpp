@@ -264,6 +264,11 @@ TEST(PlyMesh, FacesMarkTheVoxelsTheyOverlapAsAnStlDoes) {
   // reserve them all first.
   refused("many.ply", std::regex_replace(binary, std::regex("element face 12"), "element face 1000000000"),
           {"need at least 1e+09 bytes"});
+  // Faces declared with no property take no bytes however many: refused as such.
+  refused("bare.ply",
+          std::regex_replace(binary, std::regex("element face 12\nproperty list uchar int vertex_indices"),
+                             "element face 1000000000"),
+          {"element 'face' declares 1000000000 instances but no property"});
 }
 
 // A concave face (a wall with a doorway cut into it, one 8-sided face) is cut into triangles that keep the

@@ -31,7 +31,7 @@ std::string lowerExtension(const std::string& path);
 /// A point cloud file's points and, for a PLY mesh, its faces as triangles of point indices.
 struct PointCloudFile {
   std::vector<Vec3> points;
-  std::vector<std::array<std::uint32_t, 3>> triangles;  ///< each face fanned round its first vertex
+  std::vector<std::array<std::uint32_t, 3>> triangles;  ///< a convex face fanned round its first vertex, a concave one ear-clipped
 };
 
 /// Reads x, y, z of every point of a .pcd or .ply file (PCL readers), each in its own type (float32, float64
