@@ -301,8 +301,10 @@ void ExplorationRun::planStep() {
   if (decision == planning::TargetDecision::kKeep) return;
   if (current && current->reached) visited_.add(current->viewpoint, config_.local);
   if (decision == planning::TargetDecision::kReachedInVain) {
-    log("frontier " + std::to_string(target_->frontier) + " not cleared from its reached viewpoint: failed attempt");
-    failed_.push_back(target_->frontier);
+    // The frontier the same target is proposed for now (the target's own may have been regrown under a new id).
+    const std::uint32_t frontier = plan->frontier_ids.front();
+    log("frontier " + std::to_string(frontier) + " not cleared from its reached viewpoint: failed attempt");
+    failed_.push_back(frontier);
     target_.reset();
     return;
   }

@@ -376,10 +376,13 @@ class LocalPlanner : public nodelet::Nodelet {
     }
     if (current && current->reached) visited_.add(current->viewpoint, local_config_);
     if (decision == planning::TargetDecision::kReachedInVain) {
-      NODELET_INFO_STREAM(getName() << ": frontier " << target_frontier_
+      // The frontier the same target is proposed for now: the target's own may have been regrown under a new
+      // id meanwhile, and a failure of an id that is gone is forgotten (it was never blacklisted).
+      const std::uint32_t frontier = plan->frontier_ids.front();
+      NODELET_INFO_STREAM(getName() << ": frontier " << frontier
                                     << " not cleared from its reached viewpoint: failed attempt");
       std_msgs::UInt32 failed;
-      failed.data = target_frontier_;
+      failed.data = frontier;
       failed_pub_.publish(failed);
       target_.reset();
       last_out_.reset();

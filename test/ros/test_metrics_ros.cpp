@@ -602,6 +602,25 @@ TEST(LocalPlanner, PlansAgainWhenTheClockGoesBack) {
   plans = 0;
   run(4.0);
   EXPECT_GE(plans, 1u) << "no plan in 4 s after the clock went back 80 s";
+
+  // Reached in vain after its frontier was regrown under a new id: the vehicle at rest at the target, its
+  // frontier (the same cells) now listed and toured as 7. The failed attempt is reported for 7, the id the
+  // layer manager knows; 1 is gone, and its failures with it (a failure reported for it was lost, so a
+  // frontier renamed between attempts was never blacklisted).
+  std::vector<std::uint32_t> failed;
+  auto failed_sub = nh.subscribe<std_msgs::UInt32>("probe/lp/frontier_failed", 10,
+                                                   [&](const std_msgs::UInt32::ConstPtr& m) { failed.push_back(m->data); });
+  ASSERT_TRUE(spinUntil([&] { return failed_sub.getNumPublishers() > 0; }, 10.0));
+  const go_feap::ViewpointPath target = targets.back();
+  ASSERT_EQ(target.frontier_ids.at(0), 1u);
+  odom.pose.pose.position = target.positions.at(0);
+  odom.pose.pose.orientation.w = std::cos(0.5 * target.yaws.at(0));
+  odom.pose.pose.orientation.z = std::sin(0.5 * target.yaws.at(0));
+  frontiers.frontiers[0].id = 7;
+  tour.frontier_ids = {7};
+  run(6.0);
+  ASSERT_FALSE(failed.empty()) << "the target, reached and proposed again, was not reported failed";
+  EXPECT_EQ(failed.front(), 7u) << "the failure went to the target's first id, gone since";
 }
 
 // A trajectory planner (probe/tp/... in metrics.test) flies the vehicle, held still by the test at 1 m up,
