@@ -304,12 +304,11 @@ class EsdfMapper : public nodelet::Nodelet {
     // A jump between integrated frames, farther than mapper/max_pose_jump or turned more than
     // mapper/max_rotation_jump (a VIO restarted at its own origin resets the heading), is a relocalisation:
     // the frame is skipped and its pose is the reference from now on.
-    if (last_position_) {
-      const double moved = (T_W_C.translation() - *last_position_).norm();
-      const double turned = Eigen::AngleAxisd(last_rotation_->transpose() * T_W_C.linear()).angle();
+    if (reference_) {
+      const double moved = (T_W_C.translation() - reference_->translation()).norm();
+      const double turned = Eigen::AngleAxisd(reference_->linear().transpose() * T_W_C.linear()).angle();
       if (moved > max_pose_jump_ || turned > max_rotation_jump_) {
-        last_position_ = T_W_C.translation();
-        last_rotation_ = T_W_C.linear();
+        reference_ = T_W_C;
         std::ostringstream why;
         why << "camera pose moved " << moved << " m and turned " << turned << " rad since the last frame (more than "
             << "mapper/max_pose_jump, " << max_pose_jump_ << " m, or mapper/max_rotation_jump, " << max_rotation_jump_
@@ -337,8 +336,7 @@ class EsdfMapper : public nodelet::Nodelet {
       }
     }
     if (!info) return skip("frame", info.message());
-    last_position_ = T_W_C.translation();
-    last_rotation_ = T_W_C.linear();
+    reference_ = T_W_C;
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     ros_conv::publishComputeTime(compute_pub_, "mapping", t0);
     if (info->frame.pixels_used == 0)  // a covered lens, an emitter off, the wrong topic: mapping has stopped
@@ -470,8 +468,7 @@ class EsdfMapper : public nodelet::Nodelet {
   std::string intrinsics_frame_;  // frame_id of the camera_info intrinsics_ came from
   std::map<std::string, std::size_t> skipped_;
   std::map<std::string, ros::WallTime> last_warn_;
-  std::optional<common::Vec3> last_position_;
-  std::optional<Eigen::Matrix3d> last_rotation_;  ///< of the last integrated frame (or the last jump's)
+  std::optional<Eigen::Isometry3d> reference_;  ///< camera pose of the last integrated frame (or the last jump's)
   ros::Time last_cloud_;
   ros::Publisher compute_pub_;
   ros::Publisher update_pub_, handle_pub_, cloud_pub_, slice_pub_;

@@ -103,11 +103,7 @@ class TrajectoryServer : public nodelet::Nodelet {
   void onBspline(const Bspline::ConstPtr& msg) {
     auto t = ros_traj::fromMsg(*msg);
     std::lock_guard<std::mutex> lock(mutex_);
-    if (!t) {
-      NODELET_WARN_STREAM_THROTTLE(1.0, getName() << ": trajectory " << msg->traj_id << " refused: " << t.message());
-      commanding_ = commanding_ || hold_;
-      return;
-    }
+    if (!t) return refuse(msg->traj_id, t.message());
     std::string bad = ros_traj::motionProblem(*t, max_speed_, max_acceleration_, max_yaw_rate_);
     if (!bad.empty()) bad += " (server/max_speed, server/max_acceleration, server/max_yaw_rate)";
     const ros::Time now = ros::Time::now();
@@ -115,12 +111,7 @@ class TrajectoryServer : public nodelet::Nodelet {
     // One starting later is checked for where it starts when it is taken over (the vehicle goes on
     // along the running one until then: 1 s ahead at 2 m/s is 2 m from where it is now).
     if (bad.empty()) bad = startProblem(*t, now, /*where=*/!later);
-    if (!bad.empty()) {
-      NODELET_WARN_STREAM_THROTTLE(1.0, getName() << ": trajectory " << msg->traj_id << " refused: " << bad
-                                                  << "; the reference stays as it was");
-      commanding_ = commanding_ || hold_;
-      return;
-    }
+    if (!bad.empty()) return refuse(msg->traj_id, bad);
     if (later) {
       pending_ = std::move(t).value();  // the running one goes on until it starts
     } else {
@@ -137,11 +128,18 @@ class TrajectoryServer : public nodelet::Nodelet {
     if (bad.empty()) {
       current_ = std::move(pending_);
     } else {
-      NODELET_WARN_STREAM_THROTTLE(1.0, getName() << ": trajectory " << pending_->id << " refused at its start: "
-                                                  << bad << "; the reference stays as it was");
-      commanding_ = commanding_ || hold_;
+      refuse(pending_->id, "at its start, " + bad);
     }
     pending_.reset();
+  }
+
+  // A trajectory refused: said, and the reference stays as it was. Once there is a hold, commands flow from
+  // then on (a refused first trajectory is held where the vehicle is: its EMPTY flag tells the planner to plan
+  // again).
+  void refuse(std::int64_t id, const std::string& why) {
+    NODELET_WARN_STREAM_THROTTLE(1.0, getName() << ": trajectory " << id << " refused: " << why
+                                                << "; the reference stays as it was");
+    commanding_ = commanding_ || hold_;
   }
 
   // Why a trajectory cannot be taken over at time `now` (s), or "" when it can: the odometry silent, or

@@ -12,13 +12,19 @@ std::string keyOf(const std::string& child) {
 
 }  // namespace
 
+// The first of `samples` (in stamp order) at or after `stamp`.
+std::deque<SampleLog::Sample>::const_iterator SampleLog::firstFrom(const std::deque<Sample>& samples,
+                                                                  const ros::Time& stamp) {
+  return std::lower_bound(samples.begin(), samples.end(), stamp,
+                          [](const Sample& s, const ros::Time& t) { return s.stamp < t; });
+}
+
 void SampleLog::add(const std::string& child, const ros::Time& stamp, const geometry_msgs::Transform& pose) {
   if (stamp.isZero()) return;
   std::deque<Sample>& samples = links_[keyOf(child)];
   // Stamps compared as seconds: ros::Time subtraction throws beyond 2^31 s.
   if (!samples.empty() && stamp.toSec() < samples.back().stamp.toSec() - keep_s_) samples.clear();
-  const auto at = std::lower_bound(samples.begin(), samples.end(), stamp,
-                                   [](const Sample& s, const ros::Time& t) { return s.stamp < t; });
+  const auto at = firstFrom(samples, stamp);
   if (at != samples.end() && at->stamp == stamp) return;  // repeated
   const Eigen::Quaterniond q(pose.rotation.w, pose.rotation.x, pose.rotation.y, pose.rotation.z);
   samples.insert(at, Sample{stamp, Eigen::Vector3d(pose.translation.x, pose.translation.y, pose.translation.z), q});
@@ -29,8 +35,7 @@ std::optional<SampleLog::Bracket> SampleLog::around(const std::string& child, co
   const auto link = links_.find(keyOf(child));
   if (link == links_.end() || link->second.empty()) return std::nullopt;
   const std::deque<Sample>& samples = link->second;
-  const auto after = std::lower_bound(samples.begin(), samples.end(), stamp,
-                                      [](const Sample& s, const ros::Time& t) { return s.stamp < t; });
+  const auto after = firstFrom(samples, stamp);
   if (after != samples.end() && after->stamp == stamp) return Bracket{stamp, stamp, false};
   if (after == samples.begin()) return std::nullopt;
   const Sample& b = *std::prev(after);

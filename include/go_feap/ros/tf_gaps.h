@@ -48,6 +48,7 @@ class SampleLog {
     Eigen::Vector3d t;
     Eigen::Quaterniond q;
   };
+  static std::deque<Sample>::const_iterator firstFrom(const std::deque<Sample>& samples, const ros::Time& stamp);
   double keep_s_;
   std::map<std::string, std::deque<Sample>> links_;
 };
