@@ -18,11 +18,11 @@ FrontierSummary summarize(const frontier::Frontier& frontier, double now) {
   return s;
 }
 
-PathDistance TourPlanner::search(const Vec3& a, const Vec3& b, double now) {
+TourPlanner::Recent TourPlanner::search(const Vec3& a, const Vec3& b, double now) {
   const double cell = config_.reuse_cell;
   if (!(cell > 0.0)) {
     ++searches_;
-    return pathDistance(astar_, a, b);
+    return {pathDistance(astar_, a, b), now};
   }
   CellPair key;
   for (int i = 0; i < 3; ++i) {
@@ -32,11 +32,9 @@ PathDistance TourPlanner::search(const Vec3& a, const Vec3& b, double now) {
   if (std::lexicographical_compare(key.begin() + 3, key.end(), key.begin(), key.begin() + 3))
     std::rotate(key.begin(), key.begin() + 3, key.end());  // the same key either way round
   auto it = recent_.find(key);
-  if (it != recent_.end()) return it->second.distance;
+  if (it != recent_.end()) return it->second;
   ++searches_;
-  const PathDistance d = pathDistance(astar_, a, b);
-  recent_.emplace(key, Recent{d, now});
-  return d;
+  return recent_.emplace(key, Recent{pathDistance(astar_, a, b), now}).first->second;
 }
 
 common::Result<GlobalTour> TourPlanner::plan(const std::vector<FrontierSummary>& frontiers, const Vec3& uav,
@@ -44,17 +42,24 @@ common::Result<GlobalTour> TourPlanner::plan(const std::vector<FrontierSummary>&
   // Reused lengths expire (the map has grown since), and so does anything from a clock that went back.
   for (auto it = recent_.begin(); it != recent_.end();)
     it = now - it->second.time > config_.reuse_time || now < it->second.time ? recent_.erase(it) : std::next(it);
+  // A pair's length is kept while both frontiers are listed; one that fell back to a straight line (the
+  // search failed: no way through the known map, or over budget) is searched again after reuse_time,
+  // since the map may have opened a way since and the straight line understates any way round.
   std::set<unsigned> ids;
   for (const FrontierSummary& f : frontiers) ids.insert(f.id);
-  for (auto it = cache_.begin(); it != cache_.end();)
-    it = ids.count(it->first.first) && ids.count(it->first.second) ? std::next(it) : cache_.erase(it);
+  for (auto it = cache_.begin(); it != cache_.end();) {
+    const bool listed = ids.count(it->first.first) && ids.count(it->first.second);
+    const bool stale = it->second.distance.euclidean_fallback &&
+                       (now - it->second.time > config_.reuse_time || now < it->second.time);
+    it = listed && !stale ? std::next(it) : cache_.erase(it);
+  }
   std::size_t local_fallbacks = 0;
   std::set<std::pair<unsigned, unsigned>> fallback_pairs;  // each pair counted once per call
   PathDistances d;
   std::vector<double> path_from_uav(frontiers.size(), -1.0);  // searched in this call (-1: not yet)
   d.from_uav_path = [&](std::size_t j) {
     if (path_from_uav[j] >= 0.0) return path_from_uav[j];
-    const PathDistance pd = search(uav, frontiers[j].average, now);
+    const PathDistance pd = search(uav, frontiers[j].average, now).distance;
     local_fallbacks += pd.euclidean_fallback;
     return path_from_uav[j] = pd.metres;
   };
@@ -69,9 +74,10 @@ common::Result<GlobalTour> TourPlanner::plan(const std::vector<FrontierSummary>&
     if (frontiers[j].id < frontiers[i].id) std::swap(i, j);
     const auto key = std::make_pair(frontiers[i].id, frontiers[j].id);
     auto it = cache_.find(key);
-    if (it == cache_.end()) it = cache_.emplace(key, search(frontiers[i].average, frontiers[j].average, now)).first;
-    if (it->second.euclidean_fallback) fallback_pairs.insert(key);  // asked both ways round, and again for rests
-    return it->second.metres;
+    if (it == cache_.end())
+      it = cache_.emplace(key, search(frontiers[i].average, frontiers[j].average, now)).first;
+    if (it->second.distance.euclidean_fallback) fallback_pairs.insert(key);  // asked both ways round, and for rests
+    return it->second.distance.metres;
   };
   auto tour = planTour(frontiers, d, config_, last_tour_);
   if (tour) last_tour_ = tour->frontier_ids;

@@ -1043,6 +1043,12 @@ void splitByWallWithGap(World& world) {
   world.set(Index3(30, 0, 0), Index3(31, 29, 9), VoxelState::kOccupied);
 }
 
+// The same wall with no gap: x >= 3.2 m is cut off.
+void cutOffByWall(World& world) {
+  world.fill(VoxelState::kFree);
+  world.set(Index3(30, 0, 0), Index3(31, 39, 9), VoxelState::kOccupied);
+}
+
 }  // namespace
 
 TEST(TourPlanner, SearchesEachPairOnceAndFindsTheShortestOpenTour) {
@@ -1097,8 +1103,7 @@ TEST(TourPlanner, SearchesEachPairOnceAndFindsTheShortestOpenTour) {
 // both ways round and again when pricing rests, and each ask used to count.
 TEST(TourPlanner, CountsEachEuclideanFallbackOnce) {
   World world(Index3(60, 40, 10));
-  world.fill(VoxelState::kFree);
-  world.set(Index3(30, 0, 0), Index3(31, 39, 9), VoxelState::kOccupied);  // no gap: the far side is cut off
+  cutOffByWall(world);
   const Astar astar(world.occupancy(), world.esdf(), astarConfig(0.2, true));
   go_feap::planning::GlobalPlannerConfig config;
   config.s_near = 100.0;
@@ -1118,6 +1123,53 @@ TEST(TourPlanner, CountsEachEuclideanFallbackOnce) {
     // From the UAV to the cut-off frontier, and from each of the other two to it.
     EXPECT_EQ(fallbacks, 3u) << "round " << round;
   }
+}
+
+// A length that fell back to a straight line (the frontier cut off in the known map) is kept for reuse_time
+// only, then searched again: once a way has opened, the pair is priced by it. Kept for the pair's life, the
+// straight line (3 m across the wall) stood for a way round of over 6 m as long as both frontiers lived.
+TEST(TourPlanner, SearchesAFallenBackLengthAgainAfterReuseTime) {
+  World world(Index3(60, 40, 10));
+  cutOffByWall(world);
+  const Astar astar(world.occupancy(), world.esdf(), astarConfig(0.2, true));
+  go_feap::planning::GlobalPlannerConfig config;
+  config.lambda = 0.0;  // travel time only
+  config.s_near = 100.0;
+  config.reuse_cell = 0.0;  // no reuse between cells: every search is one for the pair
+  config.reuse_time = 1.0;
+  go_feap::planning::TourPlanner planner(config, astar);
+  std::vector<go_feap::planning::FrontierSummary> frontiers(2);
+  frontiers[0].id = 1, frontiers[0].average = Vec3(4.5, 1.0, 0.5);  // beyond the wall
+  frontiers[1].id = 2, frontiers[1].average = Vec3(1.5, 1.0, 0.5);  // the UAV's side
+  for (auto& f : frontiers) f.cell_count = 100;
+  const Vec3 uav = frontiers[1].average + Vec3(0.0, 0.4, 0.0);
+  const double straight = (frontiers[0].average - frontiers[1].average).norm();
+  ASSERT_TRUE(pathDistance(astar, frontiers[1].average, frontiers[0].average).euclidean_fallback);
+  std::size_t fallbacks = 0;
+  ASSERT_TRUE(planner.plan(frontiers, uav, 0.0, &fallbacks));
+  EXPECT_EQ(fallbacks, 2u);  // from the UAV to the far frontier, and between the two
+  const std::size_t searched = planner.searches();
+
+  world.set(Index3(30, 34, 0), Index3(31, 39, 9), VoxelState::kFree);  // a way round opens at y >= 3.4 m
+  const auto round = pathDistance(astar, frontiers[1].average, frontiers[0].average);
+  ASSERT_FALSE(round.euclidean_fallback);
+  ASSERT_GT(round.metres, straight + 2.5);
+  // Within reuse_time the pair's length is the kept straight line (the two legs from the UAV are searched
+  // at every call): two searches, one fallback left.
+  ASSERT_TRUE(planner.plan(frontiers, uav, 0.5, &fallbacks));
+  EXPECT_EQ(planner.searches(), searched + 2);
+  EXPECT_EQ(fallbacks, 1u);
+  // Past it the pair is searched again and priced by the way round.
+  const auto tour = planner.plan(frontiers, uav, 1.6, &fallbacks);
+  ASSERT_TRUE(tour) << tour.message();
+  EXPECT_EQ(planner.searches(), searched + 5);
+  EXPECT_EQ(fallbacks, 0u);
+  ASSERT_EQ(tour->frontier_ids, (std::vector<unsigned>{2, 1}));
+  const double from_uav = pathDistance(astar, uav, frontiers[1].average).metres;
+  EXPECT_NEAR(tour->cost, (from_uav + round.metres) / config.v_max, 1e-9);
+  // A found length stays for the pair's life, however long.
+  ASSERT_TRUE(planner.plan(frontiers, uav, 100.0));
+  EXPECT_EQ(planner.searches(), searched + 7);  // the legs from the UAV only
 }
 
 // Candidates topped up from beyond s_near are chosen by straight-line distance, but their legs from the

@@ -2,7 +2,8 @@
 // and the UAV position in, ordered tour out. Path lengths come from A* on the inflated map;
 // frontier-to-frontier lengths are cached per id pair until either frontier changes (a changed
 // frontier gets a new id; one whose cells stay the same keeps its id, and its lengths, however the map
-// between the two changes, as FUEL keeps them). Shared by the GlobalPlanner nodelet and the lock-step bench.
+// between the two changes, as FUEL keeps them). A length that fell back to a straight line is searched
+// again after reuse_time. Shared by the GlobalPlanner nodelet and the lock-step bench.
 #pragma once
 
 #include <array>
@@ -29,7 +30,8 @@ class TourPlanner {
   /// the path) a frontier cannot be near: its Euclidean distance orders the top-up, so no search is spent
   /// on it until it is chosen; a chosen one's leg from the UAV is searched (PathDistances::from_uav_path).
   /// Lengths between frontiers are searched once per unordered pair (from the lower id) and
-  /// cached by id pair; cached lengths of frontiers no longer listed are dropped first. A length to
+  /// cached by id pair; cached lengths of frontiers no longer listed are dropped first, and so are
+  /// Euclidean fallbacks (failed searches) older than reuse_time s, which are searched again. A length to
   /// search is first looked up among those searched in the last reuse_time s between the same two
   /// reuse_cell cells (either way round). `fallbacks` (when not null) counts the distances that fell
   /// back to Euclidean. The last tour warm-starts the next (planTour()'s hint): a large tour is
@@ -45,13 +47,14 @@ class TourPlanner {
   using CellPair = std::array<std::int64_t, 6>;
   struct Recent {
     PathDistance distance;
-    double time;
+    double time;  ///< when it was searched
   };
-  PathDistance search(const Vec3& a, const Vec3& b, double now);
+  /// The length between a and b, searched now or reused from recent_.
+  Recent search(const Vec3& a, const Vec3& b, double now);
 
   GlobalPlannerConfig config_;
   const Astar& astar_;
-  std::map<std::pair<unsigned, unsigned>, PathDistance> cache_;
+  std::map<std::pair<unsigned, unsigned>, Recent> cache_;  ///< by id pair, with when it was searched
   std::map<CellPair, Recent> recent_;
   std::vector<unsigned> last_tour_;  ///< frontier ids of the last tour, in order
   std::size_t searches_ = 0;
