@@ -319,6 +319,13 @@ bool FrontierFinder::keepRegion(const std::vector<std::size_t>& region) {
   auto retired = [&](std::size_t l) { return common::testBit(retired_, l); };
   auto retire = [&] {
     for (std::size_t l : region) common::setBit(retired_, l);
+    return false;
+  };
+  // A region kept is a cluster like any other from now on: it is held down to min_cluster_cells, not to the
+  // revive size (its cells' old retirement would drop it again at the first cell it lost).
+  auto keep = [&] {
+    for (std::size_t l : region) common::clearBit(retired_, l);
+    return true;
   };
   if (n < min_cells) {
     // Retired only when it comes from a cluster: a region growing up from nothing is not held back.
@@ -326,11 +333,9 @@ bool FrontierFinder::keepRegion(const std::vector<std::size_t>& region) {
       retire();
     return false;
   }
-  if (n >= config_.revive_factor * min_cells) return true;
+  if (n >= config_.revive_factor * min_cells) return keep();
   const auto r = static_cast<double>(std::count_if(region.begin(), region.end(), retired));
-  if (2.0 * r < n) return true;
-  retire();
-  return false;
+  return 2.0 * r < n ? keep() : retire();
 }
 
 void FrontierFinder::splitRange(std::vector<Cell>& cells, std::size_t begin, std::size_t end,

@@ -579,6 +579,15 @@ TEST(FrontierFinder, RemnantBelowTheSizeLimitComesBackOnlyPastTheReviveSize) {
     EXPECT_EQ(heldCells(f), 16u);
     EXPECT_EQ(step(strip(m, 0.8, 1.2, 0.55, VoxelState::kFree)), 28u);
     EXPECT_EQ(heldCells(f), 28u);
+    // The revived cluster loses three cells: 13 left, under the revive size but over the limit, so it stays
+    // (once counted again it is a cluster like any other; its cells' old retirement was dropping it here).
+    EXPECT_EQ(step(strip(m, 0.4, 0.7, 0.95, VoxelState::kOccupied)), 25u);
+    EXPECT_EQ(heldCells(f), 25u);
+    // Under the limit it is retired again, and comes back only past the revive size.
+    EXPECT_EQ(step(strip(m, 0.7, 1.1, 0.95, VoxelState::kOccupied)), 12u);
+    EXPECT_EQ(heldCells(f), 12u);
+    EXPECT_EQ(step(strip(m, 2.0, 2.4, 0.95, VoxelState::kFree)), 25u);
+    EXPECT_EQ(heldCells(f), factor > 1.0 ? 12u : 25u);
   }
 }
 
