@@ -605,8 +605,19 @@ TEST(SceneYaml, GroundPlaneFillsTheBoxFloorLayer) {
 // ---- Real scenes from other projects ---------------------------------------------------
 
 namespace {
-std::string configScene(const std::string& name) {
-  return (fs::path(__FILE__).parent_path().parent_path().parent_path() / "config/scenes" / (name + ".yaml")).string();
+// config/scenes/<name>.yaml as shipped, except that its file is the one under GO_FEAP_SHARED_DIR (the YAML
+// names ../shared beside the repository, which a build pointed elsewhere may not have): a copy in `dir`.
+std::string configScene(const TempDir& dir, const std::string& name) {
+  const fs::path shipped = fs::path(__FILE__).parent_path().parent_path().parent_path() / "config/scenes" / (name + ".yaml");
+  std::ifstream in(shipped);
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::regex file_line(R"(( file: )\S*/shared/scenes/(\S+))");
+  const std::string yaml = std::regex_replace(text.str(), file_line, "$1" + std::string(GO_FEAP_SHARED_DIR) + "/scenes/$2");
+  EXPECT_NE(yaml, text.str()) << shipped << ": no file line naming shared/scenes";
+  const std::string copy = dir.file(name + ".yaml");
+  writeText(copy, yaml);
+  return copy;
 }
 bool sharedScene(const std::string& file) {
   const std::string p = std::string(GO_FEAP_SHARED_DIR) + "/scenes/" + file;
@@ -635,7 +646,8 @@ TEST(SharedScenes, PillarPcd) {
   auto pts = loadPointCloud(std::string(GO_FEAP_SHARED_DIR) + "/scenes/pillar.pcd");
   ASSERT_TRUE(pts) << pts.message();
   EXPECT_EQ(pts->size(), 144640u);
-  auto s = loadSceneYaml(configScene("pillar"));
+  const TempDir dir;
+  auto s = loadSceneYaml(configScene(dir, "pillar"));
   ASSERT_TRUE(s) << s.message();
   // File frame = world: extents x -7.24..7.26, y -13.74..13.66, z -0.94..2.96 (README);
   // the grid spans the box + 1 m, so z is cut to [-1, 3]: it all fits.
@@ -661,7 +673,8 @@ TEST(SharedScenes, ComplexOfficeBinaryStlStartingWithSolid) {
   auto mesh = loadStl(std::string(GO_FEAP_SHARED_DIR) + "/scenes/complex_office.stl");
   ASSERT_TRUE(mesh) << mesh.message();
   EXPECT_EQ(mesh->triangleCount(), 572u);
-  auto s = loadSceneYaml(configScene("complex_office"));
+  const TempDir dir;
+  auto s = loadSceneYaml(configScene(dir, "complex_office"));
   ASSERT_TRUE(s) << s.message();
   // File x 0..31, y 0..3.5 (up), z 0..31 -> world x = 15.5 - z_f, y = 15.5 - x_f,
   // z = y_f - 0.5: x, y in -15.5..15.5, z in -0.5..3.0. Voxel centres lie within half a
