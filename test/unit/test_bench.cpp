@@ -58,11 +58,24 @@ TEST_P(PlannerModes, ExploreTheSmallMazeCompletely) {
   EXPECT_GE(s.coverage, 0.95);
   EXPECT_EQ(s.collisions, 0);
   EXPECT_GT(s.min_obstacle_distance_m, 0.1);
+  // The clearance is measured: a whole maze is not explored without passing within the monitor's horizon of
+  // a wall (a run whose positions never reached the collision monitor reports the horizon itself).
+  EXPECT_LT(s.min_obstacle_distance_m, go_feap::metrics::CollisionMonitor::kHorizon - 0.05);
   EXPECT_GT(s.flight_distance_m, 5.0);
-  // The time series ends where the summary does and coverage never decreases.
+  // The time series ends where the summary does; coverage and distance never decrease.
   ASSERT_FALSE(o.samples.empty());
   EXPECT_DOUBLE_EQ(o.samples.back().coverage, s.coverage);
-  for (std::size_t i = 1; i < o.samples.size(); ++i) EXPECT_GE(o.samples[i].coverage, o.samples[i - 1].coverage);
+  EXPECT_DOUBLE_EQ(o.samples.back().distance, s.flight_distance_m);
+  double polyline = 0.0;
+  for (std::size_t i = 1; i < o.samples.size(); ++i) {
+    EXPECT_GE(o.samples[i].coverage, o.samples[i - 1].coverage);
+    EXPECT_GE(o.samples[i].distance, o.samples[i - 1].distance);
+    polyline += (o.samples[i].position - o.samples[i - 1].position).norm();
+  }
+  // The distance is the path flown, summed finer than the samples: at least their polyline, and not much more
+  // (a smooth flight between samples).
+  EXPECT_GE(s.flight_distance_m, polyline - 1e-9);
+  EXPECT_LE(s.flight_distance_m, 1.05 * polyline);
 }
 
 INSTANTIATE_TEST_SUITE_P(Bench, PlannerModes, ::testing::Values("go_feap", "fuel", "nearest"));
