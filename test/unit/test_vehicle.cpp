@@ -253,6 +253,30 @@ TEST(Quadrotor, AStepThatIsNotAPositiveFiniteTimeIsRefused) {
   EXPECT_EQ(v.time(), 0.0);
 }
 
+// A duration that is not a whole number of dynamics steps ends with a shorter step: the vehicle's clock and
+// state are those of the exact split (0.003 s at 500 Hz = 0.002 + 0.001 s), not one step more.
+TEST(Vehicle, AdvanceEndsWithAShorterStepAtTheDurationAsked) {
+  for (const double rate : {500.0, 700.0}) {
+    QuadrotorParams params;
+    params.dynamics_rate = rate;
+    PositionReference ref;
+    ref.position = Eigen::Vector3d(1.0, -0.5, 1.5);  // a climb and a sidestep: the state changes every step
+    SimulatedVehicle whole{params, So3ControllerConfig()}, split{params, So3ControllerConfig()};
+    whole.reset(Eigen::Vector3d(0, 0, 1), 0.0);
+    split.reset(Eigen::Vector3d(0, 0, 1), 0.0);
+    const double h = 1.0 / rate, duration = 2.5 * h;
+    whole.advance(duration, ref);
+    split.advance(h, ref);
+    split.advance(h, ref);
+    split.advance(0.5 * h, ref);
+    EXPECT_NEAR(whole.time(), duration, 1e-15) << rate << " Hz";
+    EXPECT_NEAR(split.time(), duration, 1e-15) << rate << " Hz";
+    EXPECT_TRUE(whole.state().position.isApprox(split.state().position, 1e-12)) << rate << " Hz";
+    EXPECT_TRUE(whole.state().velocity.isApprox(split.state().velocity, 1e-12)) << rate << " Hz";
+    EXPECT_GT(whole.state().velocity.norm(), 0.0);
+  }
+}
+
 TEST(Quadrotor, TorqueFreeSpinConservesAngularMomentum) {
   Quadrotor q{QuadrotorParams()};
   QuadrotorState s;
