@@ -13,6 +13,7 @@
 #include <fstream>
 #include <random>
 #include <regex>
+#include <set>
 #include <sstream>
 
 #include "go_feap/world/generators.h"
@@ -454,6 +455,44 @@ TEST(Octomap, LoadsOccupiedLeavesIncludingPrunedOnes) {
   EXPECT_TRUE(s->isOccupied(Vec3(0.75, 0.05, 0.45)));
   EXPECT_TRUE(s->isOccupied(Vec3(-0.55, 1.45, 0.05)));
   EXPECT_FALSE(s->isOccupied(Vec3(0.85, 0.05, 0.45)));
+}
+
+// T_world_file turns and moves points (PCD, PLY) and triangles (STL) alike: a quarter turn round z and a
+// shift of (0.31, 0.2, 0) m put each file point in the voxel of T * p, and nothing else is marked (every
+// other file test places by the identity or without a shift).
+TEST(SceneYaml, TWorldFileTurnsAndMovesPointsAndTriangles) {
+  TempDir d;
+  const std::vector<Vec3> points{Vec3(0.05, 0.05, 0.05), Vec3(0.25, 0.05, 0.15), Vec3(0.05, 0.35, 0.45), Vec3(0.55, -0.35, 0.25)};
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  for (const Vec3& p : points) cloud.push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
+  pcl::io::savePCDFileBinary(d.file("p.pcd"), cloud);
+  std::ostringstream ply;
+  ply << "ply\nformat ascii 1.0\nelement vertex " << points.size()
+      << "\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
+  for (const Vec3& p : points) ply << p.x() << " " << p.y() << " " << p.z() << "\n";
+  writeText(d.file("p.ply"), ply.str());
+  std::vector<Vec3> triangles;  // a small triangle round each point (1 cm: inside its voxel)
+  for (const Vec3& p : points)
+    for (const Vec3& corner : {Vec3(-0.01, -0.01, 0.0), Vec3(0.01, -0.01, 0.0), Vec3(0.0, 0.01, 0.01)}) triangles.push_back(p + corner);
+  writeBinaryStl(d.file("p.stl"), triangles, "triangles");
+  Eigen::Matrix4d T;
+  T << 0, -1, 0, 0.31, 1, 0, 0, 0.2, 0, 0, 1, 0, 0, 0, 0, 1;
+  for (const char* file : {"p.pcd", "p.ply", "p.stl"}) {
+    SCOPED_TRACE(file);
+    std::string yaml = sceneYaml(file);
+    const std::string identity = "[1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]";
+    yaml.replace(yaml.find(identity), identity.size(), "[0,-1,0,0.31, 1,0,0,0.2, 0,0,1,0, 0,0,0,1]");
+    writeText(d.file(std::string(file) + ".yaml"), yaml);
+    auto s = loadSceneYaml(d.file(std::string(file) + ".yaml"));
+    ASSERT_TRUE(s) << s.message();
+    std::set<std::size_t> expected;
+    for (const Vec3& p : points) {
+      const Vec3 w = (T * p.homogeneous()).head<3>();
+      EXPECT_TRUE(s->isOccupied(w)) << "file point " << p.transpose() << " placed at " << w.transpose();
+      expected.insert(s->geometry().linear(s->geometry().coordToIndex(w)));
+    }
+    EXPECT_EQ(s->occupiedCount(), expected.size());
+  }
 }
 
 // Placed by a T_world_file that scales by 4 and turns a quarter round z, each 0.1 m leaf covers a 0.4 m
