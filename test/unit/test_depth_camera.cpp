@@ -489,23 +489,59 @@ TEST(DepthRenderer, MatchesBruteForceTraversalInClutter) {
     world::fillBox(scene, {c, c + Vec3(size(rng), size(rng), size(rng))});
   }
   for (int i = 0; i < 3000; ++i) world::markOccupied(scene, Vec3(ux(rng), ux(rng), uz(rng)));
+  // The FOV-derived intrinsics (centred), and given ones with fx != fy and the principal point off centre (as
+  // a real D435i's), where a renderer taking the image centre for (cx, cy) anywhere would differ.
+  DepthCameraConfig centred;
+  centred.max_range = 6.0;
+  DepthCameraConfig off_centre = centred;
+  off_centre.width = 480, off_centre.height = 400;
+  off_centre.fx = 300.0, off_centre.fy = 260.0, off_centre.cx = 190.0, off_centre.cy = 240.0;
+  for (const DepthCameraConfig& config : {centred, off_centre}) {
+    SCOPED_TRACE("cx " + std::to_string(config.intrinsics().cx));
+    ASSERT_TRUE(config.validate().ok());
+    const DepthRenderer renderer(config, scene);
+    std::uniform_real_distribution<double> angle(-M_PI, M_PI);
+    int poses = 0;
+    while (poses < 6) {
+      const Vec3 p(0.8 * ux(rng), 0.8 * ux(rng), 0.3 + 0.8 * uz(rng));
+      if (scene.isOccupied(p)) continue;
+      const Eigen::Isometry3d T = cameraPose(p, angle(rng), 0.4 * angle(rng), 0.2 * angle(rng));
+      cv::Mat depth;
+      renderer.render(T, depth);
+      const Comparison c = compare(depth, traversedDepth(scene, config, T));
+      EXPECT_EQ(c.beyond_one_pixel, 0) << "pose " << poses;
+      EXPECT_EQ(c.differing, 0) << "pose " << poses;
+      EXPECT_LT(c.max_matched_error, 1e-3);
+      ++poses;
+    }
+  }
+}
+
+// With the principal point off centre the image reaches farther to one side than the other: boxes 5.4 m away
+// seen only in the right columns and the top rows (beyond where a frustum taken about the image centre ends,
+// 50 and 40 pixels short of the edges) are drawn with their analytic depth.
+TEST(DepthRenderer, AnOffCentrePrincipalPointSeesToTheImageEdges) {
   DepthCameraConfig config;
   config.max_range = 6.0;
+  config.width = 480, config.height = 400;
+  config.fx = 300.0, config.fy = 260.0, config.cx = 190.0, config.cy = 240.0;
+  ASSERT_TRUE(config.validate().ok());
+  // From (0, 0, 0.5) looking along +x: image right is -y, image up is +z. At depth x, u = 190 + 300 * (-y) / x
+  // and v = 240 - 260 * (z - 0.5) / x (no box edge on a pixel centre).
+  const std::vector<Aabb> boxes{{Vec3(5.4, -5.0, 0.2), Vec3(5.6, -4.6, 0.8)},   // u 436 .. 468 (the right one)
+                                {Vec3(5.4, -0.4, 4.8), Vec3(5.8, 0.4, 5.4)}};  // v 4 .. 33 (the top one)
+  const Eigen::Isometry3d T = cameraPose(Vec3(0.0, 0.0, 0.5), 0.0);
+  const world::Scene scene = sceneWithBoxes(boxes, 0.1);
   const DepthRenderer renderer(config, scene);
-  std::uniform_real_distribution<double> angle(-M_PI, M_PI);
-  int poses = 0;
-  while (poses < 6) {
-    const Vec3 p(0.8 * ux(rng), 0.8 * ux(rng), 0.3 + 0.8 * uz(rng));
-    if (scene.isOccupied(p)) continue;
-    const Eigen::Isometry3d T = cameraPose(p, angle(rng), 0.4 * angle(rng), 0.2 * angle(rng));
-    cv::Mat depth;
-    renderer.render(T, depth);
-    const Comparison c = compare(depth, traversedDepth(scene, config, T));
-    EXPECT_EQ(c.beyond_one_pixel, 0) << "pose " << poses;
-    EXPECT_EQ(c.differing, 0) << "pose " << poses;
-    EXPECT_LT(c.max_matched_error, 1e-3);
-    ++poses;
-  }
+  cv::Mat depth;
+  renderer.render(T, depth);
+  const cv::Mat right = depth(cv::Rect(380, 0, 100, 400)), top = depth(cv::Rect(0, 0, 480, 60));
+  EXPECT_GT(countReturns(right), 600);
+  EXPECT_GT(countReturns(top), 1000);
+  const Comparison c = compare(depth, analyticDepth(boxes, config, T));
+  EXPECT_EQ(c.beyond_one_pixel, 0);
+  EXPECT_EQ(c.differing, 0);
+  EXPECT_LT(c.max_matched_error, 1e-3);
 }
 
 TEST(DepthRenderer, CameraOutsideTheGridSeesTheScene) {
