@@ -312,23 +312,37 @@ TEST(Metrics, CollisionMonitorCountsEachEntryAndKeepsTheClosestApproach) {
   EXPECT_EQ(scrape.collisions(), 2) << "away to 0.2 m and back";
 }
 
+// The scene's observable voxels known in the map, over all of them: with the map at the scene's resolution,
+// and with a coarser map (0.2 m over a 0.1 m scene), where one map voxel stands for the several scene voxels
+// whose centres it holds and counts for each of them.
 TEST(Metrics, CoverageTrackerEqualsTheWorldDefinition) {
   auto scene = smallMaze(1);
   ASSERT_TRUE(scene);
-  go_feap::map::OccupancyMap map(go_feap::map::OccupancyConfig(), scene->box);
-  std::mt19937 rng(2);
-  const auto& geo = map.geometry();
-  for (int k = 0; k < 20000; ++k) {
-    const go_feap::common::Index3 idx(rng() % geo.dims().x(), rng() % geo.dims().y(), rng() % geo.dims().z());
-    map.setState(idx, k % 3 ? go_feap::map::VoxelState::kFree : go_feap::map::VoxelState::kOccupied);
-  }
-  const metrics::CoverageTracker tracker(*scene, geo);
+  ASSERT_DOUBLE_EQ(scene->resolution(), 0.1);
   const auto observable = go_feap::world::computeObservableSet(*scene);
-  const double expected = go_feap::world::coverage(
-      observable, [&](const Vec3& c) { return map.state(c) != go_feap::map::VoxelState::kUnknown; });
-  EXPECT_GT(expected, 0.0);
-  EXPECT_DOUBLE_EQ(tracker.coverage(map), expected);
-  EXPECT_EQ(tracker.observableCount(), observable.total());
+  for (const double resolution : {0.1, 0.2}) {
+    SCOPED_TRACE("map resolution " + std::to_string(resolution));
+    go_feap::map::OccupancyConfig config;
+    config.resolution = resolution;
+    go_feap::map::OccupancyMap map(config, scene->box);
+    std::mt19937 rng(2);
+    const auto& geo = map.geometry();
+    const metrics::CoverageTracker tracker(*scene, geo);
+    EXPECT_EQ(tracker.coverage(map), 0.0);
+    for (int k = 0; k < 20000; ++k) {
+      const go_feap::common::Index3 idx(rng() % geo.dims().x(), rng() % geo.dims().y(), rng() % geo.dims().z());
+      map.setState(idx, k % 3 ? go_feap::map::VoxelState::kFree : go_feap::map::VoxelState::kOccupied);
+    }
+    const double expected = go_feap::world::coverage(
+        observable, [&](const Vec3& c) { return map.state(c) != go_feap::map::VoxelState::kUnknown; });
+    EXPECT_GT(expected, 0.0);
+    EXPECT_LT(expected, 1.0);
+    EXPECT_DOUBLE_EQ(tracker.coverage(map), expected);
+    EXPECT_EQ(tracker.observableCount(), observable.total());
+    // Every map voxel known: all of it.
+    for (std::size_t l = 0; l < geo.size(); ++l) map.setState(geo.unlinear(l), go_feap::map::VoxelState::kFree);
+    EXPECT_DOUBLE_EQ(tracker.coverage(map), 1.0);
+  }
 }
 
 // The incremental count (reset, then the changed voxels of each frame) equals a full count after every
@@ -407,11 +421,14 @@ TEST(Metrics, RecorderWritesSummaryCsvAndPlot) {
   r.summary() = summary("maze", "go_feap", 10.0, 12.5, 0.5, 1, "complete", 2.0);
   r.summary().blacklisted_frontiers = 3;
   for (int i = 0; i <= 10; ++i) {
-    metrics::Sample s;
+    metrics::Sample s;  // every field its own value, so that a column swapped or dropped shows
     s.t = i;
     s.coverage = 0.05 * i;
+    s.explored_m3 = 2.5 * i;
     s.distance = 1.25 * i;
-    s.position = Vec3(i, 0, 1);
+    s.layer = i % 3;
+    s.frontiers = 10 + i;
+    s.position = Vec3(i, -0.5 * i, 1.0 + 0.1 * i);
     r.addSample(s);
   }
   const fs::path dir = fs::temp_directory_path() / "go_feap_test_recorder";
@@ -428,9 +445,10 @@ TEST(Metrics, RecorderWritesSummaryCsvAndPlot) {
   std::string header, line;
   std::getline(csv, header);
   EXPECT_EQ(header, "t,coverage,explored_m3,distance,layer,frontiers,x,y,z");
-  int rows = 0;
-  while (std::getline(csv, line)) ++rows;
-  EXPECT_EQ(rows, 11);
+  std::vector<std::string> rows;
+  while (std::getline(csv, line)) rows.push_back(line);
+  ASSERT_EQ(rows.size(), 11u);
+  EXPECT_EQ(rows[5], "5.000,0.25000,12.500,6.250,2,15,5.000,-2.500,1.500");
   {  // samples 1 ms apart (metrics/sample_rate up to 1000 Hz) keep their own times
     metrics::Recorder fast;
     for (int i = 0; i < 3; ++i) {
@@ -447,8 +465,15 @@ TEST(Metrics, RecorderWritesSummaryCsvAndPlot) {
     fs::remove(fast_csv);
   }
   const cv::Mat plot = cv::imread((dir / "coverage.png").string());
-  EXPECT_EQ(plot.cols, 800);
-  EXPECT_EQ(plot.rows, 500);
+  ASSERT_EQ(plot.cols, 800);
+  ASSERT_EQ(plot.rows, 500);
+  // The series (the first colour, BGR 200 90 20) passes through (5 s, 25 %): the plot area spans x 70 .. 780
+  // for 0 .. 10 s and y 445 .. 40 for 0 .. 100 %; at (5 s, 75 %) there is none.
+  auto seriesAt = [&](int x, int y) {
+    return cv::norm(cv::Vec3d(plot.at<cv::Vec3b>(y, x)) - cv::Vec3d(200, 90, 20)) < 60.0;
+  };
+  EXPECT_TRUE(seriesAt(425, 445 - 101));
+  EXPECT_FALSE(seriesAt(425, 445 - 304));
   EXPECT_FALSE(r.writeAll("/proc/go_feap_no_such_dir").ok());
   for (const auto& entry : fs::directory_iterator(dir))
     EXPECT_EQ(entry.path().filename().string().rfind(".partial-", 0), std::string::npos) << entry.path() << " left";
