@@ -43,6 +43,7 @@ class SimulatorTest : public ::testing::Test {
   void onOdom(const nav_msgs::Odometry::ConstPtr& m) {
     last_odom_ = m;
     ++odom_count_;
+    if (keep_odoms_) odoms_.push_back(m);
   }
   void onDepth(const sensor_msgs::Image::ConstPtr& m) { depths_.push_back(m); }
   void onPose(const geometry_msgs::PoseStamped::ConstPtr& m) { poses_.push_back(m); }
@@ -64,6 +65,8 @@ class SimulatorTest : public ::testing::Test {
   ros::Publisher cmd_pub_;
   nav_msgs::Odometry::ConstPtr last_odom_;
   std::size_t odom_count_ = 0;
+  bool keep_odoms_ = false;
+  std::vector<nav_msgs::Odometry::ConstPtr> odoms_;
   std::deque<sensor_msgs::Image::ConstPtr> depths_;
   std::deque<geometry_msgs::PoseStamped::ConstPtr> poses_;
   std::deque<sensor_msgs::CameraInfo::ConstPtr> infos_;
@@ -86,6 +89,7 @@ TEST_F(SimulatorTest, CommandMovesOdomCameraStampsMatchNanIsIgnored) {
   EXPECT_LT((start - Eigen::Vector3d(-9, -4, 1)).norm(), 0.05);
 
   const Eigen::Vector3d target = start + Eigen::Vector3d(1.0, 0.5, 0.3);
+  keep_odoms_ = true;
   ASSERT_TRUE(spinUntil(
       [&] {
         command(target, 0.5);
@@ -93,6 +97,26 @@ TEST_F(SimulatorTest, CommandMovesOdomCameraStampsMatchNanIsIgnored) {
       },
       60.0))
       << "odom did not reach the target; at " << position().transpose();
+  keep_odoms_ = false;
+  // The twist is in the body frame (nav_msgs/Odometry: the child frame), turned 0.5 rad from the world's on
+  // the way: the world velocity from the positions either side of each message is its orientation applied
+  // to its twist.
+  auto vec = [](const auto& v) { return Eigen::Vector3d(v.x, v.y, v.z); };
+  std::size_t moving = 0;
+  for (std::size_t k = 1; k + 1 < odoms_.size(); ++k) {
+    const auto &before = *odoms_[k - 1], &at = *odoms_[k], &after = *odoms_[k + 1];
+    const double dt = (after.header.stamp - before.header.stamp).toSec();
+    if (!(dt > 0.0)) continue;
+    const Eigen::Vector3d v_world = (vec(after.pose.pose.position) - vec(before.pose.pose.position)) / dt;
+    if (v_world.norm() < 0.3) continue;
+    const auto& q = at.pose.pose.orientation;
+    const Eigen::Quaterniond attitude(q.w, q.x, q.y, q.z);
+    EXPECT_LT((attitude * vec(at.twist.twist.linear) - v_world).norm(), 0.05 * v_world.norm() + 0.02)
+        << "at " << at.header.stamp << ": body twist " << vec(at.twist.twist.linear).transpose() << ", world velocity "
+        << v_world.transpose();
+    ++moving;
+  }
+  EXPECT_GE(moving, 10u) << "too few odometry messages while moving to check the twist";
 
   // Depth and camera_pose: same stamps, 15 Hz, sensible content.
   depths_.clear();
@@ -125,7 +149,17 @@ TEST_F(SimulatorTest, CommandMovesOdomCameraStampsMatchNanIsIgnored) {
       }
     }
   EXPECT_GE(with_info + 1, images.size()) << "depth images without a camera_info of the same stamp";
-  EXPECT_NEAR(infos_.back()->K[0], 320.0 / std::tan(40.0 * M_PI / 180.0), 1e-6);
+  {  // the intrinsics config/sim.yaml derives from its fields of view: 640 x 480, 80 x 60 deg, centred
+    const double fx = 320.0 / std::tan(40.0 * M_PI / 180.0), fy = 240.0 / std::tan(30.0 * M_PI / 180.0);
+    const auto& info = *infos_.back();
+    EXPECT_EQ(info.width, 640u);
+    EXPECT_EQ(info.height, 480u);
+    const std::vector<double> K(info.K.begin(), info.K.end()), P(info.P.begin(), info.P.end());
+    const std::vector<double> K_expected{fx, 0, 319.5, 0, fy, 239.5, 0, 0, 1};
+    const std::vector<double> P_expected{fx, 0, 319.5, 0, 0, fy, 239.5, 0, 0, 0, 1, 0};
+    for (std::size_t i = 0; i < K.size(); ++i) EXPECT_NEAR(K[i], K_expected[i], 1e-6) << "K[" << i << "]";
+    for (std::size_t i = 0; i < P.size(); ++i) EXPECT_NEAR(P[i], P_expected[i], 1e-6) << "P[" << i << "]";
+  }
   const float* px = reinterpret_cast<const float*>(img.data.data());
   std::size_t valid = 0;
   for (std::size_t i = 0; i < img.width * img.height; ++i) valid += px[i] > 0.1f && px[i] <= 4.5f;
