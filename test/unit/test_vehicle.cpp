@@ -224,6 +224,49 @@ TEST(Vehicle, AReferenceManyMetresAwayIsReachedUpright) {
 }
 
 // The heading error's moment vanishes at half a turn in the geometric controller; the vehicle turns anyway.
+// The tilt limit, exactly: at rest, 15 m short of the reference in x and already tilted max_tilt towards it
+// (heading x), the vehicle holds its attitude (the thrust it asks for is max_tilt off vertical: no moment)
+// and asks for the thrust that keeps its height, m g / cos(max_tilt).
+TEST(So3Controller, TheThrustAimedAtAFarReferenceIsTiltedExactlyMaxTilt) {
+  const QuadrotorParams params;
+  const So3ControllerConfig config;
+  const So3Controller controller(config, params);
+  QuadrotorState s;
+  s.attitude = Eigen::AngleAxisd(config.max_tilt, Eigen::Vector3d::UnitY());  // body z towards +x
+  PositionReference ref;
+  ref.position = Eigen::Vector3d(15.0, 0.0, 0.0);
+  const Wrench w = controller.compute(s, ref);
+  EXPECT_LT(w.moment.norm(), 1e-9) << w.moment.transpose();
+  EXPECT_NEAR(w.thrust, params.mass * params.gravity / std::cos(config.max_tilt), 1e-9);
+  // Tilted a little less or more, it turns towards max_tilt: a pitch moment of the sign that closes the gap.
+  for (const double off : {-0.05, 0.05}) {
+    s.attitude = Eigen::AngleAxisd(config.max_tilt + off, Eigen::Vector3d::UnitY());
+    const Wrench turn = controller.compute(s, ref);
+    EXPECT_LT(turn.moment.y() * off, 0.0) << "off " << off << ": " << turn.moment.transpose();
+  }
+}
+
+// The heading rate is fed forward about the world vertical: at a roll of 30 deg the yaw rate asked for
+// changes the moment by the rate gains times the world z axis in the body frame times the rate (about the
+// body z axis alone, the vehicle would turn about its tilted axis).
+TEST(So3Controller, TheYawRateIsFedForwardAboutTheWorldVertical) {
+  const QuadrotorParams params;
+  const So3ControllerConfig config;
+  const So3Controller controller(config, params);
+  QuadrotorState s;
+  s.position = Eigen::Vector3d(0.2, -0.1, 1.0);
+  s.velocity = Eigen::Vector3d(0.3, 0.1, 0.0);
+  s.attitude = Eigen::AngleAxisd(M_PI / 6.0, Eigen::Vector3d::UnitX());
+  s.angular_velocity = Eigen::Vector3d(0.1, -0.2, 0.3);
+  PositionReference still, turning;
+  still.position = turning.position = Eigen::Vector3d(0.0, 0.0, 1.0);
+  turning.yaw_dot = 0.8;
+  const Eigen::Vector3d difference = controller.compute(s, turning).moment - controller.compute(s, still).moment;
+  const Eigen::Vector3d z_in_body = s.attitude.inverse() * Eigen::Vector3d::UnitZ();
+  EXPECT_LT((difference - config.kw.cwiseProduct(z_in_body) * turning.yaw_dot).norm(), 1e-12) << difference.transpose();
+  EXPECT_GT(std::abs(difference.y()), 0.01);  // the roll puts part of it about the body y axis
+}
+
 TEST(Vehicle, AHeadingHalfATurnRoundIsReached) {
   for (const double start_yaw : {0.3, 0.0, -2.0}) {
     SimulatedVehicle v{QuadrotorParams(), So3ControllerConfig()};
