@@ -1011,6 +1011,16 @@ TEST(BadInput, SceneYamlMissingOrWronglyTypedKeys) {
   pcl::io::savePCDFileBinary(d.file("p.pcd"), cloud);
   const std::string good = sceneYaml("p.pcd");
   ASSERT_TRUE(loadSceneYaml((writeText(d.file("good.yaml"), good), d.file("good.yaml"))));
+  {  // the start's yaw and the margin are read as given
+    std::string turned = good;
+    turned.replace(turned.find("yaw: 0"), 6, "yaw: 0.7");
+    turned += "  margin: 0.3\n";
+    writeText(d.file("turned.yaml"), turned);
+    auto s = loadSceneYaml(d.file("turned.yaml"));
+    ASSERT_TRUE(s) << s.message();
+    EXPECT_DOUBLE_EQ(s->start.yaw, 0.7);
+    EXPECT_NEAR(s->geometry().origin().x(), -1.3, 1e-9);  // the box's min less the margin
+  }
   struct Case {
     std::string from, to, expect;
   };
@@ -1028,6 +1038,9 @@ TEST(BadInput, SceneYamlMissingOrWronglyTypedKeys) {
       {"  T_world_file: [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]\n", "", "scene.T_world_file"},
       {"0,0,0,1]", "0,0,1,1]", "scene.T_world_file"},
       {"yaw: 0", "yaw: north", "scene.start.yaw"},
+      {"yaw: 0", "yaw: .nan", "scene.start.yaw"},
+      {"ground_plane: false", "ground_plane: false\n  margin: -0.5", "scene.margin"},
+      {"ground_plane: false", "ground_plane: false\n  margin: .nan", "scene.margin"},
       {"  name: t\n", "", "scene.name"},
       {"ground_plane: false", "ground_plane: maybe", "scene.ground_plane"},
       // keys the loader does not read (a typo loaded with no floor) or given twice (the first value was taken)
