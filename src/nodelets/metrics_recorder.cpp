@@ -162,8 +162,21 @@ class MetricsRecorder : public nodelet::Nodelet {
     // elapsed as a ros::Time, which threw, ending the whole nodelet manager, for an elapsed beyond the
     // clock: a status from a tool or another run early in a simulation.)
     if (msg->state != ExplorationStatus::WAIT_TRIGGER && !started_) {
+      // A recorder that first hears the exploration finished records nothing: started there, its next status
+      // wrote a summary of a run it never saw (no flight, no samples, the run's whole time).
+      if (msg->state == ExplorationStatus::FINISHED) {
+        NODELET_WARN_STREAM_ONCE(getName() << ": the exploration had finished (" << msg->finish_reason
+                                           << ") before this recorder heard it: nothing is recorded");
+        return;
+      }
       started_ = true;
       wall_start_ = ros::WallTime::now();  // the run's wall time counts from the trigger, as the bench's
+      // Joined late (loaded after the trigger, or its status subscription slow to connect): the figures count
+      // from here, which the summary alone would not tell.
+      if (msg->elapsed > 1.0 / sample_rate_ + 1.0)
+        NODELET_WARN_STREAM(getName() << ": joined the exploration " << msg->elapsed
+                                      << " s after its trigger: flight distance, samples and compute times count from "
+                                         "here, not from the trigger");
     }
   }
 

@@ -13,6 +13,7 @@
 #include <nav_msgs/Path.h>
 #include <ros/ros.h>
 #include <rosgraph_msgs/Clock.h>
+#include <rosgraph_msgs/Log.h>
 #include <std_msgs/UInt32.h>
 #include <std_msgs/UInt32MultiArray.h>
 #include <sensor_msgs/CameraInfo.h>
@@ -20,6 +21,7 @@
 #include <geometry_msgs/PoseStamped.h>
 #include <visualization_msgs/Marker.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -80,6 +82,13 @@ TEST(MetricsRecorder, SummaryHoldsThePlayedRunAndOddStatusesNeitherEndNorCountIn
   std::string output_dir;
   ASSERT_TRUE(pnh.getParam("output_dir", output_dir));
   std::filesystem::remove_all(output_dir);
+  std::vector<std::string> warnings;
+  ros::Subscriber log_sub = nh.subscribe<rosgraph_msgs::Log>("/rosout", 100, [&](const rosgraph_msgs::Log::ConstPtr& m) {
+    if (m->level == rosgraph_msgs::Log::WARN) warnings.push_back(m->msg);
+  });
+  auto warned = [&](const std::string& what) {
+    return std::any_of(warnings.begin(), warnings.end(), [&](const std::string& w) { return w.find(what) != std::string::npos; });
+  };
   auto scene = go_feap::test::sceneFromParams();
   ASSERT_TRUE(scene) << scene.message();
 
@@ -181,6 +190,8 @@ TEST(MetricsRecorder, SummaryHoldsThePlayedRunAndOddStatusesNeitherEndNorCountIn
     return paths > 0;
   }, 20.0)) << "no flown_path after the run started";
   settle();
+  // Started 500 s into the exploration: the recorder says its figures count from here.
+  EXPECT_TRUE(spinUntil([&] { return warned("/metrics_recorder: joined the exploration 500 s after its trigger"); }, 10.0));
 
   // The flight: to the wall, 5 cm into it, and back; 5 cm steps.
   std::vector<Vec3> path{start};
@@ -228,6 +239,22 @@ TEST(MetricsRecorder, SummaryHoldsThePlayedRunAndOddStatusesNeitherEndNorCountIn
   EXPECT_NEAR(summary["compute_ms"]["total"]["mean"].get<double>(), 10.0, 1e-9);
   for (const char* f : {"metrics.csv", "coverage.png"})
     EXPECT_TRUE(std::filesystem::exists(output_dir + "/" + f)) << f;
+
+  // A recorder that first hears the exploration finished (loaded after the run) says so and writes nothing:
+  // started by that status, the next one wrote a summary of a run it never saw.
+  std::string late_dir;
+  ASSERT_TRUE(pnh.getParam("late_output_dir", late_dir));
+  std::filesystem::remove_all(late_dir);
+  auto late_pub = nh.advertise<go_feap::ExplorationStatus>("late/status", 10);
+  ASSERT_TRUE(spinUntil([&] { return late_pub.getNumSubscribers() > 0; }, 20.0)) << "the late recorder is not connected";
+  for (int i = 0; i < 10; ++i) {
+    finished.header.stamp = ros::Time(now);
+    late_pub.publish(finished);
+    tick(0.1);
+  }
+  EXPECT_TRUE(spinUntil([&] { return warned("/late_metrics_recorder: the exploration had finished (complete)"); }, 10.0));
+  settle();
+  EXPECT_FALSE(std::filesystem::exists(late_dir + "/summary.json")) << "a summary of a run the recorder never saw";
 }
 
 // A layer manager (probe/... in metrics.test) has explored since the first test's odometry came. The
