@@ -326,4 +326,36 @@ TEST_F(SimulatorTest, ACameraAtHalfTheOdometryRateSendsEveryOtherStamp) {
 
 }  // namespace
 
+// Commands that stop: after simulation/command_timeout without one, the vehicle hovers where it is (and says
+// so) instead of flying on to the last command's position. Sent towards a point 6 m away for 0.2 s, it is at
+// rest well short of it; followed to the end, it would stand on it.
+TEST_F(SimulatorTest, WithoutCommandsTheVehicleHoversWhereItIs) {
+  ASSERT_TRUE(spinUntil([&] { return last_odom_ != nullptr; }, 60.0)) << "no odom";
+  std::vector<std::string> said;
+  ros::Subscriber log_sub = nh_.subscribe<rosgraph_msgs::Log>("/rosout", 100, [&](const rosgraph_msgs::Log::ConstPtr& m) {
+    if (m->msg.find("/quadrotor_sim:") != std::string::npos) said.push_back(m->msg);
+  });
+  ASSERT_TRUE(spinUntil([&] { return cmd_pub_.getNumSubscribers() > 0 && log_sub.getNumPublishers() > 0; }, 30.0));
+  double timeout = 0.0;
+  ASSERT_TRUE(ros::param::get("quadrotor_sim/simulation/command_timeout", timeout));
+  const Eigen::Vector3d goal = position() + Eigen::Vector3d(6.0, 0.0, 0.0);
+  const ros::Time until = ros::Time::now() + ros::Duration(0.2);
+  spinUntil([&] {
+    command(goal, 0.5);
+    return ros::Time::now() >= until;
+  }, 30.0);
+  said.clear();
+  spinSim(timeout + 3.0);
+  const Eigen::Vector3d v(last_odom_->twist.twist.linear.x, last_odom_->twist.twist.linear.y,
+                          last_odom_->twist.twist.linear.z);
+  EXPECT_GT((goal - position()).norm(), 1.5) << "flew on to the last command's position: at " << position().transpose();
+  EXPECT_LT(v.norm(), 0.1) << "not hovering";
+  const Eigen::Vector3d held = position();
+  spinSim(1.0);
+  EXPECT_LT((position() - held).norm(), 0.05) << "not holding its place";
+  bool warned = false;
+  for (const std::string& m : said) warned = warned || m.find("no position_cmd for") != std::string::npos;
+  EXPECT_TRUE(warned) << "the hold was not reported";
+}
+
 GO_FEAP_ROSTEST_MAIN("test_simulator_ros")
