@@ -580,6 +580,18 @@ TEST(DepthRenderer, CameraTouchingAWallSeesEverythingTooNear) {
   EXPECT_EQ(countEqual(depth, -inf), 640 * 480);  // nearer than min_range
   renderer.render(cameraPose(Vec3(2.0 - 5e-6, 0.33, 1.07), M_PI), depth);
   EXPECT_EQ(countEqual(depth, -inf), 0) << "a camera 5 microns from a wall, looking away from it";
+  // With min_range 0 nothing is too near: 3 cm from the wall every pixel has the analytic depth, none -inf.
+  DepthCameraConfig no_min;
+  no_min.min_range = 0.0;
+  ASSERT_TRUE(no_min.validate().ok());
+  const DepthRenderer close_renderer(no_min, scene);
+  const Eigen::Isometry3d T = cameraPose(Vec3(1.97, 0.33, 1.07), 0.0);
+  close_renderer.render(T, depth);
+  EXPECT_EQ(countEqual(depth, -inf), 0);
+  const Comparison c = compare(depth, analyticDepth({{Vec3(2.0, -4.0, -2.0), Vec3(2.2, 4.0, 4.0)}}, no_min, T));
+  EXPECT_EQ(c.differing, 0);
+  EXPECT_LT(c.max_matched_error, 1e-5);
+  EXPECT_NEAR(depth.at<float>(240, 320), 0.03, 1e-5);
 }
 
 // A view that misses the grid has no return anywhere: +inf (REP 117: nothing in range), not 0 (no
