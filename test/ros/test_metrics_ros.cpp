@@ -49,6 +49,16 @@ namespace {
 using go_feap::test::spinUntil;
 using Vec3 = Eigen::Vector3d;
 
+// World-frame odometry at `p`, level, stamped `now`.
+nav_msgs::Odometry odometryAt(const Vec3& p, double now) {
+  nav_msgs::Odometry m;
+  m.header.stamp = ros::Time(now);
+  m.header.frame_id = "world";
+  m.pose.pose.position.x = p.x(), m.pose.pose.position.y = p.y(), m.pose.pose.position.z = p.z();
+  m.pose.pose.orientation.w = 1.0;
+  return m;
+}
+
 void publishClock(const ros::Publisher& clock_pub, double now) {
   rosgraph_msgs::Clock c;
   c.clock = ros::Time(now);
@@ -143,12 +153,7 @@ TEST(MetricsRecorder, SummaryHoldsThePlayedRunAndOddStatusesNeitherEndNorCountIn
     tick(0.05);
   };
   auto fly = [&](const Vec3& p) {
-    nav_msgs::Odometry m;
-    m.header.stamp = ros::Time(now);
-    m.header.frame_id = "world";
-    m.pose.pose.position.x = p.x(), m.pose.pose.position.y = p.y(), m.pose.pose.position.z = p.z();
-    m.pose.pose.orientation.w = 1.0;
-    odom_pub.publish(m);
+    odom_pub.publish(odometryAt(p, now));
     tick(0.05);
   };
   auto compute = [&](const char* block, double ms) {
@@ -299,6 +304,43 @@ TEST(LayerManager, ElapsedTimeGoesOnFromWhereItWasWhenTheClockGoesBack) {
 // started ended the run "complete" after the look round). The first list, empty, lets its band settle
 // (settle_time 1 s) and the look round is asked for. Before BlacklistFollowsTheFrontiersListed, the first
 // test to send it frontiers.
+// The layer manager's own flight distance (status.distance) counts steps, not a jump of more than
+// metrics/max_odom_step (a relocalisation): 0.1 m steps, a 1.5 m jump, more 0.1 m steps add only the steps.
+TEST(LayerManager, FlightDistanceLeavesOutAnOdometryJump) {
+  ros::NodeHandle nh;
+  auto clock_pub = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
+  auto odom_pub = nh.advertise<nav_msgs::Odometry>("odom", 50);
+  std::optional<go_feap::ExplorationStatus> last;
+  auto status_sub = nh.subscribe<go_feap::ExplorationStatus>(
+      "probe/status", 50, [&](const go_feap::ExplorationStatus::ConstPtr& m) { last = *m; });
+  ASSERT_TRUE(spinUntil([&] {
+    return status_sub.getNumPublishers() > 0 && clock_pub.getNumSubscribers() > 0 && odom_pub.getNumSubscribers() > 0;
+  }, 30.0)) << "the probe layer manager is not connected";
+  double max_step = 0.0;
+  ASSERT_TRUE(ros::param::get("probe_layer_manager/metrics/max_odom_step", max_step));
+  ASSERT_LT(max_step, 1.5);
+  ASSERT_GT(max_step, 0.1);
+  double now = ros::Time::now().toSec();
+  auto fly = [&](const Vec3& p) {
+    now += 0.05;
+    publishClock(clock_pub, now);
+    odom_pub.publish(odometryAt(p, now));
+    spinUntil([] { return false; }, 0.03);
+  };
+  // The distance once the odometry stands at the start (and the statuses have caught up).
+  const Vec3 start(0.0, 0.0, 1.0);
+  for (int i = 0; i < 20; ++i) fly(start);
+  ASSERT_TRUE(last);
+  ASSERT_NE(last->state, go_feap::ExplorationStatus::WAIT_TRIGGER) << "the probe layer manager did not start";
+  const double before = last->distance;
+  Vec3 p = start;
+  for (int i = 0; i < 10; ++i) fly(p += Vec3(0.1, 0.0, 0.0));
+  fly(p += Vec3(0.0, 1.5, 0.0));  // the jump
+  for (int i = 0; i < 5; ++i) fly(p += Vec3(0.0, 0.0, 0.1));
+  for (int i = 0; i < 20; ++i) fly(p);  // standing: the statuses catch up
+  EXPECT_NEAR(last->distance - before, 1.5, 1e-6) << "the jump was counted as flight, or steps were lost";
+}
+
 TEST(LayerManager, NoBandSettlesBeforeTheFirstFrontierList) {
   ros::NodeHandle nh;
   auto clock_pub = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
@@ -426,14 +468,7 @@ TEST(LayerManager, TheStartBandIsWhereTheVehicleIsAtTheTrigger) {
       << "the wait layer manager is not connected";
   double now = ros::Time::now().toSec();
   double z = 0.2;
-  const auto send = [&](double t) {
-    nav_msgs::Odometry m;
-    m.header.stamp = ros::Time(t);
-    m.header.frame_id = "world";
-    m.pose.pose.position.z = z;
-    m.pose.pose.orientation.w = 1.0;
-    odom_pub.publish(m);
-  };
+  const auto send = [&](double t) { odom_pub.publish(odometryAt(Vec3(0.0, 0.0, z), t)); };
   playClock(clock_pub, now, 1.0, 0.05, 0.01, send);
   ASSERT_TRUE(spinUntil([&] { return state && !layers.empty(); }, 10.0)) << "no status or layer";
   EXPECT_EQ(state->state, go_feap::ExplorationStatus::WAIT_TRIGGER);
