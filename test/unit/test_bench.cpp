@@ -62,6 +62,9 @@ TEST_P(PlannerModes, ExploreTheSmallMazeCompletely) {
   // a wall (a run whose positions never reached the collision monitor reports the horizon itself).
   EXPECT_LT(s.min_obstacle_distance_m, go_feap::metrics::CollisionMonitor::kHorizon - 0.05);
   EXPECT_GT(s.flight_distance_m, 5.0);
+  EXPECT_GT(s.wall_time_s, 0.0);
+  ASSERT_TRUE(s.extra.count("map_memory_mb"));
+  EXPECT_GT(s.extra.at("map_memory_mb"), 0.0);
   // The time series ends where the summary does; coverage and distance never decrease.
   ASSERT_FALSE(o.samples.empty());
   EXPECT_DOUBLE_EQ(o.samples.back().coverage, s.coverage);

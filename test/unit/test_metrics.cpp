@@ -420,6 +420,8 @@ TEST(Metrics, RecorderWritesSummaryCsvAndPlot) {
   metrics::Recorder r;
   r.summary() = summary("maze", "go_feap", 10.0, 12.5, 0.5, 1, "complete", 2.0);
   r.summary().blacklisted_frontiers = 3;
+  r.summary().wall_time_s = 3.5;
+  r.summary().extra["map_memory_mb"] = 12.25;
   for (int i = 0; i <= 10; ++i) {
     metrics::Sample s;  // every field its own value, so that a column swapped or dropped shows
     s.t = i;
@@ -439,6 +441,8 @@ TEST(Metrics, RecorderWritesSummaryCsvAndPlot) {
                           "coverage", "collisions", "blacklisted_frontiers", "compute_ms"})
     EXPECT_TRUE(j.contains(key)) << key;
   EXPECT_EQ(j["blacklisted_frontiers"], 3);
+  EXPECT_DOUBLE_EQ(j["wall_time_s"].get<double>(), 3.5);
+  EXPECT_DOUBLE_EQ(j["map_memory_mb"].get<double>(), 12.25);  // the extra figures, each at the top level
   EXPECT_DOUBLE_EQ(j["compute_ms"]["global"]["mean"].get<double>(), 4.0);
   EXPECT_DOUBLE_EQ(j["compute_ms"]["global"]["max"].get<double>(), 6.0);
   std::ifstream csv(dir / "metrics.csv");
