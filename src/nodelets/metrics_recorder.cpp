@@ -163,10 +163,12 @@ class MetricsRecorder : public nodelet::Nodelet {
     // clock: a status from a tool or another run early in a simulation.)
     if (msg->state != ExplorationStatus::WAIT_TRIGGER && !started_) {
       // A recorder that first hears the exploration finished records nothing: started there, its next status
-      // wrote a summary of a run it never saw (no flight, no samples, the run's whole time).
+      // wrote a summary of a run it never saw (no flight, no samples, the run's whole time). The run is over
+      // all the same: a launch waiting for the recorder to end it is not left hanging.
       if (msg->state == ExplorationStatus::FINISHED) {
         NODELET_WARN_STREAM_ONCE(getName() << ": the exploration had finished (" << msg->finish_reason
                                            << ") before this recorder heard it: nothing is recorded");
+        if (shutdown_on_finish_) ros::requestShutdown();
         return;
       }
       started_ = true;
