@@ -161,13 +161,21 @@ class MetricsRecorder : public nodelet::Nodelet {
     // Only whether the run has begun: its time is the layer manager's elapsed. (This was the clock minus
     // elapsed as a ros::Time, which threw, ending the whole nodelet manager, for an elapsed beyond the
     // clock: a status from a tool or another run early in a simulation.)
+    if (msg->state == ExplorationStatus::WAIT_TRIGGER) heard_waiting_ = true;
     if (msg->state != ExplorationStatus::WAIT_TRIGGER && !started_) {
-      // A recorder that first hears the exploration finished records nothing: started there, its next status
-      // wrote a summary of a run it never saw (no flight, no samples, the run's whole time). The run is over
-      // all the same: a launch waiting for the recorder to end it is not left hanging.
       if (msg->state == ExplorationStatus::FINISHED) {
-        NODELET_WARN_STREAM_ONCE(getName() << ": the exploration had finished (" << msg->finish_reason
-                                           << ") before this recorder heard it: nothing is recorded");
+        if (heard_waiting_) {  // stopped before the trigger, with this recorder there: a run of nothing, said so
+          started_ = true;
+          wall_start_ = ros::WallTime::now();
+          finishRun(msg->finish_reason, msg->elapsed, static_cast<int>(msg->blacklisted_frontiers));
+        } else if (!said_missed_) {
+          // A recorder that first hears the exploration finished records nothing: started there, its next status
+          // wrote a summary of a run it never saw (no flight, no samples, the run's whole time).
+          said_missed_ = true;
+          NODELET_WARN_STREAM(getName() << ": the exploration had finished (" << msg->finish_reason
+                                        << ") before this recorder heard it: nothing is recorded");
+        }
+        // The run is over all the same: a launch waiting for the recorder to end it is not left hanging.
         if (shutdown_on_finish_) ros::requestShutdown();
         return;
       }
@@ -313,6 +321,8 @@ class MetricsRecorder : public nodelet::Nodelet {
   bool started_ = false;  ///< a status past WAIT_TRIGGER has come
   std::optional<common::Vec3> position_, last_position_;
   double distance_ = 0.0, next_progress_ = 0.0;
+  bool heard_waiting_ = false;  ///< a WAIT_TRIGGER status came: the recorder was there before the run
+  bool said_missed_ = false;    ///< the "finished before this recorder heard it" warning was given
   std::unique_ptr<metrics::CollisionMonitor> collisions_;
   bool finished_ = false;
   ros::WallTime wall_start_ = ros::WallTime::now();  ///< reset when the run starts

@@ -335,7 +335,15 @@ TEST_F(SimulatorTest, WithoutCommandsTheVehicleHoversWhereItIs) {
   ros::Subscriber log_sub = nh_.subscribe<rosgraph_msgs::Log>("/rosout", 100, [&](const rosgraph_msgs::Log::ConstPtr& m) {
     if (m->msg.find("/quadrotor_sim:") != std::string::npos) said.push_back(m->msg);
   });
-  ASSERT_TRUE(spinUntil([&] { return cmd_pub_.getNumSubscribers() > 0 && log_sub.getNumPublishers() > 0; }, 30.0));
+  // Heard from the simulator before anything counts (this node's own /rosout publisher already counts as one):
+  // a command refused for its NaN position makes it speak.
+  go_feap::PositionCommand bad = go_feap::test::holdCommand(position(), 0.5);
+  bad.position.x = std::numeric_limits<double>::quiet_NaN();
+  ASSERT_TRUE(spinUntil([&] {
+    cmd_pub_.publish(bad);
+    spinSim(0.3);
+    return !said.empty();
+  }, 30.0)) << "nothing heard from /quadrotor_sim on /rosout";
   double timeout = 0.0;
   ASSERT_TRUE(ros::param::get("quadrotor_sim/simulation/command_timeout", timeout));
   const Eigen::Vector3d goal = position() + Eigen::Vector3d(6.0, 0.0, 0.0);

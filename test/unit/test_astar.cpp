@@ -1127,7 +1127,7 @@ TEST(TourPlanner, CountsEachEuclideanFallbackOnce) {
 
 // A length that fell back to a straight line (the frontier cut off in the known map) is kept for reuse_time
 // only, then searched again: once a way has opened, the pair is priced by it. Kept for the pair's life, the
-// straight line (3 m across the wall) stood for a way round of over 6 m as long as both frontiers lived.
+// straight line (3 m across the wall) stood for a way round of about 6 m as long as both frontiers lived.
 TEST(TourPlanner, SearchesAFallenBackLengthAgainAfterReuseTime) {
   World world(Index3(60, 40, 10));
   cutOffByWall(world);

@@ -518,8 +518,8 @@ TEST(DepthRenderer, MatchesBruteForceTraversalInClutter) {
 }
 
 // With the principal point off centre the image reaches farther to one side than the other: boxes 5.4 m away
-// seen only in the right columns and the top rows (beyond where a frustum taken about the image centre ends,
-// 50 and 40 pixels short of the edges) are drawn with their analytic depth.
+// seen in the right columns and the top rows, wholly or mostly beyond where a frustum taken about the image
+// centre ends (50 and 40 pixels short of the edges), are drawn with their analytic depth.
 TEST(DepthRenderer, AnOffCentrePrincipalPointSeesToTheImageEdges) {
   DepthCameraConfig config;
   config.max_range = 6.0;
@@ -529,7 +529,7 @@ TEST(DepthRenderer, AnOffCentrePrincipalPointSeesToTheImageEdges) {
   // From (0, 0, 0.5) looking along +x: image right is -y, image up is +z. At depth x, u = 190 + 300 * (-y) / x
   // and v = 240 - 260 * (z - 0.5) / x (no box edge on a pixel centre).
   const std::vector<Aabb> boxes{{Vec3(5.4, -5.0, 0.2), Vec3(5.6, -4.6, 0.8)},   // u 436 .. 468 (the right one)
-                                {Vec3(5.4, -0.4, 4.8), Vec3(5.8, 0.4, 5.4)}};  // v 4 .. 33 (the top one)
+                                {Vec3(5.4, -0.4, 4.8), Vec3(5.8, 0.4, 5.4)}};  // v 4 .. 47 (the top one)
   const Eigen::Isometry3d T = cameraPose(Vec3(0.0, 0.0, 0.5), 0.0);
   const world::Scene scene = sceneWithBoxes(boxes, 0.1);
   const DepthRenderer renderer(config, scene);

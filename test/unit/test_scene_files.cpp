@@ -652,7 +652,8 @@ std::string configScene(const TempDir& dir, const std::string& name) {
   std::stringstream text;
   text << in.rdbuf();
   const std::regex file_line(R"(( file: )\S*/shared/scenes/(\S+))");
-  const std::string yaml = std::regex_replace(text.str(), file_line, "$1" + std::string(GO_FEAP_SHARED_DIR) + "/scenes/$2");
+  const std::string shared = fs::absolute(GO_FEAP_SHARED_DIR).string();  // the copy lies elsewhere
+  const std::string yaml = std::regex_replace(text.str(), file_line, "$1" + shared + "/scenes/$2");
   EXPECT_NE(yaml, text.str()) << shipped << ": no file line naming shared/scenes";
   const std::string copy = dir.file(name + ".yaml");
   writeText(copy, yaml);

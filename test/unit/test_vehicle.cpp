@@ -223,7 +223,6 @@ TEST(Vehicle, AReferenceManyMetresAwayIsReachedUpright) {
   }
 }
 
-// The heading error's moment vanishes at half a turn in the geometric controller; the vehicle turns anyway.
 // The tilt limit, exactly: at rest, 15 m short of the reference in x and already tilted max_tilt towards it
 // (heading x), the vehicle holds its attitude (the thrust it asks for is max_tilt off vertical: no moment)
 // and asks for the thrust that keeps its height, m g / cos(max_tilt).
@@ -267,6 +266,7 @@ TEST(So3Controller, TheYawRateIsFedForwardAboutTheWorldVertical) {
   EXPECT_GT(std::abs(difference.y()), 0.01);  // the roll puts part of it about the body y axis
 }
 
+// The heading error's moment vanishes at half a turn in the geometric controller; the vehicle turns anyway.
 TEST(Vehicle, AHeadingHalfATurnRoundIsReached) {
   for (const double start_yaw : {0.3, 0.0, -2.0}) {
     SimulatedVehicle v{QuadrotorParams(), So3ControllerConfig()};
@@ -297,7 +297,7 @@ TEST(Quadrotor, AStepThatIsNotAPositiveFiniteTimeIsRefused) {
 }
 
 // A duration that is not a whole number of dynamics steps ends with a shorter step: the vehicle's clock and
-// state are those of the exact split (0.003 s at 500 Hz = 0.002 + 0.001 s), not one step more.
+// state are those of the exact split (2.5 steps: 0.005 s at 500 Hz = 0.002 + 0.002 + 0.001 s), not one step more.
 TEST(Vehicle, AdvanceEndsWithAShorterStepAtTheDurationAsked) {
   for (const double rate : {500.0, 700.0}) {
     QuadrotorParams params;
