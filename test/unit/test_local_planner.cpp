@@ -71,6 +71,8 @@ TEST(LocalPlannerConfig, ValidateNamesTheBadKey) {
   expectBad("settled_tilt", [](LocalPlannerConfig& c) { c.settled_tilt = 2.0; });
   expectBad("settled_speed", [](LocalPlannerConfig& c) { c.settled_speed = -0.1; });
   expectBad("settled_speed", [](LocalPlannerConfig& c) { c.settled_speed = kInf; });
+  expectBad("min_view_fraction", [](LocalPlannerConfig& c) { c.min_view_fraction = 1.5; });
+  expectBad("min_view_fraction", [](LocalPlannerConfig& c) { c.min_view_fraction = std::nan(""); });
 }
 
 TEST(ObstacleRatio, SyntheticImages) {
@@ -172,6 +174,18 @@ TEST(FilterViewpoints, TopKByRateOrByVisibleCells) {
   EXPECT_EQ(open[1].visible_cells, 50);
   cfg.top_k = 10;
   EXPECT_EQ(filterViewpoints(vps, FrontierType::kOpen, Vec3::Zero(), 0.0, cfg).size(), 4u);
+
+  // min_view_fraction (shipped 0.8) floors the near ranking at that share of the best view (80 cells: 64):
+  // the turn in place (12) and the 30- and 50-cell views drop out, one of exactly 64 stays, ranked by its
+  // rate; the open ranking is not floored.
+  cfg.min_view_fraction = 0.8;
+  std::vector<Viewpoint> floored = vps;
+  floored.push_back({Vec3(1.5, 0, 0), 0.5, 64});
+  const auto near_floored = filterViewpoints(floored, FrontierType::kNearOrCluttered, Vec3::Zero(), 0.0, cfg);
+  ASSERT_EQ(near_floored.size(), 2u);
+  EXPECT_EQ(near_floored[0].visible_cells, 64);  // rate 0.5 / 0.75 against 0.1 / 2
+  EXPECT_EQ(near_floored[1].visible_cells, 80);
+  EXPECT_EQ(filterViewpoints(floored, FrontierType::kOpen, Vec3::Zero(), 0.0, cfg).size(), 5u);
 }
 
 // A 4 x 4 x 2 m room at 0.1 m, free, whose part x < 1 m is still unknown: the frontier is a patch of the

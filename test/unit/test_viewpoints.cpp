@@ -29,6 +29,8 @@ using go_feap::map::OccupancyMap;
 using go_feap::map::VoxelState;
 using go_feap::planning::candidateYaws;
 using go_feap::planning::countVisible;
+using go_feap::planning::FrontierType;
+using go_feap::planning::pathDistance;
 using go_feap::planning::inView;
 using go_feap::planning::sampleViewpoints;
 using go_feap::planning::ViewpointConfig;
@@ -740,6 +742,47 @@ struct OneFrontierPlan {
   Frontier f;
   go_feap::planning::Astar astar;
 };
+
+// A frontier within d_near in a straight line is typed by its path length: with a wall between, the way round
+// is longer than d_near and its viewpoints are ranked as an open frontier's (by visible cells); without the
+// wall, as a near one's (by steering rate). Typed by the straight line it was near either way.
+TEST(Viewpoints, AFrontierNearInALineButFarByPathIsTypedOpen) {
+  OneFrontierPlan one;
+  const Vec3 uav(0.8, 2.0, 1.0);
+  const double straight = (one.f.average - uav).norm();
+  one.w.set(Index3(15, 0, 0), Index3(16, 24, 19), VoxelState::kOccupied);  // x 1.5 .. 1.7 m, y up to 2.5 m
+  const double round = pathDistance(one.astar, uav, one.f.average).metres;
+  ASSERT_FALSE(pathDistance(one.astar, uav, one.f.average).euclidean_fallback);
+  ASSERT_GT(round, straight + 0.3);
+  go_feap::planning::LocalPlannerConfig local;
+  local.d_near = 0.5 * (straight + round);
+  local.top_k = 3;
+  local.k_frontiers = 1;
+  const go_feap::planning::ObstacleWindow calm(local.window_size, local.clutter_threshold);
+  ASSERT_FALSE(calm.cluttered());
+  auto expectLayer = [&](FrontierType type, const char* what) {
+    SCOPED_TRACE(what);
+    const auto plan = one(local, nullptr);
+    ASSERT_TRUE(plan) << plan.message();
+    const auto sampled = sampleViewpoints(one.f, one.w.map(), one.w.esdf(), 0.5, 1.5, testConfig());
+    const auto expected = go_feap::planning::filterViewpoints(sampled, type, uav, 0.0, local);
+    const auto other = go_feap::planning::filterViewpoints(
+        sampled, type == FrontierType::kOpen ? FrontierType::kNearOrCluttered : FrontierType::kOpen, uav, 0.0, local);
+    ASSERT_EQ(plan->layers.size(), 1u);
+    ASSERT_EQ(plan->layers[0].size(), expected.size());
+    bool differs = other.size() != expected.size();
+    for (std::size_t i = 0; i < expected.size(); ++i) {
+      EXPECT_EQ(plan->layers[0][i].position, expected[i].position) << i;
+      EXPECT_EQ(plan->layers[0][i].yaw, expected[i].yaw) << i;
+      differs = differs || (i < other.size() && other[i].position != expected[i].position);
+    }
+    EXPECT_TRUE(differs) << "the two rankings agree here: the test cannot tell the types apart";
+  };
+  expectLayer(FrontierType::kOpen, "with the wall");
+  one.w.set(Index3(15, 0, 0), Index3(16, 24, 19), VoxelState::kFree);
+  ASSERT_LT(pathDistance(one.astar, uav, one.f.average).metres, local.d_near);
+  expectLayer(FrontierType::kNearOrCluttered, "without it");
+}
 
 TEST(Viewpoints, PosesReachedMaxVisitsTimesAreNoLongerProposed) {
   go_feap::planning::LocalPlannerConfig local;
