@@ -571,6 +571,9 @@ TEST(TargetHysteresis, KeepsSwitchesAndReportsTargetsReachedInVain) {
   EXPECT_EQ(asked, 2);
   cost_b = 1.0;
   EXPECT_EQ(go_feap::planning::decideTarget(&cur, b, cost, 2.0, 10, c), TargetDecision::kSwitchQuicker);
+  // The commitment ends at commit_time itself (1.5 s), not after it; a moment before, the target is kept.
+  EXPECT_EQ(go_feap::planning::decideTarget(&cur, b, cost, 1.5, 10, c), TargetDecision::kSwitchQuicker);
+  EXPECT_EQ(go_feap::planning::decideTarget(&cur, b, cost, 1.499, 10, c), TargetDecision::kKeep);
   // A target that won on cost is not replaced on cost in turn (costs estimated through unknown space
   // can cross and cross back as the vehicle flies: the two would take turns for ever).
   cur.quicker = true;

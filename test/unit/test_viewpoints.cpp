@@ -784,6 +784,36 @@ TEST(Viewpoints, AFrontierNearInALineButFarByPathIsTypedOpen) {
   expectLayer(FrontierType::kNearOrCluttered, "without it");
 }
 
+// What is left to see from a target counts the cells of every frontier whose average lies within the sensor
+// range plus the cluster extent: a long frontier whose average is beyond the range still has cells in it. A
+// line of frontier cells 1.55 .. 4.05 m ahead (average 2.8 m, range 2.5 m): its cells within range count
+// (up to min_visible); with no extent allowed for, none.
+TEST(Viewpoints, RemainingVisibleCountsFrontiersWhoseAverageLiesBeyondTheRange) {
+  World w(Index3(60, 40, 20));
+  Frontier f;
+  for (int x = 20; x <= 45; ++x) f.cells.push_back(Index3(x, 20, 10));
+  for (const Index3& c : f.cells) f.average += w.geo().indexToCoord(c);
+  f.average /= static_cast<double>(f.cells.size());
+  const ViewpointConfig cfg = testConfig();
+  const Viewpoint target{Vec3(0.5, 2.05, 1.05), 0.0, 0};
+  ASSERT_GT((f.average - target.position).norm(), cfg.sensor_range);
+  const int in_view = countVisible(target.position, target.yaw, f.cells, w.map(), cfg);
+  ASSERT_GE(in_view, cfg.min_visible);  // the cells within range
+  EXPECT_EQ(go_feap::planning::remainingVisible(target, {f}, w.map(), cfg, 2.0), cfg.min_visible);
+  EXPECT_EQ(go_feap::planning::remainingVisible(target, {f}, w.map(), cfg, 0.0), 0);
+  // Fewer cells in view than min_visible: their own count.
+  Frontier few = f;
+  few.cells.erase(few.cells.begin() + 2, few.cells.begin() + 12);  // 1.75 .. 2.65 m ahead gone: two left in range
+  const int few_in_view = countVisible(target.position, target.yaw, few.cells, w.map(), cfg);
+  ASSERT_LT(few_in_view, cfg.min_visible);
+  ASSERT_GT(few_in_view, 0);
+  few.average = Vec3::Zero();
+  for (const Index3& c : few.cells) few.average += w.geo().indexToCoord(c);
+  few.average /= static_cast<double>(few.cells.size());
+  ASSERT_GT((few.average - target.position).norm(), cfg.sensor_range);
+  EXPECT_EQ(go_feap::planning::remainingVisible(target, {few}, w.map(), cfg, 2.0), few_in_view);
+}
+
 TEST(Viewpoints, PosesReachedMaxVisitsTimesAreNoLongerProposed) {
   go_feap::planning::LocalPlannerConfig local;
   local.max_visits = 2;
