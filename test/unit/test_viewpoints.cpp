@@ -584,6 +584,65 @@ TEST(Viewpoints, CacheForgetsAFrontierWhenTheMapChangesWithinItsReach) {
   cache.forgetChanged(go_feap::common::Aabb{Vec3(3.5, 2.0, 1.0), Vec3(3.6, 2.1, 1.1)});
   cache.get(f, w.map(), w.esdf(), z_min, z_max, cfg);
   EXPECT_EQ(cache.misses(), 3u);
+
+}
+
+// Differential: single voxels seen occupied and then free again, half of them within the clearance (and a
+// voxel) of a candidate position on the outer ring, the rest anywhere up to a few voxels past the ring's reach:
+// after forgetChanged, what the cache gives is what sampling anew gives, every time. The frontier is the six
+// faces of one unknown voxel and the rings lie at its height (so neither the cells' box nor the heights give
+// the reach slack of their own): a reach box without the clearance keeps a stale entry for a change that
+// moves a viewpoint.
+TEST(Viewpoints, CacheGivesWhatSamplingAnewGivesAfterAnyNearbyChange) {
+  ViewpointConfig cfg = testConfig();
+  cfg.min_visible = 1;
+  cfg.height_offsets = {0.0};
+  const double z_min = 0.4, z_max = 1.4;
+  World w(Index3(40, 40, 20));
+  const Index3 hole(20, 20, 9);
+  w.set(hole, hole, VoxelState::kUnknown);
+  const Frontier f = frontierOf(w);
+  ASSERT_EQ(f.cells.size(), 6u);
+  go_feap::planning::ViewpointCache cache;
+  ASSERT_FALSE(cache.get(f, w.map(), w.esdf(), z_min, z_max, cfg).empty());
+  Rng rng(11);
+  const double reach = 1.6 + cfg.clearance + 3 * kRes;  // the outer ring 1.6 m
+  int moved = 0;
+  const int n_angles = static_cast<int>(std::lround(2.0 * kPi / cfg.angular_step));
+  for (int k = 0; k < 2000; ++k) {
+    Vec3 p = f.average + Vec3(rng.uniform(-reach, reach), rng.uniform(-reach, reach), rng.uniform(-reach, reach));
+    if (k % 2 == 0) {  // near a candidate position on the outer ring
+      const double r = *std::max_element(cfg.ring_radii.begin(), cfg.ring_radii.end());
+      const double theta = 2.0 * kPi * rng(0, n_angles - 1) / n_angles;
+      const double z = std::clamp(f.average.z() + cfg.height_offsets[rng(0, static_cast<int>(cfg.height_offsets.size()) - 1)],
+                                  z_min, z_max);
+      const double d = cfg.clearance + kRes;
+      p = Vec3(f.average.x() + r * std::cos(theta), f.average.y() + r * std::sin(theta), z) +
+          Vec3(rng.uniform(-d, d), rng.uniform(-d, d), rng.uniform(-d, d));
+    }
+    const Index3 idx = w.geo().coordToIndex(p);
+    if (!w.geo().inside(idx) || (idx - hole).cwiseAbs().maxCoeff() <= 1) continue;  // the hole and its faces stay
+    const std::vector<Viewpoint> before = sampleViewpoints(f, w.map(), w.esdf(), z_min, z_max, cfg);
+    // Seen occupied, then free again (the free world each time, so that every near change counts).
+    for (const VoxelState now : {VoxelState::kOccupied, VoxelState::kFree}) {
+      w.set(idx, idx, now);
+      cache.forgetChanged(w.geo(), {w.geo().linear(idx)});
+      const std::vector<Viewpoint> want = sampleViewpoints(f, w.map(), w.esdf(), z_min, z_max, cfg);
+      const std::vector<Viewpoint> have = cache.get(f, w.map(), w.esdf(), z_min, z_max, cfg);
+      ASSERT_EQ(have.size(), want.size()) << "after setting " << idx.transpose() << " to " << static_cast<int>(now);
+      for (std::size_t i = 0; i < want.size(); ++i) {
+        ASSERT_EQ(have[i].position, want[i].position) << "after setting " << idx.transpose();
+        ASSERT_EQ(have[i].yaw, want[i].yaw);
+        ASSERT_EQ(have[i].visible_cells, want[i].visible_cells);
+      }
+      if (now == VoxelState::kOccupied) {
+        bool same = before.size() == want.size();
+        for (std::size_t i = 0; same && i < want.size(); ++i) same = before[i].position == want[i].position;
+        moved += !same;
+      }
+    }
+  }
+  EXPECT_GE(moved, 20) << "too few toggles changed the viewpoints for the test to tell";
 }
 
 // A target whose frontier was seen on the way is dropped however long it has been kept: assessTarget
