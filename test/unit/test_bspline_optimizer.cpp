@@ -410,6 +410,39 @@ TEST(BsplineOptimizer, ImpossibleProblemsFailAndReturnNothing) {
   EXPECT_TRUE(config.validate().ok());
 }
 
+// The optimiser starts from the knot span at which the control polygon just meets the margin-reduced limits:
+// for a rest-to-rest fit three times too fast, the smallest knot span whose velocity and acceleration terms
+// are zero (found by bisection on the cost itself) is where the reported initial cost is taken. Starting at
+// the fit's own span, or without the margin, gives another initial cost.
+TEST(BsplineOptimizer, StartsAtTheKnotSpanThatJustMeetsTheLimits) {
+  World world(Vec3(6.0, 4.0, 2.0));
+  world.sync();
+  const OptimizerConfig config = optimizerConfig();
+  const std::vector<Vec3> line =
+      UniformBspline::resamplePolyline({Vec3(0.5, 2, 1), Vec3(3.0, 2.5, 1.2), Vec3(5.5, 1.5, 1)}, 0.3);
+  const UniformBspline init = UniformBspline::fitPath(line, 0.3 / (3.0 * config.v_max), Vec3::Zero(), Vec3::Zero());
+  const BsplineCost cost(init, world.esdf(), config);
+  std::vector<double> x = cost.variables(init);
+  auto at = [&](double dt) {
+    x.back() = std::log(dt);
+    return x;
+  };
+  auto feasible = [&](double dt) {
+    return cost.evaluate(at(dt), nullptr, traj::kVelocity | traj::kAcceleration) == 0.0;
+  };
+  double lo = init.knotSpan(), hi = 100.0 * init.knotSpan();
+  ASSERT_FALSE(feasible(lo));
+  ASSERT_TRUE(feasible(hi));
+  for (int k = 0; k < 200 && hi - lo > 1e-15 * hi; ++k) (feasible(0.5 * (lo + hi)) ? hi : lo) = 0.5 * (lo + hi);
+  ASSERT_GT(hi, config.min_knot_span);
+  ASSERT_LT(hi, config.max_knot_span);
+  OptimizeStats stats;
+  ASSERT_TRUE(traj::optimize(init, world.esdf(), config, &stats).ok());
+  const double expected = cost.evaluate(at(hi), nullptr, traj::kAllTerms);
+  EXPECT_NEAR(stats.initial_cost, expected, 1e-9 * expected);
+  EXPECT_GT(std::abs(cost.evaluate(at(init.knotSpan()), nullptr, traj::kAllTerms) - expected), 1e-6 * expected);
+}
+
 // What NLopt minimises is BsplineCost with every term: the reported final cost is the full cost of the
 // result, no more than the initial cost; and a straight flight 0.3 m past a block's edge (inside
 // `clearance`, outside `min_clearance`) is pushed off it, the free control points' shortfall cut.
