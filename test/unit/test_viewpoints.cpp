@@ -207,6 +207,14 @@ Frontier frontierOf(const World& w) {
   return f;
 }
 
+// Random clutter (30 boxes) round an unknown block in the middle: the frontier is the free cells bordering it.
+Frontier clutterWithUnknownBlock(World& w, Rng& rng) {
+  randomise(w, rng, 30, 0);
+  const Index3 lo(rng(12, 22), rng(12, 22), 4);
+  w.set(lo, lo + Index3(rng(3, 6), rng(3, 6), 8), VoxelState::kUnknown);
+  return frontierOf(w);
+}
+
 ViewpointConfig testConfig() {
   ViewpointConfig c;
   c.ring_radii = {0.8, 1.2, 1.6};
@@ -332,10 +340,7 @@ TEST(Viewpoints, SampledViewpointsMatchExhaustiveEnumeration) {
     cfg.known_clearance = run >= 3;
     World w(Index3(40, 40, 20));
     Rng rng(seed);
-    randomise(w, rng, 30, 0);
-    const Index3 lo(rng(12, 22), rng(12, 22), 4);
-    w.set(lo, lo + Index3(rng(3, 6), rng(3, 6), 8), VoxelState::kUnknown);
-    const Frontier f = frontierOf(w);
+    const Frontier f = clutterWithUnknownBlock(w, rng);
     ASSERT_GE(f.cells.size(), 50u);
     if (cfg.known_clearance) {  // single unknown voxels scattered through free space (after the frontier)
       const Index3 d = w.geo().dims();
@@ -411,6 +416,62 @@ TEST(Viewpoints, SampledViewpointsMatchExhaustiveEnumeration) {
                               [&](const Viewpoint& v) { return (v.position - e).norm() < 1e-9; }));
   }
   EXPECT_GT(left_out_for_unknown, 0) << "no place in the fixtures borders unknown space";
+}
+
+// With max_evaluated_cells (shipped 60) a viewpoint's N_view is counted on every ceil(n / max)-th cell and
+// scaled by n over that subset's size: exactly lround(scale * the best yaw's subset count), the yaw the first
+// best one on the subset, and a ring position kept exactly when that scaled count reaches min_visible (the
+// exhaustive enumeration of SampledViewpointsMatchExhaustiveEnumeration on the subset).
+TEST(Viewpoints, SubsetCountsAreTheScaledCountsOfEveryStrideThCell) {
+  const double z_min = 0.4, z_max = 1.4;
+  for (const unsigned seed : {11u, 12u, 13u}) {
+    ViewpointConfig cfg = testConfig();
+    cfg.max_evaluated_cells = 7;
+    cfg.sensor_range = 1.3;  // part of the frontier out of range from most ring places: few subset cells near
+    World w(Index3(40, 40, 20));
+    Rng rng(seed);
+    const Frontier f = clutterWithUnknownBlock(w, rng);
+    ASSERT_GE(f.cells.size(), 50u);
+    const std::size_t stride = (f.cells.size() + 6) / 7;
+    std::vector<Index3> sub;
+    for (std::size_t i = 0; i < f.cells.size(); i += stride) sub.push_back(f.cells[i]);
+    ASSERT_LE(sub.size(), 7u);
+    const double scale = static_cast<double>(f.cells.size()) / static_cast<double>(sub.size());
+    auto scaledBest = [&](const Vec3& q, double* yaw) {
+      const std::vector<double> yaws = candidateYaws(q, f.average, cfg.yaw_samples);
+      const std::vector<int> counts = oracleCounts(w, q, yaws, sub, cfg);
+      const std::size_t k = std::max_element(counts.begin(), counts.end()) - counts.begin();
+      if (yaw) *yaw = yaws[k];
+      return static_cast<int>(std::lround(scale * counts[k]));
+    };
+    const std::vector<Viewpoint> vps = sampleViewpoints(f, w.map(), w.esdf(), z_min, z_max, cfg);
+    ASSERT_FALSE(vps.empty()) << seed;
+    for (const Viewpoint& vp : vps) {
+      double yaw = 0.0;
+      EXPECT_EQ(vp.visible_cells, scaledBest(vp.position, &yaw)) << seed << " at " << vp.position.transpose();
+      EXPECT_DOUBLE_EQ(vp.yaw, yaw);
+    }
+    std::size_t expected = 0;
+    const int n_angles = static_cast<int>(std::lround(2 * kPi / cfg.angular_step));
+    std::vector<Vec3> seen;
+    for (double r : cfg.ring_radii)
+      for (int a = 0; a < n_angles; ++a)
+        for (double off : cfg.height_offsets) {
+          const double theta = 2 * kPi * a / n_angles;
+          const double zlo = std::max(z_min, w.map().box().min.z() + cfg.clearance);
+          const double zhi = std::min(z_max, w.map().box().max.z() - cfg.clearance);
+          const Vec3 q(f.average.x() + r * std::cos(theta), f.average.y() + r * std::sin(theta),
+                       std::clamp(f.average.z() + off, zlo, zhi));
+          if ((q.array() < w.map().box().min.array() + cfg.clearance).any() ||
+              (q.array() > w.map().box().max.array() - cfg.clearance).any())
+            continue;
+          if (w.map().state(q) != VoxelState::kFree || w.esdf().distance(q) < cfg.clearance) continue;
+          if (std::any_of(seen.begin(), seen.end(), [&](const Vec3& e) { return (e - q).norm() < 1e-9; })) continue;
+          seen.push_back(q);
+          expected += scaledBest(q, nullptr) >= cfg.min_visible;
+        }
+    EXPECT_EQ(vps.size(), expected) << seed;
+  }
 }
 
 TEST(Viewpoints, HeightsAreClampedToTheBand) {
