@@ -583,46 +583,38 @@ TEST(FrontierFinder, RemnantBelowTheSizeLimitComesBackOnlyPastTheReviveSize) {
       full.recomputeAll(m, t);
       return heldCells(full);
     };
-    // 12 cells (x centres 0.05 .. 1.15): a cluster.
-    EXPECT_EQ(step(strip(m, 0.0, 1.2, 0.95, VoxelState::kFree)), 12u);
-    EXPECT_EQ(heldCells(f), 12u);
-    // Its first four cells are seen occupied: 8 left, below the limit.
-    EXPECT_EQ(step(strip(m, 0.0, 0.4, 0.95, VoxelState::kOccupied)), 0u);
-    EXPECT_EQ(heldCells(f), 0u);
-    // It grows back to 12 cells (8 retired, 4 new): over the plain limit, under 1.5 times it.
-    EXPECT_EQ(step(strip(m, 1.2, 1.6, 0.95, VoxelState::kFree)), 12u);
-    EXPECT_EQ(heldCells(f), factor > 1.0 ? 0u : 12u);
-    // 14 cells: still under 15 with hysteresis.
-    EXPECT_EQ(step(strip(m, 1.6, 1.8, 0.95, VoxelState::kFree)), 14u);
-    EXPECT_EQ(heldCells(f), factor > 1.0 ? 0u : 14u);
-    // 16 cells: past 1.5 times the limit, a cluster again.
-    EXPECT_EQ(step(strip(m, 1.8, 2.0, 0.95, VoxelState::kFree)), 16u);
-    EXPECT_EQ(heldCells(f), 16u);
-    // A new region growing from 8 to 12 cells was never a cluster: held at 12 either way.
-    EXPECT_EQ(step(strip(m, 0.0, 0.8, 0.55, VoxelState::kFree)), 16u);
-    EXPECT_EQ(heldCells(f), 16u);
-    EXPECT_EQ(step(strip(m, 0.8, 1.2, 0.55, VoxelState::kFree)), 28u);
-    EXPECT_EQ(heldCells(f), 28u);
-    // The revived cluster loses three cells: 13 left, under the revive size but over the limit, so it stays
-    // (once counted again it is a cluster like any other; its cells' old retirement was dropping it here).
-    EXPECT_EQ(step(strip(m, 0.4, 0.7, 0.95, VoxelState::kOccupied)), 25u);
-    EXPECT_EQ(heldCells(f), 25u);
-    // Under the limit (9 cells) it is retired again, and comes back only past the revive size: not at 13 cells,
-    // at 15.
-    EXPECT_EQ(step(strip(m, 0.7, 1.1, 0.95, VoxelState::kOccupied)), 12u);
-    EXPECT_EQ(heldCells(f), 12u);
-    EXPECT_EQ(step(strip(m, 2.0, 2.4, 0.95, VoxelState::kFree)), 25u);
-    EXPECT_EQ(heldCells(f), factor > 1.0 ? 12u : 25u);
-    EXPECT_EQ(step(strip(m, 2.4, 2.6, 0.95, VoxelState::kFree)), 27u);
-    EXPECT_EQ(heldCells(f), 27u);
-    // A third cluster of 10 cells at y = 0.15 loses 5 (retired), then grows 7 new ones: 12 cells of which 5
-    // (under half) are retired, so it counts at once, under the revive size.
-    EXPECT_EQ(step(strip(m, 0.0, 1.0, 0.15, VoxelState::kFree)), 37u);
-    EXPECT_EQ(heldCells(f), 37u);
-    EXPECT_EQ(step(strip(m, 0.0, 0.5, 0.15, VoxelState::kOccupied)), 27u);
-    EXPECT_EQ(heldCells(f), 27u);
-    EXPECT_EQ(step(strip(m, 1.0, 1.7, 0.15, VoxelState::kFree)), 39u);
-    EXPECT_EQ(heldCells(f), 39u);
+    // Each step paints a strip; `plain` is what the full recomputation (the plain limit) holds after it, and
+    // the finder with hysteresis holds `revived` cells instead (with revive_factor 1 it holds `plain`).
+    struct Step {
+      double x0, x1, y;
+      VoxelState state;
+      std::size_t plain, revived;
+      const char* what;
+    };
+    const VoxelState kFree = VoxelState::kFree, kOccupied = VoxelState::kOccupied;
+    const std::vector<Step> steps = {
+        {0.0, 1.2, 0.95, kFree, 12, 12, "12 cells (x centres 0.05 .. 1.15): a cluster"},
+        {0.0, 0.4, 0.95, kOccupied, 0, 0, "its first four cells seen occupied: 8 left, below the limit"},
+        {1.2, 1.6, 0.95, kFree, 12, 0, "back to 12 cells (8 retired, 4 new): over the plain limit, under 1.5 times it"},
+        {1.6, 1.8, 0.95, kFree, 14, 0, "14 cells: still under 15 with hysteresis"},
+        {1.8, 2.0, 0.95, kFree, 16, 16, "16 cells: past 1.5 times the limit, a cluster again"},
+        {0.0, 0.8, 0.55, kFree, 16, 16, "a new region of 8 cells at y = 0.55 (never a cluster)"},
+        {0.8, 1.2, 0.55, kFree, 28, 28, "... grown to 12: held either way"},
+        // Once counted again it is a cluster like any other: its cells' old retirement was dropping it here.
+        {0.4, 0.7, 0.95, kOccupied, 25, 25, "the revived cluster loses three cells: 13, over the limit, stays"},
+        {0.7, 1.1, 0.95, kOccupied, 12, 12, "9 cells, under the limit: retired again"},
+        {2.0, 2.4, 0.95, kFree, 25, 12, "13 cells (9 retired): not back"},
+        {2.4, 2.6, 0.95, kFree, 27, 27, "15 cells: back past the revive size"},
+        // Under half retired: it counts at once, under the revive size.
+        {0.0, 1.0, 0.15, kFree, 37, 37, "a third cluster of 10 cells at y = 0.15"},
+        {0.0, 0.5, 0.15, kOccupied, 27, 27, "... loses 5 (retired)"},
+        {1.0, 1.7, 0.15, kFree, 39, 39, "... grows 7 new ones: 12 cells, 5 of them retired"},
+    };
+    for (const Step& s : steps) {
+      SCOPED_TRACE(s.what);
+      EXPECT_EQ(step(strip(m, s.x0, s.x1, s.y, s.state)), s.plain);
+      EXPECT_EQ(heldCells(f), factor > 1.0 ? s.revived : s.plain);
+    }
   }
 }
 
