@@ -198,6 +198,11 @@ class TrajectoryPlanner : public nodelet::Nodelet {
       }
       return;
     }
+    if (target_ && (!shared_ || !odom_position_)) {  // a target to fly to, and nothing to plan it on: said
+      NODELET_WARN_STREAM_THROTTLE(5.0, getName() << ": a target but no " << (shared_ ? "odometry" : "map_handle")
+                                                  << " yet: not planning");
+      return;
+    }
     if (!shared_ || !target_ || !odom_position_) return;
     const ros::Time now = ros::Time::now();
     // An odometry gap: the server holds position; plan nothing until odometry is back, then start
