@@ -3,12 +3,16 @@
 
 #include <gtest/gtest.h>
 #include <ros/master.h>
+#include <ros/network.h>
+#include <xmlrpcpp/XmlRpcClient.h>
 #include <ros/ros.h>
 
 #include <rosgraph_msgs/Log.h>
 
 #include <Eigen/Core>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
 #include <deque>
 #include <sstream>
 #include <string>
@@ -31,6 +35,62 @@ inline std::vector<std::string> publishersOf(const std::string& topic) {
     if (static_cast<std::string>(publishers[i][0]) == topic)
       for (int j = 0; j < publishers[i][1].size(); ++j) nodes.push_back(static_cast<std::string>(publishers[i][1][j]));
   return nodes;
+}
+
+/// Where every thread of the node `node` (a nodelet manager) stands, for a failure message: gdb's
+/// `thread apply all bt` of its process (the pid from the node's getPid): for each thread its first three
+/// frames above the C library's waits and sleeps, and every go_feap frame, each cut at 200 characters,
+/// at most `max_chars` in all. A nodelet that went silent shows why: a
+/// callback that never returns holds its worker thread, and every nodelet queued on that thread waits
+/// with it. Without gdb, or a node the master does not know, the text says so instead.
+inline std::string threadStacks(const std::string& node, std::size_t max_chars = 16000) {
+  XmlRpc::XmlRpcValue args, result, payload;
+  args[0] = ros::this_node::getName();
+  args[1] = node;
+  if (!ros::master::execute("lookupNode", args, result, payload, false))
+    return "(no thread stacks: the master does not know " + node + ")\n";
+  std::string host;
+  std::uint32_t port = 0;
+  if (!ros::network::splitURI(static_cast<std::string>(payload), host, port))
+    return "(no thread stacks: " + node + " has the URI " + static_cast<std::string>(payload) + ")\n";
+  XmlRpc::XmlRpcClient client(host.c_str(), static_cast<int>(port), "/");
+  XmlRpc::XmlRpcValue pid_args, pid_result;
+  pid_args[0] = ros::this_node::getName();
+  if (!client.execute("getPid", pid_args, pid_result) || pid_result.getType() != XmlRpc::XmlRpcValue::TypeArray ||
+      pid_result.size() < 3 || pid_result[2].getType() != XmlRpc::XmlRpcValue::TypeInt)
+    return "(no thread stacks: " + node + " did not give its pid)\n";
+  const int pid = static_cast<int>(pid_result[2]);
+  const std::string command = "timeout 60 gdb -nx -batch -iex 'set debuginfod enabled off' -p " + std::to_string(pid) +
+                              " -ex 'thread apply all bt' 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  if (!pipe) return "(no thread stacks: could not run gdb)\n";
+  std::ostringstream out, said;
+  out << "threads of " << node << " (pid " << pid << "):\n";
+  int frame_count = 0;
+  bool any_thread = false;
+  char buffer[4096];
+  while (fgets(buffer, sizeof buffer, pipe)) {
+    const std::string line(buffer);
+    said << line;
+    if (line.rfind("Thread ", 0) == 0) {
+      any_thread = true;
+      frame_count = 0;
+      out << line;
+    } else if (line.rfind("#", 0) == 0) {
+      const bool ours = line.find("go_feap") != std::string::npos;
+      const bool libc_wait = line.find("futex") != std::string::npos || line.find("nptl") != std::string::npos ||
+                             line.find("nanosleep") != std::string::npos || line.find("poll") != std::string::npos;
+      if (ours || (!libc_wait && frame_count++ < 3)) out << "  " << line.substr(0, 200) << (line.size() > 200 ? "...\n" : "");
+    }
+  }
+  pclose(pipe);
+  if (!any_thread) {
+    const std::string text = said.str();
+    return "(no thread stacks from gdb: " + text.substr(text.size() > 600 ? text.size() - 600 : 0) + ")\n";
+  }
+  std::string text = out.str();
+  if (text.size() > max_chars) text = text.substr(0, max_chars) + "\n(cut at " + std::to_string(max_chars) + " characters)\n";
+  return text;
 }
 
 /// Spins until pred() holds or `wall_timeout` wall seconds pass; returns pred().

@@ -80,7 +80,7 @@ TEST(Chain, FliesToAViewpointWithoutCollision) {
   // full suite: 0 pairs).
   ASSERT_TRUE(spinUntil([&] { return reached() && scored >= 20; }, 200.0)) << scored << " command pairs, " << targets.size() << " targets, " << trajectories << " trajectories; vehicle at "
                                          << (path.empty() ? Vec3::Zero() : path.back()).transpose() << "\n"
-                                         << node_log.str();
+                                         << node_log.str() << go_feap::test::threadStacks("/go_feap_manager");
   double min_clearance = 1.0;
   for (std::size_t i = 0; i < path.size(); i += 2)
     min_clearance = std::min(min_clearance, latticeClearance(*scene, path[i], 0.3));
@@ -102,7 +102,8 @@ TEST(Chain, FliesToAViewpointWithoutCollision) {
   };
   ASSERT_TRUE(spinUntil([&] { return last_bspline && !path.empty() && speed > 0.8 && (trajectoryEnd() - path.back()).norm() > 1.5; },
                         120.0))
-      << "never faster than 0.8 m/s with 1.5 m to go";
+      << "never faster than 0.8 m/s with 1.5 m to go\n"
+      << node_log.str() << go_feap::test::threadStacks("/go_feap_manager");
   const Vec3 end_then = trajectoryEnd();
   ASSERT_TRUE(status && status->state != go_feap::ExplorationStatus::FINISHED) << "the exploration ended before the stop";
   std_srvs::Trigger stop;

@@ -43,7 +43,8 @@ TEST(Exploration, SmallMazeFinishesCompleteWithFullCoverageAndNoCollision) {
 
   ASSERT_TRUE(spinUntil([&] { return status && status->state == go_feap::ExplorationStatus::FINISHED; }, 540.0))
       << "not finished: " << (status ? status->state_name : std::string("no status")) << " after "
-      << (status ? status->elapsed : 0.0) << " s simulated";
+      << (status ? status->elapsed : 0.0) << " s simulated\n"
+      << go_feap::test::threadStacks("/go_feap_manager");
   EXPECT_EQ(status->finish_reason, "complete");
   std::cout << "finished (" << status->finish_reason << ") after " << status->elapsed << " s simulated, "
             << status->distance << " m\n";
