@@ -37,7 +37,8 @@ class Replay : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = fs::temp_directory_path() / ("go_feap_replay_test_" + std::to_string(::getpid()));
-    fs::create_directories(dir_);
+    data_ = dir_ / "flight data";  // bags, maps and results in a folder whose name has a space
+    fs::create_directories(data_);
   }
   void TearDown() override { fs::remove_all(dir_); }
   // roslaunch with a private master on a free port, logs under dir_; returns its output (stdout and stderr).
@@ -60,8 +61,11 @@ class Replay : public ::testing::Test {
     text << out_file.rdbuf();
     return text.str() + (status == 0 ? "" : "\n(launch exit status " + std::to_string(status) + ")");
   }
-  fs::path dir_;
+  fs::path dir_, data_;
 };
+
+// A path as a roslaunch argument's value on the bash command line the tests run (it may hold spaces).
+std::string inQuotes(const fs::path& path) { return "\"" + path.string() + "\""; }
 
 // The simulated camera's depth encoding decides what its 0 means: in 32FC1 nothing in range is +inf
 // (REP 117) and 0/NaN is no measurement, skipped; in 16UC1 (record_flight.launch, as a D435i) 0 is also
@@ -77,18 +81,18 @@ TEST_F(Replay, TheMapperCastsZeroDepthFreeOnlyForSixteenBitSimulation) {
     return text.str();
   };
   const std::string key = "/esdf_mapper/occupancy/invalid_as_free: ";
-  const std::string recording = dumped("record_flight.launch bag:=" + (dir_ / "x.bag").string());
+  const std::string recording = dumped("record_flight.launch bag:=" + inQuotes(data_ / "x.bag"));
   EXPECT_NE(recording.find(key + "true"), std::string::npos) << recording;
   for (const std::string& args : {std::string("sim_exploration.launch"), std::string("maze.launch"),
-                                  std::string("onboard.launch"), "replay.launch bag:=" + (dir_ / "x.bag").string()}) {
+                                  std::string("onboard.launch"), "replay.launch bag:=" + inQuotes(data_ / "x.bag")}) {
     const std::string params = dumped(args);
     EXPECT_NE(params.find(key + "false"), std::string::npos) << args << ":\n" << params;
   }
 }
 
 TEST_F(Replay, RecordedFlightRebuildsTheWallsItSaw) {
-  const std::string bag = (dir_ / "flight.bag").string(), bt = (dir_ / "replay.bt").string();
-  const std::string rec = launch("record_flight.launch bag:=" + bag + " duration:=12", 240);
+  const std::string bag = (data_ / "flight.bag").string(), bt = (data_ / "replay.bt").string();
+  const std::string rec = launch("record_flight.launch bag:=" + inQuotes(bag) + " duration:=12", 240);
   ASSERT_TRUE(fs::exists(bag)) << rec.substr(rec.size() > 3000 ? rec.size() - 3000 : 0);
   {
     // A flight, not a hover: the chain heard the simulator under the onboard names and flew. (Remapped
@@ -108,8 +112,8 @@ TEST_F(Replay, RecordedFlightRebuildsTheWallsItSaw) {
     ASSERT_TRUE(first) << "no odometry in the bag";
     EXPECT_GT(farthest, 1.0) << "the recorded vehicle stayed within 1 m of its start";
   }
-  const fs::path results = dir_ / "replay_results";
-  const std::string rep = launch("replay.launch bag:=" + bag + " save_map:=" + bt + " invalid_as_free:=true output_dir:=" + results.string(), 240);
+  const fs::path results = data_ / "replay_results";
+  const std::string rep = launch("replay.launch bag:=" + inQuotes(bag) + " save_map:=" + inQuotes(bt) + " invalid_as_free:=true output_dir:=" + inQuotes(results), 240);
   ASSERT_NE(rep.find("replay: save_map: wrote"), std::string::npos) << rep.substr(rep.size() > 3000 ? rep.size() - 3000 : 0);
   ASSERT_TRUE(fs::exists(bt));
   // The replayed exploration did not finish within 12 s of flight: the recorder wrote what it had when the
@@ -147,7 +151,7 @@ TEST_F(Replay, RecordedFlightRebuildsTheWallsItSaw) {
 }
 
 TEST_F(Replay, ABagWithoutDepthIsRefusedNamingTheMissingTopic) {
-  const std::string bag = (dir_ / "odom_only.bag").string();
+  const std::string bag = (data_ / "odom_only.bag").string();
   {
     rosbag::Bag out(bag, rosbag::bagmode::Write);
     nav_msgs::Odometry odom;
@@ -158,7 +162,7 @@ TEST_F(Replay, ABagWithoutDepthIsRefusedNamingTheMissingTopic) {
       out.write("/vins_estimator/odometry", odom.header.stamp, odom);
     }
   }
-  const std::string rep = launch("replay.launch bag:=" + bag, 120);
+  const std::string rep = launch("replay.launch bag:=" + inQuotes(bag), 120);
   EXPECT_NE(rep.find("lacks the topic(s) /camera/depth/image_rect_raw, /camera/depth/camera_info"), std::string::npos)
       << rep.substr(rep.size() > 3000 ? rep.size() - 3000 : 0);
 }
@@ -166,7 +170,7 @@ TEST_F(Replay, ABagWithoutDepthIsRefusedNamingTheMissingTopic) {
 // Every topic is there, but the depth is a CompressedImage and the odometry a PoseStamped: rosbag play
 // would send them to no subscriber, and the replay end with an empty map saved as a success.
 TEST_F(Replay, ABagWithTopicsOfTheWrongTypeIsRefusedNamingThem) {
-  const std::string bag = (dir_ / "wrong_types.bag").string();
+  const std::string bag = (data_ / "wrong_types.bag").string();
   {
     rosbag::Bag out(bag, rosbag::bagmode::Write);
     for (int i = 1; i <= 5; ++i) {
@@ -186,7 +190,7 @@ TEST_F(Replay, ABagWithTopicsOfTheWrongTypeIsRefusedNamingThem) {
       out.write("/tf_static", t, tf);
     }
   }
-  const std::string rep = launch("replay.launch bag:=" + bag, 120);
+  const std::string rep = launch("replay.launch bag:=" + inQuotes(bag), 120);
   EXPECT_NE(rep.find("has topics of the wrong type: /camera/depth/image_rect_raw is sensor_msgs/CompressedImage, not "
                      "sensor_msgs/Image; /vins_estimator/odometry is geometry_msgs/PoseStamped, not nav_msgs/Odometry"),
             std::string::npos)
