@@ -40,7 +40,8 @@ TEST(LookRound, NoFrontierInViewTurnsRoundBeforeEndingComplete) {
     last_yaw = yaw;
   });
   ASSERT_TRUE(spinUntil([&] { return status && status->state == go_feap::ExplorationStatus::FINISHED; }, 240.0))
-      << "not finished: " << (status ? status->state_name : std::string("no status"));
+      << "not finished: " << (status ? status->state_name : std::string("no status")) << "\n"
+      << go_feap::test::threadStacks("/go_feap_manager");
   std::cout << status->finish_reason << " after " << status->elapsed << " s simulated, " << status->distance
             << " m, turned " << turned << " rad\n";
   // FINISHED: no target after it (the local planner used to turn the vehicle in place again after every
