@@ -845,6 +845,32 @@ TEST(Astar, CoarsePathDistanceIsTheStraightLineInPlainSight) {
   EXPECT_GT(around.metres, (b - a).norm() + 1.0);  // round the wall's end at y = 1.5 m
 }
 
+TEST(Astar, CoarseMovePastAVoxelAtItsCornerIsWalkedNotProvenClearByTheEsdf) {
+  // With unknown space free and no known surroundings, a lattice move is proven clear by the ESDF at its
+  // ends when their distances exceed twice the clearance plus the move's length by the spread of the
+  // voxels the move touches round the segment (a half voxel diagonal at each end) and a voxel at each end
+  // for ESDF overestimates. The diagonal move from (2,2) to (4,4) crosses the corner the voxel (3,2)
+  // shares; with that voxel occupied the ends are 1 and sqrt(5) voxels from it, 0.41 voxel more than the
+  // move's length: a bound without the spread takes the move, 0.28 m, through the occupied voxel. The
+  // exact walk refuses it, and the path goes round by (2,4), 0.4 m, as the lattice oracle has it.
+  World world(Index3(10, 10, 10));
+  world.fill(VoxelState::kFree);
+  world.set(Index3(3, 2, 4), Index3(3, 2, 4), VoxelState::kOccupied);
+  AstarConfig config = astarConfig(0.0, true);
+  config.stride = 2;
+  const Astar astar(world.occupancy(), world.esdf(), config);
+  const GridGeometry& g = world.geo();
+  const Index3 start(2, 2, 4), goal(4, 4, 4);
+  ASSERT_FALSE(astar.segmentTraversable(g.indexToCoord(start), g.indexToCoord(goal)));
+  std::vector<std::uint8_t> ok(g.size());
+  for (std::size_t l = 0; l < g.size(); ++l) ok[l] = astar.traversable(g.unlinear(l));
+  const double want = latticeCosts(g, ok, start, 2)[g.linear(goal)];
+  ASSERT_NEAR(want, 0.4, 1e-9);
+  const PathResult r = astar.search(g.indexToCoord(start), g.indexToCoord(goal), 0.0);
+  expectWellFormed(astar, r, start, goal, 2);
+  EXPECT_NEAR(r.raw_length, want, 1e-9);
+}
+
 TEST(Astar, ShortenKeepsCornersAroundObstacles) {
   // An L-shaped path around the corner of a box: the shortcut through the box is refused, the two
   // straight legs are merged.
