@@ -4,8 +4,8 @@
 #include <gtest/gtest.h>
 #include <ros/master.h>
 #include <ros/network.h>
-#include <xmlrpcpp/XmlRpcClient.h>
 #include <ros/ros.h>
+#include <xmlrpcpp/XmlRpcClient.h>
 
 #include <rosgraph_msgs/Log.h>
 
@@ -40,7 +40,7 @@ inline std::vector<std::string> publishersOf(const std::string& topic) {
 /// Where every thread of the node `node` (a nodelet manager) stands, for a failure message: gdb's
 /// `thread apply all bt` of its process (the pid from the node's getPid): for each thread its first three
 /// frames above the C library's waits and sleeps, and every go_feap frame, each cut at 200 characters,
-/// at most `max_chars` in all. A nodelet that went silent shows why: a
+/// the threads in go_feap code first, at most `max_chars` in all. A nodelet that went silent shows why: a
 /// callback that never returns holds its worker thread, and every nodelet queued on that thread waits
 /// with it. Without gdb, or a node the master does not know, the text says so instead.
 inline std::string threadStacks(const std::string& node, std::size_t max_chars = 16000) {
@@ -64,31 +64,40 @@ inline std::string threadStacks(const std::string& node, std::size_t max_chars =
                               " -ex 'thread apply all bt' 2>&1";
   FILE* pipe = popen(command.c_str(), "r");
   if (!pipe) return "(no thread stacks: could not run gdb)\n";
-  std::ostringstream out, said;
-  out << "threads of " << node << " (pid " << pid << "):\n";
+  // One block per thread; those with a go_feap frame first (a stuck callback is among them).
+  std::vector<std::string> ours, others;
+  std::string block, said;
+  bool block_ours = false;
   int frame_count = 0;
-  bool any_thread = false;
+  auto flush = [&] {
+    if (!block.empty()) (block_ours ? ours : others).push_back(block);
+    block.clear();
+    block_ours = false;
+  };
   char buffer[4096];
   while (fgets(buffer, sizeof buffer, pipe)) {
     const std::string line(buffer);
-    said << line;
+    said += line;
     if (line.rfind("Thread ", 0) == 0) {
-      any_thread = true;
+      flush();
       frame_count = 0;
-      out << line;
-    } else if (line.rfind("#", 0) == 0) {
-      const bool ours = line.find("go_feap") != std::string::npos;
+      block = line;
+    } else if (line.rfind("#", 0) == 0 && !block.empty()) {
+      const bool in_go_feap = line.find("go_feap") != std::string::npos;
       const bool libc_wait = line.find("futex") != std::string::npos || line.find("nptl") != std::string::npos ||
                              line.find("nanosleep") != std::string::npos || line.find("poll") != std::string::npos;
-      if (ours || (!libc_wait && frame_count++ < 3)) out << "  " << line.substr(0, 200) << (line.size() > 200 ? "...\n" : "");
+      block_ours = block_ours || in_go_feap;
+      if (in_go_feap || (!libc_wait && frame_count++ < 3))
+        block += "  " + (line.size() > 200 ? line.substr(0, 200) + "...\n" : line);
     }
   }
+  flush();
   pclose(pipe);
-  if (!any_thread) {
-    const std::string text = said.str();
-    return "(no thread stacks from gdb: " + text.substr(text.size() > 600 ? text.size() - 600 : 0) + ")\n";
-  }
-  std::string text = out.str();
+  if (ours.empty() && others.empty())
+    return "(no thread stacks from gdb: " + said.substr(said.size() > 600 ? said.size() - 600 : 0) + ")\n";
+  std::string text = "threads of " + node + " (pid " + std::to_string(pid) + "), those in go_feap code first:\n";
+  for (const auto* list : {&ours, &others})
+    for (const std::string& b : *list) text += b;
   if (text.size() > max_chars) text = text.substr(0, max_chars) + "\n(cut at " + std::to_string(max_chars) + " characters)\n";
   return text;
 }
