@@ -392,6 +392,32 @@ TEST(PlanLocal, EqualsBruteForceOnRandomInstances) {
   EXPECT_GT(unreachable, 0);
 }
 
+// Equal times through the DAG go to the better ranked viewpoint (for an open frontier, the one seeing more
+// cells), in the last layer and as a predecessor: two viewpoints 1 m either side of the vehicle, facing
+// its way (0.5 s each, no turn), the one at -x seeing 30 cells and ranked first, then a viewpoint 2 m
+// ahead, as far from either (sqrt(5) m).
+TEST(PlanLocal, EqualTimesGoToTheBetterRankedViewpoint) {
+  LocalPlannerConfig cfg;
+  cfg.top_k = 2;
+  Frontier first;
+  first.id = 1;
+  first.viewpoints = {{Vec3(1, 0, 1), 0.0, 10}, {Vec3(-1, 0, 1), 0.0, 30}};
+  const auto one = planLocal(Vec3(0, 0, 1), Vec3::Zero(), 0.0, {first}, {FrontierType::kOpen}, cfg);
+  ASSERT_TRUE(one.ok()) << one.message();
+  ASSERT_EQ(one->layers[0].front().visible_cells, 30);  // ranked first
+  EXPECT_DOUBLE_EQ(one->cost, 0.5);
+  EXPECT_EQ(one->path[0].position, Vec3(-1, 0, 1));
+  Frontier second;
+  second.id = 2;
+  second.viewpoints = {{Vec3(0, 2, 1), 0.0, 20}};
+  const auto two = planLocal(Vec3(0, 0, 1), Vec3::Zero(), 0.0, {first, second},
+                             {FrontierType::kOpen, FrontierType::kOpen}, cfg);
+  ASSERT_TRUE(two.ok()) << two.message();
+  EXPECT_DOUBLE_EQ(two->cost, 0.5 + std::sqrt(5.0) / cfg.v_max);
+  EXPECT_EQ(two->path[0].position, Vec3(-1, 0, 1));
+  EXPECT_EQ(two->path[1].position, Vec3(0, 2, 1));
+}
+
 TEST(PlanLocal, Errors) {
   LocalPlannerConfig cfg;
   Frontier f;
