@@ -443,6 +443,45 @@ TEST(BsplineOptimizer, StartsAtTheKnotSpanThatJustMeetsTheLimits) {
   EXPECT_GT(std::abs(cost.evaluate(at(init.knotSpan()), nullptr, traj::kAllTerms) - expected), 1e-6 * expected);
 }
 
+// The same where the velocity bounds the span: a rest-to-rest fit three times too fast, with an a_max so high
+// that the accelerations ask for less stretch than the speed does (the span the velocity term alone needs is
+// the one both need).
+TEST(BsplineOptimizer, StartsAtTheKnotSpanWhereTheVelocityMeetsItsLimit) {
+  World world(Vec3(8.0, 4.0, 2.0));
+  world.sync();
+  OptimizerConfig config = optimizerConfig();
+  config.a_max = 40.0;
+  ASSERT_TRUE(config.validate().ok()) << config.validate().message();
+  const std::vector<Vec3> line =
+      UniformBspline::resamplePolyline({Vec3(0.5, 2, 1), Vec3(4.0, 2.5, 1.2), Vec3(7.5, 1.5, 1)}, 0.3);
+  const UniformBspline init = UniformBspline::fitPath(line, 0.3 / (3.0 * config.v_max), Vec3::Zero(), Vec3::Zero());
+  const BsplineCost cost(init, world.esdf(), config);
+  std::vector<double> x = cost.variables(init);
+  auto at = [&](double span) {
+    x.back() = std::log(span);
+    return x;
+  };
+  // The smallest span at which the given terms are zero, by bisection on the cost itself.
+  auto smallest = [&](unsigned terms) {
+    double lo = init.knotSpan(), hi = 100.0 * init.knotSpan();
+    EXPECT_GT(cost.evaluate(at(lo), nullptr, terms), 0.0);
+    EXPECT_EQ(cost.evaluate(at(hi), nullptr, terms), 0.0);
+    for (int k = 0; k < 200 && hi - lo > 1e-15 * hi; ++k)
+      (cost.evaluate(at(0.5 * (lo + hi)), nullptr, terms) == 0.0 ? hi : lo) = 0.5 * (lo + hi);
+    return hi;
+  };
+  const double for_velocity = smallest(traj::kVelocity);
+  const double for_both = smallest(traj::kVelocity | traj::kAcceleration);
+  ASSERT_NEAR(for_both, for_velocity, 1e-12 * for_velocity) << "the velocity should bound the span";
+  ASSERT_LT(smallest(traj::kAcceleration), 0.9 * for_velocity);
+  ASSERT_GT(for_both, config.min_knot_span);
+  ASSERT_LT(for_both, config.max_knot_span);
+  OptimizeStats stats;
+  ASSERT_TRUE(traj::optimize(init, world.esdf(), config, &stats).ok());
+  const double expected = cost.evaluate(at(for_both), nullptr, traj::kAllTerms);
+  EXPECT_NEAR(stats.initial_cost, expected, 1e-9 * expected);
+}
+
 // What NLopt minimises is BsplineCost with every term: the reported final cost is the full cost of the
 // result, no more than the initial cost; and a straight flight 0.3 m past a block's edge (inside
 // `clearance`, outside `min_clearance`) is pushed off it, the free control points' shortfall cut.
