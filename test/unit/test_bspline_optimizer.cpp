@@ -410,75 +410,68 @@ TEST(BsplineOptimizer, ImpossibleProblemsFailAndReturnNothing) {
   EXPECT_TRUE(config.validate().ok());
 }
 
+// A rest-to-rest fit of `corners` (resampled at 0.3 m) three times too fast, its cost, and the smallest knot
+// span at which given terms of that cost are zero, found by bisection on the cost itself.
+struct TooFastFit {
+  TooFastFit(const World& world, const OptimizerConfig& config, const std::vector<Vec3>& corners)
+      : init(UniformBspline::fitPath(UniformBspline::resamplePolyline(corners, 0.3), 0.3 / (3.0 * config.v_max),
+                                     Vec3::Zero(), Vec3::Zero())),
+        cost(init, world.esdf(), config),
+        x(cost.variables(init)) {}
+  double costAt(double span, unsigned terms) {
+    x.back() = std::log(span);
+    return cost.evaluate(x, nullptr, terms);
+  }
+  double smallestSpan(unsigned terms) {
+    double lo = init.knotSpan(), hi = 100.0 * init.knotSpan();
+    EXPECT_GT(costAt(lo, terms), 0.0);
+    EXPECT_EQ(costAt(hi, terms), 0.0);
+    for (int k = 0; k < 200 && hi - lo > 1e-15 * hi; ++k) (costAt(0.5 * (lo + hi), terms) == 0.0 ? hi : lo) = 0.5 * (lo + hi);
+    return hi;
+  }
+  UniformBspline init;
+  BsplineCost cost;
+  std::vector<double> x;
+};
+
 // The optimiser starts from the knot span at which the control polygon just meets the margin-reduced limits:
 // for a rest-to-rest fit three times too fast, the smallest knot span whose velocity and acceleration terms
-// are zero (found by bisection on the cost itself) is where the reported initial cost is taken. Starting at
-// the fit's own span, or without the margin, gives another initial cost.
+// are zero is where the reported initial cost is taken. Starting at the fit's own span, or without the margin,
+// gives another initial cost.
 TEST(BsplineOptimizer, StartsAtTheKnotSpanThatJustMeetsTheLimits) {
   World world(Vec3(6.0, 4.0, 2.0));
   world.sync();
   const OptimizerConfig config = optimizerConfig();
-  const std::vector<Vec3> line =
-      UniformBspline::resamplePolyline({Vec3(0.5, 2, 1), Vec3(3.0, 2.5, 1.2), Vec3(5.5, 1.5, 1)}, 0.3);
-  const UniformBspline init = UniformBspline::fitPath(line, 0.3 / (3.0 * config.v_max), Vec3::Zero(), Vec3::Zero());
-  const BsplineCost cost(init, world.esdf(), config);
-  std::vector<double> x = cost.variables(init);
-  auto at = [&](double dt) {
-    x.back() = std::log(dt);
-    return x;
-  };
-  auto feasible = [&](double dt) {
-    return cost.evaluate(at(dt), nullptr, traj::kVelocity | traj::kAcceleration) == 0.0;
-  };
-  double lo = init.knotSpan(), hi = 100.0 * init.knotSpan();
-  ASSERT_FALSE(feasible(lo));
-  ASSERT_TRUE(feasible(hi));
-  for (int k = 0; k < 200 && hi - lo > 1e-15 * hi; ++k) (feasible(0.5 * (lo + hi)) ? hi : lo) = 0.5 * (lo + hi);
-  ASSERT_GT(hi, config.min_knot_span);
-  ASSERT_LT(hi, config.max_knot_span);
+  TooFastFit fit(world, config, {Vec3(0.5, 2, 1), Vec3(3.0, 2.5, 1.2), Vec3(5.5, 1.5, 1)});
+  const double span = fit.smallestSpan(traj::kVelocity | traj::kAcceleration);
+  ASSERT_GT(span, config.min_knot_span);
+  ASSERT_LT(span, config.max_knot_span);
   OptimizeStats stats;
-  ASSERT_TRUE(traj::optimize(init, world.esdf(), config, &stats).ok());
-  const double expected = cost.evaluate(at(hi), nullptr, traj::kAllTerms);
+  ASSERT_TRUE(traj::optimize(fit.init, world.esdf(), config, &stats).ok());
+  const double expected = fit.costAt(span, traj::kAllTerms);
   EXPECT_NEAR(stats.initial_cost, expected, 1e-9 * expected);
-  EXPECT_GT(std::abs(cost.evaluate(at(init.knotSpan()), nullptr, traj::kAllTerms) - expected), 1e-6 * expected);
+  EXPECT_GT(std::abs(fit.costAt(fit.init.knotSpan(), traj::kAllTerms) - expected), 1e-6 * expected);
 }
 
-// The same where the velocity bounds the span: a rest-to-rest fit three times too fast, with an a_max so high
-// that the accelerations ask for less stretch than the speed does (the span the velocity term alone needs is
-// the one both need).
+// The same where the velocity bounds the span: with an a_max so high that the accelerations ask for less
+// stretch than the speed does, the span the velocity term alone needs is the one both need, and the initial
+// cost is taken there (dropping the margin from the velocity's stretch alone gives another).
 TEST(BsplineOptimizer, StartsAtTheKnotSpanWhereTheVelocityMeetsItsLimit) {
   World world(Vec3(8.0, 4.0, 2.0));
   world.sync();
   OptimizerConfig config = optimizerConfig();
   config.a_max = 40.0;
   ASSERT_TRUE(config.validate().ok()) << config.validate().message();
-  const std::vector<Vec3> line =
-      UniformBspline::resamplePolyline({Vec3(0.5, 2, 1), Vec3(4.0, 2.5, 1.2), Vec3(7.5, 1.5, 1)}, 0.3);
-  const UniformBspline init = UniformBspline::fitPath(line, 0.3 / (3.0 * config.v_max), Vec3::Zero(), Vec3::Zero());
-  const BsplineCost cost(init, world.esdf(), config);
-  std::vector<double> x = cost.variables(init);
-  auto at = [&](double span) {
-    x.back() = std::log(span);
-    return x;
-  };
-  // The smallest span at which the given terms are zero, by bisection on the cost itself.
-  auto smallest = [&](unsigned terms) {
-    double lo = init.knotSpan(), hi = 100.0 * init.knotSpan();
-    EXPECT_GT(cost.evaluate(at(lo), nullptr, terms), 0.0);
-    EXPECT_EQ(cost.evaluate(at(hi), nullptr, terms), 0.0);
-    for (int k = 0; k < 200 && hi - lo > 1e-15 * hi; ++k)
-      (cost.evaluate(at(0.5 * (lo + hi)), nullptr, terms) == 0.0 ? hi : lo) = 0.5 * (lo + hi);
-    return hi;
-  };
-  const double for_velocity = smallest(traj::kVelocity);
-  const double for_both = smallest(traj::kVelocity | traj::kAcceleration);
-  ASSERT_NEAR(for_both, for_velocity, 1e-12 * for_velocity) << "the velocity should bound the span";
-  ASSERT_LT(smallest(traj::kAcceleration), 0.9 * for_velocity);
-  ASSERT_GT(for_both, config.min_knot_span);
-  ASSERT_LT(for_both, config.max_knot_span);
+  TooFastFit fit(world, config, {Vec3(0.5, 2, 1), Vec3(4.0, 2.5, 1.2), Vec3(7.5, 1.5, 1)});
+  const double for_velocity = fit.smallestSpan(traj::kVelocity);
+  const double span = fit.smallestSpan(traj::kVelocity | traj::kAcceleration);
+  ASSERT_NEAR(span, for_velocity, 1e-12 * for_velocity) << "the velocity should bound the span";
+  ASSERT_LT(fit.smallestSpan(traj::kAcceleration), 0.9 * for_velocity);
+  ASSERT_GT(span, config.min_knot_span);
+  ASSERT_LT(span, config.max_knot_span);
   OptimizeStats stats;
-  ASSERT_TRUE(traj::optimize(init, world.esdf(), config, &stats).ok());
-  const double expected = cost.evaluate(at(for_both), nullptr, traj::kAllTerms);
+  ASSERT_TRUE(traj::optimize(fit.init, world.esdf(), config, &stats).ok());
+  const double expected = fit.costAt(span, traj::kAllTerms);
   EXPECT_NEAR(stats.initial_cost, expected, 1e-9 * expected);
 }
 
