@@ -420,6 +420,106 @@ TEST(OccupancyMap, OctomapLeavesSharingAVoxelCentre) {
   EXPECT_EQ(occupied, geo.size());
 }
 
+// A return beyond the map's edge is clipped there as free space, not marked as an obstacle at the border: a
+// camera 1 m from the far face sees a wall 1.5 m away, outside the map, and every ray leaves through that face.
+TEST(OccupancyMap, AReturnBeyondTheMapEdgeMarksNoObstacleAtTheBorder) {
+  const map::DepthIntrinsics K{8, 6, 8.0, 8.0, 4.0, 3.0};
+  map::OccupancyConfig c;
+  c.margin = 0.0;
+  c.skip_pixel = 1;
+  ASSERT_TRUE(c.validate()) << c.validate().message();
+  map::OccupancyMap m(c, {Vec3(-1, -1, 0), Vec3(1, 1, 2)});
+  const cv::Mat beyond(K.height, K.width, CV_32FC1, cv::Scalar(1.5f));
+  const auto change = m.integrate(beyond, K, cameraPose(Vec3(0, 0, 1), 0.0));
+  ASSERT_TRUE(change) << change.message();
+  EXPECT_TRUE(change->became_occupied.empty());
+  for (std::size_t l = 0; l < m.geometry().size(); ++l)
+    ASSERT_NE(m.stateAt(l), VoxelState::kOccupied) << m.geometry().unlinear(l).transpose();
+  EXPECT_EQ(m.state(Vec3(0.95, 0.0, 1.0)), VoxelState::kFree);  // the border voxel the axis leaves through
+}
+
+// A return is marked a fiftieth of a voxel behind the measured surface, so that a depth that reads a hair
+// short of a voxel face (1.9985 m for a face at 2 m) marks the wall's voxel, not the free one before it.
+TEST(OccupancyMap, AReturnJustShortOfAVoxelFaceMarksTheVoxelBehindIt) {
+  const map::DepthIntrinsics K{8, 6, 8.0, 8.0, 4.0, 3.0};
+  map::OccupancyConfig c;
+  c.margin = 0.0;
+  c.skip_pixel = 1;
+  map::OccupancyMap m(c, {Vec3(-1, -1, 0), Vec3(3, 1, 2)});
+  ASSERT_NEAR(m.geometry().indexToCoord(m.geometry().coordToIndex(Vec3(2.01, 0, 1))).x(), 2.05, 1e-12);
+  const cv::Mat wall(K.height, K.width, CV_32FC1, cv::Scalar(1.9985f));
+  ASSERT_TRUE(m.integrate(wall, K, cameraPose(Vec3(0, 0, 1), 0.0)));
+  EXPECT_EQ(m.state(Vec3(2.05, 0.0, 1.0)), VoxelState::kOccupied);
+  EXPECT_EQ(m.state(Vec3(1.95, 0.0, 1.0)), VoxelState::kFree);
+}
+
+// A frame that only clears obstacles reaches the ESDF too: a wall seen once, then seen through once (its
+// voxel back at the threshold, free), leaves no obstacle in the ESDF where the map has none.
+TEST(OccupancyMap, AFrameThatOnlyClearsObstaclesUpdatesTheEsdf) {
+  const map::DepthIntrinsics K{8, 6, 8.0, 8.0, 4.0, 3.0};
+  map::MapConfig c = mapConfig();
+  c.occupancy.skip_pixel = 1;
+  map::VoxelMap m(c, {Vec3(-1, -3, 0), Vec3(5, 3, 3)});
+  const auto T = cameraPose(Vec3(0, 0, 1.5), 0.0);
+  const cv::Mat wall(K.height, K.width, CV_32FC1, cv::Scalar(2.05f)), through(K.height, K.width, CV_32FC1, cv::Scalar(9.0f));
+  const Vec3 surface(2.052, 0.0, 1.5);
+  const Index3 at = m.geometry().coordToIndex(surface);
+  ASSERT_TRUE(m.integrate(wall, K, T));
+  ASSERT_EQ(m.occupancy().state(surface), VoxelState::kOccupied);
+  ASSERT_TRUE(m.esdf().isObstacle(at));
+  const auto info = m.integrate(through, K, T);
+  ASSERT_TRUE(info) << info.message();
+  ASSERT_TRUE(info->frame.became_occupied.empty());
+  ASSERT_FALSE(info->frame.stopped_occupied.empty());
+  EXPECT_EQ(m.occupancy().state(surface), VoxelState::kFree);
+  EXPECT_GT(info->esdf_changed, 0u);
+  for (std::size_t l = 0; l < m.geometry().size(); ++l) {
+    const Index3 i = m.geometry().unlinear(l);
+    ASSERT_EQ(m.esdf().isObstacle(i), m.occupancy().stateAt(l) == VoxelState::kOccupied) << i.transpose();
+  }
+}
+
+// Loading a .bt over a map that has obstacles: voxels the file gives as free stop being ESDF obstacles. A
+// file of occupied leaves, then one of free leaves over the same 4 x 4 x 2 voxels: the map and its ESDF are
+// what loading the second file into a fresh map gives.
+TEST(OccupancyMap, OctomapLoadedOverObstaclesClearsThemFromTheEsdf) {
+  map::MapConfig c = mapConfig();
+  c.occupancy.resolution = 0.5;
+  c.occupancy.margin = 0.0;
+  const Aabb box{Vec3(0, 0, 0), Vec3(2, 2, 1)};
+  auto written = [&](bool occupied) {
+    octomap::OcTree tree(0.5);
+    const float value = occupied ? tree.getClampingThresMaxLog() : tree.getClampingThresMinLog();
+    for (int z = 0; z < 2; ++z)
+      for (int y = 0; y < 4; ++y)
+        for (int x = 0; x < 4; ++x)
+          tree.setNodeValue(octomap::point3d(0.25f + 0.5f * x, 0.25f + 0.5f * y, 0.25f + 0.5f * z), value, true);
+    tree.updateInnerOccupancy();
+    const std::string path = (std::filesystem::temp_directory_path() /
+                              ("go_feap_reload_" + std::to_string(::getpid()) + (occupied ? "_occ" : "_free") + ".bt"))
+                                 .string();
+    std::ofstream out(path, std::ios::binary);
+    EXPECT_TRUE(tree.writeBinary(out));
+    return path;
+  };
+  const std::string occupied = written(true), free = written(false);
+  map::VoxelMap m(c, box), fresh(c, box);
+  ASSERT_TRUE(m.loadBt(occupied));
+  const auto& geo = m.geometry();
+  ASSERT_EQ(geo.size(), 32u);
+  ASSERT_TRUE(m.esdf().isObstacle(Index3(1, 1, 0)));
+  ASSERT_TRUE(m.loadBt(free));
+  ASSERT_TRUE(fresh.loadBt(free));
+  std::filesystem::remove(occupied);
+  std::filesystem::remove(free);
+  for (std::size_t l = 0; l < geo.size(); ++l) {
+    const Index3 i = geo.unlinear(l);
+    EXPECT_EQ(m.occupancy().stateAt(l), VoxelState::kFree) << i.transpose();
+    EXPECT_FALSE(m.esdf().isObstacle(i)) << i.transpose();
+    EXPECT_EQ(m.esdf().distance(i), fresh.esdf().distance(i)) << i.transpose();
+  }
+}
+
 // The map's size is checked before anything is allocated: finite values, and at most 2^32 - 1 voxels
 // (an infinite margin or resolution made a 1x1x1 map at a NaN origin; a huge box threw from an allocation
 // or from the ESDF, naming no parameter).
