@@ -796,6 +796,35 @@ TEST(Replan, EachReasonInPriorityOrder) {
   EXPECT_NE(bad.validate().message().find("target_tolerance"), std::string::npos);
 }
 
+// The tolerances are bounds the target may move within (a move of exactly target_tolerance, or a trajectory
+// ending exactly that far from the target, is no new target; with time_left exactly min_time_left the time is
+// not short), so that with every tolerance 0 an unchanged target is never replanned for. A target's heading
+// counts by the turn between the two, the short way round.
+TEST(Replan, TolerancesAreInclusiveAndHeadingsWrap) {
+  ReplanConfig config;  // 0.3 m, 0.3 rad
+  const Vec3 p(1, 2, 1);
+  EXPECT_FALSE(traj::targetMoved(p, 3.1, p, -3.1, config));  // 0.083 rad across +-pi
+  EXPECT_TRUE(traj::targetMoved(p, 0.0, p + Vec3(0.31, 0, 0), 0.0, config));
+  EXPECT_FALSE(traj::targetMoved(p, 0.0, p + Vec3(0.29, 0, 0), 0.0, config));
+  EXPECT_TRUE(traj::targetMoved(p, 0.0, p, 0.31, config));
+  EXPECT_FALSE(traj::targetMoved(p, 0.0, p, 0.29, config));
+  EXPECT_TRUE(traj::targetMoved(p, 0.0, p, 2.0 * M_PI + 0.31, config));
+  ReplanConfig zero;
+  zero.target_tolerance = zero.yaw_tolerance = zero.min_time_left = 0.0;
+  ASSERT_TRUE(zero.validate().ok());
+  EXPECT_FALSE(traj::targetMoved(p, 0.5, p, 0.5, zero));
+  ReplanInputs steady;
+  steady.has_trajectory = true;
+  steady.time_left = 0.0;
+  steady.target_distance_to_end = 0.0;
+  EXPECT_EQ(traj::shouldReplan(steady, zero), ReplanReason::kNone);
+  ReplanInputs at_limits;
+  at_limits.has_trajectory = true;
+  at_limits.time_left = config.min_time_left;
+  at_limits.target_distance_to_end = config.target_tolerance;
+  EXPECT_EQ(traj::shouldReplan(at_limits, config), ReplanReason::kNone);
+}
+
 // The server's report against the planner's trajectory 7, published at t = 10 s, grace 0.5 s.
 TEST(Replan, ServerDroppedOnlyWhenAReportAfterTheGraceFollowsAnotherOrNone) {
   // Followed (running or completed): not dropped, however late the report.
