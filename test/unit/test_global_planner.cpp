@@ -364,31 +364,36 @@ TEST(PlanTour, LowerBoundSkipsFrontiersThatCannotBeCandidates) {
 // the same tour with the lower bound of the UAV distances, and does nothing when every active frontier
 // is a candidate.
 TEST(PlanTour, RestLegMatchesBruteForceWithAnEndCost) {
+  // Also with the candidates capped at two (n_max_tsp 2: the lower bound must leave room for the rest beyond
+  // the cap), and max_exact at the candidates' count (the rest node is solved exactly on top of it).
   Fixture fx;
   int changed = 0;
+  for (int n_max : {12, 2})
   for (int rest_frontiers : {1, 2, 3})
     for (double weight : {0.5, 1.0, 3.0})
       for (double s_near : {3.0, 3.5, 4.3}) {
-        GlobalPlannerConfig c;
-        c.s_near = s_near;
-        c.n_min_tsp = 2;
-        c.lambda = 0.4;
-        c.omission = omissionConfig();
-        c.rest_weight = weight;
-        c.rest_frontiers = rest_frontiers;
-        const auto result = planTour(fx.frontiers, fx.distances(), c);
-        ASSERT_TRUE(result.ok()) << result.message();
         // Candidates and rest from the straight-line UAV distances of the fixture.
         std::vector<std::size_t> active = {0, 1, 2, 3, 4, 5};
         auto d_uav = [&](std::size_t j) { return (fx.frontiers[j].average - fx.uav).norm(); };
         std::stable_sort(active.begin(), active.end(), [&](std::size_t a, std::size_t b) { return d_uav(a) < d_uav(b); });
         std::size_t near = 0;
         while (near < active.size() && d_uav(active[near]) < s_near) ++near;
-        near = std::max<std::size_t>(near, 2);
+        near = std::min<std::size_t>(std::max<std::size_t>(near, 2), static_cast<std::size_t>(n_max));
         std::vector<std::size_t> order(active.begin(), active.begin() + near);
         const std::vector<std::size_t> rest(active.begin() + near,
                                             active.begin() + std::min(active.size(), near + rest_frontiers));
         ASSERT_FALSE(rest.empty());
+        GlobalPlannerConfig c;
+        c.s_near = s_near;
+        c.n_min_tsp = 2;
+        c.n_max_tsp = n_max;
+        c.max_exact = static_cast<int>(near);
+        c.lambda = 0.4;
+        c.omission = omissionConfig();
+        c.rest_weight = weight;
+        c.rest_frontiers = rest_frontiers;
+        const auto result = planTour(fx.frontiers, fx.distances(), c);
+        ASSERT_TRUE(result.ok()) << result.message();
         std::sort(order.begin(), order.end());
         double best = std::numeric_limits<double>::infinity(), best_rest = 0.0;
         std::vector<std::size_t> best_order;
@@ -398,18 +403,21 @@ TEST(PlanTour, RestLegMatchesBruteForceWithAnEndCost) {
           const double j = fx.openPathCost(order, c) + weight * way_on / c.v_max;
           if (j < best - 1e-12) best = j, best_order = order, best_rest = weight * way_on / c.v_max;
         } while (std::next_permutation(order.begin(), order.end()));
-        const std::string where = "rest_frontiers " + std::to_string(rest_frontiers) + " weight " +
-                                  std::to_string(weight) + " s_near " + std::to_string(s_near);
+        const std::string where = "n_max_tsp " + std::to_string(n_max) + " rest_frontiers " +
+                                  std::to_string(rest_frontiers) + " weight " + std::to_string(weight) + " s_near " +
+                                  std::to_string(s_near);
         EXPECT_EQ(result->indices, best_order) << where;
         EXPECT_NEAR(result->cost, best, 1e-9 * best) << where;
         EXPECT_NEAR(result->rest_leg, best_rest, 1e-12) << where;
-        EXPECT_TRUE(result->exact);
+        EXPECT_TRUE(result->exact) << where;
 
         PathDistances bounded = fx.distances();
         bounded.from_uav_lower_bound = d_uav;
         const auto with_bound = planTour(fx.frontiers, bounded, c);
         ASSERT_TRUE(with_bound.ok());
         EXPECT_EQ(with_bound->indices, result->indices) << where;
+        EXPECT_NEAR(with_bound->cost, best, 1e-9 * best) << where;
+        EXPECT_NEAR(with_bound->rest_leg, best_rest, 1e-12) << where;
 
         GlobalPlannerConfig open = c;
         open.rest_weight = 0.0;
@@ -432,6 +440,29 @@ TEST(PlanTour, RestLegMatchesBruteForceWithAnEndCost) {
   EXPECT_EQ(rest_tour->indices, open_tour->indices);
   EXPECT_EQ(rest_tour->cost, open_tour->cost);
   EXPECT_EQ(rest_tour->rest_leg, 0.0);
+}
+
+// A candidate that can reach no rest frontier has no leg on (not an infinite one, which the solver would
+// refuse): candidates 1 and 0 (s_near 3), rest 2, and 0 cut off from 2. Ending at 0 then costs nothing more,
+// and the tour 1, 0 (sqrt(8) + sqrt(26) m at 2 m/s) beats 0, 1 with the way on from 1 to 2.
+TEST(PlanTour, ACandidateThatReachesNoRestFrontierHasNoLegOn) {
+  Fixture fx;
+  GlobalPlannerConfig c;
+  c.s_near = 3.0;
+  c.n_min_tsp = 2;
+  c.lambda = 0.0;
+  c.rest_weight = 1.0;
+  c.rest_frontiers = 1;
+  PathDistances d = fx.distances();
+  d.between = [&](std::size_t i, std::size_t j) {
+    if ((i == 0 && j == 2) || (i == 2 && j == 0)) return std::numeric_limits<double>::infinity();
+    return fx.between(i, j);
+  };
+  const auto tour = planTour(fx.frontiers, d, c);
+  ASSERT_TRUE(tour.ok()) << tour.message();
+  EXPECT_EQ(tour->indices, (std::vector<std::size_t>{1, 0}));
+  EXPECT_EQ(tour->rest_leg, 0.0);
+  EXPECT_NEAR(tour->cost, (std::sqrt(8.0) + std::sqrt(26.0)) / c.v_max, 1e-12);
 }
 
 TEST(PlanTour, EmptyAndBadInput) {
