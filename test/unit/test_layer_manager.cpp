@@ -70,6 +70,14 @@ TEST(LayerManager, BandsGoUpFromTheStartBandThenDown) {
   LayerManager far_up(config(), kBox, 1e300), far_down(config(), kBox, -1e300);
   EXPECT_EQ(far_up.bandOrder(), (std::vector<int>{5, 4, 3, 2, 1, 0}));
   EXPECT_EQ(far_down.bandOrder(), (std::vector<int>{0, 1, 2, 3, 4, 5}));
+  // A height that is a whole number of layer heights but divides a hair over it (2.1 / 0.7 is
+  // 3.0000000000000004 in doubles) makes that many bands, not one more.
+  LayerManagerConfig c = config();
+  c.layer_height = 0.7;
+  ASSERT_GT(2.1 / 0.7, 3.0);
+  LayerManager whole(c, Aabb{Vec3(0, 0, 0), Vec3(10, 10, 2.1)}, 0.0);
+  EXPECT_EQ(whole.bandOrder(), (std::vector<int>{0, 1, 2}));
+  EXPECT_NEAR(whole.band(0).z_max, 0.7, 1e-12);
 }
 
 // Before any frontier list has arrived (a finder that has not started, a camera that sends nothing), the
@@ -421,6 +429,34 @@ TEST(LayerManager, NothingIsExploredBeforeALookRound) {
   EXPECT_EQ(out.state, ExplorationState::kFinished);
   EXPECT_EQ(out.reason, FinishReason::kComplete);
   EXPECT_FALSE(out.look_around);
+}
+
+// Headings seen before the trigger are no look round: a vehicle turned round while it waited (carried, or
+// turning on the ground), then facing one way with nothing in view after the trigger, is asked to look round
+// and its band does not end "complete".
+TEST(LayerManager, HeadingsBeforeTheTriggerAreNoLookRound) {
+  LayerManagerConfig c = config();
+  c.layer_height = 10.0;  // one band
+  LayerManager m(c, kBox, 1.0);
+  double t = 0.0;
+  for (int k = 0; k < 8; ++k) {
+    LayerInputs waiting = frontiers({}, {}, 0);
+    waiting.yaw = -M_PI + (k + 0.5) * M_PI / 4.0;
+    ASSERT_EQ(m.step(waiting, t += 0.1).state, ExplorationState::kWaitTrigger);
+  }
+  EXPECT_FALSE(m.lookedAround());
+  LayerInputs in = frontiers({}, {}, 0);
+  in.trigger = true;
+  in.yaw = 3.0;
+  ASSERT_EQ(m.step(in, t += 0.1).state, ExplorationState::kExplore);
+  in.trigger = false;
+  LayerOutputs out;
+  for (int k = 0; k < 6; ++k) {
+    out = m.step(in, t += 0.5);
+    EXPECT_EQ(out.state, ExplorationState::kExplore) << k;
+  }
+  EXPECT_TRUE(out.look_around);
+  EXPECT_FALSE(m.lookedAround());
 }
 
 // The final pass waits out settle_time only when the box was not already settled as the last band was:

@@ -487,6 +487,18 @@ TEST(Viewpoints, HeightsAreClampedToTheBand) {
     EXPECT_LE(vp.position.z(), 1.1);
   }
   EXPECT_TRUE(sampleViewpoints(f, w.map(), w.esdf(), 1.1, 0.9, cfg).empty());  // empty band
+  // Offsets that clamp to one height are sampled there once: -2 and -1 m give what -2 alone gives.
+  ViewpointConfig twice = cfg, once = cfg;
+  twice.height_offsets = {-2.0, -1.0, 0.0};
+  once.height_offsets = {-2.0, 0.0};
+  const std::vector<Viewpoint> a = sampleViewpoints(f, w.map(), w.esdf(), 0.9, 1.1, twice);
+  const std::vector<Viewpoint> b = sampleViewpoints(f, w.map(), w.esdf(), 0.9, 1.1, once);
+  ASSERT_FALSE(b.empty());
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].position, b[i].position) << i;
+    for (std::size_t j = 0; j < i; ++j) EXPECT_GT((a[i].position - a[j].position).norm(), 1e-9) << i << " " << j;
+  }
   cfg.yaw_samples = 0;
   EXPECT_TRUE(sampleViewpoints(f, w.map(), w.esdf(), 0.9, 1.1, cfg).empty());  // invalid config
 }
