@@ -336,6 +336,14 @@ TEST(MessageChecks, FrontierArraysWithAnyValueThatIsNotFiniteOrACountThatDoesNot
   });
   EXPECT_TRUE(says(why, "2 viewpoint positions but 1 yaws")) << why;
   why = broken([&](go_feap::Frontier& f) {
+    f.viewpoint_positions = {point(0.5, -0.5, 1.5), point(0.6, -0.5, 1.5)};
+    f.viewpoint_yaws = {0.1, 0.2};
+    f.viewpoint_visible = {40};
+  });
+  EXPECT_TRUE(says(why, "2 viewpoint positions but 2 yaws and 1 visible counts")) << why;
+  why = broken([&](go_feap::Frontier& f) { f.omission_likelihood = -0.1; });  // finite, but below 0
+  EXPECT_TRUE(says(why, "omission_likelihood")) << why;
+  why = broken([&](go_feap::Frontier& f) {
     f.viewpoint_positions = {point(0.5, nan, 1.5)};
     f.viewpoint_yaws = {0.1};
     f.viewpoint_visible = {40};
@@ -419,6 +427,8 @@ TEST(MessageChecks, ToursLayersMapUpdatesAndStatusesThatAreMalformedAreNamed) {
   EXPECT_TRUE(says(explorationStatusProblem(bad_status), "elapsed")) << explorationStatusProblem(bad_status);
   bad_status.elapsed = 1e12;  // finite, but past what a ros::Duration holds
   EXPECT_TRUE(says(explorationStatusProblem(bad_status), "elapsed")) << explorationStatusProblem(bad_status);
+  bad_status.elapsed = -1.0;  // finite, but before the start
+  EXPECT_TRUE(says(explorationStatusProblem(bad_status), "elapsed")) << explorationStatusProblem(bad_status);
   bad_status = status;
   bad_status.distance = -3.0;
   EXPECT_TRUE(says(explorationStatusProblem(bad_status), "distance")) << explorationStatusProblem(bad_status);
@@ -448,6 +458,16 @@ TEST(MessageChecks, ToursLayersMapUpdatesAndStatusesThatAreMalformedAreNamed) {
   bad_cmd = cmd;
   bad_cmd.yaw_dot = std::numeric_limits<double>::quiet_NaN();
   EXPECT_TRUE(says(positionCommandProblem(bad_cmd, "world"), "yaw")) << positionCommandProblem(bad_cmd, "world");
+  // Every component counts: the yaw itself, and the vertical velocity and acceleration.
+  bad_cmd = cmd;
+  bad_cmd.yaw = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(positionCommandProblem(bad_cmd, "world"), "yaw or yaw_dot is not finite");
+  bad_cmd = cmd;
+  bad_cmd.velocity.z = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(positionCommandProblem(bad_cmd, "world"), "velocity or acceleration is not finite");
+  bad_cmd = cmd;
+  bad_cmd.acceleration.z = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(positionCommandProblem(bad_cmd, "world"), "velocity or acceleration is not finite");
 }
 
 // ros_guard: an exception a nodelet's callback throws stays in the callback (roscpp would pass it to

@@ -232,6 +232,49 @@ TEST(Table, ComparesTheFirstPlannerWithEachOtherPairedBySeed) {
   EXPECT_EQ(metrics::tableMarkdown(metrics::aggregate(runs)).find("Paired by seed"), std::string::npos);
 }
 
+// Collisions are totalled over every run of a row, finished or not (1 + 2 + 0, the second stopped at the time
+// limit); a tie in the paired comparison is not "faster" (seed 0 at 100 s for both).
+TEST(Table, CollisionsAreTotalledOverAllRunsAndATieIsNotFaster) {
+  const std::vector<metrics::Summary> runs = {
+      summary("maze", "go_feap", 100, 200, 0.9, 1, "complete", 1.0),
+      summary("maze", "go_feap", 120, 220, 0.9, 2, "time_limit", 1.0),
+      summary("maze", "go_feap", 110, 210, 0.9, 0, "complete", 1.0),
+  };
+  const auto rows = metrics::aggregate(runs);
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(rows[0].collisions, 3);
+  EXPECT_EQ(nlohmann::json::parse(metrics::tableJson(rows))[0]["collisions"], 3);
+
+  auto run = [](const std::string& planner, std::uint64_t seed, double time) {
+    metrics::Summary s = summary("maze", planner, time, 100, 1.0, 0, "complete", 1.0);
+    s.seed = seed;
+    return s;
+  };
+  const auto c = metrics::compare({run("go_feap", 0, 100), run("go_feap", 1, 90), run("fuel", 0, 100), run("fuel", 1, 100)});
+  ASSERT_EQ(c.size(), 1u);
+  EXPECT_EQ(c[0].both_finished, 2);
+  EXPECT_EQ(c[0].faster, 1);
+  EXPECT_DOUBLE_EQ(c[0].time_diff_avg, -5.0);
+  const std::string md = metrics::tableMarkdown(metrics::aggregate({run("go_feap", 0, 100)}), c);
+  EXPECT_NE(md.find("| 1 of 2 |"), std::string::npos) << md;
+}
+
+// The trajectory block is planning: Table IV's total and summary.json's compute_ms.total are the planning
+// blocks' means (trajectory 6 + global 2), without mapping (1).
+TEST(Table, ThePlanningTotalCountsTheTrajectoryBlockAndNotMapping) {
+  metrics::Summary s = summary("maze", "go_feap", 100, 200, 1.0, 0, "complete", 1.0);
+  s.compute.clear();
+  s.compute["trajectory"].add(6.0);
+  s.compute["global"].add(2.0);
+  s.compute["mapping"].add(1.0);
+  EXPECT_TRUE(metrics::isComputeBlock("trajectory"));
+  EXPECT_TRUE(metrics::isPlanningBlock("trajectory"));
+  EXPECT_FALSE(metrics::isPlanningBlock("mapping"));
+  EXPECT_DOUBLE_EQ(metrics::aggregate({s})[0].compute_ms.at("total"), 8.0);
+  const nlohmann::json j = nlohmann::json::parse(metrics::summaryJson(s));
+  EXPECT_DOUBLE_EQ(j["compute_ms"]["total"]["mean"].get<double>(), 8.0);
+}
+
 TEST(Metrics, ObstacleDistanceMatchesBruteForceOverVoxelCubes) {
   auto scene = smallMaze(3);
   ASSERT_TRUE(scene) << scene.message();
@@ -310,6 +353,16 @@ TEST(Metrics, CollisionMonitorCountsEachEntryAndKeepsTheClosestApproach) {
   scrape.update(at(0.2));
   scrape.update(at(0.09));
   EXPECT_EQ(scrape.collisions(), 2) << "away to 0.2 m and back";
+
+  // A collision distance over a third of the horizon releases at the horizon (1.5 x 0.4 m would lie beyond
+  // what a clearance can read, and the first collision would never end): in a wall, far off, in again is two.
+  ASSERT_TRUE(metrics::CollisionMonitor::validDistance(metrics::CollisionMonitor::kHorizon));
+  metrics::CollisionMonitor wide(*scene, 0.4);
+  const Vec3 far = scene->geometry().bounds().max + Vec3::Constant(0.7);
+  EXPECT_TRUE(wide.update(wall_point));
+  EXPECT_FALSE(wide.update(far));
+  EXPECT_TRUE(wide.update(wall_point));
+  EXPECT_EQ(wide.collisions(), 2);
 }
 
 // The scene's observable voxels known in the map, over all of them: with the map at the scene's resolution,
