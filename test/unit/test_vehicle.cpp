@@ -245,6 +245,35 @@ TEST(So3Controller, TheThrustAimedAtAFarReferenceIsTiltedExactlyMaxTilt) {
   }
 }
 
+// The feed-forwards the reference asks for: the drag of the reference velocity (linear_drag times it, on top of
+// m (a + g)), and the gyroscopic moment w x (J w) of the present body rate. On a vehicle with drag 0.5 flying at
+// the reference's 2 m/s along x, attitude along the wanted force (1, 0, m g): no attitude moment and a thrust of
+// |F|; spinning at (0.3, 2, 0.1) rad/s on the reference, upright: the moment is -kw w + w x (J w) exactly.
+TEST(So3Controller, FeedsForwardTheReferenceDragAndTheGyroscopicMoment) {
+  QuadrotorParams params;
+  params.linear_drag = 0.5;
+  ASSERT_TRUE(params.validate().ok()) << params.validate().message();
+  const So3ControllerConfig config;
+  const So3Controller controller(config, params);
+  QuadrotorState s;
+  PositionReference ref;
+  s.velocity = ref.velocity = Eigen::Vector3d(2.0, 0.0, 0.0);
+  const Eigen::Vector3d F(params.linear_drag * 2.0, 0.0, params.mass * params.gravity);
+  s.attitude = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), F);
+  const Wrench flying = controller.compute(s, ref);
+  EXPECT_LT(flying.moment.norm(), 1e-9) << flying.moment.transpose();
+  EXPECT_NEAR(flying.thrust, F.norm(), 1e-9);
+
+  QuadrotorState spinning;
+  spinning.angular_velocity = Eigen::Vector3d(0.3, 2.0, 0.1);
+  const PositionReference here;
+  const Eigen::Vector3d& w = spinning.angular_velocity;
+  const Eigen::Vector3d expected = -config.kw.cwiseProduct(w) + w.cross(params.inertia.cwiseProduct(w));
+  const Wrench spin = controller.compute(spinning, here);
+  EXPECT_LT((spin.moment - expected).norm(), 1e-12) << spin.moment.transpose() << " against " << expected.transpose();
+  EXPECT_GT(w.cross(params.inertia.cwiseProduct(w)).norm(), 1e-4);  // the gyroscopic part is there to see
+}
+
 // The heading rate is fed forward about the world vertical: at a roll of 30 deg the yaw rate asked for
 // changes the moment by the rate gains times the world z axis in the body frame times the rate (about the
 // body z axis alone, the vehicle would turn about its tilted axis).
@@ -356,6 +385,12 @@ TEST(Reference, BadCommandsAreRefusedWithAReason) {
   EXPECT_NE(checkReference(far, bounds).message().find("outside"), std::string::npos);
   far.position = Eigen::Vector3d(19, 0, 1);  // 9 m outside: still accepted
   EXPECT_TRUE(checkReference(far, bounds));
+  for (const Eigen::Vector3d& below : {Eigen::Vector3d(-25, 0, 1), Eigen::Vector3d(1, 1, -11)}) {  // past the minimum
+    far.position = below;
+    EXPECT_NE(checkReference(far, bounds).message().find("outside"), std::string::npos) << below.transpose();
+  }
+  far.position = Eigen::Vector3d(-19, 0, 1);
+  EXPECT_TRUE(checkReference(far, bounds));
   PositionReference spin = ok;
   spin.yaw_dot = -1e7;  // finite, and the controller's moment spun the vehicle up
   EXPECT_NE(checkReference(spin, bounds).message().find("yaw rate -1e+07 rad/s exceeds 20"), std::string::npos)
@@ -373,6 +408,12 @@ TEST(Config, InvalidValuesNameTheKey) {
   EXPECT_NE(p.validate().message().find("dynamics_rate"), std::string::npos);
   p.dynamics_rate = 1e15;  // one simulated step never ended
   EXPECT_NE(p.validate().message().find("dynamics_rate"), std::string::npos);
+  for (const Eigen::Vector3d& inertia : {Eigen::Vector3d(2.64e-3, 0.0, 4.96e-3), Eigen::Vector3d(2.64e-3, -1e-3, 4.96e-3),
+                                         Eigen::Vector3d(std::numeric_limits<double>::infinity(), 2.64e-3, 4.96e-3)}) {
+    p = QuadrotorParams();
+    p.inertia = inertia;  // a zero component divides the dynamics by zero
+    EXPECT_NE(p.validate().message().find("inertia"), std::string::npos) << inertia.transpose();
+  }
   So3ControllerConfig c;
   c.kv.y() = -1;
   EXPECT_NE(c.validate().message().find("kv"), std::string::npos);
