@@ -638,6 +638,34 @@ TEST(DepthRendererNoise, ZeroConfigChangesNothing) {
   EXPECT_EQ(rng(), untouched());
 }
 
+// Noise and dropout touch returns only: a pixel with nothing in range stays +inf (free space to the range for
+// the mapper), never becoming NaN (no measurement) or a finite depth; returns do change.
+TEST(DepthRendererNoise, PixelsWithNothingInRangeStayInfinite) {
+  const world::Scene scene = sceneWithBoxes({{Vec3(2.0, -4.0, -2.0), Vec3(2.2, 4.0, 4.0)}}, 0.1);
+  DepthCameraConfig config;
+  config.dropout_probability = 0.5;
+  config.noise_stddev_per_m = 0.01;
+  const DepthRenderer renderer(config, scene);
+  cv::Mat clean;
+  renderer.render(cameraPose(Vec3(0.0, 0.0, 1.0), deg(30.0)), clean);
+  cv::Mat noisy = clean.clone();
+  std::mt19937_64 rng(5);
+  renderer.addNoise(noisy, rng);
+  int empty = 0, changed = 0;
+  for (int v = 0; v < clean.rows; ++v)
+    for (int u = 0; u < clean.cols; ++u) {
+      const float before = clean.at<float>(v, u), after = noisy.at<float>(v, u);
+      if (isReturn(before)) {
+        changed += !(after == before);
+        continue;
+      }
+      ++empty;
+      ASSERT_EQ(std::memcmp(&before, &after, sizeof(float)), 0) << "pixel " << u << ", " << v << ": " << after;
+    }
+  EXPECT_GT(empty, 0);
+  EXPECT_GT(changed, 0);
+}
+
 TEST(DepthRendererNoise, FullDropoutLeavesNoMeasurement) {
   const world::Scene scene = sceneWithBoxes({{Vec3(2.0, -4.0, -2.0), Vec3(2.2, 4.0, 4.0)}}, 0.1);
   DepthCameraConfig config;
