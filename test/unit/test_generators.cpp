@@ -146,6 +146,36 @@ TEST_P(MazeSeeds, HasADeadEndAndALoopMatchingTheVoxels) {
 
 INSTANTIATE_TEST_SUITE_P(Seeds, MazeSeeds, ::testing::Values(0, 1, 2, 3, 4, 17));
 
+// extra_openings opens that many walls and no more (0: a perfect maze, a tree of n - 1 passages), and never the
+// one that would leave no dead end: a 2 x 2 maze asked for 5 takes the one loop short of that (three of its
+// four walls open, one cell a dead end).
+TEST(Maze, ExtraOpeningsAreCountedAndKeepADeadEnd) {
+  for (std::uint64_t seed = 0; seed <= 5; ++seed) {
+    MazeConfig perfect;
+    perfect.extra_openings = 0;
+    MazeLayout layout;
+    ASSERT_TRUE(generateMaze(perfect, seed, &layout));
+    EXPECT_EQ(static_cast<int>(layout.passages.size()), layout.cells_x * layout.cells_y - 1) << seed;
+    MazeConfig three;  // the default, 3
+    ASSERT_EQ(three.extra_openings, 3);
+    MazeLayout with_loops;
+    ASSERT_TRUE(generateMaze(three, seed, &with_loops));
+    EXPECT_EQ(with_loops.passages.size(), layout.passages.size() + 3) << seed;
+
+    MazeConfig tiny;
+    tiny.size_x = tiny.size_y = 4.0;
+    tiny.extra_openings = 5;
+    MazeLayout small;
+    auto s = generateMaze(tiny, seed, &small);
+    ASSERT_TRUE(s) << s.message();
+    ASSERT_EQ(small.cells_x * small.cells_y, 4);
+    EXPECT_EQ(small.passages.size(), 3u) << seed;
+    int dead_ends = 0;
+    for (int c = 0; c < 4; ++c) dead_ends += small.degree(c) == 1;
+    EXPECT_GE(dead_ends, 1) << seed;
+  }
+}
+
 TEST(Maze, SmallMazeForEndToEndTests) {
   MazeConfig cfg;
   cfg.size_x = 10.0;

@@ -163,6 +163,23 @@ TEST(PointCloud, PcdBinaryAndAsciiAndPly) {
   }
 }
 
+// An organised cloud (WIDTH 3, HEIGHT 2, as a depth camera saves one) is read row after row: every point once.
+TEST(PointCloud, OrganisedPcdIsReadRowAfterRow) {
+  TempDir d;
+  pcl::PointCloud<pcl::PointXYZ> cloud(3, 2);
+  for (std::size_t i = 0; i < cloud.size(); ++i) cloud[i] = pcl::PointXYZ(1.0f + i, 0.5f * i, 2.0f);
+  ASSERT_TRUE(cloud.isOrganized());
+  pcl::io::savePCDFileBinary(d.file("organised_binary.pcd"), cloud);
+  pcl::io::savePCDFileASCII(d.file("organised_ascii.pcd"), cloud);
+  for (const char* f : {"organised_binary.pcd", "organised_ascii.pcd"}) {
+    auto pts = loadPointCloud(d.file(f));
+    ASSERT_TRUE(pts) << pts.message();
+    ASSERT_EQ(pts->size(), 6u) << f;
+    for (std::size_t i = 0; i < 6; ++i)
+      EXPECT_LT(((*pts)[i] - Vec3(1.0 + i, 0.5 * i, 2.0)).norm(), 1e-6) << f << " point " << i;
+  }
+}
+
 TEST(Stl, BinaryStartingWithSolidAndAsciiGiveTheSameWatertightShell) {
   TempDir d;
   const auto tri = cubeTriangles(0.23, 1.37);
