@@ -433,6 +433,27 @@ TEST(FrontierFinder, WideClustersAreSplitSmallRegionsDropped) {
   EXPECT_EQ(sizes, (std::multiset<std::size_t>{7, 7, 8, 8}));
 }
 
+// A cluster is split only while a cell lies farther than max_cluster_extent from its mean: five cells in a row
+// on a 0.25 m grid (centres exact in binary), the end ones exactly 0.5 m from the mean, stay one frontier at
+// an extent of 0.5 m.
+TEST(FrontierFinder, AClusterExactlyAtTheExtentIsNotSplit) {
+  map::OccupancyConfig c;
+  c.resolution = 0.25;
+  c.margin = 0.5;
+  ASSERT_TRUE(c.validate()) << c.validate().message();
+  map::OccupancyMap m(c, kBox);
+  ASSERT_EQ(m.geometry().indexToCoord(m.geometry().coordToIndex(Vec3(0.1, 0.9, 0.4))), Vec3(0.125, 0.875, 0.375));
+  paint(m, Vec3(0.1, 0.87, 0.37), Vec3(1.13, 0.88, 0.38), VoxelState::kFree);
+  frontier::FrontierConfig cfg;
+  cfg.min_cluster_cells = 1;
+  cfg.max_cluster_extent = 0.5;
+  frontier::FrontierFinder f(cfg, m.geometry(), kBox);
+  f.recomputeAll(m, 0.0);
+  ASSERT_EQ(f.frontiers().size(), 1u);
+  EXPECT_EQ(f.frontiers()[0].cells.size(), 5u);
+  EXPECT_EQ(f.frontiers()[0].average, Vec3(0.625, 0.875, 0.375));
+}
+
 TEST(FrontierFinder, DurationInheritedFromTheOldestAncestor) {
   map::OccupancyMap m(mapConfig(), kBox);
   const auto [lo, hi] = paint(m, Vec3(0.5, 0.5, 0.0), Vec3(1.0, 1.0, 1.0), VoxelState::kFree);
@@ -609,6 +630,11 @@ TEST(FrontierFinder, RemnantBelowTheSizeLimitComesBackOnlyPastTheReviveSize) {
         {0.0, 1.0, 0.15, kFree, 37, 37, "a third cluster of 10 cells at y = 0.15"},
         {0.0, 0.5, 0.15, kOccupied, 27, 27, "... loses 5 (retired)"},
         {1.0, 1.7, 0.15, kFree, 39, 39, "... grows 7 new ones: 12 cells, 5 of them retired"},
+        // Exactly half retired is held back ("half or more").
+        {0.0, 1.2, 1.35, kFree, 51, 51, "a fourth cluster of 12 cells at y = 1.35"},
+        {0.0, 0.6, 1.35, kOccupied, 39, 39, "... loses 6 (retired)"},
+        {1.2, 1.8, 1.35, kFree, 51, 39, "... grows 6 new ones: 12 cells, 6 of them retired: not back"},
+        {1.8, 2.4, 1.35, kFree, 57, 57, "... 18 cells: back past the revive size"},
     };
     for (const Step& s : steps) {
       SCOPED_TRACE(s.what);

@@ -418,6 +418,15 @@ TEST(PlanLocal, EqualTimesGoToTheBetterRankedViewpoint) {
   EXPECT_EQ(two->path[1].position, Vec3(0, 2, 1));
 }
 
+// The look-round target is a turn in place: the same position, the heading scan_step on, wrapped.
+TEST(ScanTarget, TurnsInPlaceByTheScanStep) {
+  LocalPlannerConfig cfg;
+  const go_feap::frontier::Viewpoint vp = go_feap::planning::scanTarget(Vec3(1, 2, 3), 3.0, cfg);
+  EXPECT_EQ(vp.position, Vec3(1, 2, 3));
+  EXPECT_NEAR(vp.yaw, 3.0 + cfg.scan_step - 2.0 * kPi, 1e-12);
+  EXPECT_GT(cfg.scan_step, 0.2);  // the turn is visible in the heading
+}
+
 TEST(PlanLocal, Errors) {
   LocalPlannerConfig cfg;
   Frontier f;

@@ -657,6 +657,21 @@ TEST(TargetHysteresis, KeepsSwitchesAndReportsTargetsReachedInVain) {
   EXPECT_FALSE(go_feap::planning::targetReached(Vec3(0.1, 0, 1), 0.1, 1.1 * c.reached_speed, a, c));
   EXPECT_FALSE(go_feap::planning::targetReached(Vec3(0.1, 0, 1), 1.0, 0.05, a, c));
   EXPECT_FALSE(go_feap::planning::targetReached(Vec3(1.0, 0, 1), 0.0, 0.0, a, c));
+  // Headings compare the short way round: a target facing 3.1 rad is reached, and proposed again, at -3.1 rad
+  // (0.083 rad apart).
+  go_feap::frontier::Viewpoint back = a;
+  back.yaw = 3.1;
+  EXPECT_TRUE(go_feap::planning::targetReached(back.position, -3.1, 0.0, back, c));
+  go_feap::planning::CurrentTarget at_back;
+  at_back.viewpoint = back;
+  at_back.reached = at_back.settled = true;
+  at_back.remaining_visible = 50;
+  go_feap::frontier::Viewpoint again = back;
+  again.yaw = -3.1;
+  EXPECT_EQ(go_feap::planning::decideTarget(&at_back, again, cost, 5.0, 10, c), TargetDecision::kReachedInVain);
+  // After the commitment a proposal exactly as quick as the target is no reason to switch.
+  cost_a = cost_b = 2.0;
+  EXPECT_EQ(go_feap::planning::decideTarget(&cur, b, cost, 5.0, 10, c), TargetDecision::kKeep);
 }
 
 // planDue(): with replan_period 0 every tick plans. With FUEL's cadence (> 0) planning is skipped

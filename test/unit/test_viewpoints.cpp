@@ -791,6 +791,22 @@ TEST(Viewpoints, ReachedTargetIsJudgedOnlyWithTheCameraSettled) {
     return go_feap::planning::assessTarget(target, 0.0, target.position, target.yaw, speed, tilt, {}, w.map(),
                                            cfg, 2.0, local);
   };
+  // The commitment's start is the one given (the callers' time of choosing the target), not 0: a target
+  // chosen at 7 s is kept at 7.5 s against a quicker proposal.
+  local.commit_time = 1.5;
+  const auto chosen = go_feap::planning::assessTarget(target, 7.0, target.position + Vec3(1.0, 0.0, 0.0), target.yaw,
+                                                      1.0, 0.0, {}, w.map(), cfg, 2.0, local);
+  EXPECT_EQ(chosen.committed_at, 7.0);
+  go_feap::planning::CurrentTarget seeing = chosen;
+  seeing.remaining_visible = cfg.min_visible;
+  Viewpoint other = target;
+  other.position.y() += 1.0;
+  other.yaw += 1.0;
+  const auto quicker_other = [&](const Viewpoint& v) { return v.position == other.position ? 0.5 : 1.0; };
+  EXPECT_EQ(go_feap::planning::decideTarget(&seeing, other, quicker_other, 7.5, cfg.min_visible, local),
+            go_feap::planning::TargetDecision::kKeep);
+  EXPECT_EQ(go_feap::planning::decideTarget(&seeing, other, quicker_other, 8.5, cfg.min_visible, local),
+            go_feap::planning::TargetDecision::kSwitchQuicker);
   const auto braking = assess(0.5, 0.19);
   EXPECT_TRUE(braking.reached);
   EXPECT_FALSE(braking.settled);
