@@ -478,6 +478,28 @@ TEST(BsplineOptimizer, StartsAtTheKnotSpanWhereTheVelocityMeetsItsLimit) {
 // What NLopt minimises is BsplineCost with every term: the reported final cost is the full cost of the
 // result, no more than the initial cost; and a straight flight 0.3 m past a block's edge (inside
 // `clearance`, outside `min_clearance`) is pushed off it, the free control points' shortfall cut.
+// The starting knot span is clamped into [min_knot_span, max_knot_span] before NLopt sees it (NLopt refuses a
+// start outside its bounds): a fit far slower than the limits (3 s spans) and one far quicker than any span
+// allows (6 mm in 0.01 s spans) are optimised, within the span bounds.
+TEST(BsplineOptimizer, StartingSpansOutsideTheBoundsAreClampedIntoThem) {
+  World world(Vec3(6.0, 4.0, 2.0));
+  world.sync();
+  const OptimizerConfig config = optimizerConfig();
+  const UniformBspline slow = UniformBspline::fitPath(
+      UniformBspline::resamplePolyline({Vec3(0.5, 2, 1), Vec3(5.5, 2, 1)}, 0.3), 3.0, Vec3::Zero(), Vec3::Zero());
+  ASSERT_GT(slow.knotSpan(), config.max_knot_span);
+  const UniformBspline tiny = UniformBspline::fitPath(
+      UniformBspline::resamplePolyline({Vec3(3.0, 2, 1), Vec3(3.006, 2, 1)}, 0.001), 0.01, Vec3::Zero(), Vec3::Zero());
+  ASSERT_GE(tiny.numControlPoints(), 7);
+  for (const UniformBspline* init : {&slow, &tiny}) {
+    OptimizeStats stats;
+    const auto r = traj::optimize(*init, world.esdf(), config, &stats);
+    ASSERT_TRUE(r.ok()) << r.message();
+    EXPECT_LE(r->knotSpan(), config.max_knot_span * (1.0 + 1e-12));
+    EXPECT_GE(r->knotSpan(), config.min_knot_span * (1.0 - 1e-12));
+  }
+}
+
 TEST(BsplineOptimizer, MinimisesTheFullCostAndPushesThePathOffAnEdge) {
   World world(Vec3(6.0, 4.0, 2.0));
   world.addBox(Index3(25, 0, 0), Index3(34, 16, 19));  // x 2.5-3.5 m, y up to 1.7 m, full height
@@ -993,6 +1015,51 @@ TEST(TrajectoryPlanner, HopsOfEveryLengthReachTheTargetWithinTheLimits) {
 
 // A vehicle left closer to a wall than min_clearance (mapped late beside it) is planned away from it:
 // every spline from there used to fail the clearance check at its own start, and the vehicle held there.
+// A plan's turn goes on from the reference's yaw rate (no jump in the commanded rate): a hop, a turn in place,
+// and a look round all start turning at the 0.8 rad/s the reference had.
+TEST(TrajectoryPlanner, TurnsGoOnFromTheReferenceYawRate) {
+  OpenRoom room(Vec3(12, 12, 3));
+  const OptimizerConfig optimizer = optimizerConfig();
+  const traj::TrajectoryPlannerConfig planner;
+  traj::PlanRequest request;
+  request.start = Vec3(4.05, 6.05, 1.55);
+  request.yaw = 0.0;
+  request.yaw_rate = 0.8;
+  request.target_yaw = 2.0;
+  for (const Vec3& offset : {Vec3(2.0, 0.0, 0.0), Vec3(0.01, 0.0, 0.0)}) {  // a hop, a turn in place
+    request.target = request.start + offset;
+    const auto planned = traj::planTrajectory(request, room.astar, room.world.esdf(), optimizer, planner);
+    ASSERT_TRUE(planned) << planned.message();
+    EXPECT_NEAR(traj::sampleTrajectory(*planned, 0.0).yaw_dot, 0.8, 1e-9) << offset.transpose();
+  }
+  const traj::Trajectory look = traj::lookAroundTrajectory(request, planner, optimizer);
+  EXPECT_NEAR(traj::sampleTrajectory(look, 0.0).yaw_dot, 0.8, 1e-9);
+}
+
+// The goal may snap to flyable space only goal_tolerance far (the start up to snap_radius): a viewpoint inside a
+// box, whose nearest flyable voxel the search reaches 0.3 .. 1 m off, is refused as goal_blocked, not flown to
+// short of it.
+TEST(TrajectoryPlanner, AGoalSnappedFartherThanTheToleranceIsRefused) {
+  OpenRoom room(Vec3(6, 4, 3));
+  room.world.addBox(Index3(30, 15, 0), Index3(35, 24, 29));  // x 3.0 .. 3.6 m, y 1.5 .. 2.5 m, full height
+  room.world.sync();
+  const OptimizerConfig optimizer = optimizerConfig();
+  const traj::TrajectoryPlannerConfig planner;
+  traj::PlanRequest request;
+  request.start = Vec3(1.0, 2.0, 1.5);
+  request.target = Vec3(3.3, 2.0, 1.5);
+  const PathResult search = room.astar.search(request.start, request.target, planner.snap_radius);
+  ASSERT_EQ(search.status, PathStatus::kFound);
+  const double off = (search.path.back() - request.target).norm();
+  ASSERT_GT(off, planner.goal_tolerance);
+  ASSERT_LT(off, planner.snap_radius);
+  traj::PlanReport report;
+  const auto planned = traj::planTrajectory(request, room.astar, room.world.esdf(), optimizer, planner, &report);
+  ASSERT_FALSE(planned);
+  EXPECT_EQ(report.path_status, PathStatus::kGoalBlocked);
+  EXPECT_NE(planned.message().find("goal_blocked"), std::string::npos) << planned.message();
+}
+
 TEST(TrajectoryPlanner, AStartTooNearAWallIsPlannedAway) {
   OpenRoom room(Vec3(6, 4, 3));
   World& world = room.world;
@@ -1927,8 +1994,15 @@ TEST(TrajectoryPlanner, StaysFlyableFollowsTheSearchRulesWithTheGivenClearance) 
   EXPECT_TRUE(traj::staysFlyable(away_spline, walled_astar, 0.25, 0.3));
   EXPECT_FALSE(traj::staysFlyable(away_spline, walled_astar, 0.25, 0.0));
   EXPECT_FALSE(traj::staysFlyable(UniformBspline::fitPath(towards, 0.2, Vec3::Zero(), Vec3::Zero()), walled_astar, 0.25, 0.3));
-  // Unknown space within the exempt radius is allowed too, not at the end.
+  // Unknown space within the exempt radius is allowed too, not at the end: a hop that ends in the unseen voxel
+  // is refused however near its start (a known voxel there instead lets it through).
   EXPECT_TRUE(traj::staysFlyable(spline, holed_astar, 0.2, 2.5));
+  std::vector<Vec3> into;
+  for (int i = 0; i <= 6; ++i) into.push_back(Vec3(2.45 + 0.1 * i, 2.05, 1.55));
+  const UniformBspline hop = UniformBspline::fitPath(into, 0.3, Vec3::Zero(), Vec3::Zero());
+  ASSERT_EQ(holed.geo().coordToIndex(hop.value(hop.duration())), holed.geo().coordToIndex(Vec3(3.0, 2.0, 1.5)));
+  EXPECT_FALSE(traj::staysFlyable(hop, holed_astar, 0.2, 2.5));
+  EXPECT_TRUE(traj::staysFlyable(hop, astar, 0.2, 2.5));
   // An unknown voxel beside the way, 0.1 m off the curve: within min_distance it fails (an obstacle
   // there, unseen, would be that close), with a smaller min_distance it passes.
   World beside(Vec3(6, 4, 3));
@@ -2409,6 +2483,9 @@ TEST(TrajectoryPlanner, FailedPlanRecoveryLooksAroundThenAtUnseenSpaceOnceThenFa
   EXPECT_FALSE(r.trajectory.partial);
   EXPECT_TRUE(endsAtRest(r.trajectory));
   EXPECT_NEAR(traj::sampleTrajectory(r.trajectory, r.trajectory.duration()).yaw, request.yaw, 1e-9);
+  // The stop goes on from the reference's velocity (no jump to rest) and brakes over v^2 / (2 a_max).
+  EXPECT_LT((traj::sampleTrajectory(r.trajectory, 0.0).velocity - request.velocity).norm(), 1e-9);
+  EXPECT_NEAR((r.trajectory.goal - request.start).x(), 0.36 / (2.0 * optimizer.a_max), 1e-3);
 
   // Any other failure counts at once, and leaves the flag alone.
   bool fresh = false;
