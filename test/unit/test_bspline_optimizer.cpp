@@ -2064,6 +2064,21 @@ TEST(TrajectoryPlanner, AWayRefusedForUnseenSpaceBesideItLooksThere) {
   EXPECT_NE(refused.message().find("leaves known flyable space"), std::string::npos) << refused.message();
   ASSERT_TRUE(report.unseen_at.has_value());
   EXPECT_LT((*report.unseen_at - unseen).norm(), 0.3);
+  // A 3 m way (under fine_spans x path_spacing, 3.6 m) is also optimised with finer spans: that optimum must
+  // keep out of the unseen pocket too, or it would be flown past it.
+  {
+    traj::TrajectoryPlannerConfig short_way = planner;
+    short_way.profile_acceleration = 0.0;  // no timed fit flown as it is: the optimisations decide
+    traj::PlanRequest hop = request;
+    hop.start = Vec3(1.55, 2.05, 1.05);
+    hop.target = Vec3(4.55, 2.05, 1.05);
+    ASSERT_LT((hop.target - hop.start).norm(), short_way.fine_spans * short_way.path_spacing);
+    traj::PlanReport hop_report;
+    const auto hop_refused = traj::planTrajectory(hop, astar, world.esdf(), optimizer, short_way, &hop_report);
+    ASSERT_FALSE(hop_refused);
+    EXPECT_NE(hop_refused.message().find("leaves known flyable space"), std::string::npos) << hop_refused.message();
+    EXPECT_FALSE(hop_report.fine);
+  }
 
   // Look there: brake, hold still and turn to face it; the target is retried when the turn is nearly done.
   const auto look = traj::lookAtUnseen(request, report, planner, optimizer);
