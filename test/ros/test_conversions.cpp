@@ -242,6 +242,10 @@ TEST(Conversions, TrajectoriesMovingFasterThanTheServerTakesAreNamed) {
   t.yaw = go_feap::trajectory::UniformBspline(leap, 3, 0.05);
   EXPECT_TRUE(says(motionProblem(t, 30.0, 50.0, 20.0), "yaw control polygon turns at 2e+07 rad/s, above 20 rad/s"))
       << motionProblem(t, 30.0, 50.0, 20.0);
+  leap << 0.0, 0.0, -1e6, -1e6;  // the other way round
+  t.yaw = go_feap::trajectory::UniformBspline(leap, 3, 0.05);
+  EXPECT_TRUE(says(motionProblem(t, 30.0, 50.0, 20.0), "yaw control polygon turns at 2e+07 rad/s, above 20 rad/s"))
+      << motionProblem(t, 30.0, 50.0, 20.0);
   Eigen::MatrixXd huge(1, 8);
   huge << 1e308, 0.0, 1e308, 0.0, 1e308, 0.0, 1e308, 0.0;
   t.yaw = go_feap::trajectory::UniformBspline(huge, 3, 0.05);
@@ -256,12 +260,19 @@ TEST(Conversions, BsplineMessagesRoundTripAndMalformedOnesAreNamed) {
   static_cast<go_feap::trajectory::Trajectory&>(t) =
       go_feap::trajectory::stopTrajectory(Vec3(0, 0, 1), Vec3(2, 0, 0), 0.5, go_feap::trajectory::OptimizerConfig());
   t.id = 7;
+  // A turning heading on a timeline of its own (0.37 s spans) and a start time: both come back as they were.
+  t.yaw = go_feap::trajectory::UniformBspline((Eigen::MatrixXd(1, 6) << 0.0, 0.2, 0.5, 0.9, 1.2, 1.2).finished(), 3, 0.37);
+  t.start_time = ros::Time(12, 500000000);
+  ASSERT_NE(t.position.knotSpan(), 0.37);
   const go_feap::Bspline good = go_feap::ros_traj::toMsg(t);
   const auto back = go_feap::ros_traj::fromMsg(good);
   ASSERT_TRUE(back) << back.message();
   EXPECT_EQ(back->id, 7);
   for (double s : {0.0, 0.3, t.position.duration()})
     EXPECT_LT((back->position.position(s) - t.position.position(s)).norm(), 1e-12) << s;
+  EXPECT_EQ(back->yaw.knotSpan(), 0.37);
+  EXPECT_EQ(back->yaw.controlPoints(), t.yaw.controlPoints());
+  EXPECT_EQ(back->start_time, t.start_time);
   auto refused = [&](const std::function<void(go_feap::Bspline&)>& spoil, const std::string& says_what) {
     go_feap::Bspline m = good;
     spoil(m);
@@ -282,6 +293,12 @@ TEST(Conversions, BsplineMessagesRoundTripAndMalformedOnesAreNamed) {
     const double dt = m.knots[1] - m.knots[0];
     for (std::size_t i = 0; i < m.knots.size(); ++i) m.knots[i] = (static_cast<double>(i) - 1.0) * dt;
   }, "order 1 is not in [2, 7]");
+  refused([](go_feap::Bspline& m) { m.pos_pts[2].y = std::nan(""); }, "a control point is not finite");
+  refused([](go_feap::Bspline& m) { m.yaw_pts.resize(3); }, "at least 4 control points");
+  refused([](go_feap::Bspline& m) { m.yaw_dt = -0.1; }, "yaw_dt must be finite and > 0");
+  refused([](go_feap::Bspline& m) { m.yaw_pts[1] = std::numeric_limits<double>::infinity(); },
+          "yaw control point is not finite");
+  refused([](go_feap::Bspline& m) { m.knots.pop_back(); }, "knots, expected");
 }
 
 TEST(Conversions, FlownStepsCountUpToTheJumpLimit) {

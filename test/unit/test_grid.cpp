@@ -19,6 +19,20 @@ TEST(GridGeometry, CoveringSnapsToResolutionMultiples) {
   EXPECT_NEAR(g.origin().x(), -1.1, 1e-9);
   EXPECT_NEAR(g.origin().z(), 0.2, 1e-9);
   EXPECT_EQ(g.dims(), Index3(31, 10, 8));
+  // Bounds that are multiples of the resolution but divide a hair off a whole number (0.3 / 0.1 is
+  // 2.9999999999999996, -0.3 / 0.1 is -2.9999999999999996) take no extra voxel on either side.
+  const GridGeometry h = GridGeometry::covering({Vec3(0.3, 0.0, 0.0), Vec3(1.1, 1.0, 1.0)}, 0.1);
+  EXPECT_NEAR(h.origin().x(), 0.3, 1e-9);
+  EXPECT_EQ(h.dims(), Index3(8, 10, 10));
+  const GridGeometry below = GridGeometry::covering({Vec3(-1.0, 0.0, 0.0), Vec3(-0.3, 1.0, 1.0)}, 0.1);
+  EXPECT_NEAR(below.origin().x(), -1.0, 1e-9);
+  EXPECT_EQ(below.dims(), Index3(7, 10, 10));
+}
+
+TEST(Aabb, ValidNeedsAPositiveExtentOnEveryAxis) {
+  EXPECT_FALSE((go_feap::common::Aabb{Vec3(0, 0, 1), Vec3(4, 4, 1)}).valid());  // no height
+  EXPECT_FALSE((go_feap::common::Aabb{Vec3(0, 0, 1), Vec3(4, -1, 2)}).valid());
+  EXPECT_TRUE((go_feap::common::Aabb{Vec3(0, 0, 1), Vec3(4, 4, 1.1)}).valid());
 }
 
 TEST(GridGeometry, IndexCoordRoundTrip) {

@@ -585,6 +585,22 @@ TEST(YamlReader, ReadsNestedKeysOverlaysAndNamesBadOnes) {
   int wrong = 0;
   typed.get("a/s", wrong);
   EXPECT_NE(typed.error().find("parameter 'a/s' has the wrong type"), std::string::npos) << typed.error();
+  // Vectors and matrices hold exactly their count of numbers; a matrix is read row-major.
+  std::ofstream(dir / "shapes.yaml") << "a:\n  v4: [1, 2, 3, 4]\n  m17: [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0]\n"
+                                        "  m16: [1, 0, 0, 0.1, 0, 1, 0, 0.2, 0, 0, 1, 0.3, 0, 0, 0, 1]\n";
+  go_feap::common::YamlReader four((dir / "shapes.yaml").string());
+  four.getVec3("a/v4", v);
+  EXPECT_NE(four.error().find("parameter 'a/v4' must hold 3 numbers"), std::string::npos) << four.error();
+  Eigen::Matrix4d M;
+  go_feap::common::YamlReader seventeen((dir / "shapes.yaml").string());
+  seventeen.getMatrix4("a/m17", M);
+  EXPECT_NE(seventeen.error().find("must hold 16 numbers"), std::string::npos) << seventeen.error();
+  go_feap::common::YamlReader sixteen((dir / "shapes.yaml").string());
+  sixteen.getMatrix4("a/m16", M);
+  ASSERT_TRUE(sixteen.ok()) << sixteen.error();
+  EXPECT_EQ(M(0, 3), 0.1);
+  EXPECT_EQ(M(2, 3), 0.3);
+  EXPECT_EQ(M(3, 0), 0.0);
   go_feap::common::YamlReader none((dir / "nope.yaml").string());
   EXPECT_FALSE(none.ok());
   EXPECT_NE(none.error().find("nope.yaml"), std::string::npos);
