@@ -6,14 +6,18 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
+#include <map>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "../../src/tools/cli_args.h"
 #include "go_feap/bench/exploration_run.h"
 #include "go_feap/world/scene_files.h"
 
@@ -227,6 +231,14 @@ TEST(Bench, CommandLineValuesOutOfRangeAreRefusedUpFront) {
            {bench + " --max-sim-time 2 --out " + file.string(), "--out " + file.string() + ": cannot make it a folder"},
            {bench + " --max-sim-time 3abc", "--max-sim-time must be a number > 0"},  // was taken as 3
            {bench + " --max-sim-time 0x4", "--max-sim-time must be a number > 0"},   // was taken as 4
+           {bench + " --max-sim-time 0", "--max-sim-time must be a number > 0"},     // every run failed late
+           {bench + " --max-sim-time -1", "--max-sim-time must be a number > 0"},
+           {bench + " --max-sim-time 1e999", "--max-sim-time must be a number > 0"},  // infinite
+           {bench + " --runs 0", "--runs must be an integer from 1 to 100000"},        // empty tables, exit 0
+           {bench + " --jobs 0", "--jobs must be an integer from 1 to 256"},           // no worker: every run "failed"
+           {bench + " --seed -1", "--seed must be an integer >= 0"},                   // 2^64 - 1
+           {bench + " --seed", "--seed needs a value"},
+           {bench + " --sede 3", "unknown argument '--sede'"},
            {bench + " --seed 18446744073709551615 --runs 2", "--seed + --runs - 1 must fit in 64 bits"},  // wrapped to 0
            {bench + " --scene maze,maze", "'maze' is named twice in --scene"},
            {bench + " --planner go_feap,fuel,go_feap", "'go_feap' is named twice in --planner"},
@@ -245,6 +257,50 @@ TEST(Bench, CommandLineValuesOutOfRangeAreRefusedUpFront) {
   }
   EXPECT_TRUE(std::filesystem::is_regular_file(file));  // left as it was
   std::filesystem::remove(file);
+}
+
+// The tools' argument parsing: a flag takes no value (the next argument is read on its own), an option's
+// value must be there, numbers are whole and finite.
+TEST(Bench, ArgumentsParseFlagsOptionsAndWholeNumbersOnly) {
+  const std::map<std::string, bool> known = {{"--seed", true}, {"--perf", false}, {"--runs", true}};
+  auto parse = [&](std::vector<std::string> words, std::map<std::string, std::string>& values, bool& help) {
+    std::vector<char*> argv;
+    for (std::string& w : words) argv.push_back(w.data());
+    argv.push_back(nullptr);
+    return go_feap::tools::parseArgs(static_cast<int>(words.size()), argv.data(), known, values, help);
+  };
+  std::map<std::string, std::string> values;
+  bool help = true;
+  EXPECT_EQ(parse({"p", "--perf", "--runs", "2"}, values, help), "");
+  EXPECT_FALSE(help);
+  EXPECT_EQ(values, (std::map<std::string, std::string>{{"--perf", "1"}, {"--runs", "2"}}));
+  values.clear();
+  EXPECT_EQ(parse({"p", "--runs", "2", "--seed"}, values, help), "--seed needs a value");
+  values.clear();
+  EXPECT_EQ(parse({"p", "--sede", "3"}, values, help), "unknown argument '--sede'");
+  values.clear();
+  EXPECT_EQ(parse({"p", "--runs", "2", "-h"}, values, help), "");
+  EXPECT_TRUE(help);
+
+  unsigned long long n = 7;
+  EXPECT_TRUE(go_feap::tools::parseCount("42", n));
+  EXPECT_EQ(n, 42u);
+  EXPECT_TRUE(go_feap::tools::parseCount("18446744073709551615", n));
+  EXPECT_EQ(n, 18446744073709551615ull);
+  for (const char* bad : {"", "3abc", "-1", " 1", "+1", "1.0", "18446744073709551616"}) {
+    n = 7;
+    EXPECT_FALSE(go_feap::tools::parseCount(bad, n)) << "'" << bad << "'";
+  }
+  double d = 0.0;
+  EXPECT_TRUE(go_feap::tools::parseNumber("1e308", d));
+  EXPECT_DOUBLE_EQ(d, 1e308);
+  EXPECT_TRUE(go_feap::tools::parseNumber("-2.5", d));
+  EXPECT_DOUBLE_EQ(d, -2.5);
+  for (const char* bad : {"", "1e999", "-1e999", "inf", "nan", "0x4", "2abc", "1 "}) {
+    d = 3.0;
+    EXPECT_FALSE(go_feap::tools::parseNumber(bad, d)) << "'" << bad << "'";
+    EXPECT_DOUBLE_EQ(d, 3.0) << "'" << bad << "' changed the value";
+  }
 }
 
 // Results as a user reads them, in one folder: a scene read from a file (it takes no seed) is run once per
@@ -314,6 +370,13 @@ TEST(Bench, ResultsFoldersHoldEachRunOnceAndTheTablesWhole) {
                                        " --max-sim-time 2 --out " + out);
   EXPECT_EQ(rc3, 1) << said3;
   EXPECT_NE(said3.find("share the results folder"), std::string::npos) << said3;
+  // Two scenes of one name (the tables group runs by it, and would merge them into one row): refused too.
+  std::ofstream(dir / "named_again.yaml") << "scene:\n  name: caf\xc3\xa9\n  generator: maze\n"
+                                             "  maze: {size_x: 8.0, size_y: 6.0, height: 3.0, cell_size: 2.0}\n";
+  const auto [rc5, said5] = runCommand("timeout 60 " + bench + " --scene " + (dir / "named.yaml").string() + "," +
+                                       (dir / "named_again.yaml").string() + " --max-sim-time 1 --out " + out);
+  EXPECT_EQ(rc5, 1) << said5;
+  EXPECT_NE(said5.find("share the scene name 'caf\xc3\xa9'"), std::string::npos) << said5;
   fs::remove_all(dir);
 }
 
@@ -368,6 +431,141 @@ TEST(Bench, ConfigErrorsNameTheModeOrKey) {
   ASSERT_FALSE(step);
   EXPECT_NE(step.message().find("must not set 'metrics/*'"), std::string::npos) << step.message();
   std::filesystem::remove_all(step_dir);
+}
+
+// Each rate and the camera's extrinsic is checked, naming its key; a rate equal to the control rate is fine
+// (each stage runs at most once a control step), and a run's time limit must be finite and > 0.
+TEST(Bench, EveryRateAndTheTimeLimitAreCheckedNamingTheKey) {
+  bench::LoopConfig loop;
+  ASSERT_TRUE(loop.validate().ok()) << loop.validate().message();
+  loop.sample_rate = 0.0;  // a metrics.csv of its first and last rows only
+  EXPECT_EQ(loop.validate().message(), "metrics: sample_rate must be in (0, 1000] Hz");
+  loop = bench::LoopConfig();
+  loop.control_rate = 1e12;
+  EXPECT_EQ(loop.validate().message(), "loop: control_rate must be in (0, 1000] Hz");
+  loop.control_rate = 1000.0;
+  EXPECT_TRUE(loop.validate().ok()) << loop.validate().message();
+
+  auto loaded = bench::loadExplorationConfig(GO_FEAP_CONFIG_DIR, "go_feap");
+  ASSERT_TRUE(loaded) << loaded.message();
+  const bench::ExplorationConfig base = *loaded;
+  auto says = [](const bench::ExplorationConfig& c, const std::string& what) {
+    const go_feap::common::Status st = c.validate();
+    EXPECT_FALSE(st.ok()) << what;
+    EXPECT_NE(st.message().find(what), std::string::npos) << st.message();
+  };
+  for (const double bad : {0.0, -5.0, std::numeric_limits<double>::quiet_NaN()}) {
+    bench::ExplorationConfig c = base;
+    c.layer_rate = bad;  // at 0 the state machine never stepped again; below, the run ended at once
+    says(c, "layers: rate must be in (0, 1000] Hz");
+    c = base;
+    c.planner_rate = bad;
+    says(c, "planner: rate must be in (0, 1000] Hz");
+    c = base;
+    c.camera_rate = bad;
+    says(c, "depth_camera: rate must be in (0, 100] Hz");
+  }
+  bench::ExplorationConfig scaled = base;
+  scaled.T_B_C.linear() *= 2.0;
+  says(scaled, "depth_camera: T_B_C must be a finite rigid transform");
+  bench::ExplorationConfig equal = base;
+  equal.loop.sample_rate = equal.loop.control_rate;  // once a control step: allowed
+  equal.planner_rate = equal.loop.control_rate;
+  EXPECT_TRUE(equal.validate().ok()) << equal.validate().message();
+
+  auto scene = go_feap::world::makeScene(kSmallMaze, 0);
+  ASSERT_TRUE(scene) << scene.message();
+  for (const double bad : {0.0, -1.0, std::numeric_limits<double>::infinity(), std::numeric_limits<double>::quiet_NaN()})
+    EXPECT_THROW(bench::ExplorationRun(*scene, base, "go_feap", bad), std::invalid_argument) << bad;
+}
+
+// A copy of the package's config with `from` replaced by `to` in `file` (each found exactly once).
+void replaceInConfig(const std::filesystem::path& dir, const std::string& file, const std::string& from,
+                     const std::string& to) {
+  std::ifstream in(dir / file);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::size_t at = text.find(from);
+  ASSERT_NE(at, std::string::npos) << file << ": " << from;
+  ASSERT_EQ(text.find(from, at + 1), std::string::npos) << file << ": " << from << " twice";
+  std::ofstream(dir / file) << text.replace(at, from.size(), to);
+}
+
+// Rates whose shipped values equal the struct defaults are read all the same: a user's edit of any of them
+// reaches the run.
+TEST(Bench, TheRatesAreReadFromTheirFiles) {
+  const std::filesystem::path dir = configWithMode("rates", "planner:\n  rate: 20.0\nlayers:\n  rate: 4.0\n");
+  replaceInConfig(dir, "exploration.yaml", "sample_rate: 2.0", "sample_rate: 4.0");
+  replaceInConfig(dir, "bench.yaml", "control_rate: 100.0", "control_rate: 200.0");
+  replaceInConfig(dir, "sim.yaml", "  rate: 15.0", "  rate: 20.0");
+  auto c = bench::loadExplorationConfig(dir.string(), "rates");
+  std::filesystem::remove_all(dir);
+  ASSERT_TRUE(c) << c.message();
+  EXPECT_DOUBLE_EQ(c->planner_rate, 20.0);
+  EXPECT_DOUBLE_EQ(c->layer_rate, 4.0);
+  EXPECT_DOUBLE_EQ(c->loop.sample_rate, 4.0);
+  EXPECT_DOUBLE_EQ(c->loop.control_rate, 200.0);
+  EXPECT_DOUBLE_EQ(c->camera_rate, 20.0);
+}
+
+// What a run records, against the run itself: rows of metrics.csv at t = 0 and every 1 / sample_rate s, the
+// explored volume as the map's known voxels, the mapping block timed once a frame (the frontier update is
+// its own block).
+TEST(Bench, ARunsSamplesAndComputeTimesFollowItsRates) {
+  auto config = bench::loadExplorationConfig(GO_FEAP_CONFIG_DIR, "go_feap");
+  ASSERT_TRUE(config) << config.message();
+  auto scene = go_feap::world::makeScene(kSmallMaze, 0);
+  ASSERT_TRUE(scene) << scene.message();
+  bench::ExplorationRun run(*scene, *config, "go_feap", 1.2);
+  run.run();
+  const auto& samples = run.recorder().samples();
+  const double period = 1.0 / config->loop.sample_rate, dt = 1.0 / config->loop.control_rate;
+  ASSERT_GE(samples.size(), 3u);
+  EXPECT_EQ(samples[0].t, 0.0);
+  for (std::size_t i = 1; i + 1 < samples.size(); ++i)  // the last is taken at the end
+    EXPECT_NEAR(samples[i].t, i * period, dt + 1e-9) << i;
+  const double res = run.map().geometry().resolution();
+  EXPECT_DOUBLE_EQ(samples.back().explored_m3, static_cast<double>(run.map().occupancy().knownCount()) * res * res * res);
+  EXPECT_GT(samples.back().explored_m3, 0.0);
+  const auto& compute = run.recorder().summary().compute;
+  ASSERT_TRUE(compute.count("mapping"));
+  ASSERT_TRUE(compute.count("frontier"));
+  const double end = run.recorder().summary().exploration_time_s;
+  const std::size_t frames = static_cast<std::size_t>(std::floor(end * config->camera_rate + 1e-9)) + 1;
+  EXPECT_LE(compute.at("mapping").count, frames) << "end " << end;
+  EXPECT_GE(compute.at("mapping").count + 1, frames) << "end " << end;
+  EXPECT_GE(compute.at("frontier").count, 1u);
+  EXPECT_LE(compute.at("frontier").count, compute.at("mapping").count);
+}
+
+// A collision in a bench run reaches its summary: the start 0.2 m from an obstacle, with a collision distance
+// of 0.5 m, is one collision (the vehicle hovering there does not leave it, so it is not counted again).
+TEST(Bench, ACollisionReachesTheSummary) {
+  auto config = bench::loadExplorationConfig(GO_FEAP_CONFIG_DIR, "go_feap");
+  ASSERT_TRUE(config) << config.message();
+  config->loop.collision_distance = 0.5;
+  auto scene = go_feap::world::makeScene(kSmallMaze, 0);
+  ASSERT_TRUE(scene) << scene.message();
+  ASSERT_TRUE(go_feap::world::markOccupied(*scene, scene->start.position + go_feap::common::Vec3(0.2, 0.0, 0.0)));
+  bench::ExplorationRun run(*scene, *config, "go_feap", 5.0);
+  ASSERT_TRUE(run.step());
+  EXPECT_EQ(run.recorder().summary().collisions, 1);
+  EXPECT_LE(run.recorder().summary().min_obstacle_distance_m, 0.2 + 1e-9);
+}
+
+// The camera's noise is drawn from the run's seed: the same maze under another seed is a run of its own.
+TEST(Bench, TheNoiseFollowsTheSeed) {
+  auto config = bench::loadExplorationConfig(GO_FEAP_CONFIG_DIR, "go_feap");
+  ASSERT_TRUE(config) << config.message();
+  config->camera.noise_stddev_per_m = 0.02;
+  config->camera.dropout_probability = 0.05;
+  auto scene = go_feap::world::makeScene(kSmallMaze, 1);
+  ASSERT_TRUE(scene) << scene.message();
+  go_feap::world::Scene other = *scene;
+  other.seed = 2;  // the same walls
+  bench::ExplorationRun a(*scene, *config, "go_feap", 5.0), b(other, *config, "go_feap", 5.0);
+  ASSERT_TRUE(a.step());
+  ASSERT_TRUE(b.step());
+  EXPECT_NE(a.map().occupancy().knownCount(), b.map().occupancy().knownCount());
 }
 
 // A run never outlasts its time limit by more than a second of simulated time, however slowly the layer

@@ -87,6 +87,17 @@ TEST(Table, AggregatesPerSceneAndPlannerWithPopulationStd) {
   EXPECT_DOUBLE_EQ(j[0]["coverage"]["min"].get<double>(), 0.97);
   EXPECT_EQ(j[0]["collisions"], 2);
   EXPECT_DOUBLE_EQ(j[0]["compute_ms"]["total"].get<double>(), 4.0);
+  // Each figure under its own name, for each row.
+  EXPECT_EQ(j[0]["planner"], "go_feap");
+  EXPECT_EQ(j[1]["planner"], "fuel");
+  EXPECT_NEAR(j[0]["exploration_time_s"]["std"].get<double>(), 5.0, 1e-12);
+  EXPECT_DOUBLE_EQ(j[0]["exploration_time_s"]["max"].get<double>(), 110.0);
+  EXPECT_DOUBLE_EQ(j[0]["exploration_time_s"]["min"].get<double>(), 100.0);
+  EXPECT_DOUBLE_EQ(j[0]["flight_distance_m"]["avg"].get<double>(), 205.0);
+  EXPECT_NEAR(j[0]["flight_distance_m"]["std"].get<double>(), 5.0, 1e-12);
+  EXPECT_DOUBLE_EQ(j[0]["flight_distance_m"]["max"].get<double>(), 210.0);
+  EXPECT_NEAR(j[0]["coverage"]["avg"].get<double>(), (0.99 + 0.97 + 1.0) / 3.0, 1e-12);
+  EXPECT_DOUBLE_EQ(j[1]["exploration_time_s"]["avg"].get<double>(), 150.0);
   // Every run is counted by how it ended, the time-limit one (FINISHED too, not finished) included.
   EXPECT_EQ(j[0]["finish_reasons"], nlohmann::json({{"complete", 2}, {"time_limit", 1}}));
   EXPECT_EQ(j[1]["finish_reasons"], nlohmann::json({{"complete", 1}}));
@@ -213,6 +224,19 @@ TEST(Table, ComparesTheFirstPlannerWithEachOtherPairedBySeed) {
   EXPECT_EQ(c[2].both_finished, 0);
   EXPECT_TRUE(std::isnan(c[2].time_ratio));
   EXPECT_EQ(c[2].faster, 0);
+  // The other way round: a baseline run that did not finish compares with nothing either.
+  const auto unfinished_baseline = metrics::compare({run("maze", "go_feap", 0, 100, 200, "complete"),
+                                                     run("maze", "fuel", 0, 900, 300, "time_limit"),
+                                                     run("maze", "go_feap", 1, 120, 220, "complete"),
+                                                     run("maze", "fuel", 1, 100, 230, "complete")});
+  ASSERT_EQ(unfinished_baseline.size(), 1u);
+  EXPECT_EQ(unfinished_baseline[0].pairs, 2);
+  EXPECT_EQ(unfinished_baseline[0].both_finished, 1);
+  EXPECT_DOUBLE_EQ(unfinished_baseline[0].time_ratio, 120.0 / 100.0);  // not 220 / 1000
+  EXPECT_DOUBLE_EQ(unfinished_baseline[0].distance_ratio, 220.0 / 230.0);
+  EXPECT_DOUBLE_EQ(unfinished_baseline[0].time_diff_avg, 20.0);
+  EXPECT_TRUE(std::isnan(unfinished_baseline[0].time_diff_se));
+  EXPECT_EQ(unfinished_baseline[0].faster, 0);  // seed 0's 100 s against a stopped 900 s is not faster
 
   const nlohmann::json j = nlohmann::json::parse(metrics::comparisonJson(c));
   ASSERT_TRUE(j.is_array());
@@ -244,6 +268,12 @@ TEST(Table, CollisionsAreTotalledOverAllRunsAndATieIsNotFaster) {
   ASSERT_EQ(rows.size(), 1u);
   EXPECT_EQ(rows[0].collisions, 3);
   EXPECT_EQ(nlohmann::json::parse(metrics::tableJson(rows))[0]["collisions"], 3);
+  // The Markdown row's last column is the collisions (3), not the finished runs (2).
+  const std::string row_md = metrics::tableMarkdown(rows);
+  EXPECT_NE(row_md.find("| maze | go_feap | 3 | 2 | 105.0 | 5.0 | 110.0 | 100.0 | 205.0 | 5.0 | 210.0 | 200.0 | 90.0 | "
+                        "90.0 | 3 |"),
+            std::string::npos)
+      << row_md;
 
   auto run = [](const std::string& planner, std::uint64_t seed, double time) {
     metrics::Summary s = summary("maze", planner, time, 100, 1.0, 0, "complete", 1.0);
@@ -273,6 +303,12 @@ TEST(Table, ThePlanningTotalCountsTheTrajectoryBlockAndNotMapping) {
   EXPECT_DOUBLE_EQ(metrics::aggregate({s})[0].compute_ms.at("total"), 8.0);
   const nlohmann::json j = nlohmann::json::parse(metrics::summaryJson(s));
   EXPECT_DOUBLE_EQ(j["compute_ms"]["total"]["mean"].get<double>(), 8.0);
+  // Table IV's columns in their order: mapping, frontier (none), global, local (none), trajectory, total.
+  const std::string md = metrics::tableMarkdown(metrics::aggregate({s}));
+  EXPECT_NE(md.find("| maze | go_feap | 1.00 | – | 2.00 | – | 6.00 | 8.00 |"), std::string::npos) << md;
+  // Mapping is a block of the chain (the ROS recorder takes its times), though not a planning one.
+  EXPECT_TRUE(metrics::isComputeBlock("mapping"));
+  EXPECT_FALSE(metrics::isComputeBlock("total"));
 }
 
 TEST(Metrics, ObstacleDistanceMatchesBruteForceOverVoxelCubes) {
@@ -449,6 +485,25 @@ TEST(Metrics, SummaryWithBytesThatAreNotTextIsStillWritten) {
   EXPECT_TRUE(r.writeAll(dir.string()).ok());
   EXPECT_TRUE(fs::exists(dir / "summary.json"));
   fs::remove_all(dir);
+}
+
+// summary.json's figures are the run's own: its seed, collisions, closest approach and each block's calls.
+TEST(Metrics, SummaryJsonHoldsTheRunsSeedCollisionsAndCallCounts) {
+  metrics::Summary s = summary("maze", "go_feap", 10.0, 12.5, 0.5, 2, "complete", 2.0);
+  s.seed = 7;
+  s.min_obstacle_distance_m = 0.25;
+  s.compute["frontier"].add(1.0);
+  s.compute["frontier"].add(3.0);
+  const nlohmann::json j = nlohmann::json::parse(metrics::summaryJson(s));
+  EXPECT_EQ(j["seed"], 7);
+  EXPECT_EQ(j["collisions"], 2);
+  EXPECT_DOUBLE_EQ(j["min_obstacle_distance_m"].get<double>(), 0.25);
+  EXPECT_EQ(j["compute_ms"]["frontier"]["count"], 2);
+  EXPECT_DOUBLE_EQ(j["compute_ms"]["frontier"]["mean"].get<double>(), 2.0);
+  EXPECT_DOUBLE_EQ(j["compute_ms"]["frontier"]["max"].get<double>(), 3.0);
+  EXPECT_EQ(j["compute_ms"]["global"]["count"], 2);
+  EXPECT_EQ(j["compute_ms"]["mapping"]["count"], 1);
+  EXPECT_DOUBLE_EQ(j["compute_ms"]["total"]["mean"].get<double>(), 2.0 + 4.0);  // frontier and global, not mapping
 }
 
 // Onboard or in a replay there is no scene to compare with: the figures that need one are null, not the
