@@ -10,13 +10,17 @@
 #include <octomap/OcTree.h>
 #include <ros/ros.h>
 
+#include <cmath>
 #include <filesystem>
+#include <map>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "go_feap/ExplorationStatus.h"
+#include "go_feap/FrontierArray.h"
 #include "go_feap/SaveMap.h"
 #include "go_feap/bench/exploration_run.h"
+#include "go_feap/planning/omission.h"
 #include "go_feap/world/scene_files.h"
 #include "ros_test_util.h"
 
@@ -41,11 +45,56 @@ TEST(Exploration, SmallMazeFinishesCompleteWithFullCoverageAndNoCollision) {
   auto status_sub = nh.subscribe<go_feap::ExplorationStatus>(
       "status", 10, [&](const go_feap::ExplorationStatus::ConstPtr& m) { status = m; });
 
+  // The finder's published omission inputs, against an oracle on every frontier list of the run: N_near is
+  // the count of the other frontiers (active or not) whose average lies within frontier/s_near of this one's,
+  // a frontier's duration grows with the clock from one list to the next, and the omission likelihood is
+  // xi of the three with the finder's omission/* parameters. (Published as 0, the planner's omission
+  // ordering fell back to FUEL's, and the run still finished.)
+  auto param = [](const std::string& key, auto& value) {
+    EXPECT_TRUE(ros::param::get("/frontier_finder/" + key, value)) << key;
+  };
+  double s_near = 0.0;
+  param("frontier/s_near", s_near);
+  go_feap::planning::OmissionConfig omission;
+  param("omission/alpha_max", omission.alpha_max);
+  param("omission/c_small", omission.c_small);
+  param("omission/w_t", omission.w_t);
+  param("omission/t_max", omission.t_max);
+  param("omission/n_t", omission.n_t);
+  param("omission/n_max", omission.n_max);
+  std::size_t lists = 0, neighbours = 0, wrong_n_near = 0, wrong_xi = 0, aged = 0, wrong_age = 0;
+  std::map<std::uint32_t, std::pair<double, double>> first_heard;  // id -> list stamp, duration there
+  auto frontier_sub = nh.subscribe<go_feap::FrontierArray>("frontiers", 50, [&](const go_feap::FrontierArray::ConstPtr& m) {
+    ++lists;
+    const double stamp = m->header.stamp.toSec();
+    for (const auto& f : m->frontiers) {
+      std::uint32_t n = 0;
+      for (const auto& g : m->frontiers) {
+        const double dx = g.average.x - f.average.x, dy = g.average.y - f.average.y, dz = g.average.z - f.average.z;
+        n += g.id != f.id && dx * dx + dy * dy + dz * dz < s_near * s_near;
+      }
+      neighbours += n;
+      wrong_n_near += f.n_near != n;
+      const double xi = go_feap::planning::xi(omission, static_cast<int>(f.cells.size()), f.duration, static_cast<int>(n));
+      wrong_xi += !(std::abs(f.omission_likelihood - xi) <= 1e-9);
+      const auto [it, fresh] = first_heard.emplace(f.id, std::make_pair(stamp, f.duration));
+      if (fresh || stamp == it->second.first) continue;
+      ++aged;
+      wrong_age += !(std::abs((f.duration - it->second.second) - (stamp - it->second.first)) <= 1e-6);
+    }
+  });
+
   ASSERT_TRUE(spinUntil([&] { return status && status->state == go_feap::ExplorationStatus::FINISHED; }, 540.0))
       << "not finished: " << (status ? status->state_name : std::string("no status")) << " after "
       << (status ? status->elapsed : 0.0) << " s simulated\n"
       << go_feap::test::threadStacks("/go_feap_manager");
   EXPECT_EQ(status->finish_reason, "complete");
+  std::cout << lists << " frontier lists: " << neighbours << " neighbours counted, " << aged << " ages compared\n";
+  EXPECT_GT(neighbours, 0u) << "no frontier had a neighbour: N_near untested";
+  EXPECT_GT(aged, 0u) << "no frontier in two lists: durations untested";
+  EXPECT_EQ(wrong_n_near, 0u) << "frontiers whose N_near is not the count within frontier/s_near";
+  EXPECT_EQ(wrong_xi, 0u) << "frontiers whose omission likelihood is not xi of their cells, duration and N_near";
+  EXPECT_EQ(wrong_age, 0u) << "frontiers whose duration did not grow with the clock";
   std::cout << "finished (" << status->finish_reason << ") after " << status->elapsed << " s simulated, "
             << status->distance << " m\n";
 

@@ -96,6 +96,15 @@ TEST(LookRound, AnUnreachedTurnInPlaceIsRepeatedWhileALookRoundIsAsked) {
             odom.pose.pose.orientation.z = std::sin(0.5 * yaw);
             odom.pose.pose.orientation.w = std::cos(0.5 * yaw);
             odom_pub.publish(odom);
+            // Each followed by odometry the local planner refuses (a VIO glitch at 1e155 m/s, and a pose in
+            // another frame 4 m away): taken, the turn would never be reached, or be turned at x = 4.
+            nav_msgs::Odometry glitch = odom;
+            glitch.twist.twist.linear.x = 1e155;
+            odom_pub.publish(glitch);
+            nav_msgs::Odometry foreign = odom;
+            foreign.header.frame_id = "odom";
+            foreign.pose.pose.position.x = 4.0;
+            odom_pub.publish(foreign);
             last_odom = now;
           }
           if ((now - last_layer).toSec() >= 0.2 && odom_pub.getNumSubscribers() > 0) {

@@ -10,6 +10,7 @@
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
+#include <tf2_ros/static_transform_broadcaster.h>
 #include <tf2_ros/transform_broadcaster.h>
 #include <Eigen/Geometry>
 
@@ -457,6 +458,31 @@ TEST_F(MapperTest, InApproximateModeMessagesStampedFarAheadAreSkippedAndTheNextF
   probe.depth_pub.publish(far_depth);
   spinUntil([] { return false; }, 0.5);
   EXPECT_TRUE(probe.sendRealUntilIntegrated()) << "after messages stamped far ahead";
+
+  // The synchroniser pairs an image with the nearest pose however far it is: an image whose only pose is
+  // 0.3 s away (more than mapper/pose_tolerance, 0.02 s) is skipped, one whose pose is 0.015 s away is
+  // integrated. Each is the only pair the synchroniser can make: the next frames come 2 s later.
+  double tolerance = 0.0;
+  ASSERT_TRUE(ros::param::get("/approx_probe_mapper/mapper/pose_tolerance", tolerance));
+  ASSERT_LT(0.015, tolerance);
+  ASSERT_GT(0.3, tolerance);
+  for (const double apart : {0.3, 0.015}) {
+    probe.frame += 2000;
+    const ros::Time t = probe.lastSent();
+    sensor_msgs::Image image = *probe.depth;
+    geometry_msgs::PoseStamped pose = *probe.pose;
+    image.header.stamp = t;
+    pose.header.stamp = t + ros::Duration(apart);
+    probe.pose_pub.publish(pose);
+    probe.depth_pub.publish(image);
+    spinUntil([] { return false; }, 0.5);
+    probe.frame += 2000;
+    EXPECT_TRUE(probe.sendRealUntilIntegrated()) << "after an image with its pose " << apart << " s away";
+    if (apart > tolerance)
+      EXPECT_EQ(probe.updateAt(t), nullptr) << "an image was integrated at a pose " << apart << " s from it";
+    else
+      EXPECT_NE(probe.updateAt(t), nullptr) << "an image with its pose " << apart << " s away was not integrated";
+  }
 }
 
 // sync_mode tf: a depth frame waits, without blocking the mapper, for a transform that comes late (VIO
@@ -543,6 +569,25 @@ TEST_F(MapperTest, InTfModeAFrameWaitsForALateTransformAndOneWithoutNeverBlocksT
   EXPECT_TRUE(spinUntil([&] { return updates == 6; }, 10.0)) << "a frame between samples 0.3 s apart";
   depth_pub.publish(frameAt(s0 + ros::Duration(2.8), "tf_probe_camera"));
   EXPECT_TRUE(spinUntil([&] { return updates == 7; }, 10.0)) << "a frame between samples 1 s apart of a still camera";
+
+  // As on a drone: the camera is a static link (/tf_static) below a body that odometry moves. The gap is in
+  // the body's samples, a link of the chain above the image's frame: the frame inside it is skipped too,
+  // the one at the sample after it integrated.
+  tf2_ros::StaticTransformBroadcaster static_pub;
+  geometry_msgs::TransformStamped mount;
+  mount.header.stamp = s0;
+  mount.header.frame_id = "tf_probe_body";
+  mount.child_frame_id = "tf_probe_mounted_camera";
+  mount.transform.rotation.w = 1.0;
+  static_pub.sendTransform(mount);
+  tf_pub.sendTransform(transformAt(s0 + ros::Duration(4.0), "tf_probe_body"));
+  tf_pub.sendTransform(transformAt(s0 + ros::Duration(5.0), "tf_probe_body", 0.3));
+  spinUntil([] { return false; }, 0.5);
+  depth_pub.publish(frameAt(s0 + ros::Duration(4.5), "tf_probe_mounted_camera"));
+  spinUntil([] { return false; }, 1.0);
+  EXPECT_EQ(updates, 7u) << "a frame whose body pose was interpolated across a 1 s gap was integrated";
+  depth_pub.publish(frameAt(s0 + ros::Duration(5.0), "tf_probe_mounted_camera"));
+  EXPECT_TRUE(spinUntil([&] { return updates == 8; }, 10.0)) << "the frame at the body's sample after the gap";
 }
 
 // A relocalisation moves the reference later frames are judged by (the probe mapper, fed only by the tests;

@@ -209,6 +209,17 @@ TEST(MetricsRecorder, SummaryHoldsThePlayedRunAndOddStatusesNeitherEndNorCountIn
   double length = 0.0;
   for (std::size_t i = 1; i < path.size(); ++i) length += (path[i] - path[i - 1]).norm();
   for (const Vec3& p : path) fly(p);
+  // Odometry in another frame (0.5 m aside) and odometry that is not finite are refused: neither adds to
+  // the flight, nor does the way back from them.
+  {
+    nav_msgs::Odometry foreign = odometryAt(path.back() + Vec3(0.0, 0.5, 0.0), now);
+    foreign.header.frame_id = "odom";
+    odom_pub.publish(foreign);
+    tick(0.05);
+    odom_pub.publish(odometryAt(Vec3(nan, 0.0, 1.0), now));
+    tick(0.05);
+    fly(path.back());
+  }
   // A relocalisation: the odometry jumps 1.2 m (more than metrics/max_odom_step, 1 m) and goes on from
   // there; the jump is not flight, the 5 cm after it are.
   settle();
@@ -217,6 +228,11 @@ TEST(MetricsRecorder, SummaryHoldsThePlayedRunAndOddStatusesNeitherEndNorCountIn
   length += 0.05;
   for (double ms : {2.0, 4.0, 9.0}) compute("frontier", ms);
   compute("global", 5.0);
+  // Times below 0 or not finite, and blocks the chain does not have, are refused.
+  compute("frontier", -100.0);
+  compute("frontier", nan);
+  compute("bogus", 7.0);
+  compute("total", 7.0);
   for (int i = 0; i < 10; ++i) tick(0.1);
   settle();
 
@@ -242,6 +258,9 @@ TEST(MetricsRecorder, SummaryHoldsThePlayedRunAndOddStatusesNeitherEndNorCountIn
   EXPECT_EQ(summary["compute_ms"]["frontier"]["count"], 3);
   EXPECT_NEAR(summary["compute_ms"]["global"]["mean"].get<double>(), 5.0, 1e-9);
   EXPECT_NEAR(summary["compute_ms"]["total"]["mean"].get<double>(), 10.0, 1e-9);
+  EXPECT_FALSE(summary["compute_ms"].contains("bogus")) << summary.dump();
+  EXPECT_TRUE(warned("/metrics_recorder: odometry refused: ")) << "no word of the odometry in frame 'odom'";
+  EXPECT_TRUE(warned("/metrics_recorder: compute_time refused: block 'frontier'"));
   for (const char* f : {"metrics.csv", "coverage.png"})
     EXPECT_TRUE(std::filesystem::exists(output_dir + "/" + f)) << f;
 
@@ -508,6 +527,82 @@ TEST(LayerManager, TheStartBandIsWhereTheVehicleIsAtTheTrigger) {
   ASSERT_TRUE(spinUntil([&] { return state->state == go_feap::ExplorationStatus::EXPLORE && !layers.empty(); }, 10.0))
       << "not exploring after the trigger: " << state->state_name;
   EXPECT_EQ(layers.back().index, 1u) << "the start band is the one of the first odometry, on the ground";
+
+  // A band's frontiers are those whose average lies in it: with the only frontier in band 0 (z 1.05 m),
+  // band 1 is done once the vehicle has looked round, and band 0 comes next. (Counted in every band, it
+  // kept band 1 open for good.)
+  auto frontiers_pub = nh.advertise<go_feap::FrontierArray>("wait/frontiers", 5);
+  ASSERT_TRUE(spinUntil([&] { return frontiers_pub.getNumSubscribers() > 0; }, 30.0));
+  go_feap::FrontierArray below = frontierAhead(0.3, 0.3);
+  below.header.frame_id = "world";
+  double yaw = 0.0;
+  const auto turn = [&](double t) {
+    nav_msgs::Odometry odom = odometryAt(Vec3(0.0, 0.0, z), t);
+    odom.pose.pose.orientation.z = std::sin(0.5 * yaw);
+    odom.pose.pose.orientation.w = std::cos(0.5 * yaw);
+    odom_pub.publish(odom);
+    below.header.stamp = ros::Time(t);
+    frontiers_pub.publish(below);
+    yaw += 0.1;  // a turn in 3.2 s of clock
+  };
+  for (int k = 0; k < 200 && layers.back().index != 0u; ++k) playClock(clock_pub, now, 0.05, 0.05, 0.01, turn);
+  EXPECT_EQ(layers.back().index, 0u) << "band 1 was not done with its only frontier in band 0, after a turn of "
+                                     << yaw << " rad";
+}
+
+// The stuck layer manager (stuck/... in metrics.test, layers/stuck_timeout 2 s) hovers with a frontier in
+// view and map updates that change no voxel: it ends FINISHED(stuck) 2 s after the trigger. A relocalisation
+// jump of 2 m on the way (more than metrics/max_odom_step) is no progress either: counted as progress_travel
+// flown, it put the end off by a second; and counting every map update as progress, it never came.
+TEST(LayerManager, HoveringWithoutMapProgressIsStuckAndAJumpIsNoProgress) {
+  ros::NodeHandle nh;
+  auto clock_pub = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
+  auto odom_pub = nh.advertise<nav_msgs::Odometry>("stuck/odom", 20);
+  auto update_pub = nh.advertise<go_feap::MapUpdate>("stuck/map_update", 20);
+  auto frontiers_pub = nh.advertise<go_feap::FrontierArray>("stuck/frontiers", 5);
+  std::optional<go_feap::ExplorationStatus> last;
+  auto status_sub = nh.subscribe<go_feap::ExplorationStatus>(
+      "stuck/status", 50, [&](const go_feap::ExplorationStatus::ConstPtr& m) { last = *m; });
+  ASSERT_TRUE(spinUntil([&] {
+    return odom_pub.getNumSubscribers() > 0 && update_pub.getNumSubscribers() > 0 &&
+           frontiers_pub.getNumSubscribers() > 0 && status_sub.getNumPublishers() > 0;
+  }, 30.0)) << "the stuck layer manager is not connected";
+  double stuck_timeout = 0.0, travel = 0.0;
+  ASSERT_TRUE(ros::param::get("stuck_layer_manager/layers/stuck_timeout", stuck_timeout));
+  ASSERT_TRUE(ros::param::get("stuck_layer_manager/layers/progress_travel", travel));
+  ASSERT_DOUBLE_EQ(stuck_timeout, 2.0);
+  ASSERT_LT(travel, 2.0);
+  double now = ros::Time::now().toSec();
+  Vec3 at(0.0, 0.0, 1.0);
+  std::uint64_t sequence = 0;
+  std::optional<double> jumped;  // the elapsed time of the jump
+  const auto send = [&](double t) {
+    if (!jumped && last && last->state == go_feap::ExplorationStatus::EXPLORE && last->elapsed >= 1.0) {
+      at += Vec3(0.0, 2.0, 0.0);
+      jumped = last->elapsed;
+    }
+    odom_pub.publish(odometryAt(at, t));
+    go_feap::MapUpdate update;
+    update.header.stamp = ros::Time(t);
+    update.header.frame_id = "world";
+    update.sequence = ++sequence;
+    update.changed_voxels = 0;
+    update_pub.publish(update);
+    go_feap::FrontierArray frontiers = frontierAhead(0.3, 0.3);
+    frontiers.header.stamp = ros::Time(t);
+    frontiers.header.frame_id = "world";
+    frontiers_pub.publish(frontiers);
+  };
+  for (int k = 0; k < 200 && !(last && last->state == go_feap::ExplorationStatus::FINISHED); ++k)
+    playClock(clock_pub, now, 0.05, 0.05, 0.01, send);
+  ASSERT_TRUE(last);
+  ASSERT_EQ(last->state, go_feap::ExplorationStatus::FINISHED) << "not stuck after 10 s of clock: " << last->state_name
+                                                              << " at " << last->elapsed << " s";
+  EXPECT_EQ(last->finish_reason, "stuck");
+  ASSERT_TRUE(jumped) << "ended before the jump";
+  EXPECT_LT(*jumped, stuck_timeout - 0.5);
+  EXPECT_GE(last->elapsed, stuck_timeout);
+  EXPECT_LE(last->elapsed, stuck_timeout + 0.5) << "the jump at " << *jumped << " s was taken for progress";
 }
 
 TEST(LayerManager, BlacklistFollowsTheFrontiersListed) {

@@ -54,6 +54,9 @@ TEST(Parameters, ANodeletWithAnInvalidOrMissingParameterDoesNotStartAndNamesIt) 
       {"bad_collision_distance", "go_feap/MetricsRecorder", "metrics/collision_distance"},  // 0: no collision ever counted
       {"missing_layers", "go_feap/LayerManager", "layers/"},                    // no exploration.yaml at all
       {"bad_box", "go_feap/LayerManager", "exploration_box/min"},              // an infinite top: NaN bands
+      {"bad_box_min", "go_feap/LayerManager", "exploration_box/min"},          // an infinite bottom
+      {"bad_box_length", "go_feap/LayerManager", "exploration_box/min"},       // 4 numbers: the 4th was dropped
+      {"bad_extrinsic_length", "go_feap/DepthCamera", "depth_camera/T_B_C"},   // 17 numbers
       {"bad_pose_tolerance", "go_feap/EsdfMapper", "mapper/pose_tolerance"},    // 5 s
       {"bad_map_size", "go_feap/EsdfMapper", "exploration_box"},                // 1e6 m long: 2.9e10 voxels
       {"bad_cluster_extent", "go_feap/LocalPlanner", "frontier/max_cluster_extent"},  // NaN

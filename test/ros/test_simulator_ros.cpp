@@ -7,8 +7,11 @@
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/PointCloud2.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_listener.h>
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 #include <deque>
 #include <limits>
@@ -17,6 +20,7 @@
 #include <vector>
 
 #include "go_feap/PositionCommand.h"
+#include "go_feap/ros/conversions.h"
 #include "ros_test_util.h"
 
 namespace {
@@ -114,6 +118,11 @@ TEST_F(SimulatorTest, CommandMovesOdomCameraStampsMatchNanIsIgnored) {
     EXPECT_LT((attitude * vec(at.twist.twist.linear) - v_world).norm(), 0.05 * v_world.norm() + 0.02)
         << "at " << at.header.stamp << ": body twist " << vec(at.twist.twist.linear).transpose() << ", world velocity "
         << v_world.transpose();
+    // As the planners read it: the child frame says the twist is the body's (with "world" there they took
+    // it as the world velocity, turned by the yaw).
+    EXPECT_EQ(at.child_frame_id, "body");
+    EXPECT_LT((go_feap::ros_conv::odometryVelocity(at) - v_world).norm(), 0.05 * v_world.norm() + 0.02)
+        << "at " << at.header.stamp << ": odometryVelocity " << go_feap::ros_conv::odometryVelocity(at).transpose();
     ++moving;
   }
   EXPECT_GE(moving, 10u) << "too few odometry messages while moving to check the twist";
@@ -296,6 +305,56 @@ TEST_F(SimulatorTest, OdometryWhoseStampStandsStillIsReported) {
   }
   EXPECT_TRUE(spinUntil([&] { return frames.size() >= 5 && heard("odometry stamps advance again"); }, 10.0))
       << frames.size() << " frames over 1 s of advancing stamps";
+}
+
+// OdometryTf puts only odometry the map can use into TF: a pose in another frame (VIO's "odom" beside the
+// map's "world"), a pose that is not finite and a stamp of 0 are refused, said, and leave no TF; the next
+// good message is world -> body at its stamp, and the camera hangs below the body by the extrinsic.
+TEST_F(SimulatorTest, OdometryTfSendsOnlyOdometryInTheWorldFrame) {
+  tf2_ros::Buffer buffer;
+  tf2_ros::TransformListener listener(buffer);
+  ros::Publisher odom_pub = nh_.advertise<nav_msgs::Odometry>("probe/vio_odom", 10);
+  std::vector<std::string> said;
+  ros::Subscriber log_sub = nh_.subscribe<rosgraph_msgs::Log>("/rosout", 100, [&](const rosgraph_msgs::Log::ConstPtr& m) {
+    if (m->msg.find("/probe_odometry_tf:") != std::string::npos) said.push_back(m->msg);
+  });
+  ASSERT_TRUE(spinUntil([&] { return odom_pub.getNumSubscribers() > 0 && log_sub.getNumPublishers() > 0; }, 30.0))
+      << "the probe OdometryTf is not connected";
+  auto heard = [&](const std::string& what) {
+    return std::any_of(said.begin(), said.end(), [&](const std::string& m) { return m.find(what) != std::string::npos; });
+  };
+  auto odometry = [](const char* frame, double t, const Eigen::Vector3d& p) {
+    nav_msgs::Odometry m;
+    m.header.stamp = ros::Time(t);
+    m.header.frame_id = frame;
+    m.child_frame_id = "probe_body";
+    m.pose.pose.position.x = p.x(), m.pose.pose.position.y = p.y(), m.pose.pose.position.z = p.z();
+    m.pose.pose.orientation.w = 1.0;
+    return m;
+  };
+  const double t0 = ros::Time::now().toSec() + 50.0;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  // Sent again until its refusal is heard (a /rosout connection from the manager may come up after the first).
+  EXPECT_TRUE(spinUntil([&] {
+    odom_pub.publish(odometry("odom", t0, Eigen::Vector3d(2.0, 0.0, 1.0)));
+    return spinUntil([&] { return heard("odometry refused: odometry is in frame 'odom'"); }, 0.3);
+  }, 20.0)) << "no word of the odometry in frame 'odom'";
+  odom_pub.publish(odometry("world", t0 + 0.05, Eigen::Vector3d(nan, 0.0, 1.0)));
+  odom_pub.publish(odometry("world", 0.0, Eigen::Vector3d(3.0, 0.0, 1.0)));
+  spinUntil([] { return false; }, 0.3);
+  odom_pub.publish(odometry("world", t0 + 0.1, Eigen::Vector3d(1.0, 0.0, 1.0)));
+  odom_pub.publish(odometry("world", t0 + 0.2, Eigen::Vector3d(1.2, 0.0, 1.0)));
+  ASSERT_TRUE(spinUntil([&] { return buffer.canTransform("world", "probe_body", ros::Time(t0 + 0.2)); }, 10.0))
+      << "no TF from the odometry in the world frame";
+  const geometry_msgs::TransformStamped at = buffer.lookupTransform("world", "probe_body", ros::Time(t0 + 0.1));
+  EXPECT_NEAR(at.transform.translation.x, 1.0, 1e-9);
+  EXPECT_NEAR(at.transform.translation.z, 1.0, 1e-9);
+  EXPECT_FALSE(buffer.canTransform("world", "probe_body", ros::Time(t0))) << "the pose in frame 'odom' is in TF";
+  EXPECT_FALSE(buffer.canTransform("world", "probe_body", ros::Time(t0 + 0.05))) << "the NaN pose is in TF";
+  // The extrinsic: the camera 0.1 m ahead of the body (config/d435i.yaml T_B_C), looking along its x.
+  const geometry_msgs::TransformStamped camera = buffer.lookupTransform("probe_body", "probe_camera", ros::Time(0));
+  EXPECT_NEAR(camera.transform.translation.x, 0.10, 1e-9);
+  EXPECT_NEAR(camera.transform.translation.z, 0.02, 1e-9);
 }
 
 // The probe camera runs at 50 Hz: on odometry every 0.01 s it sends a frame with every other stamp. Its

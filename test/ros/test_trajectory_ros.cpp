@@ -474,13 +474,13 @@ class ProbeServer {
         seconds, [&] { if (send_.due() && !silent) publish_odometry(); }, [] { return false; }, 30.0);
     return command;
   }
-  // A straight flight from a to b over 3 s (7 control points, 0.75 s knot span), heading `yaw`.
-  void fly(const Vec3& a, const Vec3& b, std::int64_t id, const ros::Time& start, double yaw = 0.0) {
+  // A straight flight from a to b over 4 knot spans of `span` s (7 control points; 3 s by default), heading `yaw`.
+  void fly(const Vec3& a, const Vec3& b, std::int64_t id, const ros::Time& start, double yaw = 0.0, double span = 0.75) {
     Eigen::MatrixXd q(3, 7), y = Eigen::MatrixXd::Constant(1, 4, yaw);
     for (int i = 0; i < 7; ++i) q.col(i) = a + (b - a) * std::clamp((i - 1) / 4.0, 0.0, 1.0);
     go_feap::ros_traj::Trajectory t;
-    t.position = go_feap::trajectory::UniformBspline(q, 3, 0.75);
-    t.yaw = go_feap::trajectory::UniformBspline(y, 3, 0.75);
+    t.position = go_feap::trajectory::UniformBspline(q, 3, span);
+    t.yaw = go_feap::trajectory::UniformBspline(y, 3, span);
     t.id = id;
     t.start_time = start;
     bspline_pub_.publish(go_feap::ros_traj::toMsg(t));
@@ -591,6 +591,25 @@ TEST_F(ProbeServerTest, TrajectoriesStartingAtAnotherHeadingAreRefused) {
   probe.fly(vehicle, vehicle + Vec3(1.0, 0.0, 0.0), 922, ros::Time::now(), 0.3);
   EXPECT_TRUE(spinUntil([&] { return probe.hover(0.05)->trajectory_id == 922u; }, 20.0))
       << "a trajectory facing 0.3 rad off was refused";
+}
+
+// A trajectory whose control polygon moves faster than server/max_speed (0.5 m in 4 ms: 125 m/s, corrupt
+// or not this planner's) is refused though it starts and ends within server/max_start_offset of the
+// odometry: the controller would have been handed a step. The same line over 3 s is followed.
+TEST_F(ProbeServerTest, ATrajectoryFasterThanTheServerTakesIsRefused) {
+  const double max_speed = param("server/max_speed");
+  ASSERT_LT(max_speed, 0.125 / 0.001);
+  ASSERT_GT(param("server/max_start_offset"), 0.5);
+  const Vec3 vehicle = probe.vehicle;
+  probe.hover(3.5);  // whatever an earlier test left running (3 s at most) has ended: the reference is held
+  const Vec3 held = probe.commanded();
+  probe.fly(vehicle, vehicle + Vec3(0.5, 0.0, 0.0), 951, ros::Time::now(), 0.0, 0.001);
+  probe.hover(1.0);
+  EXPECT_NE(probe.command->trajectory_id, 951u) << "a trajectory at 125 m/s was taken";
+  EXPECT_LT((probe.commanded() - held).norm(), 1e-9) << "the held reference moved";
+  probe.fly(vehicle, vehicle + Vec3(0.5, 0.0, 0.0), 952, ros::Time::now());
+  EXPECT_TRUE(spinUntil([&] { return probe.hover(0.05)->trajectory_id == 952u; }, 20.0))
+      << "the same line over 3 s was refused";
 }
 
 // A trajectory that reaches the server while its odometry is silent (one planned just before the odometry
