@@ -59,11 +59,9 @@ double timeMs(const Instance& in, Solver solver, TourResult& result) {
 int main(int argc, char** argv) {
   std::map<std::string, std::string> args;
   bool help = false;
-  if (const std::string err =
-          go_feap::tools::parseArgs(argc, argv, {{"--repeats", true}, {"--seed", true}}, args, help);
-      !err.empty())
-    return usage(err.c_str());
-  if (help) return usage(nullptr);
+  const std::string err = go_feap::tools::parseArgs(argc, argv, {{"--repeats", true}, {"--seed", true}}, args, help);
+  if (help) return usage(nullptr), 0;  // as the other tools: --help is no error (it exited 2)
+  if (!err.empty()) return usage(err.c_str());
   unsigned long long repeats = 20, seed = 1;
   if (args.count("--repeats") && (!go_feap::tools::parseCount(args["--repeats"], repeats) || repeats == 0))
     return usage("--repeats needs a whole number > 0");

@@ -17,6 +17,9 @@
 #include <utility>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
+#include "../../src/tools/camera_path.h"
 #include "../../src/tools/cli_args.h"
 #include "go_feap/bench/exploration_run.h"
 #include "go_feap/world/scene_files.h"
@@ -223,8 +226,10 @@ TEST(Bench, CallsWithoutOutGetTheirOwnFoldersAndLogOneLinePerRun) {
 // --skip-pixel of 2^32 wrapped to 0 in go_feap_map_perf (a loop for ever).
 TEST(Bench, CommandLineValuesOutOfRangeAreRefusedUpFront) {
   const std::string bench = GO_FEAP_BENCH_BIN, map_perf = GO_FEAP_MAP_PERF_BIN, esdf_perf = GO_FEAP_ESDF_PERF_BIN;
+  const std::string scene = GO_FEAP_SCENE_BIN, sim_perf = GO_FEAP_SIM_PERF_BIN, tsp_perf = GO_FEAP_TSP_PERF_BIN;
   const std::filesystem::path file = std::filesystem::temp_directory_path() / ("go_feap_not_a_folder_" + std::to_string(getpid()));
   std::ofstream(file) << "a file\n";
+  const std::string scratch = (std::filesystem::temp_directory_path() / ("go_feap_scene_out_" + std::to_string(getpid()))).string();
   for (const auto& [command, says] : std::vector<std::pair<std::string, std::string>>{
            {bench + " --jobs 1000000000000", "--jobs must be an integer from 1 to 256"},
            {bench + " --runs 1000000000000", "--runs must be an integer from 1 to 100000"},
@@ -250,13 +255,174 @@ TEST(Bench, CommandLineValuesOutOfRangeAreRefusedUpFront) {
            {bench + " --out ''", "--out must name a folder"},  // fell back to the default folder
            {map_perf + " --scene maze --skip-pixel 4294967296", "--skip-pixel must be an integer from 1 to 640"},
            {map_perf + " --scene maze --frames 4294967296", "--frames must be an integer from 1 to 1000000"},
-           {esdf_perf + " --max-distance 2abc", "--max-distance must be a number"}}) {  // was taken as 2
+           {esdf_perf + " --max-distance 2abc", "--max-distance must be a number"},  // was taken as 2
+           {map_perf + " --scene maze --skip-pixel 0", "--skip-pixel must be an integer from 1 to 640"},  // a step of 0
+           {map_perf + " --scene maze --frames 0", "--frames must be an integer from 1 to 1000000"},  // a table of nan
+           {esdf_perf + " --max-distance 0", "esdf: max_distance must be finite and > 0"},  // aborted
+           {esdf_perf + " --max-distance 0.05", "esdf: max_distance must be >= the map's resolution"},
+           {esdf_perf + " --repeats 0", "--repeats must be a positive integer"},
+           {sim_perf + " --scene maze --frames 0", "--frames must be a positive integer"},
+           {sim_perf + " --scene maze --frames 4294967296", "--frames must be a positive integer"},  // cast to 0
+           {sim_perf + " --scene office", "--scene must be maze or powerplant"},
+           {tsp_perf + " --repeats 0", "--repeats needs a whole number > 0"},
+           {tsp_perf + " --seed -1", "--seed needs a whole number >= 0"},
+           {scene + " --scene maze --seed -1 --out " + scratch, "--seed must be a non-negative integer"},
+           {scene + " --scene maze", "--out is required"},
+           {scene + " --out " + scratch, "--scene is required"},
+           {scene + " --scene nowhere --out " + scratch, "unknown scene 'nowhere'"}}) {
     const auto [rc, out] = runCommand("timeout 60 " + command);
     EXPECT_TRUE(rc == 1 || rc == 2) << command << ": exit status " << rc << "\n" << out;
     EXPECT_NE(out.find(says), std::string::npos) << command << ":\n" << out;
   }
   EXPECT_TRUE(std::filesystem::is_regular_file(file));  // left as it was
   std::filesystem::remove(file);
+  EXPECT_FALSE(std::filesystem::exists(scratch)) << "a refused call made its --out";
+  std::filesystem::remove_all(scratch);
+  // --help is no error, for every tool (go_feap_tsp_perf exited 2).
+  for (const std::string& tool : {bench, map_perf, esdf_perf, scene, sim_perf, tsp_perf}) {
+    const auto [rc, out] = runCommand("timeout 60 " + tool + " --help");
+    EXPECT_EQ(rc, 0) << tool << "\n" << out;
+    EXPECT_NE(out.find("usage:"), std::string::npos) << tool << "\n" << out;
+  }
+}
+
+// go_feap_scene on a scene of 2 x 1 x 1 m at 0.5 m read from a .pcd: one obstacle voxel in the box, one
+// beyond it in the grid's margin. scene.json's box is the exploration box (scripts/run passes it on to the
+// launch), its counts those of the box, the grid and the observable set, and a file scene takes no seed.
+TEST(Bench, SceneToolWritesTheScenesFiguresAndFiles) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("go_feap_scene_tool_" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  using go_feap::common::Vec3;
+  go_feap::world::Scene tiny = go_feap::world::makeEmptyScene("tiny", {Vec3(0, 0, 0), Vec3(2, 1, 1)}, 0.5, 0.5);
+  ASSERT_TRUE(go_feap::world::markOccupied(tiny, Vec3(1.75, 0.25, 0.25)));  // voxel (4, 1, 1), in the box
+  ASSERT_TRUE(go_feap::world::markOccupied(tiny, Vec3(2.25, 0.25, 0.25)));  // voxel (5, 1, 1), in the margin
+  ASSERT_TRUE(go_feap::world::saveScenePcd(tiny, (dir / "tiny.pcd").string()));
+  std::ofstream(dir / "tiny.yaml") << "scene:\n  name: tiny\n  file: tiny.pcd\n"
+                                      "  T_world_file: [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]\n  resolution: 0.5\n"
+                                      "  margin: 0.5\n  box: {min: [0, 0, 0], max: [2, 1, 1]}\n"
+                                      "  start: {position: [0.25, 0.25, 0.25], yaw: 0}\n  ground_plane: false\n";
+  const std::string tool = GO_FEAP_SCENE_BIN;
+  const auto [rc, said] = runCommand("timeout 60 " + tool + " --scene " + (dir / "tiny.yaml").string() +
+                                     " --seed 5 --out " + (dir / "out").string());
+  ASSERT_EQ(rc, 0) << said;
+  EXPECT_NE(said.find("scene 'tiny' (seed 0): 1 occupied, 15 free voxels in the box, 16 observable"), std::string::npos)
+      << said;
+  for (const char* f : {"scene.pcd", "scene.bt", "scene.json", "scene.png"})
+    EXPECT_TRUE(fs::is_regular_file(dir / "out" / f)) << f;
+  const nlohmann::json j = nlohmann::json::parse(std::ifstream(dir / "out" / "scene.json"));
+  EXPECT_EQ(j["name"], "tiny");
+  EXPECT_EQ(j["seed"], 0);
+  EXPECT_DOUBLE_EQ(j["resolution"].get<double>(), 0.5);
+  EXPECT_EQ(j["box"]["min"], nlohmann::json({0.0, 0.0, 0.0}));
+  EXPECT_EQ(j["box"]["max"], nlohmann::json({2.0, 1.0, 1.0}));
+  EXPECT_EQ(j["grid"]["origin"], nlohmann::json({-0.5, -0.5, -0.5}));
+  EXPECT_EQ(j["grid"]["dims"], nlohmann::json({6, 4, 4}));
+  EXPECT_EQ(j["start"]["position"], nlohmann::json({0.25, 0.25, 0.25}));
+  // The box's voxel centres: x 0.25 .. 1.75, y and z 0.25 and 0.75 (4 x 2 x 2); the flood fill from the start
+  // reaches its 15 free voxels and sees the occupied one.
+  EXPECT_EQ(j["voxels"]["occupied_in_box"], 1);
+  EXPECT_EQ(j["voxels"]["free_in_box"], 15);
+  EXPECT_EQ(j["voxels"]["occupied_in_grid"], 2);
+  EXPECT_EQ(j["voxels"]["observable"], 16);
+  EXPECT_EQ(j["voxels"]["observable_free"], 15);
+  EXPECT_EQ(j["voxels"]["observable_occupied"], 1);
+  // A procedural scene keeps its seed.
+  const auto [rc2, said2] = runCommand("timeout 60 " + tool + " --scene " + kSmallMaze + " --seed 7 --out " +
+                                       (dir / "maze").string());
+  ASSERT_EQ(rc2, 0) << said2;
+  const nlohmann::json m = nlohmann::json::parse(std::ifstream(dir / "maze" / "scene.json"));
+  EXPECT_EQ(m["seed"], 7);
+  EXPECT_EQ(m["box"]["min"], nlohmann::json({-5.0, -3.0, 0.0}));
+  EXPECT_EQ(m["box"]["max"], nlohmann::json({5.0, 3.0, 3.0}));
+  fs::remove_all(dir);
+}
+
+// scripts/test's last line and exit status come from scripts/lib/count_results.py: a failure, an error, a
+// skip without a reason (a failing SetUpTestSuite), an unreadable result, a make run that stopped early and
+// a folder without results all count as failed; a skip with a reason and a test not run count as skipped.
+TEST(Bench, TheTestCountCountsEveryOutcome) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("go_feap_count_results_" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir / "mixed");
+  fs::create_directories(dir / "good");
+  fs::create_directories(dir / "empty");
+  std::ofstream(dir / "mixed" / "a.xml")
+      << "<testsuites><testsuite name=\"S\">\n"
+         "<testcase classname=\"S\" name=\"ok\" status=\"run\"/>\n"
+         "<testcase classname=\"S\" name=\"bad\" status=\"run\"><failure message=\"x.cpp:3&#10;boom\"/></testcase>\n"
+         "<testcase classname=\"S\" name=\"err\"><error message=\"crashed\"/></testcase>\n"
+         "<testcase classname=\"S\" name=\"why\" status=\"run\" result=\"skipped\"><skipped message=\"x.cpp:9&#10;needs shared/\"/></testcase>\n"
+         "<testcase classname=\"S\" name=\"bare\" status=\"run\" result=\"skipped\"><skipped message=\"x.cpp:9&#10;\"/></testcase>\n"
+         "<testcase classname=\"S\" name=\"off\" status=\"notrun\"/>\n"
+         "</testsuite></testsuites>\n";
+  std::ofstream(dir / "good" / "b.xml") << "<testsuites><testsuite name=\"S\"><testcase classname=\"S\" name=\"ok\" "
+                                           "status=\"run\"/></testsuite></testsuites>\n";
+  const std::string count = "/usr/bin/python3 " GO_FEAP_CONFIG_DIR "/../scripts/lib/count_results.py ";
+  auto lastLine = [](const std::string& out) {
+    const std::size_t end = out.find_last_not_of('\n');
+    return out.substr(out.rfind('\n', end) + 1, end - out.rfind('\n', end));
+  };
+  {
+    const auto [rc, out] = runCommand(count + (dir / "mixed").string());
+    EXPECT_EQ(rc, 1) << out;
+    EXPECT_EQ(lastLine(out), "1 passed, 3 failed") << out;
+    for (const char* line : {"FAILED S.bad: x.cpp:3\n", "FAILED S.err: crashed\n", "FAILED S.bare: skipped with no reason given",
+                             "\n2 skipped\n"})
+      EXPECT_NE(out.find(line), std::string::npos) << line << "\n" << out;
+  }
+  {  // make stopped (124: its timeout) before every test ran
+    const auto [rc, out] = runCommand(count + (dir / "mixed").string() + " 124");
+    EXPECT_EQ(rc, 1) << out;
+    EXPECT_EQ(lastLine(out), "1 passed, 4 failed") << out;
+    EXPECT_NE(out.find("make run_tests exited 124"), std::string::npos) << out;
+  }
+  {
+    const auto [rc, out] = runCommand(count + (dir / "good").string() + " 0");
+    EXPECT_EQ(rc, 0) << out;
+    EXPECT_EQ(lastLine(out), "1 passed, 0 failed") << out;
+  }
+  for (const fs::path& nothing : {dir / "empty", dir / "missing"}) {
+    const auto [rc, out] = runCommand(count + nothing.string());
+    EXPECT_EQ(rc, 1) << out;
+    EXPECT_NE(out.find("no test results found under"), std::string::npos) << out;
+    EXPECT_EQ(lastLine(out), "0 passed, 1 failed") << out;
+  }
+  std::ofstream(dir / "empty" / "broken.xml") << "<testsuite";
+  {
+    const auto [rc, out] = runCommand(count + (dir / "empty").string());
+    EXPECT_EQ(rc, 1) << out;
+    EXPECT_NE(out.find("FAILED broken.xml: unreadable result"), std::string::npos) << out;
+    EXPECT_EQ(lastLine(out), "0 passed, 1 failed") << out;
+  }
+  fs::remove_all(dir);
+}
+
+// The perf tools' camera path keeps 0.3 m from every obstacle, inside the box at 1 to 2 m, looking level.
+TEST(Bench, ThePerfToolsCameraPathKeepsClearOfObstacles) {
+  using go_feap::common::Vec3;
+  go_feap::world::Scene s = go_feap::world::makeEmptyScene("t", {Vec3(0, 0, 0), Vec3(2, 2, 2)}, 0.1, 0.0);
+  ASSERT_TRUE(go_feap::world::markOccupied(s, Vec3(1.05, 1.05, 1.05)));  // voxel (10, 10, 10)
+  EXPECT_FALSE(go_feap::tools::isClear(s, Vec3(1.05, 1.05, 1.25), 0.3));
+  EXPECT_TRUE(go_feap::tools::isClear(s, Vec3(1.05, 1.05, 1.45), 0.3));  // voxels 11 .. 17 along z
+  EXPECT_FALSE(go_feap::tools::isClear(s, Vec3(1.05, 1.05, 0.75), 0.3));  // 5 .. 10: the last one counts
+  EXPECT_FALSE(go_feap::tools::isClear(s, Vec3(0.75, 1.05, 1.05), 0.3));
+  EXPECT_FALSE(go_feap::tools::isClear(s, Vec3(1.05, 0.75, 1.05), 0.3));
+  auto maze = go_feap::world::makeScene("maze", 0);
+  ASSERT_TRUE(maze) << maze.message();
+  const auto poses = go_feap::tools::cameraPath(*maze, 300, 2256);
+  ASSERT_EQ(poses.size(), 300u);
+  for (const auto& T : poses) {
+    const Vec3 p = T.translation();
+    EXPECT_TRUE(go_feap::tools::isClear(*maze, p, 0.3)) << p.transpose();
+    EXPECT_TRUE(maze->box.contains(p)) << p.transpose();
+    EXPECT_GE(p.z(), 1.0 - 1e-9);
+    EXPECT_LE(p.z(), 2.0 + 1e-9);
+    EXPECT_NEAR(T.linear().col(2).z(), 0.0, 1e-9) << "the optical axis is not level";
+    EXPECT_NEAR(T.linear().col(1).z(), -1.0, 1e-9) << "the image's y does not point down";
+  }
 }
 
 // The tools' argument parsing: a flag takes no value (the next argument is read on its own), an option's
