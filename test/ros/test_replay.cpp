@@ -14,11 +14,13 @@
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/CompressedImage.h>
 #include <tf2_msgs/TFMessage.h>
+#include <yaml-cpp/yaml.h>
 
 #include <Eigen/Core>
 
 #include <algorithm>
 #include <cstdlib>
+#include <functional>
 #include <filesystem>
 #include <fstream>
 #include <optional>
@@ -88,6 +90,165 @@ TEST_F(Replay, TheMapperCastsZeroDepthFreeOnlyForSixteenBitSimulation) {
     const std::string params = dumped(args);
     EXPECT_NE(params.find(key + "false"), std::string::npos) << args << ":\n" << params;
   }
+}
+
+// The command line roslaunch gives node `node` of a launch (its remaps included): no master needed.
+std::string nodeArgs(const std::string& node, const std::string& args) {
+  const std::string command = "bash -c 'roslaunch --args " + node + " go_feap " + args + "' 2>&1";
+  std::string out;
+  if (FILE* pipe = popen(command.c_str(), "r")) {
+    char buffer[4096];
+    while (std::fgets(buffer, sizeof(buffer), pipe)) out += buffer;
+    pclose(pipe);
+  }
+  return out;
+}
+
+// A launch's arguments reach the nodes they are documented for, as roslaunch --dump-params and --args give
+// them (no master, no node started): the exploration box and world frame of onboard.launch and
+// replay.launch (left out, a drone explored exploration.launch's default box, and a map in its VIO frame
+// never filled); a config folder and camera config of the user's own (ignored, the shipped clearances and
+// extrinsic flew); the planner mode in every planning nodelet; the simulated time limit; the depth encoding
+// a recording uses; the topics the chain is given.
+TEST_F(Replay, LaunchArgumentsReachTheNodesTheyName) {
+  auto dumpParams = [&](const std::string& args) {
+    const fs::path out = dir_ / "params.yaml";
+    const std::string command = "bash -c 'roslaunch --dump-params go_feap " + args + "' > " + out.string() + " 2> " +
+                                (dir_ / "params.err").string();
+    EXPECT_EQ(std::system(command.c_str()), 0) << args;
+    try {
+      return YAML::LoadFile(out.string());
+    } catch (const YAML::Exception& e) {
+      ADD_FAILURE() << args << ": " << e.what();
+      return YAML::Node();
+    }
+  };
+  auto asNumbers = [](const YAML::Node& n) {
+    std::vector<double> v;
+    if (n && n.IsSequence())
+      for (const auto& x : n) v.push_back(x.as<double>());
+    return v;
+  };
+  // Every key of `params` ending in `suffix`, with its value.
+  auto keysEnding = [](const YAML::Node& params, const std::string& suffix) {
+    std::vector<std::pair<std::string, YAML::Node>> found;
+    for (const auto& kv : params) {
+      const std::string key = kv.first.as<std::string>();
+      if (key.size() >= suffix.size() && key.compare(key.size() - suffix.size(), suffix.size(), suffix) == 0)
+        found.emplace_back(key, kv.second);
+    }
+    return found;
+  };
+
+  // A config folder of the user's own: one value changed in each file the chain reads.
+  const fs::path config = dir_ / "my config";
+  fs::copy(GO_FEAP_SOURCE_DIR "/config", config, fs::copy_options::recursive);
+  auto replace = [&](const std::string& file, const std::string& from, const std::string& to) {
+    std::ifstream in(config / file);
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::size_t at = text.find(from);
+    ASSERT_NE(at, std::string::npos) << file << ": " << from;
+    std::ofstream(config / file) << text.replace(at, from.size(), to);
+  };
+  replace("exploration.yaml", "s_near: 5.0", "s_near: 4.5");
+  replace("mapping.yaml", "pose_tolerance: 0.02", "pose_tolerance: 0.03");
+  replace("trajectory.yaml", "lambda_smooth: 1.0", "lambda_smooth: 1.25");
+  replace("d435i.yaml", "T_B_C: [0, 0, 1, 0.10,", "T_B_C: [0, 0, 1, 0.12,");
+  const std::string box = " box_min:=[-3.5,-2.5,0.5] box_max:=[4.5,3.5,2.5] world_frame:=vio";
+  const std::string mine = " config_dir:=" + inQuotes(config) + " camera_config:=" + inQuotes(config / "d435i.yaml");
+  for (const std::string& launch : {std::string("onboard.launch"), "replay.launch bag:=" + inQuotes(data_ / "x.bag")}) {
+    const YAML::Node p = dumpParams(launch + box + mine);
+    for (const char* node : {"/esdf_mapper", "/frontier_finder", "/layer_manager"}) {
+      EXPECT_EQ(asNumbers(p[std::string(node) + "/exploration_box/min"]), (std::vector<double>{-3.5, -2.5, 0.5}))
+          << launch << " " << node;
+      EXPECT_EQ(asNumbers(p[std::string(node) + "/exploration_box/max"]), (std::vector<double>{4.5, 3.5, 2.5}))
+          << launch << " " << node;
+    }
+    const auto frames = keysEnding(p, "world_frame");
+    EXPECT_GE(frames.size(), launch == "onboard.launch" ? 9u : 7u) << launch;  // a replay has no server, no OdometryTf
+    for (const auto& [key, value] : frames) EXPECT_EQ(value.as<std::string>(), "vio") << launch << " " << key;
+    const auto s_near = keysEnding(p, "/frontier/s_near");
+    EXPECT_GE(s_near.size(), 4u) << launch;
+    for (const auto& [key, value] : s_near) EXPECT_DOUBLE_EQ(value.as<double>(), 4.5) << launch << " " << key;
+    EXPECT_DOUBLE_EQ(p["/esdf_mapper/mapper/pose_tolerance"].as<double>(0.0), 0.03) << launch;
+    EXPECT_DOUBLE_EQ(p["/trajectory_planner/optimizer/lambda_smooth"].as<double>(0.0), 1.25) << launch;
+    if (launch == "onboard.launch") {
+      const std::vector<double> T = asNumbers(p["/odometry_tf/T_B_C"]);
+      ASSERT_EQ(T.size(), 16u);
+      EXPECT_DOUBLE_EQ(T[3], 0.12) << "the extrinsic is not the camera_config's";
+    }
+  }
+  // The planner mode: each key of modes/fuel.yaml, with its value, in every nodelet that loads a mode.
+  {
+    const YAML::Node p = dumpParams("sim_exploration.launch planner:=fuel");
+    const YAML::Node fuel = YAML::LoadFile(GO_FEAP_SOURCE_DIR "/config/modes/fuel.yaml");
+    std::size_t checked = 0;
+    std::function<void(const YAML::Node&, const std::string&)> leaves = [&](const YAML::Node& n, const std::string& at) {
+      if (n.IsMap()) {
+        for (const auto& kv : n) leaves(kv.second, at + "/" + kv.first.as<std::string>());
+        return;
+      }
+      for (const char* node : {"/frontier_finder", "/global_planner", "/local_planner", "/trajectory_planner",
+                               "/trajectory_server", "/layer_manager"}) {
+        EXPECT_DOUBLE_EQ(p[node + at].as<double>(-12345.0), n.as<double>()) << node << at;
+        ++checked;
+      }
+    };
+    leaves(fuel, "");
+    EXPECT_GE(checked, 6u * 10u);
+    EXPECT_EQ(p["/metrics_recorder/metrics/planner"].as<std::string>(""), "fuel");
+  }
+  // The simulated time limit: the argument's, powerplant.launch's 3000 s, exploration.yaml's 900 s.
+  EXPECT_DOUBLE_EQ(dumpParams("sim_exploration.launch time_limit:=1234.5")["/layer_manager/layers/time_limit"].as<double>(0.0),
+                   1234.5);
+  EXPECT_DOUBLE_EQ(dumpParams("powerplant.launch")["/layer_manager/layers/time_limit"].as<double>(0.0), 3000.0);
+  EXPECT_DOUBLE_EQ(dumpParams("maze.launch")["/layer_manager/layers/time_limit"].as<double>(0.0), 900.0);
+  // A recording's depth is a D435i's, 16-bit millimetres; the simulation's own is 32-bit metres.
+  EXPECT_EQ(dumpParams("record_flight.launch bag:=" + inQuotes(data_ / "x.bag"))["/depth_camera/depth_camera/encoding"]
+                .as<std::string>(""),
+            "16UC1");
+  EXPECT_EQ(dumpParams("sim_exploration.launch")["/depth_camera/depth_camera/encoding"].as<std::string>(""), "32FC1");
+  // The topics: the trajectory planner hears the commands where the server sends them, the mapper the
+  // camera pose where it is given.
+  EXPECT_NE(nodeArgs("/trajectory_planner", "onboard.launch position_cmd_topic:=/cmd_x").find("position_cmd:=/cmd_x"),
+            std::string::npos);
+  EXPECT_NE(nodeArgs("/trajectory_server", "onboard.launch position_cmd_topic:=/cmd_x").find("position_cmd:=/cmd_x"),
+            std::string::npos);
+  EXPECT_NE(nodeArgs("/esdf_mapper", "exploration.launch camera_pose_topic:=/pose_x").find("camera_pose:=/pose_x"),
+            std::string::npos);
+  EXPECT_NE(nodeArgs("/odometry_tf", "onboard.launch odom_topic:=/odom_x").find("odom:=/odom_x"), std::string::npos);
+}
+
+// Every nodelet of every launch file is required: a nodelet that refuses its parameters (or dies) ends the
+// launch, as the README says; without it scripts/run waited for its wall-clock guard (hours for the
+// powerplant) with the chain broken. Read with roslaunch's own loader.
+TEST_F(Replay, EveryNodeletOfEveryLaunchIsRequired) {
+  const fs::path script = dir_ / "required.py";
+  std::ofstream(script) << "import glob, sys\n"
+                           "import roslaunch.config\n"
+                           "checked = 0\n"
+                           "for path in sorted(glob.glob(sys.argv[1] + '/launch/*.launch')):\n"
+                           "    sys.argv = ['check', 'bag:=/tmp/x.bag', 'manager:=m', 'planner:=go_feap',\n"
+                           "                'odom_topic:=/o', 'depth_topic:=/d']  # the arguments without defaults\n"
+                           "    config = roslaunch.config.load_config_default([path], None, verbose=False)\n"
+                           "    for node in config.nodes:\n"
+                           "        if node.package != 'nodelet':\n"
+                           "            continue\n"
+                           "        checked += 1\n"
+                           "        if not node.required:\n"
+                           "            print('NOT REQUIRED', path, node.name)\n"
+                           "print('checked', checked)\n";
+  const std::string command = "bash -c '/usr/bin/python3 " + script.string() + " " GO_FEAP_SOURCE_DIR "' 2>&1";
+  std::string out;
+  if (FILE* pipe = popen(command.c_str(), "r")) {
+    char buffer[4096];
+    while (std::fgets(buffer, sizeof(buffer), pipe)) out += buffer;
+    EXPECT_EQ(pclose(pipe), 0) << out;
+  }
+  EXPECT_EQ(out.find("NOT REQUIRED"), std::string::npos) << out;
+  const std::size_t at = out.find("checked ");
+  ASSERT_NE(at, std::string::npos) << out;
+  EXPECT_GE(std::stoi(out.substr(at + 8)), 60) << out;
 }
 
 TEST_F(Replay, RecordedFlightRebuildsTheWallsItSaw) {

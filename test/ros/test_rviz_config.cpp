@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/core.hpp>
+#include <yaml-cpp/yaml.h>
 
 #include <array>
 #include <cstdio>
@@ -60,6 +61,27 @@ TEST(RvizConfig, LoadsUnderXvfbWithoutErrors) {
   cv::meanStdDev(shot, mean, stddev);
   EXPECT_GT(stddev[0] + stddev[1] + stddev[2], 10.0) << "the screenshot is blank";
   fs::remove_all(dir);
+}
+
+// What the config shows, read as rviz reads it. The depth image is shown over its own range: a fixed range
+// (0 to 4.5, as it was) suits 32FC1 metres only, and made a D435i's 16UC1 millimetres (onboard.launch,
+// replay.launch) solid white. The 2D Nav Goal goes where the layer manager takes its trigger.
+TEST(RvizConfig, TheDepthImageIsShownOverItsOwnRangeAndTheGoalTriggersExploration) {
+  const YAML::Node config = YAML::LoadFile(GO_FEAP_SOURCE_DIR "/rviz/exploration.rviz");
+  std::size_t depth_displays = 0;
+  for (const YAML::Node& d : config["Visualization Manager"]["Displays"]) {
+    if (d["Class"].as<std::string>() != "rviz/Image" || d["Image Topic"].as<std::string>("") != "/depth") continue;
+    ++depth_displays;
+    EXPECT_TRUE(d["Normalize Range"].as<bool>(false)) << "the depth image has a fixed range";
+  }
+  EXPECT_EQ(depth_displays, 1u);
+  std::size_t goals = 0;
+  for (const YAML::Node& t : config["Visualization Manager"]["Tools"]) {
+    if (t["Class"].as<std::string>() != "rviz/SetGoal") continue;
+    ++goals;
+    EXPECT_EQ(t["Topic"].as<std::string>(""), "/move_base_simple/goal");
+  }
+  EXPECT_EQ(goals, 1u);
 }
 
 }  // namespace
