@@ -6,6 +6,7 @@
 // without depth, or with topics of the wrong type, is refused with the topics named. Each launch gets
 // its own ROS master.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 #include <octomap/OcTree.h>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
@@ -26,6 +27,8 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "go_feap/world/scene_files.h"
 #include "free_port.h"
@@ -249,6 +252,51 @@ TEST_F(Replay, EveryNodeletOfEveryLaunchIsRequired) {
   const std::size_t at = out.find("checked ");
   ASSERT_NE(at, std::string::npos) << out;
   EXPECT_GE(std::stoi(out.substr(at + 8)), 60) << out;
+}
+
+// The user scripts refuse bad arguments by name, exit 2, before the install and the build (minutes on a
+// fresh machine): their build folder is pointed at one that must stay unmade, and a refusal that did not
+// come is cut short by the timeout. --help is no error.
+TEST_F(Replay, TheScriptsRefuseBadArgumentsBeforeInstallingOrBuilding) {
+  const fs::path unmade = dir_ / "unmade build";
+  const fs::path done = dir_ / "done";
+  fs::create_directories(done);
+  std::ofstream(done / "summary.json") << "{}\n";
+  std::ofstream(done / "flight.bag") << "a bag\n";
+  const std::string scripts = GO_FEAP_SOURCE_DIR "/scripts/";
+  for (const auto& [call, says] : std::vector<std::pair<std::string, std::string>>{
+           {"run --rate-factor 0", "--rate-factor must be a number in (0, 1000]"},
+           {"run --planner warp", "unknown planner 'warp'"},
+           {"run --seed -1", "--seed must be a whole number"},
+           {"run --seed", "--seed needs a value"},
+           {"run maze powerplant", "one scene only"},
+           {"run nowhere.yaml", "neither maze, powerplant nor an existing scene YAML"},
+           {"run --out " + inQuotes(done), "already holds a run's summary.json"},
+           {"run --fast", "unknown option --fast"},
+           {"record_flight --duration 0", "--duration must be a whole number of seconds"},
+           {"record_flight --out " + inQuotes(done / "flight.bag"), "already exists"},
+           {"record_flight --seed x", "--seed must be a whole number"},
+           {"paper_tables --runs 0", "--runs must be a whole number from 1 to 100000"},
+           {"paper_tables --jobs 0", "--jobs must be a whole number from 1 to 256"},
+           {"paper_tables --planners go_feap,warp", "unknown planner 'warp'"},
+           {"paper_tables --scenes maze,", "'' is neither maze, powerplant nor an existing scene YAML"},
+           {"paper_tables --scenes office", "'office' is neither maze, powerplant nor an existing scene YAML"}}) {
+    const std::string command = "GO_FEAP_BUILD=" + inQuotes(unmade) + " timeout 20 " + scripts + call + " 2>&1";
+    std::string out;
+    int status = -1;
+    if (FILE* pipe = popen(command.c_str(), "r")) {
+      char buffer[4096];
+      while (std::fgets(buffer, sizeof(buffer), pipe)) out += buffer;
+      status = pclose(pipe);
+    }
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 2) << call << ": status " << status << "\n" << out;
+    EXPECT_NE(out.find(says), std::string::npos) << call << ":\n" << out;
+    EXPECT_FALSE(fs::exists(unmade)) << call << " began a build";
+  }
+  for (const char* script : {"run", "record_flight", "paper_tables", "test"}) {
+    const std::string command = scripts + script + " --help > /dev/null 2>&1";
+    EXPECT_EQ(std::system(command.c_str()), 0) << script << " --help";
+  }
 }
 
 TEST_F(Replay, RecordedFlightRebuildsTheWallsItSaw) {
