@@ -9,7 +9,9 @@
 #include <nav_msgs/Odometry.h>
 #include <octomap/OcTree.h>
 #include <ros/ros.h>
+#include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -97,6 +99,43 @@ TEST(Exploration, SmallMazeFinishesCompleteWithFullCoverageAndNoCollision) {
   EXPECT_EQ(wrong_age, 0u) << "frontiers whose duration did not grow with the clock";
   std::cout << "finished (" << status->finish_reason << ") after " << status->elapsed << " s simulated, "
             << status->distance << " m\n";
+
+  // What rviz/exploration.rviz shows is what the chain publishes: each display's topic is advertised with
+  // the type the display takes (a display on a topic nothing sends stays empty without a word), and its 2D
+  // Nav Goal reaches a subscriber (the layer manager's trigger).
+  {
+    std::string rviz_config;
+    ASSERT_TRUE(pnh.getParam("rviz_config", rviz_config));
+    const std::map<std::string, std::string> type_of = {
+        {"rviz/PointCloud2", "sensor_msgs/PointCloud2"}, {"rviz/Marker", "visualization_msgs/Marker"},
+        {"rviz/MarkerArray", "visualization_msgs/MarkerArray"}, {"rviz/Odometry", "nav_msgs/Odometry"},
+        {"rviz/Path", "nav_msgs/Path"}, {"rviz/Image", "sensor_msgs/Image"}};
+    ros::master::V_TopicInfo advertised;
+    ASSERT_TRUE(ros::master::getTopics(advertised));
+    std::size_t shown = 0;
+    const YAML::Node rviz = YAML::LoadFile(rviz_config);
+    for (const YAML::Node& d : rviz["Visualization Manager"]["Displays"]) {
+      const auto type = type_of.find(d["Class"].as<std::string>());
+      if (type == type_of.end()) continue;
+      const std::string topic =
+          (d["Topic"] ? d["Topic"] : d["Marker Topic"] ? d["Marker Topic"] : d["Image Topic"]).as<std::string>("");
+      ++shown;
+      EXPECT_TRUE(std::any_of(advertised.begin(), advertised.end(), [&](const ros::master::TopicInfo& t) {
+        return t.name == topic && t.datatype == type->second;
+      })) << d["Name"].as<std::string>("") << ": nothing publishes " << topic << " as " << type->second;
+    }
+    EXPECT_GE(shown, 12u);
+    std::string goal;
+    for (const YAML::Node& t : rviz["Visualization Manager"]["Tools"])
+      if (t["Class"].as<std::string>() == "rviz/SetGoal") goal = t["Topic"].as<std::string>("");
+    XmlRpc::XmlRpcValue request, response, payload;
+    request[0] = ros::this_node::getName();
+    ASSERT_TRUE(ros::master::execute("getSystemState", request, response, payload, true));
+    bool heard = false;
+    for (int i = 0; i < payload[1].size(); ++i)  // [topic, [subscribers]]
+      heard = heard || (static_cast<std::string>(payload[1][i][0]) == goal && payload[1][i][1].size() > 0);
+    EXPECT_TRUE(heard) << "nothing subscribes to the 2D Nav Goal's " << goal;
+  }
 
   // Coverage from the mapper's map, through its own export.
   const std::string bt = (std::filesystem::temp_directory_path() / "go_feap_exploration_test.bt").string();
