@@ -6,7 +6,6 @@
 // without depth, or with topics of the wrong type, is refused with the topics named. Each launch gets
 // its own ROS master.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 #include <octomap/OcTree.h>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
@@ -25,18 +24,21 @@
 #include <filesystem>
 #include <fstream>
 #include <optional>
-#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "go_feap/world/scene_files.h"
+#include "../command_util.h"
 #include "free_port.h"
 
 namespace {
 
 namespace fs = std::filesystem;
 using go_feap::test::freeTcpPort;
+using go_feap::test::readText;
+using go_feap::test::replaceOnce;
+using go_feap::test::runCommand;
 
 class Replay : public ::testing::Test {
  protected:
@@ -61,10 +63,7 @@ class Replay : public ::testing::Test {
                                 std::to_string(timeout_s) + " roslaunch -p " + tag + " go_feap " + args + "' > " +
                                 out.string() + " 2>&1 < /dev/null";
     const int status = std::system(command.c_str());
-    std::ifstream out_file(out);
-    std::stringstream text;
-    text << out_file.rdbuf();
-    return text.str() + (status == 0 ? "" : "\n(launch exit status " + std::to_string(status) + ")");
+    return readText(out) + (status == 0 ? "" : "\n(launch exit status " + std::to_string(status) + ")");
   }
   fs::path dir_, data_;
 };
@@ -80,10 +79,7 @@ TEST_F(Replay, TheMapperCastsZeroDepthFreeOnlyForSixteenBitSimulation) {
     const fs::path out = dir_ / "params.out";
     const std::string command = "bash -c 'roslaunch --dump-params go_feap " + args + "' > " + out.string() + " 2>&1";
     EXPECT_EQ(std::system(command.c_str()), 0) << args;
-    std::ifstream file(out);
-    std::stringstream text;
-    text << file.rdbuf();
-    return text.str();
+    return readText(out);
   };
   const std::string key = "/esdf_mapper/occupancy/invalid_as_free: ";
   const std::string recording = dumped("record_flight.launch bag:=" + inQuotes(data_ / "x.bag"));
@@ -97,14 +93,7 @@ TEST_F(Replay, TheMapperCastsZeroDepthFreeOnlyForSixteenBitSimulation) {
 
 // The command line roslaunch gives node `node` of a launch (its remaps included): no master needed.
 std::string nodeArgs(const std::string& node, const std::string& args) {
-  const std::string command = "bash -c 'roslaunch --args " + node + " go_feap " + args + "' 2>&1";
-  std::string out;
-  if (FILE* pipe = popen(command.c_str(), "r")) {
-    char buffer[4096];
-    while (std::fgets(buffer, sizeof(buffer), pipe)) out += buffer;
-    pclose(pipe);
-  }
-  return out;
+  return runCommand("bash -c 'roslaunch --args " + node + " go_feap " + args + "'").second;
 }
 
 // A launch's arguments reach the nodes they are documented for, as roslaunch --dump-params and --args give
@@ -146,17 +135,10 @@ TEST_F(Replay, LaunchArgumentsReachTheNodesTheyName) {
   // A config folder of the user's own: one value changed in each file the chain reads.
   const fs::path config = dir_ / "my config";
   fs::copy(GO_FEAP_SOURCE_DIR "/config", config, fs::copy_options::recursive);
-  auto replace = [&](const std::string& file, const std::string& from, const std::string& to) {
-    std::ifstream in(config / file);
-    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    const std::size_t at = text.find(from);
-    ASSERT_NE(at, std::string::npos) << file << ": " << from;
-    std::ofstream(config / file) << text.replace(at, from.size(), to);
-  };
-  replace("exploration.yaml", "s_near: 5.0", "s_near: 4.5");
-  replace("mapping.yaml", "pose_tolerance: 0.02", "pose_tolerance: 0.03");
-  replace("trajectory.yaml", "lambda_smooth: 1.0", "lambda_smooth: 1.25");
-  replace("d435i.yaml", "T_B_C: [0, 0, 1, 0.10,", "T_B_C: [0, 0, 1, 0.12,");
+  ASSERT_TRUE(replaceOnce(config / "exploration.yaml", "s_near: 5.0", "s_near: 4.5"));
+  ASSERT_TRUE(replaceOnce(config / "mapping.yaml", "pose_tolerance: 0.02", "pose_tolerance: 0.03"));
+  ASSERT_TRUE(replaceOnce(config / "trajectory.yaml", "lambda_smooth: 1.0", "lambda_smooth: 1.25"));
+  ASSERT_TRUE(replaceOnce(config / "d435i.yaml", "T_B_C: [0, 0, 1, 0.10,", "T_B_C: [0, 0, 1, 0.12,"));
   const std::string box = " box_min:=[-3.5,-2.5,0.5] box_max:=[4.5,3.5,2.5] world_frame:=vio";
   const std::string mine = " config_dir:=" + inQuotes(config) + " camera_config:=" + inQuotes(config / "d435i.yaml");
   for (const std::string& launch : {std::string("onboard.launch"), "replay.launch bag:=" + inQuotes(data_ / "x.bag")}) {
@@ -241,13 +223,8 @@ TEST_F(Replay, EveryNodeletOfEveryLaunchIsRequired) {
                            "        if not node.required:\n"
                            "            print('NOT REQUIRED', path, node.name)\n"
                            "print('checked', checked)\n";
-  const std::string command = "bash -c '/usr/bin/python3 " + script.string() + " " GO_FEAP_SOURCE_DIR "' 2>&1";
-  std::string out;
-  if (FILE* pipe = popen(command.c_str(), "r")) {
-    char buffer[4096];
-    while (std::fgets(buffer, sizeof(buffer), pipe)) out += buffer;
-    EXPECT_EQ(pclose(pipe), 0) << out;
-  }
+  const auto [status, out] = runCommand("/usr/bin/python3 " + script.string() + " " GO_FEAP_SOURCE_DIR);
+  EXPECT_EQ(status, 0) << out;
   EXPECT_EQ(out.find("NOT REQUIRED"), std::string::npos) << out;
   const std::size_t at = out.find("checked ");
   ASSERT_NE(at, std::string::npos) << out;
@@ -281,15 +258,8 @@ TEST_F(Replay, TheScriptsRefuseBadArgumentsBeforeInstallingOrBuilding) {
            {"paper_tables --planners go_feap,warp", "unknown planner 'warp'"},
            {"paper_tables --scenes maze,", "'' is neither maze, powerplant nor an existing scene YAML"},
            {"paper_tables --scenes office", "'office' is neither maze, powerplant nor an existing scene YAML"}}) {
-    const std::string command = "GO_FEAP_BUILD=" + inQuotes(unmade) + " timeout 20 " + scripts + call + " 2>&1";
-    std::string out;
-    int status = -1;
-    if (FILE* pipe = popen(command.c_str(), "r")) {
-      char buffer[4096];
-      while (std::fgets(buffer, sizeof(buffer), pipe)) out += buffer;
-      status = pclose(pipe);
-    }
-    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 2) << call << ": status " << status << "\n" << out;
+    const auto [status, out] = runCommand("GO_FEAP_BUILD=" + inQuotes(unmade) + " timeout 20 " + scripts + call);
+    EXPECT_EQ(status, 2) << call << "\n" << out;
     EXPECT_NE(out.find(says), std::string::npos) << call << ":\n" << out;
     EXPECT_FALSE(fs::exists(unmade)) << call << " began a build";
   }
@@ -327,11 +297,9 @@ TEST_F(Replay, RecordedFlightRebuildsTheWallsItSaw) {
   ASSERT_TRUE(fs::exists(bt));
   // The replayed exploration did not finish within 12 s of flight: the recorder wrote what it had when the
   // launch ended with the bag (it used to write nothing).
-  std::ifstream summary(results / "summary.json");
-  ASSERT_TRUE(summary.good()) << "no summary.json in output_dir after the replay";
-  std::stringstream summary_text;
-  summary_text << summary.rdbuf();
-  EXPECT_NE(summary_text.str().find("\"finish_reason\": \"stopped\""), std::string::npos) << summary_text.str();
+  ASSERT_TRUE(fs::is_regular_file(results / "summary.json")) << "no summary.json in output_dir after the replay";
+  const std::string summary = readText(results / "summary.json");
+  EXPECT_NE(summary.find("\"finish_reason\": \"stopped\""), std::string::npos) << summary;
 
   auto scene = go_feap::world::makeScene("maze", 0);
   ASSERT_TRUE(scene) << scene.message();

@@ -5,12 +5,12 @@
 #include <opencv2/core.hpp>
 #include <yaml-cpp/yaml.h>
 
-#include <array>
-#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <memory>
 #include <string>
 
+#include "../command_util.h"
 #include "free_port.h"
 
 #ifndef GO_FEAP_SOURCE_DIR
@@ -21,15 +21,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::pair<int, std::string> run(const std::string& command) {
-  std::string output;
-  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
-  if (!pipe) return {-1, "popen failed"};
-  std::array<char, 4096> buffer;
-  while (fgets(buffer.data(), buffer.size(), pipe)) output += buffer.data();
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
-}
+using go_feap::test::runCommand;
 
 TEST(RvizConfig, LoadsUnderXvfbWithoutErrors) {
   const fs::path dir = fs::temp_directory_path() / ("go_feap_rviz_test_" + std::to_string(::getpid()));
@@ -43,16 +35,11 @@ TEST(RvizConfig, LoadsUnderXvfbWithoutErrors) {
                             .c_str()),
             0);
   const auto [rc, output] =
-      run("export " + env + "; for i in $(seq 60); do rosnode list >/dev/null 2>&1 && break; sleep 0.5; done; timeout 180 " GO_FEAP_SOURCE_DIR "/scripts/lib/rviz_screenshot.sh " + (dir / "rviz.png").string() + " 12");
+      runCommand("export " + env + "; for i in $(seq 60); do rosnode list >/dev/null 2>&1 && break; sleep 0.5; done; timeout 180 " GO_FEAP_SOURCE_DIR "/scripts/lib/rviz_screenshot.sh " + (dir / "rviz.png").string() + " 12");
   std::system(("kill $(cat " + dir.string() + "/roscore.pid) 2>/dev/null; sleep 1").c_str());
   EXPECT_EQ(rc, 0) << output;
   EXPECT_NE(output.find("rviz printed no ERROR lines"), std::string::npos) << output;
-  std::string log;
-  if (FILE* f = fopen((dir / "rviz.rviz.log").c_str(), "r")) {
-    std::array<char, 4096> buffer;
-    while (fgets(buffer.data(), buffer.size(), f)) log += buffer.data();
-    fclose(f);
-  }
+  const std::string log = go_feap::test::readText(dir / "rviz.rviz.log");
   EXPECT_EQ(log.find("[ERROR]"), std::string::npos) << log;
   const cv::Mat shot = cv::imread((dir / "rviz.png").string());
   ASSERT_FALSE(shot.empty()) << "no screenshot";

@@ -2,15 +2,12 @@
 // explores it to FINISHED(complete) with at least 95 % coverage and no collision, and the same
 // seed and options give the same run.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <atomic>
 #include <cmath>
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <iterator>
 #include <limits>
 #include <map>
 #include <string>
@@ -19,6 +16,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "../command_util.h"
 #include "../../src/tools/camera_path.h"
 #include "../../src/tools/cli_args.h"
 #include "go_feap/bench/exploration_run.h"
@@ -31,6 +29,9 @@
 namespace {
 
 namespace bench = go_feap::bench;
+using go_feap::test::readText;
+using go_feap::test::replaceOnce;
+using go_feap::test::runCommand;
 
 const std::string kSmallMaze = GO_FEAP_CONFIG_DIR "/scenes/maze_small.yaml";
 
@@ -183,17 +184,6 @@ TEST(Bench, ModeOverlaysSetThePlannersDistanceSearchNotTheFlightSearch) {
   EXPECT_EQ(probe->flight_astar.name, "astar");
   EXPECT_EQ(probe->scout_astar.name, "scout_astar");
   EXPECT_EQ(probe->coarse_astar.name, "coarse_astar");
-}
-
-// Runs `command` through the shell: its exit status and what it wrote (stdout and stderr).
-std::pair<int, std::string> runCommand(const std::string& command) {
-  std::string out;
-  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
-  if (!pipe) return {-1, "popen failed"};
-  char buffer[4096];
-  while (std::fgets(buffer, sizeof(buffer), pipe)) out += buffer;
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status), out};
 }
 
 // Without --out, two calls started together get folders of their own (a shared one kept only the last
@@ -504,8 +494,7 @@ TEST(Bench, ResultsFoldersHoldEachRunOnceAndTheTablesWhole) {
     for (const char* file : {"seed3/summary.json", "seed4/summary.json", "seed3/events.log"})
       EXPECT_TRUE(fs::is_regular_file(fs::path(out) / "named" / planner / file)) << planner << " " << file;
   }
-  std::ifstream table_in(fs::path(out) / "table.json");
-  const std::string table((std::istreambuf_iterator<char>(table_in)), std::istreambuf_iterator<char>());
+  const std::string table = readText(fs::path(out) / "table.json");
   EXPECT_NE(table.find("\"scene\": \"from_file\""), std::string::npos) << table;
   EXPECT_NE(table.find("\"runs\": 1"), std::string::npos) << table;
   EXPECT_NE(table.find("\"runs\": 2"), std::string::npos) << table;
@@ -520,8 +509,7 @@ TEST(Bench, ResultsFoldersHoldEachRunOnceAndTheTablesWhole) {
   EXPECT_NE(said2.find("already holds results"), std::string::npos) << said2;
   EXPECT_EQ(said.find("already holds results"), std::string::npos) << said;  // the first call's folder was new
   EXPECT_FALSE(fs::exists(fs::path(out) / "comparison.json"));
-  std::ifstream md_in(fs::path(out) / "table.md");
-  const std::string md((std::istreambuf_iterator<char>(md_in)), std::istreambuf_iterator<char>());
+  const std::string md = readText(fs::path(out) / "table.md");
   EXPECT_NE(md.find("Compute times measured with 1 run(s) at a time"), std::string::npos) << md;
   // A scene name that would break table.md's rows: refused before any run.
   std::ofstream(dir / "piped.yaml") << "scene:\n  name: \"a|b\"\n  generator: maze\n"
@@ -578,8 +566,7 @@ TEST(Bench, ConfigErrorsNameTheModeOrKey) {
   EXPECT_NE(lenient.message().find("must not set 'metrics/*'"), std::string::npos) << lenient.message();
   // A collision distance of 0 never counted a collision (a centre inside an obstacle is at 0, not below), one
   // beyond the clearance horizon (0.5 m) counted one at the start and never another.
-  std::ifstream in(rule_dir / "exploration.yaml");
-  const std::string yaml((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string yaml = readText(rule_dir / "exploration.yaml");
   const std::string key = "collision_distance: 0.1";
   const std::size_t at = yaml.find(key);
   ASSERT_NE(at, std::string::npos);
@@ -645,24 +632,13 @@ TEST(Bench, EveryRateAndTheTimeLimitAreCheckedNamingTheKey) {
     EXPECT_THROW(bench::ExplorationRun(*scene, base, "go_feap", bad), std::invalid_argument) << bad;
 }
 
-// A copy of the package's config with `from` replaced by `to` in `file` (each found exactly once).
-void replaceInConfig(const std::filesystem::path& dir, const std::string& file, const std::string& from,
-                     const std::string& to) {
-  std::ifstream in(dir / file);
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const std::size_t at = text.find(from);
-  ASSERT_NE(at, std::string::npos) << file << ": " << from;
-  ASSERT_EQ(text.find(from, at + 1), std::string::npos) << file << ": " << from << " twice";
-  std::ofstream(dir / file) << text.replace(at, from.size(), to);
-}
-
 // Rates whose shipped values equal the struct defaults are read all the same: a user's edit of any of them
 // reaches the run.
 TEST(Bench, TheRatesAreReadFromTheirFiles) {
   const std::filesystem::path dir = configWithMode("rates", "planner:\n  rate: 20.0\nlayers:\n  rate: 4.0\n");
-  replaceInConfig(dir, "exploration.yaml", "sample_rate: 2.0", "sample_rate: 4.0");
-  replaceInConfig(dir, "bench.yaml", "control_rate: 100.0", "control_rate: 200.0");
-  replaceInConfig(dir, "sim.yaml", "  rate: 15.0", "  rate: 20.0");
+  ASSERT_TRUE(replaceOnce(dir / "exploration.yaml", "sample_rate: 2.0", "sample_rate: 4.0"));
+  ASSERT_TRUE(replaceOnce(dir / "bench.yaml", "control_rate: 100.0", "control_rate: 200.0"));
+  ASSERT_TRUE(replaceOnce(dir / "sim.yaml", "  rate: 15.0", "  rate: 20.0"));
   auto c = bench::loadExplorationConfig(dir.string(), "rates");
   std::filesystem::remove_all(dir);
   ASSERT_TRUE(c) << c.message();
