@@ -1228,6 +1228,28 @@ TEST(TourPlanner, CandidatesBeyondSNearArePricedByPathFromTheUav) {
   EXPECT_NEAR(tour->cost, (std::min(behind, beside) + between) / config.v_max, 1e-9);
 }
 
+// What the tour planner takes from a frontier: the bench's go_feap mode weighs frontiers by these, so a
+// field lost here (N_near, say) would silently plan without the omission terms.
+TEST(TourPlanner, SummarizeKeepsWhatTheOmissionTermsWeigh) {
+  go_feap::frontier::Frontier f;
+  f.id = 7;
+  f.cells.assign(10, Index3(1, 2, 3));
+  f.average = Vec3(1.5, -2.0, 0.75);
+  f.first_seen = 2.0;
+  f.n_near = 2;
+  f.active = false;
+  const go_feap::planning::FrontierSummary s = go_feap::planning::summarize(f, 5.0);
+  EXPECT_EQ(s.id, 7u);
+  EXPECT_EQ(s.cell_count, 10);
+  EXPECT_EQ(s.average, f.average);
+  EXPECT_DOUBLE_EQ(s.duration, 3.0);
+  EXPECT_EQ(s.n_near, 2);
+  EXPECT_FALSE(s.active);
+  EXPECT_DOUBLE_EQ(go_feap::planning::summarize(f, 1.0).duration, 0.0);  // a clock that went back
+  f.active = true;
+  EXPECT_TRUE(go_feap::planning::summarize(f, 5.0).active);
+}
+
 // Regrown clusters (new ids, averages moved a little) and a UAV that moved a little reuse the lengths
 // searched between the same reuse_cell cells for reuse_time s, either way round; after that, or with
 // reuse_cell 0, they are searched again.
@@ -1277,6 +1299,12 @@ TEST(TourPlanner, ReusesLengthsBetweenTheSameCellsForReuseTime) {
   moved[0].average += Vec3(0.4, 0.0, 0.0);
   ASSERT_TRUE(planner.plan(moved, uav, 1.6));
   EXPECT_EQ(planner.searches(), 2 * fresh + n);
+  // A clock that went back (a bag played again, the planner kept) drops what was searched "later": the map
+  // they were searched in is gone.
+  go_feap::planning::TourPlanner rewound(config, astar);
+  ASSERT_TRUE(rewound.plan(summaries(1, Vec3::Zero(), false), uav, 10.0));
+  ASSERT_TRUE(rewound.plan(summaries(100, shift, true), uav + shift, 2.0));
+  EXPECT_EQ(rewound.searches(), 2 * fresh);
 
   config.reuse_cell = 0.0;  // never reused
   go_feap::planning::TourPlanner plain(config, astar);

@@ -84,6 +84,7 @@ TEST(Omission, ValidateNamesTheKey) {
       {[](OmissionConfig& c) { c.t_max = 0.0; }, "omission: t_max must be > 0"},
       {[](OmissionConfig& c) { c.n_t = std::numeric_limits<double>::infinity(); },
        "omission: n_t must be >= 0"},
+      {[](OmissionConfig& c) { c.n_t = -1.0; }, "omission: n_t must be >= 0"},
       {[](OmissionConfig& c) { c.n_max = 1; }, "omission: n_max must be > 1"},
   };
   for (const Row& r : rows) {
@@ -105,7 +106,10 @@ TEST(GlobalPlannerConfig, ValidateNamesTheKey) {
       {[](GlobalPlannerConfig& c) { c.n_max_tsp = 2; }, "global: n_max_tsp must be >= n_min_tsp"},
       {[](GlobalPlannerConfig& c) { c.lambda = -0.1; }, "global: lambda must be >= 0"},
       {[](GlobalPlannerConfig& c) { c.v_max = 0.0; }, "global: v_max must be > 0"},
+      // Infinite: every leg would take no time, and the tour's order would be left to ties.
+      {[](GlobalPlannerConfig& c) { c.v_max = std::numeric_limits<double>::infinity(); }, "global: v_max must be > 0"},
       {[](GlobalPlannerConfig& c) { c.max_exact = 17; }, "global: max_exact must be in [0, 16]"},
+      {[](GlobalPlannerConfig& c) { c.max_exact = -1; }, "global: max_exact must be in [0, 16]"},
       {[](GlobalPlannerConfig& c) {  // with a rest leg: 17 nodes
          c.max_exact = 16;
          c.rest_weight = 1.0;

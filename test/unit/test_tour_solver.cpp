@@ -212,6 +212,32 @@ TEST(SolveExact, RefusesTooManyFrontiers) {
   EXPECT_FALSE(solve(small.cost, small.xi, small.lambda, 11).exact);
 }
 
+// The exact solver's largest size, 16 frontiers, is solved exactly (max_exact 16 is a valid setting). On a
+// line, frontier k at x = k m and the UAV at 0: in any order frontier k is reached after at least k m and the
+// last after at least 16 m, and visiting 1, 2, ..., 16 meets every bound at once, so it is the optimum with
+// J = 16 + lambda * sum(xi_k * k).
+TEST(SolveExact, SolvesTheLargestSizeExactly) {
+  const int n = kMaxExactFrontiers;
+  Eigen::MatrixXd cost = Eigen::MatrixXd::Zero(n + 1, n + 1);
+  for (int i = 0; i <= n; ++i)
+    for (int j = 1; j <= n; ++j) cost(i, j) = std::abs(i - j);
+  std::vector<double> xi(n);
+  double penalty = 0.0;
+  for (int k = 1; k <= n; ++k) {
+    xi[k - 1] = 0.1 * (k % 5);
+    penalty += xi[k - 1] * k;
+  }
+  const double lambda = 0.7;
+  std::vector<int> in_order(n);
+  for (int k = 1; k <= n; ++k) in_order[k - 1] = k;
+  for (const TourResult& r : {solveExact(cost, xi, lambda), solve(cost, xi, lambda, n)}) {
+    ASSERT_TRUE(r.status.ok()) << r.status.message();
+    EXPECT_TRUE(r.exact);
+    EXPECT_EQ(r.order, in_order);
+    EXPECT_NEAR(r.cost, n + lambda * penalty, 1e-9);
+  }
+}
+
 TEST(TourProblem, InvalidInputIsRefusedWithAReason) {
   const Problem p = randomProblem(4, 9, Kind::kUniform);
   auto message = [](const TourResult& r) { return r.status.ok() ? std::string("ok") : r.status.message(); };
@@ -223,6 +249,12 @@ TEST(TourProblem, InvalidInputIsRefusedWithAReason) {
   std::vector<double> bad_xi = p.xi;
   bad_xi[2] = std::nan("");
   EXPECT_NE(message(solveHeuristic(p.cost, bad_xi, 1.0)).find("xi of frontier 3"), std::string::npos);
+  // A negative weight would reward arriving late: refused by every solver.
+  bad_xi = p.xi;
+  bad_xi[1] = -0.5;
+  EXPECT_NE(message(solveExact(p.cost, bad_xi, 1.0)).find("xi of frontier 2"), std::string::npos);
+  EXPECT_NE(message(solveHeuristic(p.cost, bad_xi, 1.0)).find("xi of frontier 2"), std::string::npos);
+  EXPECT_NE(message(improveTour(p.cost, bad_xi, 1.0, {1, 2, 3, 4})).find("xi of frontier 2"), std::string::npos);
   Eigen::MatrixXd bad_cost = p.cost;
   bad_cost(2, 1) = -0.5;
   EXPECT_NE(message(solveExact(bad_cost, p.xi, 1.0)).find("cost(2, 1)"), std::string::npos);
@@ -305,7 +337,7 @@ TEST(SolveHeuristic, ThreeHundredFrontiersGiveAValidImprovedTour) {
 
 // The largest gain (fraction of J) one move of the full neighbourhoods (any segment reversed, any run of
 // 1-3 nodes moved anywhere), evaluated by arrivalObjective(), would still make on `order`.
-double bestSingleMoveGain(const Problem& p, const std::vector<int>& order) {
+double bestSingleMoveGain(const Problem& p, const std::vector<int>& order, int max_run = 3) {
   const double j = arrivalObjective(p, order);
   const int n = static_cast<int>(order.size());
   double best = 0.0;
@@ -315,7 +347,7 @@ double bestSingleMoveGain(const Problem& p, const std::vector<int>& order) {
       std::reverse(o.begin() + a, o.begin() + b + 1);
       best = std::max(best, 1.0 - arrivalObjective(p, o) / j);
     }
-  for (int len = 1; len <= 3; ++len)
+  for (int len = 1; len <= max_run; ++len)
     for (int a = 0; a + len <= n; ++a) {
       std::vector<int> rest = order;
       const std::vector<int> run(order.begin() + a, order.begin() + a + len);
@@ -329,11 +361,12 @@ double bestSingleMoveGain(const Problem& p, const std::vector<int>& order) {
   return best;
 }
 
-// Up to 40 frontiers the local search tries every 2-opt and Or-opt move, judged by O(1) changes of J: from
-// random orders, improveTour() must end at a local optimum of those neighbourhoods, checked move by move by
-// the objective itself, and never above its start. A wrong sign or a missing omission term in a delta leaves
-// moves that still gain (the restarts and kicks of solveHeuristic() hid one: its tours stayed optimal at 12
-// frontiers). Asymmetric costs, lambda > 0. A start that is no permutation is refused.
+// Up to 40 frontiers the local search tries every 2-opt and Or-opt move (runs of any length), judged by
+// O(1) changes of J: from random orders, improveTour() must end at a local optimum of those neighbourhoods,
+// checked move by move by the objective itself, and never above its start. A wrong sign or a missing
+// omission term in a delta leaves moves that still gain (the restarts and kicks of solveHeuristic() hid
+// one: its tours stayed optimal at 12 frontiers). Asymmetric costs, lambda > 0. A start that is no
+// permutation is refused.
 TEST(ImproveTour, RandomOrdersEndAtALocalOptimumOfEveryMove) {
   double worst = 0.0;
   for (unsigned seed = 0; seed < 12; ++seed) {
@@ -347,7 +380,7 @@ TEST(ImproveTour, RandomOrdersEndAtALocalOptimumOfEveryMove) {
     ASSERT_TRUE(r.status.ok()) << r.status.message();
     ASSERT_TRUE(isPermutation(r.order, n));
     EXPECT_LE(r.cost, tourCost(p.cost, p.xi, p.lambda, start) + 1e-9) << "seed " << seed;
-    const double gain = bestSingleMoveGain(p, r.order);
+    const double gain = bestSingleMoveGain(p, r.order, n - 1);  // runs of any length
     EXPECT_LT(gain, 1e-9) << "seed " << seed << ", " << n << " frontiers";
     worst = std::max(worst, gain);
   }
