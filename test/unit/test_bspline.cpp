@@ -304,6 +304,10 @@ TEST(Bspline, RejectsBadArguments) {
   EXPECT_THROW(UniformBspline(Eigen::MatrixXd::Zero(3, 3), 3, 0.1), std::invalid_argument);
   EXPECT_THROW(UniformBspline(Eigen::MatrixXd::Zero(3, 5), 3, 0.0), std::invalid_argument);
   EXPECT_THROW(UniformBspline(Eigen::MatrixXd::Zero(3, 5), -1, 0.1), std::invalid_argument);
+  // Above kMaxDegree the basis would not fit its fixed-size arrays: refused, while kMaxDegree itself works.
+  EXPECT_THROW(UniformBspline(Eigen::MatrixXd::Zero(3, 12), UniformBspline::kMaxDegree + 1, 0.1),
+               std::invalid_argument);
+  EXPECT_NO_THROW(UniformBspline(Eigen::MatrixXd::Zero(3, 12), UniformBspline::kMaxDegree, 0.1));
   EXPECT_THROW(UniformBspline::fitPath(std::vector<Vec3>{Vec3::Zero()}, 0.1, Vec3::Zero(), Vec3::Zero()),
                std::invalid_argument);
   EXPECT_THROW(UniformBspline::fitPath(Eigen::MatrixXd::Zero(2, 4), 0.1, Eigen::VectorXd::Zero(3),

@@ -270,6 +270,25 @@ TEST(Esdf, OutsideTheGrid) {
   EXPECT_NEAR(d, 0.8 * (1.0 - 0.3 * 0.3 * 0.3), 1e-12);
 }
 
+// The same at the grid's upper corner: beyond the last centres the interpolant still blends towards
+// max_distance (it used to be checked at the lower corner only), and its gradient is the finite difference.
+TEST(Esdf, OutsideTheGridAtTheUpperCorner) {
+  Esdf esdf(smallGrid(), configWith(0.8));
+  const GridGeometry& g = esdf.geometry();
+  esdf.update({g.linear(Index3(g.dims() - Index3::Ones()))}, {});
+  const Vec3 p = g.bounds().max + Vec3::Constant(0.02);
+  EXPECT_NEAR(esdf.distance(p), 0.8 * (1.0 - 0.3 * 0.3 * 0.3), 1e-12);
+  Vec3 gradient;
+  esdf.distanceAndGradient(p, gradient);
+  const double h = 1e-6;
+  for (int a = 0; a < 3; ++a) {
+    const Vec3 e = Vec3::Unit(a) * h;
+    const double fd = (esdf.distance(Vec3(p + e)) - esdf.distance(Vec3(p - e))) / (2.0 * h);
+    EXPECT_NEAR(gradient[a], fd, 1e-5) << "axis " << a;
+    EXPECT_GT(gradient[a], 0.1) << "axis " << a;  // away from the obstacle, towards max_distance
+  }
+}
+
 TEST(Esdf, SingleObstacleIsExactAndItsGradientPointsAway) {
   Esdf esdf(smallGrid(), configWith(1.0));
   const GridGeometry& g = esdf.geometry();

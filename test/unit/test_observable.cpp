@@ -53,6 +53,12 @@ TEST(ObservableSet, FloodFillStaysInsideTheBox) {
   const ObservableSet o = computeObservableSet(s);
   EXPECT_EQ(o.free_count, 1000u);
   EXPECT_EQ(o.occupied_count, 0u);
+  // A start in the margin, outside the box, reaches nothing of it (the fill must not seed from there and
+  // spill into the box).
+  s.start.position = Vec3(-0.05, 0.55, 0.55);
+  const ObservableSet outside = computeObservableSet(s);
+  EXPECT_EQ(outside.total(), 0u);
+  for (std::size_t l = 0; l < outside.mask.size(); ++l) ASSERT_FALSE(outside.mask[l]) << l;
 }
 
 TEST(Coverage, CountsKnownObservableVoxels) {

@@ -453,6 +453,73 @@ TEST(OccupancyMap, AReturnJustShortOfAVoxelFaceMarksTheVoxelBehindIt) {
   EXPECT_EQ(m.state(Vec3(1.95, 0.0, 1.0)), VoxelState::kFree);
 }
 
+// A return at exactly max_range is a surface (only depths beyond it, and +inf, mean "no return"): the voxel
+// it ends in is occupied.
+TEST(OccupancyMap, AReturnAtExactlyMaxRangeIsASurface) {
+  const map::DepthIntrinsics K{8, 6, 8.0, 8.0, 4.0, 3.0};
+  map::OccupancyConfig c;
+  c.margin = 0.0;
+  c.skip_pixel = 1;
+  ASSERT_EQ(c.max_range, 4.5);
+  map::OccupancyMap m(c, {Vec3(-1, -3, 0), Vec3(6, 3, 3)});
+  const cv::Mat wall(K.height, K.width, CV_32FC1, cv::Scalar(4.5f));
+  ASSERT_TRUE(m.integrate(wall, K, cameraPose(Vec3(0, 0, 1.5), 0.0)));
+  EXPECT_EQ(m.state(Vec3(4.502, 0.0, 1.5)), VoxelState::kOccupied);
+  EXPECT_EQ(m.state(Vec3(4.4, 0.0, 1.5)), VoxelState::kFree);
+}
+
+// Settings that would break the map are refused by name: no pixel step (a division by zero), a plausible
+// depth inside the range (valid frames refused as millimetres), and clamps whose log-odds leave a voxel's
+// byte (they wrapped round: every hit made a voxel free, or every miss an obstacle).
+TEST(OccupancyMap, ConfigsThatWouldBreakTheMapAreRefusedByName) {
+  ASSERT_TRUE(map::OccupancyConfig().validate());
+  const Aabb box{Vec3(-5, -3, 0), Vec3(5, 3, 3)};
+  for (const auto& [key, broken] : std::vector<std::pair<std::string, std::function<void(map::OccupancyConfig&)>>>{
+           {"skip_pixel", [](map::OccupancyConfig& o) { o.skip_pixel = 0; }},
+           {"skip_pixel", [](map::OccupancyConfig& o) { o.skip_pixel = -3; }},
+           {"max_plausible_depth", [](map::OccupancyConfig& o) { o.max_plausible_depth = 3.0; }},
+           {"max_plausible_depth", [](map::OccupancyConfig& o) { o.max_plausible_depth = 4.5; }},
+           {"p_min/p_max", [](map::OccupancyConfig& o) { o.p_max = 0.95; }},
+           {"p_min/p_max", [](map::OccupancyConfig& o) { o.p_min = 0.05; }}}) {
+    map::OccupancyConfig bad;
+    broken(bad);
+    const common::Status st = bad.validate();
+    ASSERT_FALSE(st) << key;
+    EXPECT_NE(st.message().find(key), std::string::npos) << st.message();
+    map::MapConfig whole = mapConfig();
+    whole.occupancy = bad;
+    EXPECT_FALSE(whole.validate(box)) << key;
+  }
+  map::OccupancyConfig wider;
+  wider.max_plausible_depth = 5.0;  // above max_range: valid
+  EXPECT_TRUE(wider.validate()) << wider.validate().message();
+}
+
+// The world box of what a frame changed is the union of the changed voxels' cubes (the frontier finder and
+// the local planner redo what lies in it).
+TEST(VoxelMap, TheChangedBoxIsTheChangedVoxelsCubes) {
+  const map::DepthIntrinsics K{8, 6, 8.0, 8.0, 4.0, 3.0};
+  map::MapConfig c = mapConfig();
+  c.occupancy.skip_pixel = 1;
+  map::VoxelMap m(c, {Vec3(-1, -3, 0), Vec3(5, 3, 3)});
+  const cv::Mat wall(K.height, K.width, CV_32FC1, cv::Scalar(2.05f));
+  const auto info = m.integrate(wall, K, cameraPose(Vec3(0, 0, 1.5), 0.3));
+  ASSERT_TRUE(info) << info.message();
+  ASSERT_TRUE(info->frame.any_change);
+  ASSERT_FALSE(info->frame.changed.empty());
+  const auto& geo = m.geometry();
+  Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
+  for (std::size_t l : info->frame.changed) {
+    const Vec3 corner = geo.origin() + geo.unlinear(l).cast<double>() * geo.resolution();
+    lo = lo.cwiseMin(corner);
+    hi = hi.cwiseMax(Vec3(corner + Vec3::Constant(geo.resolution())));
+  }
+  EXPECT_LT((info->changed_box.min - lo).cwiseAbs().maxCoeff(), 1e-9)
+      << info->changed_box.min.transpose() << " / " << lo.transpose();
+  EXPECT_LT((info->changed_box.max - hi).cwiseAbs().maxCoeff(), 1e-9)
+      << info->changed_box.max.transpose() << " / " << hi.transpose();
+}
+
 // A frame that only clears obstacles reaches the ESDF too: a wall seen once, then seen through once (its
 // voxel back at the threshold, free), leaves no obstacle in the ESDF where the map has none.
 TEST(OccupancyMap, AFrameThatOnlyClearsObstaclesUpdatesTheEsdf) {
