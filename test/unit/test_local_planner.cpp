@@ -73,6 +73,9 @@ TEST(LocalPlannerConfig, ValidateNamesTheBadKey) {
   expectBad("settled_speed", [](LocalPlannerConfig& c) { c.settled_speed = kInf; });
   expectBad("min_view_fraction", [](LocalPlannerConfig& c) { c.min_view_fraction = 1.5; });
   expectBad("min_view_fraction", [](LocalPlannerConfig& c) { c.min_view_fraction = std::nan(""); });
+  expectBad("scan_step", [](LocalPlannerConfig& c) { c.scan_step = 0.0; });   // a look round that never turns
+  expectBad("scan_step", [](LocalPlannerConfig& c) { c.scan_step = -1.0; });
+  expectBad("scan_step", [](LocalPlannerConfig& c) { c.scan_step = 3.2; });
 }
 
 TEST(ObstacleRatio, SyntheticImages) {
@@ -130,6 +133,14 @@ TEST(ObstacleWindow, SlidesOverTheLastRatios) {
   EXPECT_FALSE(at.cluttered());  // strictly above the threshold
   w.clear();
   EXPECT_FALSE(w.cluttered());
+  // The bounds themselves are ratios: a frame all obstacle (facing a wall, 1.0) and one with none (0.0).
+  ObstacleWindow full(3, 0.95);
+  EXPECT_TRUE(full.push(1.0));
+  EXPECT_TRUE(full.push(0.0));
+  EXPECT_EQ(full.size(), 2u);
+  for (int k = 0; k < 3; ++k) EXPECT_TRUE(full.push(1.0));
+  EXPECT_DOUBLE_EQ(full.mean(), 1.0);
+  EXPECT_TRUE(full.cluttered());
 }
 
 TEST(FrontierType, NearOrCluttered) {

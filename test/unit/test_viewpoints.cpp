@@ -247,6 +247,8 @@ TEST(ViewpointConfig, ValidateNamesTheBadKey) {
   expectBad("clearance", [](ViewpointConfig& c) { c.clearance = -0.1; });
   expectBad("sensor_range", [](ViewpointConfig& c) { c.sensor_range = 0.0; });
   expectBad("hfov", [](ViewpointConfig& c) { c.hfov = kPi; });
+  expectBad("hfov", [](ViewpointConfig& c) { c.hfov = 0.0; });  // nothing would ever be in view
+  expectBad("hfov", [](ViewpointConfig& c) { c.hfov = -0.5; });
   expectBad("vfov", [](ViewpointConfig& c) { c.vfov = 0.0; });
   expectBad("min_visible", [](ViewpointConfig& c) { c.min_visible = -1; });
   expectBad("yaw_samples", [](ViewpointConfig& c) { c.yaw_samples = 0; });
@@ -474,6 +476,27 @@ TEST(Viewpoints, SubsetCountsAreTheScaledCountsOfEveryStrideThCell) {
   }
 }
 
+// min_visible is the fewest cells a viewpoint may see: in open space a 2 x 2 x 1 frontier is seen whole from
+// every viewpoint on a 1 m ring round it, so min_visible 4 (its size) keeps them and 5 keeps none.
+TEST(Viewpoints, AViewpointSeeingExactlyMinVisibleCellsIsKept) {
+  World w(Index3(40, 40, 20));
+  Frontier f;
+  f.id = 3;
+  for (int dx = 0; dx < 2; ++dx)
+    for (int dy = 0; dy < 2; ++dy) f.cells.push_back(Index3(20 + dx, 20 + dy, 10));
+  for (const Index3& c : f.cells) f.average += w.geo().indexToCoord(c) / 4.0;
+  ViewpointConfig cfg = testConfig();
+  cfg.ring_radii = {1.0};
+  cfg.angular_step = kPi / 2;
+  cfg.height_offsets = {0.0};
+  cfg.min_visible = 4;
+  const std::vector<Viewpoint> kept = sampleViewpoints(f, w.map(), w.esdf(), 0.4, 1.4, cfg);
+  EXPECT_EQ(kept.size(), 4u);
+  for (const Viewpoint& vp : kept) EXPECT_EQ(vp.visible_cells, 4) << vp.position.transpose();
+  cfg.min_visible = 5;
+  EXPECT_TRUE(sampleViewpoints(f, w.map(), w.esdf(), 0.4, 1.4, cfg).empty());
+}
+
 TEST(Viewpoints, HeightsAreClampedToTheBand) {
   World w(Index3(40, 40, 20));
   w.set(Index3(15, 15, 0), Index3(25, 25, 19), VoxelState::kUnknown);
@@ -589,13 +612,20 @@ TEST(Viewpoints, CacheGivesTheSampledViewpointsAndDropsThoseTheMapHasFilled) {
     EXPECT_GE(w.esdf().distance(vp.position), cfg.clearance);
     EXPECT_TRUE(std::any_of(sampled.begin(), sampled.end(), [&](const Viewpoint& s) { return s.position == vp.position; }));
   }
-  // Another band, or a forgotten frontier, is sampled afresh.
-  cache.get(f, w.map(), w.esdf(), z_min, z_max + 0.5, cfg);
+  // Another band, or a forgotten frontier, is sampled afresh: a band with another floor only (the layer
+  // manager's switch from the top band to the whole box moves z_min alone), another ceiling.
+  ASSERT_TRUE(
+      std::any_of(after.begin(), after.end(), [&](const Viewpoint& vp) { return vp.position.z() < z_min + 0.5; }));
+  const std::vector<Viewpoint> raised = cache.get(f, w.map(), w.esdf(), z_min + 0.5, z_max, cfg);
   EXPECT_EQ(cache.misses(), 2u);
+  EXPECT_TRUE(same(raised, sampleViewpoints(f, w.map(), w.esdf(), z_min + 0.5, z_max, cfg)));
+  for (const Viewpoint& vp : raised) EXPECT_GE(vp.position.z(), z_min + 0.5 - 1e-9);
+  cache.get(f, w.map(), w.esdf(), z_min + 0.5, z_max + 0.5, cfg);
+  EXPECT_EQ(cache.misses(), 3u);
   cache.retain({});
   EXPECT_EQ(cache.size(), 0u);
   cache.get(f, w.map(), w.esdf(), z_min, z_max, cfg);
-  EXPECT_EQ(cache.misses(), 3u);
+  EXPECT_EQ(cache.misses(), 4u);
 }
 
 // A frontier keeps its id while its cells stay the same, however the map round it changes: its cached
@@ -880,11 +910,13 @@ struct OneFrontierPlan {
     ac.unknown_is_free = true;
     return ac;
   }
+  /// From (0.8, 2.0, 1.0), heading 0, at `velocity`; the obstacle window empty unless one is given.
   go_feap::common::Result<go_feap::planning::LocalPlan> operator()(
-      const go_feap::planning::LocalPlannerConfig& local, const go_feap::planning::VisitedViewpoints* visited) const {
-    go_feap::planning::ObstacleWindow window(local.window_size, local.clutter_threshold);
-    return go_feap::planning::chooseLocalTarget(Vec3(0.8, 2.0, 1.0), Vec3::Zero(), 0.0, {f}, 0.5, 1.5, w.map(), w.esdf(), astar,
-                                                window, testConfig(), local, nullptr, visited);
+      const go_feap::planning::LocalPlannerConfig& local, const go_feap::planning::VisitedViewpoints* visited,
+      const go_feap::planning::ObstacleWindow* window = nullptr, const Vec3& velocity = Vec3::Zero()) const {
+    const go_feap::planning::ObstacleWindow empty(local.window_size, local.clutter_threshold);
+    return go_feap::planning::chooseLocalTarget(Vec3(0.8, 2.0, 1.0), velocity, 0.0, {f}, 0.5, 1.5, w.map(), w.esdf(),
+                                                astar, window ? *window : empty, testConfig(), local, nullptr, visited);
   }
   World w;
   Frontier f;
@@ -908,9 +940,10 @@ TEST(Viewpoints, AFrontierNearInALineButFarByPathIsTypedOpen) {
   local.k_frontiers = 1;
   const go_feap::planning::ObstacleWindow calm(local.window_size, local.clutter_threshold);
   ASSERT_FALSE(calm.cluttered());
-  auto expectLayer = [&](FrontierType type, const char* what) {
+  auto expectLayer = [&](FrontierType type, const char* what,
+                         const go_feap::planning::ObstacleWindow* window = nullptr) {
     SCOPED_TRACE(what);
-    const auto plan = one(local, nullptr);
+    const auto plan = one(local, nullptr, window);
     ASSERT_TRUE(plan) << plan.message();
     const auto sampled = sampleViewpoints(one.f, one.w.map(), one.w.esdf(), 0.5, 1.5, testConfig());
     const auto expected = go_feap::planning::filterViewpoints(sampled, type, uav, 0.0, local);
@@ -927,9 +960,56 @@ TEST(Viewpoints, AFrontierNearInALineButFarByPathIsTypedOpen) {
     EXPECT_TRUE(differs) << "the two rankings agree here: the test cannot tell the types apart";
   };
   expectLayer(FrontierType::kOpen, "with the wall");
+  // Far by path, but in clutter (the obstacle window's mean above its threshold): near-or-cluttered.
+  go_feap::planning::ObstacleWindow clutter(local.window_size, local.clutter_threshold);
+  for (int k = 0; k < local.window_size; ++k) clutter.push(0.9);
+  ASSERT_TRUE(clutter.cluttered());
+  expectLayer(FrontierType::kNearOrCluttered, "with the wall, in clutter", &clutter);
   one.w.set(Index3(15, 0, 0), Index3(16, 24, 19), VoxelState::kFree);
   ASSERT_LT(pathDistance(one.astar, uav, one.f.average).metres, local.d_near);
   expectLayer(FrontierType::kNearOrCluttered, "without it");
+}
+
+// The vehicle's velocity reaches the plan's first leg: moving away from the frontier at 2 m/s with a_max 2,
+// the plan costs what startCost() gives for the best of its viewpoints (the Euclidean legs of the DAG), at
+// least a second more than from rest.
+TEST(Viewpoints, TheLocalPlanPricesTheFirstLegFromTheVehiclesVelocity) {
+  OneFrontierPlan one;
+  go_feap::planning::LocalPlannerConfig local;
+  local.k_frontiers = 1;
+  local.a_max = 2.0;
+  const Vec3 uav(0.8, 2.0, 1.0), away(-2.0, 0.0, 0.0);
+  ASSERT_GT(one.f.average.x(), uav.x() + 1.0);  // the frontier lies ahead in +x
+  const auto moving = one(local, nullptr, nullptr, away);
+  const auto resting = one(local, nullptr);
+  ASSERT_TRUE(moving) << moving.message();
+  ASSERT_TRUE(resting) << resting.message();
+  ASSERT_EQ(moving->layers.size(), 1u);
+  double best = INFINITY;
+  for (const Viewpoint& v : moving->layers[0])
+    best = std::min(best, go_feap::planning::startCost(uav, away, 0.0, v, (v.position - uav).norm(), local));
+  EXPECT_NEAR(moving->cost, best, 1e-9);
+  EXPECT_GT(moving->cost, resting->cost + 1.0);
+}
+
+// Frontiers without a viewpoint (too small to be seen from anywhere) take no layer of the DAG: with
+// k_frontiers 1, a tour that begins with one is planned to the next frontier.
+TEST(Viewpoints, FrontiersWithoutViewpointsTakeNoLayer) {
+  OneFrontierPlan one;
+  Frontier tiny;
+  tiny.id = 99;
+  tiny.cells = {Index3(5, 5, 10), Index3(6, 5, 10)};  // 2 cells, min_visible 5
+  for (const Index3& c : tiny.cells) tiny.average += one.w.geo().indexToCoord(c) / 2.0;
+  ASSERT_TRUE(sampleViewpoints(tiny, one.w.map(), one.w.esdf(), 0.5, 1.5, testConfig()).empty());
+  go_feap::planning::LocalPlannerConfig local;
+  local.k_frontiers = 1;
+  const go_feap::planning::ObstacleWindow window(local.window_size, local.clutter_threshold);
+  const auto plan = go_feap::planning::chooseLocalTarget(Vec3(0.8, 2.0, 1.0), Vec3::Zero(), 0.0, {tiny, one.f}, 0.5,
+                                                         1.5, one.w.map(), one.w.esdf(), one.astar, window,
+                                                         testConfig(), local);
+  ASSERT_TRUE(plan) << plan.message();
+  EXPECT_EQ(plan->frontier_ids, std::vector<unsigned>{one.f.id});
+  EXPECT_EQ(plan->layers.size(), 1u);
 }
 
 // What is left to see from a target counts the cells of every frontier whose average lies within the sensor
