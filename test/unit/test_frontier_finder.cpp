@@ -74,6 +74,10 @@ TEST(FrontierFinder, KnownFreeBlockInUnknownSpace) {
   EXPECT_EQ(got, expect);
   ASSERT_EQ(f.frontiers().size(), 1u);  // one connected ring
   EXPECT_LT((f.frontiers()[0].average - Vec3(1.5, 1.0, 0.5)).norm(), 1e-9);
+  // Its box B is that of the cell cubes (Frontier.msg's aabb): here the painted block itself.
+  const Aabb& box = f.frontiers()[0].box;
+  EXPECT_LT((box.min - Vec3(1.0, 0.5, 0.0)).cwiseAbs().maxCoeff(), 1e-9) << box.min.transpose();
+  EXPECT_LT((box.max - Vec3(2.0, 1.5, 1.0)).cwiseAbs().maxCoeff(), 1e-9) << box.max.transpose();
 }
 
 namespace {
@@ -259,6 +263,43 @@ TEST(FrontierFinder, CellsTouchingOnlyDiagonallyAreOneCluster) {
   EXPECT_EQ(sizes, (std::multiset<std::size_t>{6, 8, 8}));
 }
 
+// Clusters of 4 cells or more, no wider than `extent`, and no region regrown past the clusters an update
+// touches (max_regrow_cells 0, the fuel mode's setting).
+frontier::FrontierConfig noRegrowConfig(double extent) {
+  frontier::FrontierConfig cfg;
+  cfg.min_cluster_cells = 4;
+  cfg.max_cluster_extent = extent;
+  cfg.max_regrow_cells = 0;
+  return cfg;
+}
+
+// The frontiers of `m` in kBox, found at time 0.
+frontier::FrontierFinder found(const map::OccupancyMap& m, const frontier::FrontierConfig& cfg) {
+  frontier::FrontierFinder f(cfg, m.geometry(), kBox);
+  f.recomputeAll(m, 0.0);
+  return f;
+}
+
+// The frontiers of a free block [lo, hi] painted into `m` (unknown elsewhere), found with noRegrowConfig(extent).
+frontier::FrontierFinder noRegrowFinder(map::OccupancyMap& m, const Vec3& lo, const Vec3& hi, double extent) {
+  paint(m, lo, hi, VoxelState::kFree);
+  return found(m, noRegrowConfig(extent));
+}
+
+// With max_regrow_cells 0 (the fuel mode) the box form of update() still rebuilds every cluster with a cell
+// within 2 voxels of the change: a voxel inside the block turned unknown makes 6 frontier cells, the nearest
+// 26-adjacent to the ring 2 voxels away, so ring and newcomers are one region, as the oracle clusters them.
+TEST(FrontierFinder, TheBoxUpdateRebuildsClustersTwoVoxelsFromTheChange) {
+  map::OccupancyMap m(mapConfig(), kBox);
+  frontier::FrontierFinder f = noRegrowFinder(m, Vec3(1.0, 0.5, 0.0), Vec3(2.0, 1.5, 1.0), 100.0);
+  ASSERT_EQ(f.frontiers().size(), 1u);
+  const Index3 v = m.geometry().coordToIndex(Vec3(1.75, 1.05, 0.55));
+  m.setState(v, VoxelState::kUnknown);
+  f.update(m, v, v, 1.0);
+  EXPECT_EQ(clusterSets(f, m.geometry()), oracleClusters(m, noRegrowConfig(100.0).min_cluster_cells));
+  EXPECT_EQ(f.frontiers().size(), 1u);
+}
+
 // With max_regrow_cells = 0 every update keeps the clusters it does not touch.
 TEST(FrontierFinder, LocalUpdatesKeepValidClustersOnRandomUpdates) {
   frontier::FrontierConfig cfg = randomUpdateConfig();
@@ -290,13 +331,8 @@ TEST(FrontierFinder, CutOffCellsOfRebuiltClustersAreNotLostPastTheRegrowLimit) {
 // connected region.
 TEST(FrontierFinder, UpdateKeepsTheClustersItDoesNotTouch) {
   map::OccupancyMap m(mapConfig(), kBox);
-  paint(m, Vec3(0.2, 0.5, 0.0), Vec3(2.5, 1.5, 1.0), VoxelState::kFree);
-  frontier::FrontierConfig cfg;
-  cfg.min_cluster_cells = 4;
-  cfg.max_cluster_extent = 0.4;
-  cfg.max_regrow_cells = 0;
-  frontier::FrontierFinder f(cfg, m.geometry(), kBox);
-  f.recomputeAll(m, 0.0);
+  frontier::FrontierFinder f = noRegrowFinder(m, Vec3(0.2, 0.5, 0.0), Vec3(2.5, 1.5, 1.0), 0.4);
+  const frontier::FrontierConfig cfg = noRegrowConfig(0.4);
   const std::size_t before = f.frontiers().size();
   ASSERT_GT(before, 8u);
   // Grow the free block by 0.2 m at its x end.
@@ -523,6 +559,27 @@ TEST(FrontierFinder, NearCountsAndActiveBand) {
   for (const auto& fr : f.frontiers()) EXPECT_FALSE(fr.active);
   f.setActiveBand(0.0, 1.0);
   for (const auto& fr : f.frontiers()) EXPECT_TRUE(fr.active);
+}
+
+// A band holds both its bounds: a frontier whose average lies exactly on the boundary of two bands is active
+// in either (z centres 0.375 and 0.625 at 0.25 m: the average is exactly 0.5).
+TEST(FrontierFinder, AnAverageOnABandBoundaryIsInBothBands) {
+  map::OccupancyConfig c;
+  c.resolution = 0.25;
+  c.margin = 0.5;
+  map::OccupancyMap m(c, kBox);
+  paint(m, Vec3(1.0, 0.75, 0.25), Vec3(1.5, 1.25, 0.75), VoxelState::kFree);
+  frontier::FrontierConfig cfg;
+  cfg.min_cluster_cells = 1;
+  frontier::FrontierFinder f = found(m, cfg);
+  ASSERT_EQ(f.frontiers().size(), 1u);
+  ASSERT_EQ(f.frontiers()[0].average.z(), 0.5);
+  f.setActiveBand(0.5, 1.0);
+  EXPECT_TRUE(f.frontiers()[0].active);
+  f.setActiveBand(0.0, 0.5);
+  EXPECT_TRUE(f.frontiers()[0].active);
+  f.setActiveBand(0.51, 1.0);
+  EXPECT_FALSE(f.frontiers()[0].active);
 }
 
 // A band that splits the frontiers by height: only those whose average lies within [z_min, z_max] are active,

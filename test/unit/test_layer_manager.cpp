@@ -331,6 +331,27 @@ TEST(LayerManager, AFlightIsProgressJitterIsNot) {
   }
 }
 
+// A position first known after the trigger is where progress is measured from: a flight of 1 m/s (2 m per
+// stuck_timeout, progress_travel 1 m) that begins without a known position is progress all the same.
+TEST(LayerManager, APositionFirstKnownAfterTheTriggerStartsTheProgressCount) {
+  LayerManagerConfig c = config();
+  c.stuck_timeout = kStuckTimeout;
+  c.progress_travel = 1.0;
+  LayerManager m(c, kBox, 0.5);
+  LayerInputs in = frontiers({1}, {1}, 42);
+  in.trigger = true;
+  ASSERT_FALSE(in.position);
+  m.step(in, 0.0);
+  in.trigger = false;
+  LayerOutputs out;
+  double t = 0.0;
+  for (int k = 1; k <= 40; ++k) {  // 20 s
+    in.position = Vec3(0.5 * k, 0.0, 0.5);
+    out = m.step(in, t += 0.5);
+    ASSERT_EQ(out.state, ExplorationState::kExplore) << "stuck while flying, at " << t << " s";
+  }
+}
+
 // An odometry that relocalises (jumps of 2 m, each reported) is no flight: with the map unchanged the run
 // ends stuck stuck_timeout after the trigger, however often it jumps. Unreported, each jump counted as
 // progress_travel flown, and the stuck check never fired.
@@ -377,6 +398,15 @@ TEST(LayerManager, ValidateNamesKeys) {
     c = config();
     c.progress_travel = travel;
     EXPECT_NE(c.validate().message().find("progress_travel"), std::string::npos) << travel;
+  }
+  // 0 ended every run at its trigger (stuck, or out of time); NaN never would.
+  for (double bad : {0.0, -1.0, std::numeric_limits<double>::quiet_NaN()}) {
+    c = config();
+    c.stuck_timeout = bad;
+    EXPECT_NE(c.validate().message().find("stuck_timeout"), std::string::npos) << bad;
+    c = config();
+    c.time_limit = bad;
+    EXPECT_NE(c.validate().message().find("time_limit"), std::string::npos) << bad;
   }
   EXPECT_STREQ(toString(FinishReason::kStuck), "stuck");
   EXPECT_STREQ(toString(ExplorationState::kFinalPass), "FINAL_PASS");
