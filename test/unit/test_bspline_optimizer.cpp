@@ -229,6 +229,11 @@ TEST(BsplineCost, EachTermGradientMatchesCentralDifferences) {
   OptimizerConfig config = optimizerConfig();
   config.v_max = 1.5;
   config.a_max = 1.5;
+  // Weights away from their defaults (and from 1): a weight the cost ignored would leave its documented term.
+  config.lambda_smooth = 2.5;
+  config.lambda_clearance *= 1.7;
+  config.lambda_feasibility *= 0.6;
+  config.lambda_time *= 1.3;
   const TermCase cases[] = {
       {traj::kSmoothness, "smoothness"},     {traj::kClearance, "clearance"}, {traj::kVelocity, "velocity"},
       {traj::kAcceleration, "acceleration"}, {traj::kTime, "time"},           {traj::kAllTerms, "all"}};
@@ -401,6 +406,26 @@ TEST(BsplineOptimizer, ImpossibleProblemsFailAndReturnNothing) {
   bad = config;
   bad.clearance = 1.5;
   EXPECT_NE(bad.validate(world.esdf().config()).message().find("clearance"), std::string::npos);
+  // optimize() itself refuses it (the ESDF's distances stop at max_distance, 1 m here), before any evaluation.
+  for (double clearance : {1.0, 1.5}) {
+    bad.clearance = clearance;
+    OptimizeStats none;
+    r = traj::optimize(through, world.esdf(), bad, &none);
+    EXPECT_FALSE(r.ok()) << clearance;
+    EXPECT_NE(r.message().find("max_distance"), std::string::npos) << r.message();
+    EXPECT_EQ(none.evaluations, 0) << clearance;
+  }
+  // A margin above 1 aims past the limits; no evaluation budget is no budget at all (NLopt's 0: unlimited).
+  bad = config;
+  bad.feasibility_margin = 1.2;
+  EXPECT_NE(bad.validate().message().find("feasibility_margin"), std::string::npos);
+  bad.feasibility_margin = 1.0;
+  EXPECT_TRUE(bad.validate().ok()) << bad.validate().message();
+  for (int iterations : {0, -1}) {
+    bad = config;
+    bad.max_iterations = iterations;
+    EXPECT_NE(bad.validate().message().find("max_iterations"), std::string::npos) << iterations;
+  }
   bad = config;
   bad.min_clearance = 0.8;
   EXPECT_NE(bad.validate().message().find("clearance"), std::string::npos);
@@ -533,6 +558,36 @@ TEST(BsplineOptimizer, MinimisesTheFullCostAndPushesThePathOffAnEdge) {
 // checkTrajectory() samples densely enough (every half voxel of a span's control polygon) that the
 // closest approach it reports is within a quarter voxel of a 20000-sample search, and its speed and
 // acceleration within 1 % of finite differences, on long spans (1-2 m) weaving between blocks.
+// Speed is judged against v_max and acceleration against a_max, each alone: a straight line at exactly
+// 3 m/s (a uniform B-spline reproduces it, no acceleration) and a parabola at 2 m/s^2, in open space.
+TEST(CheckTrajectory, SpeedIsJudgedAgainstVmaxAndAccelerationAgainstAmax) {
+  const World world(Vec3(6.0, 4.0, 2.0));
+  Eigen::MatrixXd line(3, 10), parabola(3, 10);
+  for (int i = 0; i < 10; ++i) {
+    line.col(i) = Vec3(1.0 + 0.3 * i, 2.0, 1.0);
+    parabola.col(i) = Vec3(1.0 + 0.01 * i * i, 2.0, 1.0);
+  }
+  const UniformBspline fast(line, 3, 0.1), bending(parabola, 3, 0.1);
+  OptimizerConfig config = optimizerConfig();
+  config.v_max = 1.0;
+  config.a_max = 5.0;
+  OptimizeStats stats;
+  go_feap::common::Status s = traj::checkTrajectory(fast, world.esdf(), config, &stats);
+  EXPECT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("v_max"), std::string::npos) << s.message();
+  EXPECT_NEAR(stats.max_velocity, 3.0, 1e-6);
+  config.v_max = 3.5;
+  EXPECT_TRUE(traj::checkTrajectory(fast, world.esdf(), config).ok());
+  config.v_max = 10.0;
+  config.a_max = 1.0;
+  s = traj::checkTrajectory(bending, world.esdf(), config, &stats);
+  EXPECT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("a_max"), std::string::npos) << s.message();
+  EXPECT_NEAR(stats.max_acceleration, 2.0, 1e-6);
+  config.a_max = 2.5;
+  EXPECT_TRUE(traj::checkTrajectory(bending, world.esdf(), config).ok());
+}
+
 TEST(CheckTrajectory, SamplesLongSpansDenselyEnoughToFindTheClosestApproach) {
   World world(Vec3(6.0, 6.0, 2.0));
   world.addBox(Index3(20, 20, 0), Index3(22, 40, 19));
@@ -818,6 +873,21 @@ TEST(Replan, EachReasonInPriorityOrder) {
   ReplanConfig bad;
   bad.target_tolerance = -1.0;
   EXPECT_NE(bad.validate().message().find("target_tolerance"), std::string::npos);
+  // A negative heading tolerance made every target a new one (replanned for at every step).
+  bad = ReplanConfig();
+  bad.yaw_tolerance = -0.1;
+  EXPECT_NE(bad.validate().message().find("yaw_tolerance"), std::string::npos);
+  for (double t : {-1.0, std::numeric_limits<double>::infinity()}) {
+    bad = ReplanConfig();
+    bad.min_time_left = t;
+    EXPECT_NE(bad.validate().message().find("min_time_left"), std::string::npos) << t;
+  }
+  // The planner's collision horizon: 0 checked only the present instant, never an obstacle mapped ahead.
+  for (double horizon : {0.0, -1.0}) {
+    traj::TrajectoryPlannerConfig planner;
+    planner.collision_horizon = horizon;
+    EXPECT_NE(planner.validate().message().find("collision_horizon"), std::string::npos) << horizon;
+  }
 }
 
 // The tolerances are bounds the target may move within (a move of exactly target_tolerance, or a trajectory
