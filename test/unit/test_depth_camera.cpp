@@ -246,6 +246,9 @@ TEST(DepthCameraConfig, ValidateNamesTheBadKey) {
       {[](DepthCameraConfig& c) { c.height = DepthCameraConfig::kMaxSide + 1; }, "height"},
       {[](DepthCameraConfig& c) { c.hfov_deg = 180.0; }, "hfov_deg"},
       {[](DepthCameraConfig& c) { c.vfov_deg = 0.0; }, "vfov_deg"},
+      {[](DepthCameraConfig& c) { c.vfov_deg = 180.0; }, "vfov_deg"},  // no focal length
+      {[](DepthCameraConfig& c) { c.vfov_deg = 250.0; }, "vfov_deg"},  // a negative one: the image upside down
+      {[](DepthCameraConfig& c) { c.hfov_deg = 0.0; }, "hfov_deg"},
       {[](DepthCameraConfig& c) { c.cx = 320.0; }, "fx"},
       {[](DepthCameraConfig& c) { c.fx = 300.0; }, "fy"},
       {[](DepthCameraConfig& c) {
@@ -574,6 +577,13 @@ TEST(DepthRenderer, CameraTouchingAWallSeesEverythingTooNear) {
   for (const double yaw : {M_PI, 0.5 * M_PI}) {
     renderer.render(cameraPose(Vec3(2.0, 0.33, 1.07), yaw), depth);
     EXPECT_EQ(countEqual(depth, -inf), 640 * 480) << "yaw " << yaw;
+  }
+  // Touching a ceiling from below (its lower face at z = 2.0), looking along it: the same.
+  const world::Scene ceiling = sceneWithBoxes({{Vec3(-1.0, -6.0, 2.0), Vec3(9.0, 6.0, 2.2)}}, 0.1);
+  const DepthRenderer under(DepthCameraConfig(), ceiling);
+  for (const double yaw : {0.0, 0.5 * M_PI}) {
+    under.render(cameraPose(Vec3(1.0, 0.33, 2.0), yaw), depth);
+    EXPECT_EQ(countEqual(depth, -inf), 640 * 480) << "under a ceiling, yaw " << yaw;
   }
   // A hair off the face (5 microns): the wall ahead at that depth, nothing else in view.
   renderer.render(cameraPose(Vec3(2.0 - 5e-6, 0.33, 1.07), 0.0), depth);

@@ -524,6 +524,35 @@ TEST(Metrics, FiguresWithoutGroundTruthAreNull) {
   EXPECT_DOUBLE_EQ(nlohmann::json::parse(metrics::summaryJson(s))["coverage"].get<double>(), 0.0);
 }
 
+// Samples of unknown coverage (negative: onboard, replayed, or before the first map) are not drawn: a series
+// of them alone leaves only its legend in the series' colour, where a measured one draws its line (at 0 %
+// they used to be drawn as a line along the bottom).
+TEST(Metrics, ThePlotLeavesOutSamplesOfUnknownCoverage) {
+  auto colourPixels = [](const std::vector<metrics::Sample>& samples) {
+    const std::filesystem::path png = std::filesystem::temp_directory_path() / "go_feap_test_plot_unknown.png";
+    EXPECT_TRUE(metrics::plotCoverage({{"run", samples}}, "unknown", png.string()).ok());
+    const cv::Mat img = cv::imread(png.string());
+    std::filesystem::remove(png);
+    int n = 0;
+    for (int y = 0; y < img.rows; ++y)
+      for (int x = 0; x < img.cols; ++x) {
+        const cv::Vec3b p = img.at<cv::Vec3b>(y, x);  // BGR; the first series is (200, 90, 20)
+        n += std::abs(p[0] - 200) < 40 && std::abs(p[1] - 90) < 40 && std::abs(p[2] - 20) < 40;
+      }
+    return n;
+  };
+  std::vector<metrics::Sample> unknown(11), measured(11);
+  for (int i = 0; i <= 10; ++i) {
+    unknown[i].t = measured[i].t = i;
+    unknown[i].coverage = -1.0;
+    measured[i].coverage = 0.0;
+  }
+  const int legend = colourPixels(unknown), line = colourPixels(measured);
+  EXPECT_GT(legend, 0) << "no legend";
+  EXPECT_GT(line, legend + 300) << "the measured series drew no line";
+  EXPECT_LT(legend, 200) << "samples of unknown coverage were drawn";
+}
+
 TEST(Metrics, RecorderWritesSummaryCsvAndPlot) {
   metrics::Recorder r;
   r.summary() = summary("maze", "go_feap", 10.0, 12.5, 0.5, 1, "complete", 2.0);

@@ -192,6 +192,34 @@ TEST(Quadrotor, SaturationKeepsRollAndPitchThenThrustThenYaw) {
   EXPECT_LT(c.moment.head<2>().norm(), 1e-9);
   EXPECT_TRUE(!within(Wrench{c.thrust, Eigen::Vector3d(0.0, 0.0, c.moment.z() * 1.01)}))
       << "the yaw moment could have been larger";
+  // Low thrust (0.5 N a rotor) and a yaw moment: the motors' minimum bounds the moment, the thrust is kept.
+  const Wrench low{2.0, Eigen::Vector3d(0.0, 0.0, 1.0)};
+  const Wrench d = q.saturate(low);
+  EXPECT_TRUE(within(d));
+  EXPECT_NEAR(d.thrust, low.thrust, 1e-9);
+  EXPECT_GT(d.moment.z(), 0.0);
+  EXPECT_TRUE(!within(Wrench{d.thrust, Eigen::Vector3d(0.0, 0.0, d.moment.z() * 1.01)}))
+      << "the yaw moment could have been larger";
+}
+
+// Linear drag decays the velocity at linear_drag / mass: coasting with no thrust from 1 m/s along x, a 2 kg
+// vehicle with 1 kg/s of drag follows v_x = exp(-t / 2), x = 2 (1 - exp(-t / 2)), and falls with
+// v_z = -(g m / c) (1 - exp(-c t / m)).
+TEST(Quadrotor, DragDecaysTheVelocityAtDragOverMass) {
+  QuadrotorParams p;
+  p.mass = 2.0;
+  p.motor_max_thrust = 6.0;
+  p.linear_drag = 1.0;
+  ASSERT_TRUE(p.validate()) << p.validate().message();
+  Quadrotor q{p};
+  QuadrotorState s;
+  s.velocity = Eigen::Vector3d(1.0, 0.0, 0.0);
+  q.setState(s);
+  for (int i = 0; i < 500; ++i) q.step(Wrench{0.0, Eigen::Vector3d::Zero()}, 0.002);
+  const double lambda = p.linear_drag / p.mass, t = 1.0;
+  EXPECT_NEAR(q.state().velocity.x(), std::exp(-lambda * t), 1e-9);
+  EXPECT_NEAR(q.state().position.x(), (1.0 - std::exp(-lambda * t)) / lambda, 1e-9);
+  EXPECT_NEAR(q.state().velocity.z(), -p.gravity / lambda * (1.0 - std::exp(-lambda * t)), 1e-9);
 }
 
 // A reference many metres away (a hold after a refused plan, a hand-sent goal): the vehicle stays
@@ -383,6 +411,10 @@ TEST(Reference, BadCommandsAreRefusedWithAReason) {
   PositionReference far = ok;
   far.position = Eigen::Vector3d(25, 0, 1);
   EXPECT_NE(checkReference(far, bounds).message().find("outside"), std::string::npos);
+  far.position = Eigen::Vector3d(18, 13, 1);  // 8 m outside on two axes: 11.3 m away
+  EXPECT_NE(checkReference(far, bounds).message().find("outside"), std::string::npos);
+  far.position = Eigen::Vector3d(17, 12, 1);  // 7 m on two axes: 9.9 m away, accepted
+  EXPECT_TRUE(checkReference(far, bounds));
   far.position = Eigen::Vector3d(19, 0, 1);  // 9 m outside: still accepted
   EXPECT_TRUE(checkReference(far, bounds));
   for (const Eigen::Vector3d& below : {Eigen::Vector3d(-25, 0, 1), Eigen::Vector3d(1, 1, -11)}) {  // past the minimum
@@ -417,6 +449,14 @@ TEST(Config, InvalidValuesNameTheKey) {
   So3ControllerConfig c;
   c.kv.y() = -1;
   EXPECT_NE(c.validate().message().find("kv"), std::string::npos);
+  // Past pi / 2 the tangent of the tilt limit turns negative and the horizontal force points away.
+  for (double tilt : {1.4, 2.0, 0.05}) {
+    c = So3ControllerConfig();
+    c.max_tilt = tilt;
+    EXPECT_NE(c.validate().message().find("max_tilt"), std::string::npos) << tilt;
+  }
+  c.max_tilt = 1.39;
+  EXPECT_TRUE(c.validate()) << c.validate().message();
 }
 
 // Values that cannot fly are refused by name: infinite ones (an infinite arm length or torque coefficient
@@ -434,7 +474,9 @@ TEST(Config, ValuesThatCannotFlyAreRefusedByName) {
       {"motor_min_thrust", [&](QuadrotorParams& p) { p.motor_min_thrust = inf; }},
       {"motor_min_thrust", [&](QuadrotorParams& p) { p.motor_min_thrust = 3.0; }},  // 4 x 3 N > 0.98 kg g
       {"linear_drag", [&](QuadrotorParams& p) { p.linear_drag = inf; }},
-      {"linear_drag", [&](QuadrotorParams& p) { p.linear_drag = 5000.0; }}};
+      {"linear_drag", [&](QuadrotorParams& p) { p.linear_drag = 5000.0; }},
+      {"linear_drag", [&](QuadrotorParams& p) { p.linear_drag = -0.5; }},  // a push, not a drag
+      {"motor_min_thrust", [&](QuadrotorParams& p) { p.motor_min_thrust = -0.1; }}};
   for (const auto& [key, spoil] : bad) {
     QuadrotorParams p;
     spoil(p);
