@@ -679,6 +679,15 @@ TEST(CheckTrajectory, AStartTooNearAnObstacleMayLeaveButNotComeNearerNorStayNear
   EXPECT_EQ(traj::firstCollisionTime(back, t_away, world.esdf(), config.min_clearance, config.leave_distance, 100.0),
             std::nullopt);
   EXPECT_TRUE(traj::firstCollisionTime(skimming, 1.0, world.esdf(), config.min_clearance, config.leave_distance, 100.0));
+  // leave_distance is counted from the trajectory's start, not from the time asked: 0.8 m along the skim, the
+  // collision is still the one 1 m from the start.
+  double t_mid = 0.0;
+  while (t_mid < skimming.duration() && (skimming.position(t_mid) - near).norm() < 0.8) t_mid += 0.01;
+  ASSERT_LT(t_mid, *t_skim);
+  const std::optional<double> t_skim_mid =
+      traj::firstCollisionTime(skimming, t_mid, world.esdf(), config.min_clearance, config.leave_distance, 100.0);
+  ASSERT_TRUE(t_skim_mid.has_value());
+  EXPECT_NEAR((skimming.position(*t_skim_mid) - near).norm(), 1.0, 0.1);
   // A NaN time reads as the start.
   EXPECT_EQ(traj::firstCollisionTime(back, std::nan(""), world.esdf(), config.min_clearance, config.leave_distance, 100.0),
             t);
