@@ -1,6 +1,7 @@
 // Observable set and coverage on a hand-built room with a sealed cavity.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 
 #include "go_feap/world/scene.h"
@@ -92,6 +93,25 @@ TEST(Shapes, HollowCylinderLeavesTheAxisFree) {
   EXPECT_FALSE(s.isOccupied(Vec3(0.05, 0.05, 1.0)));
   EXPECT_TRUE(s.isOccupied(Vec3(0.85, 0.05, 1.0)));
   EXPECT_FALSE(s.isOccupied(Vec3(1.15, 0.05, 1.0)));
+}
+
+// A pipe is the solid cylinder between its end points, capped flat there: every voxel centre against the
+// closed form (within the radius of the axis, between the ends along it).
+TEST(Shapes, APipeFillsItsCylinderBetweenItsEnds) {
+  Scene s = makeEmptyScene("pipe", {Vec3(-2, -1, 0), Vec3(2, 1, 2)}, 0.1, 0.0);
+  const Vec3 a(-0.98, 0.02, 1.03), b(0.98, 0.02, 1.03);
+  const double radius = 0.27;
+  fillPipe(s, a, b, radius);
+  const auto& g = s.geometry();
+  std::size_t mismatches = 0, inside = 0;
+  for (std::size_t l = 0; l < g.size(); ++l) {
+    const Vec3 c = g.indexToCoord(g.unlinear(l));
+    const bool expect = c.x() >= a.x() && c.x() <= b.x() && std::hypot(c.y() - a.y(), c.z() - a.z()) <= radius;
+    inside += expect;
+    mismatches += expect != (s.occupied.at(g.unlinear(l)) != 0);
+  }
+  EXPECT_GT(inside, 0u);
+  EXPECT_EQ(mismatches, 0u);
 }
 
 // The scan-line fill against a plain breadth-first fill over face neighbours (the oracle), on random

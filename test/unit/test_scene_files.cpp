@@ -472,6 +472,13 @@ TEST(Octomap, LoadsOccupiedLeavesIncludingPrunedOnes) {
   EXPECT_TRUE(s->isOccupied(Vec3(0.75, 0.05, 0.45)));
   EXPECT_TRUE(s->isOccupied(Vec3(-0.55, 1.45, 0.05)));
   EXPECT_FALSE(s->isOccupied(Vec3(0.85, 0.05, 0.45)));
+  // A tree of free space only is refused by name, not loaded as nothing.
+  octomap::OcTree free_only(0.1);
+  free_only.updateNode(octomap::point3d(0.05, 0.05, 0.05), false);
+  ASSERT_TRUE(free_only.writeBinary(d.file("free.bt")));
+  auto none = loadOctomap(d.file("free.bt"));
+  ASSERT_FALSE(none);
+  expectErrorMentions(none.message(), {"free.bt", "no occupied voxels"});
 }
 
 // T_world_file turns and moves points (PCD, PLY) and triangles (STL) alike: a quarter turn round z and a
@@ -573,6 +580,25 @@ TEST(RoundTrip, MazeThroughPcdAndBtKeepsTheOccupiedSet) {
     EXPECT_EQ(back->geometry().dims(), maze->geometry().dims());
     EXPECT_EQ(occupiedSet(*back), occupiedSet(*maze)) << f;
   }
+}
+
+// A tall box (6 m, above the side view's 5 m) gets a side view under the top view, looking along +y with up
+// at the top: 1 x 1 x 6 m at 0.1 m is 15 pixels a voxel, the top view 150 rows, a 6-row gap, then 60 rows of
+// blocks, the top one the box's highest voxel layer. Two voxels, near the top and near the floor, show where
+// they are and not mirrored.
+TEST(SceneImage, TheSideViewHasUpAtTheTop) {
+  Scene s = makeEmptyScene("tall", Aabb{Vec3(0, 0, 0), Vec3(1, 1, 6)}, 0.1, 0.0);
+  ASSERT_TRUE(markOccupied(s, Vec3(0.55, 0.55, 5.05)));  // x index 5, z index 50
+  ASSERT_TRUE(markOccupied(s, Vec3(0.25, 0.35, 0.55)));  // x index 2, z index 5
+  const cv::Mat image = renderSceneImage(s, 900, 5.0);
+  ASSERT_EQ(image.cols, 150);
+  ASSERT_EQ(image.rows, 150 + 6 + 900);
+  auto block = [&](int x, int z) { return image.at<cv::Vec3b>(156 + (59 - z) * 15 + 7, x * 15 + 7); };
+  const cv::Vec3b white(255, 255, 255);
+  EXPECT_NE(block(5, 50), white);
+  EXPECT_NE(block(2, 5), white);
+  EXPECT_EQ(block(5, 59 - 50), white);  // where a picture upside down would have them
+  EXPECT_EQ(block(2, 59 - 5), white);
 }
 
 // The scene picture's top view against the grid: a pixel block is white exactly where no voxel of its
@@ -801,6 +827,14 @@ TEST(BadInput, TruncatedAndCorruptStl) {
   auto low = loadStl(d.file("full.stl"));
   ASSERT_TRUE(low) << low.message();
   EXPECT_EQ(up->vertices, low->vertices);
+  // One record more than the header's count: corrupt (it lost a triangle without a word).
+  expectStlRefused(d.file("extra.stl"), bytes + std::string(50, '\0'),
+                   {"truncated or corrupt binary STL", "12 triangles"});
+  // NUL padding after an ASCII file's text is no sign of a binary one: the same 12 triangles.
+  writeText(d.file("padded.stl"), ascii + std::string(16, '\0'));
+  auto padded = loadStl(d.file("padded.stl"));
+  ASSERT_TRUE(padded) << padded.message();
+  EXPECT_EQ(padded->vertices, low->vertices);
   auto tri = cubeTriangles(0, 1);
   tri[4].y() = std::numeric_limits<double>::quiet_NaN();
   writeBinaryStl(d.file("nan.stl"), tri);
@@ -1147,6 +1181,16 @@ void expectPoints(const std::string& path, const std::vector<Vec3>& want) {
 
 }  // namespace
 
+// A field given twice is refused by name: which of the two x values is the point's would be a guess.
+TEST(BadInput, PcdFieldGivenTwice) {
+  TempDir d;
+  writeText(d.file("twice.pcd"), pcdHeader({{"x", 4, 'F', 1}, {"y", 4, 'F', 1}, {"z", 4, 'F', 1}, {"x", 4, 'F', 1}}, 1,
+                                           "ascii") + "1 2 3 9\n");
+  auto r = loadPointCloud(d.file("twice.pcd"));
+  ASSERT_FALSE(r) << (*r)[0].transpose();
+  expectErrorMentions(r.message(), {"twice.pcd", "'x' twice"});
+}
+
 // x, y, z stored as float64 or an integer type are read at their offsets in their own type: PCL's
 // conversion to PointXYZ, which only matched the names, made every such point (0, 0, 0) without a word.
 TEST(PointCloud, XyzOfEveryNumericTypeKeepTheirValues) {
@@ -1340,6 +1384,10 @@ TEST(BadInput, GeneratedMazeYamlUnknownRepeatedOrWronglyTypedKeys) {
       {"name: m", "name: \"caf\xe9\"", "key 'scene.name' must be UTF-8 text without control characters"},
       {"name: m", "name: \"a\\tb\"", "key 'scene.name' must be UTF-8 text without control characters"},
       {"name: m", "name: \"\xc0\xaf\"", "key 'scene.name' must be UTF-8 text without control characters"},
+      // A Latin-1 byte with more text after it (its next byte is no continuation), a surrogate, past U+10FFFF.
+      {"name: m", "name: \"caf\xe9 bar\"", "key 'scene.name' must be UTF-8 text without control characters"},
+      {"name: m", "name: \"\xed\xa0\x80\"", "key 'scene.name' must be UTF-8 text without control characters"},
+      {"name: m", "name: \"\xf4\x90\x80\x80\"", "key 'scene.name' must be UTF-8 text without control characters"},
   };
   for (const auto& [from, to, expect] : cases) {
     std::string y = maze;
@@ -1355,6 +1403,20 @@ TEST(BadInput, GeneratedMazeYamlUnknownRepeatedOrWronglyTypedKeys) {
   auto u = makeScene(d.file("utf8.yaml"), 0);
   ASSERT_TRUE(u) << u.message();
   EXPECT_EQ(u->name, "caf\xc3\xa9 \xe2\x82\xac \xf0\x9f\x99\x82");
+  // Every maze key reaches the generator (the shipped files all give the defaults for height and cell_size).
+  writeText(d.file("tall.yaml"),
+            "scene:\n  name: tall\n  generator: maze\n  maze: {size_x: 10, size_y: 6, height: 4.5, cell_size: 2.5}\n");
+  auto tall = makeScene(d.file("tall.yaml"), 0);
+  ASSERT_TRUE(tall) << tall.message();
+  MazeConfig config;
+  config.size_x = 10.0;
+  config.size_y = 6.0;
+  config.height = 4.5;
+  config.cell_size = 2.5;
+  auto direct = generateMaze(config, 0);
+  ASSERT_TRUE(direct) << direct.message();
+  EXPECT_NEAR(tall->box.size().z(), 4.5, 1e-9);
+  EXPECT_EQ(occupiedSet(*tall), occupiedSet(*direct));
 }
 
 // Singular means columns (nearly) dependent, whatever the scale: a millimetre mesh turned 45 degrees
