@@ -260,6 +260,18 @@ void expectWellFormed(const Astar& astar, const PathResult& r, const Index3& sta
   EXPECT_LE(r.length, r.raw_length + 1e-9);
   EXPECT_GE(r.length, (r.path.back() - r.path.front()).norm() - 1e-9);
   expectSegmentsTraversable(astar, r.path);
+  // The path is the raw path's shortening: its points are raw points in order, and each kept point is the
+  // last one seen from the one before it (the raw point after it is not), short of the goal.
+  std::size_t at = 0;
+  std::vector<std::size_t> kept;
+  for (const Vec3& p : r.path) {
+    while (at < r.raw_path.size() && r.raw_path[at] != p) ++at;
+    ASSERT_LT(at, r.raw_path.size()) << "a path point that is no raw point, in order";
+    kept.push_back(at);
+  }
+  for (std::size_t i = 1; i + 1 < kept.size(); ++i)
+    EXPECT_FALSE(astar.segmentTraversable(r.raw_path[kept[i - 1]], r.raw_path[kept[i] + 1]))
+        << "the path could have gone on past raw point " << kept[i];
 }
 
 const Index3 kRandomDims(25, 20, 10);
@@ -320,6 +332,12 @@ TEST(AstarConfig, ValidateNamesTheBadKey) {
   c = AstarConfig();
   c.max_expansions = 0;
   EXPECT_NE(c.validate().message().find("max_expansions"), std::string::npos);
+  c.max_expansions = 50000001;  // node indices are 32-bit
+  EXPECT_NE(c.validate().message().find("max_expansions"), std::string::npos);
+  c.max_expansions = 50000000;
+  EXPECT_TRUE(c.validate().ok()) << c.validate().message();
+  c.probe_expansions = 50000001;
+  EXPECT_NE(c.validate().message().find("probe_expansions"), std::string::npos);
   c = AstarConfig();
   c.probe_expansions = -1;
   EXPECT_NE(c.validate().message().find("probe_expansions"), std::string::npos);
@@ -651,6 +669,24 @@ TEST(Astar, CoarseLatticeCrossesOpenSpaceInFewExpansionsAndNeverThroughAThinWall
   }
 }
 
+// On the stride-2 lattice a goal off the start's lattice is snapped onto it (within the snap radius), as with
+// every other stride: the search ends at a lattice voxel nearest the goal, not in a flood that never meets it.
+TEST(Astar, AGoalOffTheStride2LatticeIsSnappedOntoIt) {
+  World world(Index3(20, 20, 10));
+  world.fill(VoxelState::kFree);
+  AstarConfig config = astarConfig(0.0, true);
+  config.stride = 2;
+  const Astar astar(world.occupancy(), world.esdf(), config);
+  const GridGeometry& g = world.geo();
+  const Index3 start(4, 4, 4), goal(9, 6, 5);  // 5, 2 and 1 voxels apart: off the lattice in x and z
+  const PathResult r = astar.search(g.indexToCoord(start), g.indexToCoord(goal), 0.25);
+  ASSERT_EQ(r.status, PathStatus::kFound) << toString(r.status);
+  const Index3 end = g.coordToIndex(r.raw_path.back());
+  EXPECT_TRUE(onLattice(end, start, 2)) << end.transpose();
+  // The nearest lattice voxels lie sqrt(2) voxels away (one step in x and one in z).
+  EXPECT_NEAR((r.raw_path.back() - g.indexToCoord(goal)).norm(), std::sqrt(2.0) * kRes, 1e-9);
+}
+
 TEST(Astar, CorridorNarrowerThanTwiceTheClearanceIsImpassable) {
   // A wall across the whole grid at x = 15 with a slot of `width` voxels in y over the full height;
   // with clearance 0.25 m the slot needs a voxel 2.5 voxels from both sides.
@@ -800,6 +836,23 @@ TEST(Astar, BudgetExceededFallsBackToEuclidean) {
   EXPECT_FALSE(d.euclidean_fallback);
   EXPECT_NEAR(d.metres, full.length, 1e-9);   // a and b are voxel centres
   EXPECT_GT(d.metres, (b - a).norm() + 2.0);  // the detour through the opening
+
+  // A large tie_breaker (the fuel mode's greedy search) trades the optimum for fewer expansions: never shorter
+  // than the optimal raw path above, found in fewer expansions.
+  AstarConfig greedy_config = astarConfig(0.1, true);
+  greedy_config.tie_breaker = 10000.0;
+  const PathResult greedy = Astar(world.occupancy(), world.esdf(), greedy_config).search(a, b);
+  ASSERT_EQ(greedy.status, PathStatus::kFound);
+  EXPECT_GE(greedy.raw_length, full.raw_length - 1e-9);
+  EXPECT_LT(greedy.expansions, full.expansions / 2);
+  // Probes from both ends that run out (50 expansions each) are counted with the search that follows them,
+  // which finds the same path.
+  AstarConfig probe_config = astarConfig(0.1, true);
+  probe_config.probe_expansions = 50;
+  const PathResult probed = Astar(world.occupancy(), world.esdf(), probe_config).search(a, b);
+  ASSERT_EQ(probed.status, PathStatus::kFound);
+  EXPECT_EQ(probed.expansions, full.expansions + 2 * 50);
+  EXPECT_EQ(probed.raw_path, full.raw_path);
 
   // Other failures fall back too: a start far outside the map.
   const Vec3 far(-20.0, 0.5, 1.0);

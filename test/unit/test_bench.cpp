@@ -621,6 +621,18 @@ TEST(Bench, EveryRateAndTheTimeLimitAreCheckedNamingTheKey) {
   bench::ExplorationConfig scaled = base;
   scaled.T_B_C.linear() *= 2.0;
   says(scaled, "depth_camera: T_B_C must be a finite rigid transform");
+  // Each stage runs at most once a control step: a faster rate is refused by name (it ran at the control rate).
+  const double control = base.loop.control_rate;
+  auto faster = [&](auto set, const std::string& key) {
+    bench::ExplorationConfig c = base;
+    set(c);
+    says(c, key + " must be at most loop: control_rate");
+  };
+  faster([&](bench::ExplorationConfig& c) { c.planner_rate = 2.0 * control; }, "planner: rate");
+  faster([&](bench::ExplorationConfig& c) { c.layer_rate = 2.0 * control; }, "layers: rate");
+  faster([&](bench::ExplorationConfig& c) { c.loop.sample_rate = 2.0 * control; }, "metrics: sample_rate");
+  faster([&](bench::ExplorationConfig& c) { c.loop.plan_rate = 2.0 * control; }, "global: rate");
+  faster([](bench::ExplorationConfig& c) { c.loop.control_rate = 50.0, c.camera_rate = 60.0; }, "depth_camera: rate");
   bench::ExplorationConfig equal = base;
   equal.loop.sample_rate = equal.loop.control_rate;  // once a control step: allowed
   equal.planner_rate = equal.loop.control_rate;
@@ -708,6 +720,15 @@ TEST(Bench, TheNoiseFollowsTheSeed) {
   ASSERT_TRUE(a.step());
   ASSERT_TRUE(b.step());
   EXPECT_NE(a.map().occupancy().knownCount(), b.map().occupancy().knownCount());
+  // Dropouts alone (no noise) reach the camera too: with 90 % of the returns dropped the first frame maps less.
+  config->camera.noise_stddev_per_m = 0.0;
+  config->camera.dropout_probability = 0.9;
+  bench::ExplorationRun dropped(*scene, *config, "go_feap", 5.0);
+  config->camera.dropout_probability = 0.0;
+  bench::ExplorationRun clean(*scene, *config, "go_feap", 5.0);
+  ASSERT_TRUE(dropped.step());
+  ASSERT_TRUE(clean.step());
+  EXPECT_LT(dropped.map().occupancy().knownCount(), clean.map().occupancy().knownCount());
 }
 
 // A run never outlasts its time limit by more than a second of simulated time, however slowly the layer

@@ -237,6 +237,20 @@ TEST(Table, ComparesTheFirstPlannerWithEachOtherPairedBySeed) {
   EXPECT_DOUBLE_EQ(unfinished_baseline[0].time_diff_avg, 20.0);
   EXPECT_TRUE(std::isnan(unfinished_baseline[0].time_diff_se));
   EXPECT_EQ(unfinished_baseline[0].faster, 0);  // seed 0's 100 s against a stopped 900 s is not faster
+  // Three pairs (differences 0, 10 and 20 s): the sample standard deviation 10 over sqrt(3). With two pairs
+  // the population and sample forms of the standard error agree; here they do not.
+  std::vector<metrics::Summary> three_pairs;
+  for (std::uint64_t seed = 0; seed < 3; ++seed) {
+    three_pairs.push_back(run("maze", "go_feap", seed, 100.0 + 10.0 * seed, 200, "complete"));
+    three_pairs.push_back(run("maze", "fuel", seed, 100, 200, "complete"));
+  }
+  const auto three = metrics::compare(three_pairs);
+  ASSERT_EQ(three.size(), 1u);
+  EXPECT_EQ(three[0].both_finished, 3);
+  EXPECT_DOUBLE_EQ(three[0].time_diff_avg, 10.0);
+  EXPECT_NEAR(three[0].time_diff_se, 10.0 / std::sqrt(3.0), 1e-9);
+  EXPECT_DOUBLE_EQ(three[0].time_ratio, 1.1);
+  EXPECT_EQ(three[0].faster, 0);
 
   const nlohmann::json j = nlohmann::json::parse(metrics::comparisonJson(c));
   ASSERT_TRUE(j.is_array());
