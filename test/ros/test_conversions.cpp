@@ -246,6 +246,10 @@ TEST(Conversions, TrajectoriesMovingFasterThanTheServerTakesAreNamed) {
   t.yaw = go_feap::trajectory::UniformBspline(leap, 3, 0.05);
   EXPECT_TRUE(says(motionProblem(t, 30.0, 50.0, 20.0), "yaw control polygon turns at 2e+07 rad/s, above 20 rad/s"))
       << motionProblem(t, 30.0, 50.0, 20.0);
+  leap << 0.0, 0.0, 0.0, 1e6;  // in the last span
+  t.yaw = go_feap::trajectory::UniformBspline(leap, 3, 0.05);
+  EXPECT_TRUE(says(motionProblem(t, 30.0, 50.0, 20.0), "yaw control polygon turns at 2e+07 rad/s, above 20 rad/s"))
+      << motionProblem(t, 30.0, 50.0, 20.0);
   Eigen::MatrixXd huge(1, 8);
   huge << 1e308, 0.0, 1e308, 0.0, 1e308, 0.0, 1e308, 0.0;
   t.yaw = go_feap::trajectory::UniformBspline(huge, 3, 0.05);
@@ -327,8 +331,19 @@ TEST(MessageChecks, FrontierArraysWithAnyValueThatIsNotFiniteOrACountThatDoesNot
   EXPECT_TRUE(says(why, "box") && says(why, "not finite")) << why;
   why = broken([&](go_feap::Frontier& f) { std::swap(f.aabb_min, f.aabb_max); });
   EXPECT_TRUE(says(why, "box") && says(why, "inverted")) << why;
+  why = broken([&](go_feap::Frontier& f) { f.aabb_min.z = f.aabb_max.z + 0.1; });  // inverted in z alone
+  EXPECT_TRUE(says(why, "box") && says(why, "inverted")) << why;
+  EXPECT_EQ(broken([&](go_feap::Frontier& f) { f.aabb_min = f.aabb_max; }), "") << "a box of one point";
   why = broken([&](go_feap::Frontier& f) { f.duration = -1.0; });
   EXPECT_TRUE(says(why, "duration")) << why;
+  why = broken([&](go_feap::Frontier& f) { f.duration = inf; });
+  EXPECT_TRUE(says(why, "duration")) << why;
+  why = broken([&](go_feap::Frontier& f) {
+    f.viewpoint_positions = {point(0.5, -0.5, 1.5)};
+    f.viewpoint_yaws = {nan};
+    f.viewpoint_visible = {40};
+  });
+  EXPECT_TRUE(says(why, "viewpoint 0")) << why;
   why = broken([&](go_feap::Frontier& f) { f.duration = nan; });
   EXPECT_TRUE(says(why, "duration")) << why;
   why = broken([&](go_feap::Frontier& f) { f.omission_likelihood = inf; });
@@ -409,6 +424,12 @@ TEST(MessageChecks, ToursLayersMapUpdatesAndStatusesThatAreMalformedAreNamed) {
   go_feap::LayerBounds bad_layer = layer;
   bad_layer.z_min = std::numeric_limits<double>::quiet_NaN();
   EXPECT_TRUE(says(layerBoundsProblem(bad_layer), "band z")) << layerBoundsProblem(bad_layer);
+  for (const auto& [lo, hi] : {std::pair{1.0, std::numeric_limits<double>::infinity()},
+                                std::pair{-std::numeric_limits<double>::infinity(), 2.0}}) {
+    bad_layer = layer;
+    bad_layer.z_min = lo, bad_layer.z_max = hi;  // ordered, but not a band
+    EXPECT_TRUE(says(layerBoundsProblem(bad_layer), "band z")) << layerBoundsProblem(bad_layer);
+  }
   bad_layer = layer;
   bad_layer.z_max = 1.0;  // empty
   EXPECT_TRUE(says(layerBoundsProblem(bad_layer), "z_min < z_max")) << layerBoundsProblem(bad_layer);
@@ -448,6 +469,8 @@ TEST(MessageChecks, ToursLayersMapUpdatesAndStatusesThatAreMalformedAreNamed) {
   EXPECT_TRUE(says(explorationStatusProblem(bad_status), "elapsed")) << explorationStatusProblem(bad_status);
   bad_status = status;
   bad_status.distance = -3.0;
+  EXPECT_TRUE(says(explorationStatusProblem(bad_status), "distance")) << explorationStatusProblem(bad_status);
+  bad_status.distance = std::numeric_limits<double>::infinity();
   EXPECT_TRUE(says(explorationStatusProblem(bad_status), "distance")) << explorationStatusProblem(bad_status);
   bad_status = status;
   bad_status.coverage = std::numeric_limits<double>::infinity();
@@ -559,6 +582,10 @@ TEST(MessageChecks, DepthImagesThatCannotBeReadWholeAreNamed) {
   bad.width = 0;
   EXPECT_TRUE(says(depthImageProblem(bad), "0x3")) << depthImageProblem(bad);
   bad = img;
+  bad.height = 0;  // no rows, no bytes: nothing to read either
+  bad.data.clear();
+  EXPECT_TRUE(says(depthImageProblem(bad), "4x0")) << depthImageProblem(bad);
+  bad = img;
   bad.step = 12;  // narrower than 4 pixels of 4 bytes
   EXPECT_TRUE(says(depthImageProblem(bad), "step 12")) << depthImageProblem(bad);
   bad = img;
@@ -634,7 +661,7 @@ TEST(TfSampleLog, GivesTheSamplesRoundAStampAsTf2InterpolatesBetweenThem) {
   b = log.around("body", t(102.0));  // a gap it turned across
   ASSERT_TRUE(b && b->after);
   EXPECT_TRUE(b->moved);
-  log.add("body", t(111.0), at(0.0));  // 100.x and 101.5 now more than 10 s behind: dropped
+  log.add("body", t(111.0), at(0.0));  // 100.x now more than 10 s behind: dropped
   EXPECT_FALSE(log.around("body", t(100.1)).has_value());
   b = log.around("body", t(105.0));
   ASSERT_TRUE(b);
@@ -646,6 +673,30 @@ TEST(TfSampleLog, GivesTheSamplesRoundAStampAsTf2InterpolatesBetweenThem) {
   EXPECT_EQ(*b->after, t(50.0));
   log.add("body", t(0.0), at(0.0));  // a stamp of 0 is no sample
   EXPECT_FALSE(log.around("body", t(0.0)).has_value());
+}
+
+// A link moved between two samples when it went more than 1 mm or turned more than 1 mrad, along any axis:
+// 5 mm up, 5 mrad about z and 5 mm along x are moves, 0.5 mm is none.
+TEST(TfSampleLog, AMoveIsAMillimetreOrAMilliradianAlongAnyAxis) {
+  go_feap::ros_tf::SampleLog log(10.0);
+  auto pose = [](double x, double z, double yaw) {
+    geometry_msgs::Transform p;
+    p.translation.x = x, p.translation.z = z;
+    p.rotation.w = std::cos(0.5 * yaw), p.rotation.z = std::sin(0.5 * yaw);
+    return p;
+  };
+  const std::vector<std::tuple<std::string, geometry_msgs::Transform, bool>> cases = {
+      {"up", pose(0.0, 1.005, 0.0), true},
+      {"turned", pose(0.0, 1.0, 0.005), true},
+      {"along", pose(0.005, 1.0, 0.0), true},
+      {"jitter", pose(0.0005, 1.0, 0.0), false}};
+  for (const auto& [link, after, moved] : cases) {
+    log.add(link, ros::Time(10.0), pose(0.0, 1.0, 0.0));
+    log.add(link, ros::Time(11.0), after);
+    const auto b = log.around(link, ros::Time(10.5));
+    ASSERT_TRUE(b && b->after) << link;
+    EXPECT_EQ(b->moved, moved) << link;
+  }
 }
 
 TEST(Guarded, AnExceptionFromACallbackStaysInItAndTheNextMessageIsTaken) {
