@@ -644,13 +644,41 @@ TEST(Bench, EveryRateAndTheTimeLimitAreCheckedNamingTheKey) {
     EXPECT_THROW(bench::ExplorationRun(*scene, base, "go_feap", bad), std::invalid_argument) << bad;
 }
 
+// A mistyped value in any of the five files is refused naming the file and the key: a group whose reader's
+// error went unchecked flew its struct default without a word.
+TEST(Bench, AMistypedValueInAnyFileIsNamedWithTheFile) {
+  const std::string go_feap_mode = readText(GO_FEAP_CONFIG_DIR "/modes/go_feap.yaml");
+  for (const auto& [file, from, to, key] :
+       std::vector<std::array<std::string, 4>>{
+           {"sim.yaml", "  fx: 0.0", "  fx: wide", "depth_camera/fx"},
+           {"mapping.yaml", "max_distance: 2.0", "max_distance: far", "esdf/max_distance"},
+           {"exploration.yaml", "same_target_yaw: 0.3", "same_target_yaw: [0.3]", "local/same_target_yaw"},
+           {"trajectory.yaml", "  a_max: 2.0", "  a_max: high", "optimizer/a_max"},
+           {"bench.yaml", "control_rate: 100.0", "control_rate: fast", "loop/control_rate"}}) {
+    const std::filesystem::path dir = configWithMode("go_feap", go_feap_mode);
+    ASSERT_TRUE(replaceOnce(dir / file, from, to));
+    auto c = bench::loadExplorationConfig(dir.string(), "go_feap");
+    std::filesystem::remove_all(dir);
+    ASSERT_FALSE(c) << file;
+    EXPECT_NE(c.message().find("/" + file), std::string::npos) << c.message();
+    EXPECT_NE(c.message().find(": parameter '" + key + "' has the wrong type"), std::string::npos) << c.message();
+  }
+}
+
 // Rates whose shipped values equal the struct defaults are read all the same: a user's edit of any of them
-// reaches the run.
-TEST(Bench, TheRatesAreReadFromTheirFiles) {
+// reaches the run. So do neighbouring keys of one line whose shipped values are equal (v_max and a_max 2.0,
+// the same-target distance and heading 0.3, the camera's intrinsics all 0), each to its own field.
+TEST(Bench, TheRatesAndNeighbouringKeysAreReadFromTheirFiles) {
   const std::filesystem::path dir = configWithMode("rates", "planner:\n  rate: 20.0\nlayers:\n  rate: 4.0\n");
   ASSERT_TRUE(replaceOnce(dir / "exploration.yaml", "sample_rate: 2.0", "sample_rate: 4.0"));
   ASSERT_TRUE(replaceOnce(dir / "bench.yaml", "control_rate: 100.0", "control_rate: 200.0"));
   ASSERT_TRUE(replaceOnce(dir / "sim.yaml", "  rate: 15.0", "  rate: 20.0"));
+  for (const auto& [from, to] : std::vector<std::pair<std::string, std::string>>{
+           {"  fx: 0.0", "  fx: 500.0"}, {"  fy: 0.0", "  fy: 400.0"},
+           {"  cx: 0.0", "  cx: 319.5"}, {"  cy: 0.0", "  cy: 239.5"}})
+    ASSERT_TRUE(replaceOnce(dir / "sim.yaml", from, to));
+  ASSERT_TRUE(replaceOnce(dir / "exploration.yaml", "same_target_distance: 0.3", "same_target_distance: 0.25"));
+  ASSERT_TRUE(replaceOnce(dir / "trajectory.yaml", "  a_max: 2.0", "  a_max: 3.0"));
   auto c = bench::loadExplorationConfig(dir.string(), "rates");
   std::filesystem::remove_all(dir);
   ASSERT_TRUE(c) << c.message();
@@ -659,6 +687,14 @@ TEST(Bench, TheRatesAreReadFromTheirFiles) {
   EXPECT_DOUBLE_EQ(c->loop.sample_rate, 4.0);
   EXPECT_DOUBLE_EQ(c->loop.control_rate, 200.0);
   EXPECT_DOUBLE_EQ(c->camera_rate, 20.0);
+  EXPECT_DOUBLE_EQ(c->camera.fx, 500.0);
+  EXPECT_DOUBLE_EQ(c->camera.fy, 400.0);
+  EXPECT_DOUBLE_EQ(c->camera.cx, 319.5);
+  EXPECT_DOUBLE_EQ(c->camera.cy, 239.5);
+  EXPECT_DOUBLE_EQ(c->local.same_target_distance, 0.25);
+  EXPECT_DOUBLE_EQ(c->local.same_target_yaw, 0.3);
+  EXPECT_DOUBLE_EQ(c->optimizer.a_max, 3.0);
+  EXPECT_DOUBLE_EQ(c->optimizer.v_max, 2.0);
 }
 
 // What a run records, against the run itself: rows of metrics.csv at t = 0 and every 1 / sample_rate s, the

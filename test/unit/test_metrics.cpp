@@ -675,7 +675,8 @@ TEST(YamlReader, ReadsNestedKeysOverlaysAndNamesBadOnes) {
   double missing = 0;
   r.get("a/missing", missing);
   EXPECT_FALSE(r.ok());
-  EXPECT_NE(r.error().find("parameter 'a/missing' is missing"), std::string::npos) << r.error();
+  EXPECT_EQ(r.error(), (dir / "base.yaml").string() + " + " + (dir / "over.yaml").string() +
+                           ": parameter 'a/missing' is missing");  // the files it looked in, and the key
   go_feap::common::YamlReader under_scalar((dir / "base.yaml").string());
   under_scalar.get("flag/x", missing);  // was read as the null under true: "has the wrong type"
   EXPECT_NE(under_scalar.error().find("parameter 'flag/x' is missing"), std::string::npos) << under_scalar.error();
@@ -685,10 +686,18 @@ TEST(YamlReader, ReadsNestedKeysOverlaysAndNamesBadOnes) {
   EXPECT_NE(typed.error().find("parameter 'a/s' has the wrong type"), std::string::npos) << typed.error();
   // Vectors and matrices hold exactly their count of numbers; a matrix is read row-major.
   std::ofstream(dir / "shapes.yaml") << "a:\n  v4: [1, 2, 3, 4]\n  m17: [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0]\n"
-                                        "  m16: [1, 0, 0, 0.1, 0, 1, 0, 0.2, 0, 0, 1, 0.3, 0, 0, 0, 1]\n";
+                                        "  m16: [1, 0, 0, 0.1, 0, 1, 0, 0.2, 0, 0, 1, 0.3, 0, 0, 0, 1]\n"
+                                        "  v2: [1, 2]\n  m15: [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0]\n";
   go_feap::common::YamlReader four((dir / "shapes.yaml").string());
   four.getVec3("a/v4", v);
   EXPECT_NE(four.error().find("parameter 'a/v4' must hold 3 numbers"), std::string::npos) << four.error();
+  go_feap::common::YamlReader two((dir / "shapes.yaml").string());
+  two.getVec3("a/v2", v);  // too few too: the third was read past the end
+  EXPECT_NE(two.error().find("parameter 'a/v2' must hold 3 numbers"), std::string::npos) << two.error();
+  go_feap::common::YamlReader fifteen((dir / "shapes.yaml").string());
+  Eigen::Matrix4d M15;
+  fifteen.getMatrix4("a/m15", M15);
+  EXPECT_NE(fifteen.error().find("must hold 16 numbers"), std::string::npos) << fifteen.error();
   Eigen::Matrix4d M;
   go_feap::common::YamlReader seventeen((dir / "shapes.yaml").string());
   seventeen.getMatrix4("a/m17", M);
