@@ -55,6 +55,8 @@ TEST(Parameters, ANodeletWithAnInvalidOrMissingParameterDoesNotStartAndNamesIt) 
       {"missing_layers", "go_feap/LayerManager", "layers/"},                    // no exploration.yaml at all
       {"bad_box", "go_feap/LayerManager", "exploration_box/min"},              // an infinite top: NaN bands
       {"bad_box_min", "go_feap/LayerManager", "exploration_box/min"},          // an infinite bottom
+      {"bad_box_inverted", "go_feap/LayerManager", "exploration_box/min"},     // min above max in x
+      {"empty_world_frame", "go_feap/GlobalPlanner", "world_frame"},           // no frame at all
       {"bad_box_length", "go_feap/LayerManager", "exploration_box/min"},       // 4 numbers: the 4th was dropped
       {"bad_extrinsic_length", "go_feap/DepthCamera", "depth_camera/T_B_C"},   // 17 numbers
       {"bad_pose_tolerance", "go_feap/EsdfMapper", "mapper/pose_tolerance"},    // 5 s
