@@ -65,6 +65,14 @@ class Replay : public ::testing::Test {
     const int status = std::system(command.c_str());
     return readText(out) + (status == 0 ? "" : "\n(launch exit status " + std::to_string(status) + ")");
   }
+  // The parameters a launch would set, as YAML (roslaunch --dump-params: no master, no node started).
+  std::string dumpParams(const std::string& args) {
+    // roslaunch's warnings go to a file of their own (runCommand merges the shell's stderr into the YAML).
+    const auto [status, out] = runCommand("bash -c 'roslaunch --dump-params go_feap " + args + " 2> " +
+                                          (dir_ / "params.err").string() + "'");
+    EXPECT_EQ(status, 0) << args << ":\n" << out << readText(dir_ / "params.err");
+    return out;
+  }
   fs::path dir_, data_;
 };
 
@@ -75,18 +83,12 @@ std::string inQuotes(const fs::path& path) { return "\"" + path.string() + "\"";
 // (REP 117) and 0/NaN is no measurement, skipped; in 16UC1 (record_flight.launch, as a D435i) 0 is also
 // nothing in range, cast free, or the recording would map no free space beyond the walls' reach.
 TEST_F(Replay, TheMapperCastsZeroDepthFreeOnlyForSixteenBitSimulation) {
-  auto dumped = [&](const std::string& args) {
-    const fs::path out = dir_ / "params.out";
-    const std::string command = "bash -c 'roslaunch --dump-params go_feap " + args + "' > " + out.string() + " 2>&1";
-    EXPECT_EQ(std::system(command.c_str()), 0) << args;
-    return readText(out);
-  };
   const std::string key = "/esdf_mapper/occupancy/invalid_as_free: ";
-  const std::string recording = dumped("record_flight.launch bag:=" + inQuotes(data_ / "x.bag"));
+  const std::string recording = dumpParams("record_flight.launch bag:=" + inQuotes(data_ / "x.bag"));
   EXPECT_NE(recording.find(key + "true"), std::string::npos) << recording;
   for (const std::string& args : {std::string("sim_exploration.launch"), std::string("maze.launch"),
                                   std::string("onboard.launch"), "replay.launch bag:=" + inQuotes(data_ / "x.bag")}) {
-    const std::string params = dumped(args);
+    const std::string params = dumpParams(args);
     EXPECT_NE(params.find(key + "false"), std::string::npos) << args << ":\n" << params;
   }
 }
@@ -103,13 +105,9 @@ std::string nodeArgs(const std::string& node, const std::string& args) {
 // extrinsic flew); the planner mode in every planning nodelet; the simulated time limit; the depth encoding
 // a recording uses; the topics the chain is given.
 TEST_F(Replay, LaunchArgumentsReachTheNodesTheyName) {
-  auto dumpParams = [&](const std::string& args) {
-    const fs::path out = dir_ / "params.yaml";
-    const std::string command = "bash -c 'roslaunch --dump-params go_feap " + args + "' > " + out.string() + " 2> " +
-                                (dir_ / "params.err").string();
-    EXPECT_EQ(std::system(command.c_str()), 0) << args;
+  auto dumpYaml = [&](const std::string& args) {
     try {
-      return YAML::LoadFile(out.string());
+      return YAML::Load(dumpParams(args));
     } catch (const YAML::Exception& e) {
       ADD_FAILURE() << args << ": " << e.what();
       return YAML::Node();
@@ -142,7 +140,7 @@ TEST_F(Replay, LaunchArgumentsReachTheNodesTheyName) {
   const std::string box = " box_min:=[-3.5,-2.5,0.5] box_max:=[4.5,3.5,2.5] world_frame:=vio";
   const std::string mine = " config_dir:=" + inQuotes(config) + " camera_config:=" + inQuotes(config / "d435i.yaml");
   for (const std::string& launch : {std::string("onboard.launch"), "replay.launch bag:=" + inQuotes(data_ / "x.bag")}) {
-    const YAML::Node p = dumpParams(launch + box + mine);
+    const YAML::Node p = dumpYaml(launch + box + mine);
     for (const char* node : {"/esdf_mapper", "/frontier_finder", "/layer_manager"}) {
       EXPECT_EQ(asNumbers(p[std::string(node) + "/exploration_box/min"]), (std::vector<double>{-3.5, -2.5, 0.5}))
           << launch << " " << node;
@@ -165,7 +163,7 @@ TEST_F(Replay, LaunchArgumentsReachTheNodesTheyName) {
   }
   // The planner mode: each key of modes/fuel.yaml, with its value, in every nodelet that loads a mode.
   {
-    const YAML::Node p = dumpParams("sim_exploration.launch planner:=fuel");
+    const YAML::Node p = dumpYaml("sim_exploration.launch planner:=fuel");
     const YAML::Node fuel = YAML::LoadFile(GO_FEAP_SOURCE_DIR "/config/modes/fuel.yaml");
     std::size_t checked = 0;
     std::function<void(const YAML::Node&, const std::string&)> leaves = [&](const YAML::Node& n, const std::string& at) {
@@ -184,15 +182,15 @@ TEST_F(Replay, LaunchArgumentsReachTheNodesTheyName) {
     EXPECT_EQ(p["/metrics_recorder/metrics/planner"].as<std::string>(""), "fuel");
   }
   // The simulated time limit: the argument's, powerplant.launch's 3000 s, exploration.yaml's 900 s.
-  EXPECT_DOUBLE_EQ(dumpParams("sim_exploration.launch time_limit:=1234.5")["/layer_manager/layers/time_limit"].as<double>(0.0),
+  EXPECT_DOUBLE_EQ(dumpYaml("sim_exploration.launch time_limit:=1234.5")["/layer_manager/layers/time_limit"].as<double>(0.0),
                    1234.5);
-  EXPECT_DOUBLE_EQ(dumpParams("powerplant.launch")["/layer_manager/layers/time_limit"].as<double>(0.0), 3000.0);
-  EXPECT_DOUBLE_EQ(dumpParams("maze.launch")["/layer_manager/layers/time_limit"].as<double>(0.0), 900.0);
+  EXPECT_DOUBLE_EQ(dumpYaml("powerplant.launch")["/layer_manager/layers/time_limit"].as<double>(0.0), 3000.0);
+  EXPECT_DOUBLE_EQ(dumpYaml("maze.launch")["/layer_manager/layers/time_limit"].as<double>(0.0), 900.0);
   // A recording's depth is a D435i's, 16-bit millimetres; the simulation's own is 32-bit metres.
-  EXPECT_EQ(dumpParams("record_flight.launch bag:=" + inQuotes(data_ / "x.bag"))["/depth_camera/depth_camera/encoding"]
+  EXPECT_EQ(dumpYaml("record_flight.launch bag:=" + inQuotes(data_ / "x.bag"))["/depth_camera/depth_camera/encoding"]
                 .as<std::string>(""),
             "16UC1");
-  EXPECT_EQ(dumpParams("sim_exploration.launch")["/depth_camera/depth_camera/encoding"].as<std::string>(""), "32FC1");
+  EXPECT_EQ(dumpYaml("sim_exploration.launch")["/depth_camera/depth_camera/encoding"].as<std::string>(""), "32FC1");
   // The topics: the trajectory planner hears the commands where the server sends them, the mapper the
   // camera pose where it is given.
   EXPECT_NE(nodeArgs("/trajectory_planner", "onboard.launch position_cmd_topic:=/cmd_x").find("position_cmd:=/cmd_x"),
@@ -264,8 +262,8 @@ TEST_F(Replay, TheScriptsRefuseBadArgumentsBeforeInstallingOrBuilding) {
     EXPECT_FALSE(fs::exists(unmade)) << call << " began a build";
   }
   for (const char* script : {"run", "record_flight", "paper_tables", "test"}) {
-    const std::string command = scripts + script + " --help > /dev/null 2>&1";
-    EXPECT_EQ(std::system(command.c_str()), 0) << script << " --help";
+    const auto [status, out] = runCommand(scripts + script + " --help");
+    EXPECT_EQ(status, 0) << script << " --help:\n" << out;
   }
 }
 
