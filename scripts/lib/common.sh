@@ -68,14 +68,35 @@ build_package() {
     { tail -40 "$GO_FEAP_BUILD.configure.log" >&2; log "configure failed (log: $GO_FEAP_BUILD.configure.log)"; return 1; }
   cmake --build "$GO_FEAP_BUILD" -j"${GO_FEAP_JOBS:-2}" >"$GO_FEAP_BUILD.build.log" 2>&1 ||
     { grep -E "error|Error" "$GO_FEAP_BUILD.build.log" | head -40 >&2; log "build failed (log: $GO_FEAP_BUILD.build.log)"; return 1; }
-  # The catkin setup scripts read unset variables: source them without `set -u`.
+  source_setup
+  log "build ok"
+}
+
+# Sources the build's catkin setup (ROS_PACKAGE_PATH and the rest), which reads unset variables: without
+# `set -u` while it runs.
+source_setup() {
   local nounset=0
   [[ $- == *u* ]] && nounset=1
   set +u
   # shellcheck disable=SC1091
   source "$GO_FEAP_BUILD/devel/setup.bash"
   [ "$nounset" = 1 ] && set -u
-  log "build ok"
+}
+
+# prepare_build NO_BUILD: install and build (NO_BUILD false), or, with --no-build (true), use the build
+# already in $GO_FEAP_BUILD as it is, refused when there is none. The test suite runs the scripts so from
+# inside `make run_tests`, where configuring the same build folder again would rewrite the makefiles that
+# make is running; a user can run on a build while editing sources not meant to be built yet.
+prepare_build() {
+  if [ "$1" != true ]; then
+    install_dependencies
+    build_package
+    return
+  fi
+  [ -f "$GO_FEAP_BUILD/devel/setup.bash" ] && [ -x "$GO_FEAP_BUILD/devel/lib/go_feap/go_feap_bench" ] ||
+    { log "--no-build: there is no build in $GO_FEAP_BUILD (run once without --no-build)"; return 2; }
+  source_setup
+  log "--no-build: using the build in $GO_FEAP_BUILD as it is"
 }
 
 # Kills (KILL) every process whose environment holds GO_FEAP_SESSION_TOKEN=$1.

@@ -23,7 +23,9 @@
 #include <functional>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -231,7 +233,8 @@ TEST_F(Replay, EveryNodeletOfEveryLaunchIsRequired) {
 
 // The user scripts refuse bad arguments by name, exit 2, before the install and the build (minutes on a
 // fresh machine): their build folder is pointed at one that must stay unmade, and a refusal that did not
-// come is cut short by the timeout. --help is no error.
+// come is cut short by the timeout; --no-build is refused there, as there is no build to use. --help is no
+// error.
 TEST_F(Replay, TheScriptsRefuseBadArgumentsBeforeInstallingOrBuilding) {
   const fs::path unmade = dir_ / "unmade build";
   const fs::path done = dir_ / "done";
@@ -248,6 +251,9 @@ TEST_F(Replay, TheScriptsRefuseBadArgumentsBeforeInstallingOrBuilding) {
            {"run nowhere.yaml", "neither maze, powerplant nor an existing scene YAML"},
            {"run --out " + inQuotes(done), "already holds a run's summary.json"},
            {"run --fast", "unknown option --fast"},
+           {"run --no-build", "--no-build: there is no build in"},
+           {"record_flight --no-build --out " + inQuotes(dir_ / "none.bag"), "--no-build: there is no build in"},
+           {"paper_tables --no-build", "--no-build: there is no build in"},
            {"record_flight --duration 0", "--duration must be a whole number of seconds"},
            {"record_flight --out " + inQuotes(done / "flight.bag"), "already exists"},
            {"record_flight --seed x", "--seed must be a whole number"},
@@ -267,10 +273,59 @@ TEST_F(Replay, TheScriptsRefuseBadArgumentsBeforeInstallingOrBuilding) {
   }
 }
 
+// scripts/run, the main command, on the small maze with the suite's own build (--no-build): it explores
+// through the ROS chain to the end, exits 0, prints progress lines and a summary whose figures are
+// summary.json's, and leaves the results folder the README lists. Its output goes to a file, not a pipe (a
+// leftover of a killed run would hold a pipe open).
+TEST_F(Replay, ScriptsRunExploresTheSmallMazeAndLeavesItsResults) {
+  const fs::path out = data_ / "run results", log = dir_ / "run.log";
+  const int status = std::system(("GO_FEAP_BUILD=" + inQuotes(GO_FEAP_BUILD_DIR) + " timeout --kill-after=30 900 " +
+                                  GO_FEAP_SOURCE_DIR "/scripts/run " GO_FEAP_SOURCE_DIR
+                                  "/config/scenes/maze_small.yaml --no-build --rate-factor 2 --out " +
+                                  inQuotes(out) + " > " + log.string() + " 2>&1 < /dev/null").c_str());
+  const std::string text = readText(log);
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "status " << status << "\n" << text;
+  EXPECT_NE(text.find("--no-build: using the build in"), std::string::npos) << text;
+  EXPECT_EQ(text.find("dependencies"), std::string::npos) << "--no-build installed:\n" << text;
+  EXPECT_EQ(text.find("building in"), std::string::npos) << "--no-build built:\n" << text;
+  // Progress lines, one per line off a terminal, with the state and the coverage.
+  EXPECT_NE(text.find("\n[go_feap] EXPLORE band"), std::string::npos) << text;
+
+  for (const char* file : {"summary.json", "metrics.csv", "coverage.png", "scene/scene.json", "ros.log"})
+    EXPECT_TRUE(fs::is_regular_file(out / file)) << file << " missing from " << out;
+  const YAML::Node summary = YAML::LoadFile((out / "summary.json").string());  // JSON is YAML
+  EXPECT_EQ(summary["scene"].as<std::string>(), "maze_small");
+  EXPECT_EQ(summary["finish_reason"].as<std::string>(), "complete");
+  const double coverage = summary["coverage"].as<double>();
+  EXPECT_GE(coverage, 0.95);
+  EXPECT_EQ(summary["collisions"].as<int>(), 0);
+  std::ostringstream line;
+  line << std::fixed << std::setprecision(1) << "summary: maze_small (seed 0, go_feap): complete after "
+       << summary["exploration_time_s"].as<double>() << " s simulated, " << summary["flight_distance_m"].as<double>()
+       << " m flown, coverage " << 100.0 * coverage << " %, 0 collision(s), wall ";
+  EXPECT_NE(text.find(line.str()), std::string::npos) << "no '" << line.str() << "' in:\n" << text;
+  EXPECT_NE(text.find("results: " + out.string() + " ("), std::string::npos) << text;
+  // metrics.csv: its header and a row per sample (2 Hz of simulated time).
+  std::istringstream csv(readText(out / "metrics.csv"));
+  std::string header, row;
+  std::getline(csv, header);
+  int rows = 0;
+  while (std::getline(csv, row)) rows += !row.empty();
+  EXPECT_EQ(header.rfind("t,coverage,", 0), 0u) << header;
+  EXPECT_GT(rows, 10) << "metrics.csv:\n" << header;
+  const std::string png = readText(out / "coverage.png");
+  EXPECT_EQ(png.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8)) << "coverage.png is no PNG";
+}
+
+// scripts/record_flight records a short simulated flight (with the suite's own build), and replay.launch
+// maps it.
 TEST_F(Replay, RecordedFlightRebuildsTheWallsItSaw) {
   const std::string bag = (data_ / "flight.bag").string(), bt = (data_ / "replay.bt").string();
-  const std::string rec = launch("record_flight.launch bag:=" + inQuotes(bag) + " duration:=12", 240);
-  ASSERT_TRUE(fs::exists(bag)) << rec.substr(rec.size() > 3000 ? rec.size() - 3000 : 0);
+  const auto [recorded, rec] = runCommand("GO_FEAP_BUILD=" + inQuotes(GO_FEAP_BUILD_DIR) + " timeout --kill-after=30 300 " +
+                                          GO_FEAP_SOURCE_DIR "/scripts/record_flight --no-build --duration 12 --out " +
+                                          inQuotes(bag) + " < /dev/null");
+  ASSERT_EQ(recorded, 0) << rec << readText(data_ / "flight.log");
+  ASSERT_TRUE(fs::exists(bag)) << rec;
   {
     // A flight, not a hover: the chain heard the simulator under the onboard names and flew. (Remapped
     // around the include, the names were overridden by each node's own remap, and the bag held the
