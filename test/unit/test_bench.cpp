@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -484,16 +485,37 @@ TEST(Bench, ResultsFoldersHoldEachRunOnceAndTheTablesWhole) {
   const std::string bench = GO_FEAP_BENCH_BIN, out = (dir / "out").string();
   const auto [rc, said] = runCommand("timeout 300 " + bench + " --scene " + (dir / "from_file.yaml").string() + "," +
                                      (dir / "named.yaml").string() + " --planner go_feap,fuel --runs 2 --seed 3 "
-                                     "--max-sim-time 2 --out " + out);
+                                     "--max-sim-time 2 --perf --out " + out);
   ASSERT_EQ(rc, 0) << said;
   EXPECT_NE(said.find("takes no seed: run once per planner"), std::string::npos) << said;
+  std::size_t mapping_calls = 0;  // over the six runs' summaries
   for (const char* planner : {"go_feap", "fuel"}) {
     EXPECT_TRUE(fs::is_regular_file(fs::path(out) / "from_file" / planner / "seed0" / "summary.json")) << planner;
     EXPECT_FALSE(fs::exists(fs::path(out) / "from_file" / planner / "seed3")) << planner;
     EXPECT_FALSE(fs::exists(fs::path(out) / "from_file" / planner / "seed4")) << planner;
     for (const char* file : {"seed3/summary.json", "seed4/summary.json", "seed3/events.log"})
       EXPECT_TRUE(fs::is_regular_file(fs::path(out) / "named" / planner / file)) << planner << " " << file;
+    for (const auto& [folder, seed] : std::vector<std::pair<std::string, int>>{{"from_file/", 0}, {"named/", 3}, {"named/", 4}}) {
+      const fs::path file = fs::path(out) / (folder + std::string(planner)) / ("seed" + std::to_string(seed)) / "summary.json";
+      const nlohmann::json summary = nlohmann::json::parse(readText(file), nullptr, false);
+      ASSERT_TRUE(summary.is_object()) << file;
+      EXPECT_EQ(summary["seed"], seed) << file;  // the run's own seed, which pairs the runs below
+      mapping_calls += summary["compute_ms"]["mapping"]["count"].get<std::size_t>();
+    }
   }
+  // --perf: the calls of each block counted over every run.
+  const std::size_t perf_at = said.find("\n  mapping ");
+  ASSERT_NE(perf_at, std::string::npos) << said;
+  const std::size_t calls_at = said.find('(', perf_at);
+  EXPECT_EQ(said.substr(calls_at, said.find('\n', calls_at) - calls_at), "(" + std::to_string(mapping_calls) + " calls)")
+      << said;
+  // One coverage plot per scene (of its first seed), from_file's with its one seed.
+  EXPECT_TRUE(fs::is_regular_file(fs::path(out) / "from_file_coverage.png"));
+  EXPECT_TRUE(fs::is_regular_file(fs::path(out) / "named_coverage.png"));
+  // The paired comparison: both of café's seeds, from_file's one.
+  const nlohmann::json pairs = nlohmann::json::parse(readText(fs::path(out) / "comparison.json"), nullptr, false);
+  ASSERT_TRUE(pairs.is_array() && pairs.size() == 2u) << pairs.dump();
+  for (const nlohmann::json& c : pairs) EXPECT_EQ(c["pairs"], c["scene"] == "from_file" ? 1 : 2) << c.dump();
   const std::string table = readText(fs::path(out) / "table.json");
   EXPECT_NE(table.find("\"scene\": \"from_file\""), std::string::npos) << table;
   EXPECT_NE(table.find("\"runs\": 1"), std::string::npos) << table;
@@ -706,7 +728,14 @@ TEST(Bench, ARunsSamplesAndComputeTimesFollowItsRates) {
   auto scene = go_feap::world::makeScene(kSmallMaze, 0);
   ASSERT_TRUE(scene) << scene.message();
   bench::ExplorationRun run(*scene, *config, "go_feap", 1.2);
+  const auto wall0 = std::chrono::steady_clock::now();
   run.run();
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  // The summary's wall time in seconds, within the call's; the map's memory in MiB.
+  EXPECT_GT(run.recorder().summary().wall_time_s, 0.0);
+  EXPECT_LE(run.recorder().summary().wall_time_s, wall);
+  EXPECT_NEAR(run.recorder().summary().extra.at("map_memory_mb") * 1024.0 * 1024.0,
+              static_cast<double>(run.map().memoryBytes()), 1e-6 * static_cast<double>(run.map().memoryBytes()));
   const auto& samples = run.recorder().samples();
   const double period = 1.0 / config->loop.sample_rate, dt = 1.0 / config->loop.control_rate;
   ASSERT_GE(samples.size(), 3u);
@@ -725,6 +754,41 @@ TEST(Bench, ARunsSamplesAndComputeTimesFollowItsRates) {
   EXPECT_GE(compute.at("mapping").count + 1, frames) << "end " << end;
   EXPECT_GE(compute.at("frontier").count, 1u);
   EXPECT_LE(compute.at("frontier").count, compute.at("mapping").count);
+}
+
+// The global tour and the local viewpoint run at global/rate, not at the trajectory planner's planner/rate:
+// at 2 Hz a 5 s run plans at most 11 times (at 0, 0.5, ..., 5 s).
+TEST(Bench, PlanningRunsAtTheGlobalRate) {
+  auto config = bench::loadExplorationConfig(GO_FEAP_CONFIG_DIR, "go_feap");
+  ASSERT_TRUE(config) << config.message();
+  ASSERT_NE(config->planner_rate, 2.0);
+  config->loop.plan_rate = 2.0;
+  auto scene = go_feap::world::makeScene(kSmallMaze, 0);
+  ASSERT_TRUE(scene) << scene.message();
+  bench::ExplorationRun run(*scene, *config, "go_feap", 5.0);
+  run.run();
+  const auto& compute = run.recorder().summary().compute;
+  ASSERT_TRUE(compute.count("global"));
+  EXPECT_GE(compute.at("global").count, 2u);
+  EXPECT_LE(compute.at("global").count, 11u);
+  EXPECT_LE(compute.count("local") ? compute.at("local").count : 0u, compute.at("global").count);
+}
+
+// go_feap_map_perf's --skip-pixel thins the rays it integrates: every 8th pixel of the same three frames
+// gives fewer rays per frame, after merging, than every pixel.
+TEST(Bench, MapPerfsSkipPixelThinsTheRays) {
+  auto raysPerFrame = [](int skip) {
+    const auto [rc, said] = runCommand("timeout 120 " GO_FEAP_MAP_PERF_BIN " --scene maze --frames 3 --skip-pixel " +
+                                       std::to_string(skip));
+    EXPECT_EQ(rc, 0) << said;
+    const std::string tag = "skip_pixel " + std::to_string(skip) + ", ";
+    const std::size_t at = said.find(tag);
+    EXPECT_NE(at, std::string::npos) << said;
+    return at == std::string::npos ? -1.0 : std::stod(said.substr(at + tag.size()));
+  };
+  const double every = raysPerFrame(1), eighth = raysPerFrame(8);
+  EXPECT_GT(eighth, 0.0);
+  EXPECT_GT(every, eighth);
 }
 
 // A collision in a bench run reaches its summary: the start 0.2 m from an obstacle, with a collision distance

@@ -261,6 +261,11 @@ TEST(Table, ComparesTheFirstPlannerWithEachOtherPairedBySeed) {
   EXPECT_TRUE(j[2]["time_ratio"].is_null());
   EXPECT_TRUE(j[2]["distance_ratio"].is_null());
   EXPECT_DOUBLE_EQ(j[0]["time_ratio"].get<double>(), 220.0 / 210.0);
+  EXPECT_DOUBLE_EQ(j[0]["distance_ratio"].get<double>(), 420.0 / 440.0);  // not the time ratio
+  EXPECT_EQ(j[0]["both_finished"], 2);
+  EXPECT_EQ(j[0]["faster"], 1);
+  EXPECT_EQ(j[0]["scene"], "maze");
+  EXPECT_EQ(j[0]["planner"], "go_feap");
   EXPECT_DOUBLE_EQ(j[0]["time_diff_s"]["avg"].get<double>(), 5.0);
   EXPECT_NEAR(j[0]["time_diff_s"]["se"].get<double>(), 15.0, 1e-9);
   const std::string md = metrics::tableMarkdown(metrics::aggregate(runs), c);
