@@ -9,6 +9,7 @@
 #include <nav_msgs/Odometry.h>
 #include <octomap/OcTree.h>
 #include <ros/ros.h>
+#include <std_msgs/Float64.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -16,6 +17,7 @@
 #include <filesystem>
 #include <map>
 #include <fstream>
+#include <vector>
 #include <nlohmann/json.hpp>
 
 #include "go_feap/ExplorationStatus.h"
@@ -46,6 +48,10 @@ TEST(Exploration, SmallMazeFinishesCompleteWithFullCoverageAndNoCollision) {
   });
   auto status_sub = nh.subscribe<go_feap::ExplorationStatus>(
       "status", 10, [&](const go_feap::ExplorationStatus::ConstPtr& m) { status = m; });
+  // The recorder's live coverage, a fraction as in summary.json (-1 while unknown).
+  std::vector<double> live_coverage;
+  auto coverage_sub = nh.subscribe<std_msgs::Float64>(
+      "coverage", 100, [&](const std_msgs::Float64::ConstPtr& m) { live_coverage.push_back(m->data); });
 
   // The finder's published omission inputs, against an oracle on every frontier list of the run: N_near is
   // the count of the other frontiers (active or not) whose average lies within frontier/s_near of this one's,
@@ -166,6 +172,9 @@ TEST(Exploration, SmallMazeFinishesCompleteWithFullCoverageAndNoCollision) {
   EXPECT_EQ(summary["finish_reason"], "complete");
   EXPECT_EQ(summary["collisions"], 0);
   EXPECT_NEAR(summary["coverage"].get<double>(), coverage, 0.02);
+  ASSERT_FALSE(live_coverage.empty()) << "nothing on coverage";
+  for (double c : live_coverage) EXPECT_TRUE(c == -1.0 || (c >= 0.0 && c <= 1.0)) << c;
+  EXPECT_NEAR(live_coverage.back(), summary["coverage"].get<double>(), 0.02);
   for (const char* key : {"scene", "seed", "planner", "exploration_time_s", "flight_distance_m", "compute_ms"})
     EXPECT_TRUE(summary.contains(key)) << key;
 

@@ -160,6 +160,9 @@ TEST_F(FrontierPlannerTest, NothingIsPlannedBeforeTheTriggerWhichStartsTheStartB
   ASSERT_TRUE(spinUntil([&] { return frontiers_->header.stamp > after && !frontiers_->frontiers.empty(); }, 60.0));
   for (const auto& f : frontiers_->frontiers)
     EXPECT_EQ(f.active, f.average.z >= 1.0 && f.average.z <= 2.0) << "frontier " << f.id << " z " << f.average.z;
+  // The status names the band flown (not the number of bands).
+  EXPECT_TRUE(spinUntil([&] { return status_->layer == layer_->index; }, 10.0))
+      << "status band " << status_->layer << ", layer topic band " << layer_->index << " of " << layer_->count;
 }
 
 // Runs after the trigger test (EXPLORE), as every test below.

@@ -588,6 +588,12 @@ TEST_F(MapperTest, InTfModeAFrameWaitsForALateTransformAndOneWithoutNeverBlocksT
   EXPECT_EQ(updates, 7u) << "a frame whose body pose was interpolated across a 1 s gap was integrated";
   depth_pub.publish(frameAt(s0 + ros::Duration(5.0), "tf_probe_mounted_camera"));
   EXPECT_TRUE(spinUntil([&] { return updates == 8; }, 10.0)) << "the frame at the body's sample after the gap";
+
+  // A frame stamped 0 (a driver before its clock is set) is skipped: tf2 reads time 0 as the latest
+  // transform, which is not the image's pose, and its map update would date its frontiers to the epoch.
+  depth_pub.publish(frameAt(ros::Time(0), "tf_probe_camera"));
+  spinUntil([] { return false; }, 1.0);
+  EXPECT_EQ(updates, 8u) << "a frame stamped 0 was integrated at the latest transform";
 }
 
 // A relocalisation moves the reference later frames are judged by (the probe mapper, fed only by the tests;

@@ -27,7 +27,7 @@ using go_feap::test::spinUntil;
 struct Case {
   const char* name;  // the nodelet's name: its private parameters are /name/...
   const char* type;
-  const char* key;   // the parameter the message must name, in full: /name/key
+  const char* key;   // the parameter the message must name, in full: /name/key (after a quote, what it says)
 };
 
 TEST(Parameters, ANodeletWithAnInvalidOrMissingParameterDoesNotStartAndNamesIt) {
@@ -58,6 +58,8 @@ TEST(Parameters, ANodeletWithAnInvalidOrMissingParameterDoesNotStartAndNamesIt) 
       {"bad_box_inverted", "go_feap/LayerManager", "exploration_box/min"},     // min above max in x
       {"empty_world_frame", "go_feap/GlobalPlanner", "world_frame"},           // no frame at all
       {"bad_box_length", "go_feap/LayerManager", "exploration_box/min"},       // 4 numbers: the 4th was dropped
+      {"bad_box_text", "go_feap/LayerManager", "exploration_box/min' must be a list of 3 numbers"},  // "-3", a string
+      {"bad_auto_start_type", "go_feap/LayerManager", "layers/auto_start' has the wrong type"},  // "yes", a string
       {"bad_extrinsic_length", "go_feap/DepthCamera", "depth_camera/T_B_C"},   // 17 numbers
       {"bad_pose_tolerance", "go_feap/EsdfMapper", "mapper/pose_tolerance"},    // 5 s
       {"bad_map_size", "go_feap/EsdfMapper", "exploration_box"},                // 1e6 m long: 2.9e10 voxels

@@ -13,6 +13,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <deque>
 #include <limits>
 #include <mutex>
@@ -359,7 +360,9 @@ TEST_F(SimulatorTest, OdometryTfSendsOnlyOdometryInTheWorldFrame) {
 
 // The probe camera runs at 50 Hz: on odometry every 0.01 s it sends a frame with every other stamp. Its
 // schedule is a sum of periods in doubles and the stamps whole nanoseconds, so a frame due with a stamp came
-// out 1e-12 s after it and waited for the next one: frames 0.03 s apart, then 0.01 s, and some lost.
+// out 1e-12 s after it and waited for the next one: frames 0.03 s apart, then 0.01 s, and some lost. After
+// a 1 s gap in the odometry the schedule starts again from the first stamp back, 50 Hz still (catching up
+// period by period, it sent a frame with every stamp for a second).
 TEST_F(SimulatorTest, ACameraAtHalfTheOdometryRateSendsEveryOtherStamp) {
   ASSERT_TRUE(spinUntil([&] { return last_odom_ != nullptr; }, 60.0)) << "no odom";
   ros::Publisher odom_pub = nh_.advertise<nav_msgs::Odometry>("probe/odom", 200);
@@ -369,18 +372,90 @@ TEST_F(SimulatorTest, ACameraAtHalfTheOdometryRateSendsEveryOtherStamp) {
   ASSERT_TRUE(spinUntil([&] { return odom_pub.getNumSubscribers() > 0 && depth_sub.getNumPublishers() > 0; }, 30.0))
       << "the probe camera is not connected";
   nav_msgs::Odometry odom = *last_odom_;
-  constexpr int kStamps = 300;
-  for (int k = 0; k < kStamps; ++k) {
-    odom.header.stamp = ros::Time(2.0 + 0.01 * k);  // rounded to whole nanoseconds, as a clock's stamps are
+  constexpr int kStamps = 300, kAfterGap = 100;  // 2.00 .. 4.99 s, then 6.00 .. 6.99 s
+  for (int k = 0; k < kStamps + kAfterGap; ++k) {
+    // Rounded to whole nanoseconds, as a clock's stamps are.
+    odom.header.stamp = ros::Time(k < kStamps ? 2.0 + 0.01 * k : 6.0 + 0.01 * (k - kStamps));
     odom_pub.publish(odom);
     spinUntil([] { return false; }, 0.01);
   }
-  spinUntil([&] { return frames.size() >= kStamps / 2; }, 10.0);
+  spinUntil([&] { return frames.size() >= (kStamps + kAfterGap) / 2; }, 10.0);
   ASSERT_GE(frames.size(), 2u);
-  std::size_t off = 0;
-  for (std::size_t i = 1; i < frames.size(); ++i) off += std::abs(frames[i] - frames[i - 1] - 0.02) > 1e-6;
+  std::size_t off = 0, restarts = 0;
+  for (std::size_t i = 1; i < frames.size(); ++i) {
+    if (frames[i - 1] < 5.0 && frames[i] >= 6.0) {  // across the gap: from the first stamp back
+      restarts += std::abs(frames[i] - 6.0) < 1e-6;
+      continue;
+    }
+    off += std::abs(frames[i] - frames[i - 1] - 0.02) > 1e-6;
+  }
   EXPECT_EQ(off, 0u) << frames.size() << " frames, " << off << " of them not 0.02 s after the one before";
-  EXPECT_EQ(frames.size(), static_cast<std::size_t>(kStamps / 2));
+  EXPECT_EQ(restarts, 1u) << "no frame at 6.00 s, the first stamp after the gap";
+  EXPECT_EQ(frames.size(), static_cast<std::size_t>((kStamps + kAfterGap) / 2));
+}
+
+// Depth noise and dropouts each apply alone (depth_camera/noise_stddev_per_m without dropouts, and the other
+// way round): two frames from one pose differ in most of their returns with noise, and about a fifth of the
+// returns are NaN (REP 117's no measurement) with a dropout probability of 0.2, where the clean renderer
+// gives none.
+TEST_F(SimulatorTest, NoiseAndDropoutsEachApplyAlone) {
+  ASSERT_TRUE(spinUntil([&] { return last_odom_ != nullptr; }, 60.0)) << "no odom";
+  struct Camera {
+    ros::Publisher odom;
+    ros::Subscriber depth;
+    std::vector<sensor_msgs::Image::ConstPtr> frames;
+  };
+  Camera noisy, dropping;
+  for (auto [camera, name] : {std::make_pair(&noisy, "noisy"), std::make_pair(&dropping, "dropping")}) {
+    camera->odom = nh_.advertise<nav_msgs::Odometry>(std::string(name) + "/odom", 10);
+    camera->depth = nh_.subscribe<sensor_msgs::Image>(std::string(name) + "/depth", 10,
+                                                      [camera](const sensor_msgs::Image::ConstPtr& m) { camera->frames.push_back(m); });
+  }
+  ASSERT_TRUE(spinUntil(
+      [&] {
+        return noisy.odom.getNumSubscribers() > 0 && noisy.depth.getNumPublishers() > 0 &&
+               dropping.odom.getNumSubscribers() > 0 && dropping.depth.getNumPublishers() > 0;
+      },
+      30.0))
+      << "the noisy and dropping cameras are not connected";
+  nav_msgs::Odometry odom = *last_odom_;
+  // Two frames from the pose (1 s apart, past the 15 Hz period), sent again until each camera has both.
+  ASSERT_TRUE(spinUntil(
+      [&] {
+        for (Camera* camera : {&noisy, &dropping}) {
+          if (camera->frames.size() >= 2) continue;
+          odom.header.stamp = ros::Time(100.0 + static_cast<double>(camera->frames.size()));
+          camera->odom.publish(odom);
+        }
+        spinUntil([] { return false; }, 0.1);
+        return noisy.frames.size() >= 2 && dropping.frames.size() >= 2;
+      },
+      30.0))
+      << noisy.frames.size() << " noisy and " << dropping.frames.size() << " dropping frames";
+  auto depthAt = [](const sensor_msgs::Image& image, std::size_t i) {
+    float d;
+    std::memcpy(&d, image.data.data() + 4 * i, 4);
+    return d;
+  };
+  const sensor_msgs::Image &a = *noisy.frames[0], &b = *noisy.frames[1];
+  ASSERT_EQ(a.encoding, "32FC1");
+  std::size_t both = 0, differ = 0;
+  for (std::size_t i = 0; i < a.width * a.height; ++i)
+    if (std::isfinite(depthAt(a, i)) && std::isfinite(depthAt(b, i))) {
+      ++both;
+      differ += depthAt(a, i) != depthAt(b, i);
+    }
+  ASSERT_GT(both, 1000u) << "the pose sees too little";
+  EXPECT_GT(differ, both / 2) << differ << " of " << both << " returns differ between two frames from one pose";
+  const sensor_msgs::Image& d = *dropping.frames[0];
+  std::size_t returns = 0, dropped = 0;
+  for (std::size_t i = 0; i < d.width * d.height; ++i) {
+    const float v = depthAt(d, i);
+    dropped += std::isnan(v);
+    returns += std::isnan(v) || std::isfinite(v);  // +-inf: nothing in range, or too near
+  }
+  ASSERT_GT(returns, 1000u);
+  EXPECT_NEAR(static_cast<double>(dropped) / static_cast<double>(returns), 0.2, 0.05) << dropped << " of " << returns;
 }
 
 }  // namespace

@@ -681,12 +681,14 @@ TEST_F(ProbeServerTest, ATrajectoryStartingLaterWaitsWhileTheRunningOneIsFollowe
 }
 
 // Every command of a followed trajectory is the trajectory sampled at the command's stamp: position,
-// velocity, acceleration, heading and yaw rate (the feed-forward terms the controller flies by).
+// velocity, acceleration, heading and yaw rate (the feed-forward terms the controller flies by); the heading
+// within (-pi, pi], as a flight controller's bridge takes it, though the spline's lies a turn above.
 TEST_F(ProbeServerTest, CommandsAreTheTrajectorySampledAtTheirStamps) {
   const Vec3 a = probe.vehicle;
   Eigen::MatrixXd q(3, 7), y(1, 7);
   for (int i = 0; i < 7; ++i) q.col(i) = a + Vec3(0.6, 0.3, 0.1) * std::clamp((i - 1) / 4.0, 0.0, 1.0) * std::clamp((i - 1) / 4.0, 0.0, 1.0);
   y << 0.0, 0.0, 0.2, 0.5, 0.9, 1.2, 1.2;
+  y.array() += 2 * M_PI;  // a heading a turn round (the vehicle's, 0): commanded within (-pi, pi]
   go_feap::ros_traj::Trajectory t;
   t.position = go_feap::trajectory::UniformBspline(q, 3, 0.75);
   t.yaw = go_feap::trajectory::UniformBspline(y, 3, 0.75);
@@ -705,6 +707,7 @@ TEST_F(ProbeServerTest, CommandsAreTheTrajectorySampledAtTheirStamps) {
     EXPECT_LT((v - s.velocity).norm(), 1e-9) << "at " << c->header.stamp;
     EXPECT_LT((acc - s.acceleration).norm(), 1e-9) << "at " << c->header.stamp;
     EXPECT_NEAR(std::remainder(c->yaw - s.yaw, 2 * M_PI), 0.0, 1e-9) << "at " << c->header.stamp;
+    EXPECT_TRUE(c->yaw > -M_PI && c->yaw <= M_PI) << c->yaw << " at " << c->header.stamp;
     EXPECT_NEAR(c->yaw_dot, s.yaw_dot, 1e-9) << "at " << c->header.stamp;
     ++checked;
     moving += s.velocity.norm() > 0.05 && std::abs(s.yaw_dot) > 0.05 && s.acceleration.norm() > 0.01;

@@ -1799,6 +1799,22 @@ TEST(TrajectoryPlanner, WithoutAKnownWayItScoutsAlongAWayThroughUnseenSpace) {
 // finds the way round; it is flown whole, joined to the target's voxel off the lattice, within the limits,
 // in flyable space, and no shorter than the exhaustive fine search's path. Without a coarse search, or with
 // one that runs out as well, the plan fails with the fine search's status as before.
+// A sample's heading lies in (-pi, pi], the reference the controller and a flight controller's bridge take,
+// though the yaw spline may lie a turn or more away (a heading unwrapped from the one before), during the
+// flight and after it.
+TEST(TrajectoryPlanner, ASampledHeadingLiesWithinOneTurn) {
+  traj::Trajectory t;
+  t.position = UniformBspline(Eigen::MatrixXd::Zero(3, 4), 3, 0.5);
+  for (const double heading : {2 * kPi + 0.3, -2 * kPi - 3.0, 5 * kPi - 1e-3, -3 * kPi + 1e-3}) {
+    t.yaw = UniformBspline(Eigen::MatrixXd::Constant(1, 4, heading), 3, 0.5);
+    for (const double at : {0.0, 0.3, 5.0}) {
+      const traj::TrajectorySample s = traj::sampleTrajectory(t, at);
+      EXPECT_TRUE(s.yaw > -kPi && s.yaw <= kPi) << heading << " at " << at << " s: " << s.yaw;
+      EXPECT_NEAR(std::remainder(s.yaw - heading, 2 * kPi), 0.0, 1e-9) << heading << " at " << at << " s";
+    }
+  }
+}
+
 TEST(TrajectoryPlanner, AFlightSearchOverBudgetIsSearchedAgainOnTheCoarseLattice) {
   World world(Vec3(8, 8, 2));
   world.setFree(Index3(0, 0, 0), Index3(79, 79, 19));
