@@ -388,7 +388,7 @@ TEST_F(FrontierPlannerTest, LocalPlannerNeverPlansAgainstARepeatedTour) {
 
 // A tour none of whose frontiers is in the latest frontier list (planned on an older one) is skipped: no
 // attempt fails and no look round starts (each of its frontiers was reported failed, and the vehicle turned
-// in place), and the next tour is wanted. The chain's own tour is then planned against.
+// in place), and the next tour is wanted. So is an empty tour. The chain's own tour is then planned against.
 TEST_F(FrontierPlannerTest, LocalPlannerSkipsATourWhoseFrontiersAreAllGone) {
   int wanted = 0, computed = 0, failed = 0;
   go_feap::ViewpointPath::ConstPtr probe_target;
@@ -434,6 +434,19 @@ TEST_F(FrontierPlannerTest, LocalPlannerSkipsATourWhoseFrontiersAreAllGone) {
   EXPECT_EQ(failed, 0) << "frontiers of a stale tour reported failed";
   EXPECT_FALSE(probe_target) << "a target (a look round) from a stale tour";
   EXPECT_EQ(computed, 0) << "planning against a stale tour";
+  // An empty tour (nothing to visit: every frontier blacklisted, or none in reach) is no attempt either:
+  // no look round and no failed frontier; the layer manager decides what comes next.
+  computed = failed = 0;
+  ASSERT_TRUE(feedTours(
+      tour_pub,
+      [](go_feap::GlobalTour& tour) {
+        tour.frontier_ids.clear();
+        tour.waypoints.clear();
+      },
+      1.5, [] { return false; }));
+  EXPECT_EQ(failed, 0) << "frontiers failed on an empty tour";
+  EXPECT_FALSE(probe_target) << "a target (a look round) from an empty tour";
+  EXPECT_EQ(computed, 0) << "planning against an empty tour";
   ASSERT_TRUE(feed(false, 10.0));
   ASSERT_TRUE(probe_target) << "no target from the chain's tour";
   EXPECT_GE(computed, 1);

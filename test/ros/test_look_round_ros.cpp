@@ -11,6 +11,7 @@
 #include <std_msgs/UInt32.h>
 
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <vector>
 
@@ -82,6 +83,7 @@ TEST(LookRound, AnUnreachedTurnInPlaceIsRepeatedWhileALookRoundIsAsked) {
   exploring.state_name = "EXPLORE";
   status_pub.publish(exploring);
   double yaw = 0.0;
+  bool malformed = false;  // the requests' band NaN at its bottom
   ros::WallTime last_odom, last_layer;
   // Spins, publishing the hover odometry at 20 Hz and the look round request at 5 Hz, until pred().
   auto spinPublishing = [&](auto pred, double wall_timeout) {
@@ -112,6 +114,7 @@ TEST(LookRound, AnUnreachedTurnInPlaceIsRepeatedWhileALookRoundIsAsked) {
             layer.header.stamp = ros::Time::now();
             layer.count = 1;
             layer.z_max = 3.0;
+            if (malformed) layer.z_min = std::numeric_limits<double>::quiet_NaN();
             layer.look_around = true;
             layer_pub.publish(layer);
             last_layer = now;
@@ -154,6 +157,16 @@ TEST(LookRound, AnUnreachedTurnInPlaceIsRepeatedWhileALookRoundIsAsked) {
       << "no next turn once the second was reached";
   EXPECT_EQ(targets.back()->target_seq, second.target_seq + 1);
   EXPECT_NEAR(std::remainder(targets.back()->yaws.at(0) - 2.0 * scan_step, 2.0 * M_PI), 0.0, 1e-6);
+  // Requests in a malformed band (NaN at its bottom) are refused whole: the unreached turn is not repeated
+  // for them (taken, the band would have sampled no viewpoint, and every tour frontier failed). Well formed
+  // again, they are answered.
+  malformed = true;
+  spinPublishing([] { return false; }, 0.5);  // a well-formed request may still be on its way
+  const std::size_t before = targets.size();
+  spinPublishing([] { return false; }, 2.0);
+  EXPECT_EQ(targets.size(), before) << "a target for a look round asked in a NaN band";
+  malformed = false;
+  EXPECT_TRUE(spinPublishing([&] { return targets.size() > before; }, 10.0)) << "no target once the band was well formed";
 }
 
 }  // namespace

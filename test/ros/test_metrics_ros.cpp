@@ -527,6 +527,10 @@ TEST(LayerManager, TheStartBandIsWhereTheVehicleIsAtTheTrigger) {
   ASSERT_TRUE(spinUntil([&] { return state->state == go_feap::ExplorationStatus::EXPLORE && !layers.empty(); }, 10.0))
       << "not exploring after the trigger: " << state->state_name;
   EXPECT_EQ(layers.back().index, 1u) << "the start band is the one of the first odometry, on the ground";
+  // Time and distance count from the trigger (summary.json's exploration_time_s and flight_distance_m): not
+  // the 5.8 s of clock and the 4.3 m the vehicle was carried before it, but the 1 s of hovering since.
+  EXPECT_LT(state->elapsed, 1.5);
+  EXPECT_LT(state->distance, 0.05);
 
   // A band's frontiers are those whose average lies in it: with the only frontier in band 0 (z 1.05 m),
   // band 1 is done once the vehicle has looked round, and band 0 comes next. (Counted in every band, it
@@ -654,6 +658,13 @@ TEST(LayerManager, BlacklistFollowsTheFrontiersListed) {
       << " ids, the first " << (lists.back().empty() ? 0u : lists.back().front()) << ")";
   for (const Ids& l : lists)
     for (std::uint32_t id : l) EXPECT_TRUE(id == 5 || id == 6) << "blacklisted " << id;
+  // Latched: a subscriber that comes later (a global planner loaded again, rostopic echo) hears the blacklist
+  // as it stands, with the clock held.
+  std::vector<Ids> late_lists;
+  auto late_sub = nh.subscribe<std_msgs::UInt32MultiArray>(
+      "probe/blacklist", 10, [&](const std_msgs::UInt32MultiArray::ConstPtr& m) { late_lists.push_back(m->data); });
+  EXPECT_TRUE(spinUntil([&] { return !late_lists.empty(); }, 5.0)) << "no blacklist for a later subscriber";
+  if (!late_lists.empty()) EXPECT_EQ(late_lists.back(), Ids{6});
 }
 
 // A latched EXPLORE status on `topic`: the probe planners act only while the exploration is under way.
@@ -696,6 +707,11 @@ TEST(GlobalPlanner, PlansAgainAtOnceWhenTheClockGoesBack) {
   run(2.0);
   ASSERT_GE(tours.size(), 3u) << "the probe global planner planned no tours";
   EXPECT_EQ(tours.back().frontier_ids, std::vector<std::uint32_t>{1});
+  // At global/rate, not at each frontier message (20 Hz here).
+  double rate = 0.0;
+  ASSERT_TRUE(ros::param::get("/probe_global_planner/global/rate", rate));
+  ASSERT_LT(rate, 20.0);
+  EXPECT_LE(static_cast<double>(tours.size()), 2.0 * rate + 2.0) << "tours in 2 s of frontiers every 0.05 s";
   now = 20.0;
   tours.clear();
   run(2.0);

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "go_feap/Bspline.h"
+#include "go_feap/ExplorationStatus.h"
 #include "go_feap/PositionCommand.h"
 #include "go_feap/ViewpointPath.h"
 #include "go_feap/ros/bspline_conversion.h"
@@ -109,14 +110,18 @@ TEST_F(TrajectoryTargetTest, ANewlyNumberedTargetIsFlownToExactlyEvenNearTheLast
   const auto centre = [&](const Vec3& p) { return Vec3(((p / resolution).array().floor() + 0.5) * resolution); };
   const Vec3 t1 = centre(start_ + 1.0 * forward_), t2 = centre(t1 + 0.2 * forward_), t3 = centre(t2 + 0.2 * forward_);
 
-  // Malformed targets (no heading for the viewpoint; a position not finite) are refused: nothing is
-  // planned, and the planner stays up for the next (a missing heading was read past the end of its array).
+  // Malformed targets (no heading for the viewpoint; a position not finite; no viewpoint at all, a default
+  // message) are refused: nothing is planned, and the planner stays up for the next (a missing heading was
+  // read past the end of its array).
   go_feap::ViewpointPath no_yaw = target(t1, 1);
   no_yaw.yaws.clear();
   go_feap::ViewpointPath not_finite = target(t1, 1);
   not_finite.positions.front().y = std::numeric_limits<double>::quiet_NaN();
+  go_feap::ViewpointPath empty = target(t1, 1);
+  empty.positions.clear(), empty.yaws.clear(), empty.frontier_ids.clear();
   publishWhile(no_yaw, 1.0, [] { return false; });
   publishWhile(not_finite, 1.0, [] { return false; });
+  publishWhile(empty, 1.0, [] { return false; });
   EXPECT_EQ(trajectories_, 0);
 
   // Target 1, repeated as a kept target is: one trajectory there, and the vehicle arrives.
@@ -365,6 +370,22 @@ TEST_F(TrajectoryTargetTest, AnOdometryJumpAwayFromTheReferenceIsPlannedFromTheO
     }
   }
   EXPECT_TRUE(from_command) << "no plan of five started at the stamp of a command:" << tries;
+
+  // Stopped (FINISHED(aborted), the stop service): the planner brakes, then takes no target any more, a
+  // new one included.
+  ros::Publisher status_pub = nh_.advertise<go_feap::ExplorationStatus>("probe/jump/status", 1, /*latch=*/true);
+  go_feap::ExplorationStatus stopped;
+  stopped.state = go_feap::ExplorationStatus::FINISHED;
+  stopped.state_name = "FINISHED";
+  stopped.finish_reason = "aborted";
+  status_pub.publish(stopped);
+  ASSERT_TRUE(spinUntil([&] { return status_pub.getNumSubscribers() > 0; }, 10.0));
+  play(1.0, [] { return false; });  // the last target repeated; a braking plan may come
+  const std::size_t stopped_at = planned.size();
+  goal = this->target(odometry_pose, 99);
+  goal.yaws.front() = yaw_ + 2.0;
+  play(3.0, [] { return false; });
+  EXPECT_EQ(planned.size(), stopped_at) << "a target taken after FINISHED(aborted)";
 }
 
 // A second trajectory server (probe/...) fed only by this test. It holds the first usable odometry pose
