@@ -16,6 +16,7 @@ GO_FEAP_APT_PACKAGES=(
   libpcl-dev libopencv-dev libnlopt-cxx-dev liboctomap-dev libeigen3-dev libgtest-dev
   libyaml-cpp-dev nlohmann-json3-dev
   rviz librviz-dev xvfb imagemagick python3-matplotlib
+  gdb  # the chain tests' thread stacks when one times out
 )
 
 log() { printf '[go_feap] %s\n' "$*" >&2; }
