@@ -55,6 +55,12 @@ common::Status ExplorationConfig::validate() const {
     return common::Status::Error("planner: rate must be in (0, 1000] Hz");
   if (!common::isRigidTransform(T_B_C.matrix()))
     return common::Status::Error("depth_camera: T_B_C must be a finite rigid transform");
+  // The camera renders nothing in its range as +inf, which the mapper casts free up to its own range: a
+  // mapper reaching farther cleared the walls between the two ranges.
+  if (!(map.occupancy.max_range <= camera.max_range))
+    return common::Status::Error("occupancy: max_range must not exceed depth_camera: max_range (" +
+                                 std::to_string(camera.max_range) + " m): beyond it the camera's 'nothing in range' "
+                                 "would be cast free through walls");
   // Each stage runs at most once a control step: a faster one ran at the control rate without a word.
   for (const auto& [key, r] : {std::make_pair("depth_camera: rate", camera_rate), std::make_pair("global: rate", loop.plan_rate),
                                std::make_pair("planner: rate", planner_rate), std::make_pair("layers: rate", layer_rate),

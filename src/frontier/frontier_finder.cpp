@@ -9,8 +9,12 @@ namespace go_feap::frontier {
 
 common::Status FrontierConfig::validate() const {
   if (min_cluster_cells < 1) return common::Status::Error("frontier: min_cluster_cells must be >= 1");
-  if (!(max_cluster_extent > 0.0)) return common::Status::Error("frontier: max_cluster_extent must be > 0");
-  if (!(s_near > 0.0)) return common::Status::Error("frontier: s_near must be > 0");
+  // Finite, and squared too (the finder compares squared distances): an infinite extent split no cluster, and
+  // an infinite s_near made every frontier near every other, which zeroed every omission likelihood (beta).
+  if (!(max_cluster_extent > 0.0) || !std::isfinite(max_cluster_extent * max_cluster_extent))
+    return common::Status::Error("frontier: max_cluster_extent must be finite and > 0");
+  if (!(s_near > 0.0) || !std::isfinite(s_near * s_near))
+    return common::Status::Error("frontier: s_near must be finite and > 0");
   if (max_regrow_cells < 0) return common::Status::Error("frontier: max_regrow_cells must be >= 0");
   if (!(revive_factor >= 1.0) || !std::isfinite(revive_factor))
     return common::Status::Error("frontier: revive_factor must be >= 1 and finite");

@@ -15,6 +15,9 @@
 #include <std_msgs/Float64.h>
 #include <visualization_msgs/Marker.h>
 
+#include <unistd.h>
+
+#include <filesystem>
 #include <iomanip>
 #include <mutex>
 #include <optional>
@@ -67,6 +70,17 @@ class MetricsRecorder : public nodelet::Nodelet {
                                "parameter '" + p.fullName("metrics/max_odom_step") + "' must be finite and > 0");
     ros_params::requireOrThrow(std::isfinite(progress_period_) && progress_period_ > 0.0, getName(),
                                "parameter '" + p.fullName("metrics/progress_period") + "' must be > 0");
+    ros_params::requireOrThrow(!planner_.empty(), getName(),
+                               "parameter '" + p.fullName("metrics/planner") + "' must name the planner (summary.json's)");
+    // The results folder made (or found) writable now, not when the run is over: a folder that cannot be
+    // made lost the whole run's figures at its end, with only an error logged.
+    if (!output_dir_.empty()) {
+      std::error_code ec;
+      std::filesystem::create_directories(output_dir_, ec);
+      ros_params::requireOrThrow(!ec && std::filesystem::is_directory(output_dir_, ec) && ::access(output_dir_.c_str(), W_OK) == 0,
+                                 getName(), "parameter '" + p.fullName("metrics/output_dir") + "': '" + output_dir_ +
+                                                "' cannot be made a writable folder" + (ec ? " (" + ec.message() + ")" : ""));
+    }
     metrics::Summary& s = recorder_.summary();
     s.planner = planner_;
     s.coverage = -1.0;

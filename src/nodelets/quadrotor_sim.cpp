@@ -56,17 +56,19 @@ class QuadrotorSim : public nodelet::Nodelet {
     ros_params::requireOrThrow(world_frame_ != body_frame_, me,
                                "parameter '" + p.fullName("simulation/body_frame") + "' must differ from '" +
                                    p.fullName("simulation/world_frame") + "' (a TF from a frame to itself)");
-    ros_params::requireOrThrow(rate_factor_ > 0.0 && rate_factor_ <= 1000.0, me,
-                               "parameter '" + p.fullName("simulation/rate_factor") + "' must be in (0, 1000]");
-    // NaN would switch the command checks off (no norm is > NaN).
-    ros_params::requireOrThrow(std::isfinite(max_cmd_acc_) && max_cmd_acc_ > 0.0, me,
-                               "parameter '" + p.fullName("simulation/max_command_acceleration") + "' must be > 0");
-    ros_params::requireOrThrow(std::isfinite(max_cmd_speed_) && max_cmd_speed_ > 0.0, me,
-                               "parameter '" + p.fullName("simulation/max_command_speed") + "' must be > 0");
-    ros_params::requireOrThrow(std::isfinite(max_cmd_yaw_rate_) && max_cmd_yaw_rate_ > 0.0, me,
-                               "parameter '" + p.fullName("simulation/max_command_yaw_rate") + "' must be > 0");
-    ros_params::requireOrThrow(std::isfinite(max_cmd_out_) && max_cmd_out_ >= 0.0, me,
-                               "parameter '" + p.fullName("simulation/max_command_outside") + "' must be >= 0");
+    // At least 0.01: at 1e-9 the first step waited 1e7 s of wall time, the clock stood still.
+    ros_params::requireOrThrow(rate_factor_ >= 0.01 && rate_factor_ <= 1000.0, me,
+                               "parameter '" + p.fullName("simulation/rate_factor") + "' must be in [0.01, 1000]");
+    // NaN would switch the command checks off (no norm is > NaN), and a limit of 1e308 let through the
+    // commands they guard against (the controller's gains times 1e308 m/s overflowed, its thrust went NaN).
+    ros_params::requireOrThrow(max_cmd_acc_ > 0.0 && max_cmd_acc_ <= 1000.0, me,
+                               "parameter '" + p.fullName("simulation/max_command_acceleration") + "' must be in (0, 1000]");
+    ros_params::requireOrThrow(max_cmd_speed_ > 0.0 && max_cmd_speed_ <= 1000.0, me,
+                               "parameter '" + p.fullName("simulation/max_command_speed") + "' must be in (0, 1000]");
+    ros_params::requireOrThrow(max_cmd_yaw_rate_ > 0.0 && max_cmd_yaw_rate_ <= 100.0, me,
+                               "parameter '" + p.fullName("simulation/max_command_yaw_rate") + "' must be in (0, 100]");
+    ros_params::requireOrThrow(max_cmd_out_ >= 0.0 && max_cmd_out_ <= 1000.0, me,
+                               "parameter '" + p.fullName("simulation/max_command_outside") + "' must be in [0, 1000]");
     ros_params::requireOrThrow(odom_rate_ >= 10.0 && odom_rate_ <= q.dynamics_rate, me,
                                "parameter '" + p.fullName("simulation/odom_rate") + "' must be in [10, dynamics_rate]");
     ros_params::requireOrThrow(std::isfinite(command_timeout_) && command_timeout_ > 0.0, me,

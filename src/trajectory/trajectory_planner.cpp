@@ -27,7 +27,10 @@ TrajectorySample sampleTrajectory(const Trajectory& trajectory, double t) {
 
 common::Status TrajectoryPlannerConfig::validate() const {
   auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
-  if (!positive(path_spacing)) return common::Status::Error("planner: path_spacing must be finite and > 0");
+  // At least 5 cm, half the shipped voxel (a finer resampling of the voxel path adds nothing): the spline fit
+  // is dense in the samples, and 1 mm asked for gigabytes per plan.
+  if (!(std::isfinite(path_spacing) && path_spacing >= 0.05))
+    return common::Status::Error("planner: path_spacing must be finite and >= 0.05 m");
   if (!positive(collision_horizon))
     return common::Status::Error("planner: collision_horizon must be finite and > 0");
   if (!std::isfinite(min_time_between_plans) || min_time_between_plans < 0.0)
@@ -42,8 +45,10 @@ common::Status TrajectoryPlannerConfig::validate() const {
   if (!std::isfinite(horizon) || horizon < 0.0) return common::Status::Error("planner: horizon must be finite and >= 0");
   if (!std::isfinite(max_slowdown) || max_slowdown < 1.0)
     return common::Status::Error("planner: max_slowdown must be finite and >= 1");
-  if (!std::isfinite(snap_radius) || snap_radius < 0.0)
-    return common::Status::Error("planner: snap_radius must be finite and >= 0");
+  // At most 3 m: the search waives its checks of unseen space within it around the start, so a large radius
+  // let flights brush unseen space unchecked (and 5 km overflowed its squared voxel count).
+  if (!std::isfinite(snap_radius) || snap_radius < 0.0 || snap_radius > 3.0)
+    return common::Status::Error("planner: snap_radius must be in [0, 3] m");
   if (!std::isfinite(goal_tolerance) || goal_tolerance < 0.0)
     return common::Status::Error("planner: goal_tolerance must be finite and >= 0");
   if (!std::isfinite(failed_search_memory) || failed_search_memory < 0.0)

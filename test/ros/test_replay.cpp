@@ -243,7 +243,8 @@ TEST_F(Replay, TheScriptsRefuseBadArgumentsBeforeInstallingOrBuilding) {
   std::ofstream(done / "flight.bag") << "a bag\n";
   const std::string scripts = GO_FEAP_SOURCE_DIR "/scripts/";
   for (const auto& [call, says] : std::vector<std::pair<std::string, std::string>>{
-           {"run --rate-factor 0", "--rate-factor must be a number in (0, 1000]"},
+           {"run --rate-factor 0", "--rate-factor must be a number in [0.01, 1000]"},
+           {"run --rate-factor 0.001", "--rate-factor must be a number in [0.01, 1000]"},
            {"run --planner warp", "unknown planner 'warp'"},
            {"run --seed -1", "--seed must be a whole number"},
            {"run --seed", "--seed needs a value"},

@@ -629,6 +629,14 @@ TEST(Bench, EveryRateAndTheTimeLimitAreCheckedNamingTheKey) {
     EXPECT_FALSE(st.ok()) << what;
     EXPECT_NE(st.message().find(what), std::string::npos) << st.message();
   };
+  {
+    // A mapper reaching past the camera's range took its "nothing in range" for free space through walls.
+    bench::ExplorationConfig c = base;
+    c.map.occupancy.max_range = c.camera.max_range + 0.5;
+    says(c, "occupancy: max_range must not exceed depth_camera: max_range");
+    c.map.occupancy.max_range = c.camera.max_range;
+    EXPECT_TRUE(c.validate().ok()) << c.validate().message();
+  }
   for (const double bad : {0.0, -5.0, std::numeric_limits<double>::quiet_NaN()}) {
     bench::ExplorationConfig c = base;
     c.layer_rate = bad;  // at 0 the state machine never stepped again; below, the run ended at once

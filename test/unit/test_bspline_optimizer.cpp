@@ -421,7 +421,7 @@ TEST(BsplineOptimizer, ImpossibleProblemsFailAndReturnNothing) {
   EXPECT_NE(bad.validate().message().find("feasibility_margin"), std::string::npos);
   bad.feasibility_margin = 1.0;
   EXPECT_TRUE(bad.validate().ok()) << bad.validate().message();
-  for (int iterations : {0, -1}) {
+  for (int iterations : {0, -1, 100001, std::numeric_limits<int>::max()}) {  // the top: hours of evaluations
     bad = config;
     bad.max_iterations = iterations;
     EXPECT_NE(bad.validate().message().find("max_iterations"), std::string::npos) << iterations;
@@ -897,6 +897,22 @@ TEST(Replan, EachReasonInPriorityOrder) {
     planner.collision_horizon = horizon;
     EXPECT_NE(planner.validate().message().find("collision_horizon"), std::string::npos) << horizon;
   }
+  // Path samples at least 5 cm apart (1 mm asked for gigabytes in the dense fit); a snap radius of at most 3 m
+  // (the search waives its unseen-space checks within it).
+  for (double spacing : {0.0, 0.001, 0.049}) {
+    traj::TrajectoryPlannerConfig planner;
+    planner.path_spacing = spacing;
+    EXPECT_NE(planner.validate().message().find("planner: path_spacing"), std::string::npos) << spacing;
+  }
+  for (double radius : {-0.1, 3.01, 5000.0}) {
+    traj::TrajectoryPlannerConfig planner;
+    planner.snap_radius = radius;
+    EXPECT_NE(planner.validate().message().find("planner: snap_radius"), std::string::npos) << radius;
+  }
+  traj::TrajectoryPlannerConfig edges;
+  edges.path_spacing = 0.05;
+  edges.snap_radius = 3.0;
+  EXPECT_TRUE(edges.validate().ok()) << edges.validate().message();
 }
 
 // The tolerances are bounds the target may move within (a move of exactly target_tolerance, or a trajectory

@@ -259,7 +259,9 @@ TEST(DepthCameraConfig, ValidateNamesTheBadKey) {
       {[](DepthCameraConfig& c) { c.min_range = -0.1; }, "min_range"},
       {[](DepthCameraConfig& c) { c.max_range = 0.1; }, "max_range"},
       {[](DepthCameraConfig& c) { c.noise_stddev_per_m = -0.01; }, "noise_stddev_per_m"},
+      {[](DepthCameraConfig& c) { c.noise_stddev_per_m = 1e12; }, "noise_stddev_per_m"},  // half the returns past max_range
       {[](DepthCameraConfig& c) { c.dropout_probability = 1.5; }, "dropout_probability"},
+      {[](DepthCameraConfig& c) { c.dropout_probability = 1.0; }, "dropout_probability"},  // no return to map
   };
   for (const Case& k : cases) {
     DepthCameraConfig c;
@@ -676,17 +678,26 @@ TEST(DepthRendererNoise, PixelsWithNothingInRangeStayInfinite) {
   EXPECT_GT(changed, 0);
 }
 
-TEST(DepthRendererNoise, FullDropoutLeavesNoMeasurement) {
+// A dropped return is NaN (REP 117: no measurement); the rest keep their depth (no noise here). At a dropout of
+// 0.99 of 307200 returns, the count dropped lies within 6 standard deviations (55) of 304128.
+TEST(DepthRendererNoise, DroppedReturnsAreNoMeasurement) {
   const world::Scene scene = sceneWithBoxes({{Vec3(2.0, -4.0, -2.0), Vec3(2.2, 4.0, 4.0)}}, 0.1);
   DepthCameraConfig config;
-  config.dropout_probability = 1.0;
+  config.dropout_probability = 0.99;
+  ASSERT_TRUE(config.validate().ok());
   const DepthRenderer renderer(config, scene);
   cv::Mat depth;
   renderer.render(cameraPose(Vec3(0.0, 0.0, 1.0), 0.0), depth);
   ASSERT_EQ(countReturns(depth), 640 * 480);
+  const cv::Mat clean = depth.clone();
   std::mt19937_64 rng(3);
   renderer.addNoise(depth, rng);
-  EXPECT_EQ(countEqual(depth, std::numeric_limits<float>::quiet_NaN()), 640 * 480);  // REP 117: no measurement
+  const int dropped = countEqual(depth, std::numeric_limits<float>::quiet_NaN());
+  EXPECT_NEAR(dropped, 0.99 * 640 * 480, 6 * 55);
+  int kept_as_they_were = 0;
+  for (int v = 0; v < depth.rows; ++v)
+    for (int u = 0; u < depth.cols; ++u) kept_as_they_were += depth.at<float>(v, u) == clean.at<float>(v, u);
+  EXPECT_EQ(kept_as_they_were + dropped, 640 * 480);
 }
 
 // A wall 0.2 m thick whose face lies `wall_x` ahead of a camera at (0, 0, 1) looking along x: its clean

@@ -711,6 +711,20 @@ TEST(FrontierFinder, ReviveFactorBelowOneIsRejected) {
   EXPECT_FALSE(cfg.validate().ok());
 }
 
+// Distances the finder squares must be finite squared: an infinite s_near made every frontier near every other
+// (N_near past n_max, so every omission likelihood 0), an infinite extent split no cluster.
+TEST(FrontierFinder, InfiniteDistancesAreRejectedByName) {
+  for (const double bad : {std::numeric_limits<double>::infinity(), 1e155}) {
+    frontier::FrontierConfig cfg;
+    cfg.s_near = bad;
+    EXPECT_NE(cfg.validate().message().find("frontier: s_near"), std::string::npos) << bad;
+    cfg = frontier::FrontierConfig();
+    cfg.max_cluster_extent = bad;
+    EXPECT_NE(cfg.validate().message().find("frontier: max_cluster_extent"), std::string::npos) << bad;
+  }
+  EXPECT_TRUE(frontier::FrontierConfig().validate().ok());
+}
+
 // A finder told to go on from another's ids hands out none below them, and never lowers its own.
 TEST(FrontierFinder, IdsGoOnFromWhereAnotherFinderStopped) {
   map::OccupancyMap m(mapConfig(), kBox);
