@@ -56,7 +56,7 @@ common::Status ExplorationConfig::validate() const {
   if (!common::isRigidTransform(T_B_C.matrix()))
     return common::Status::Error("depth_camera: T_B_C must be a finite rigid transform");
   // The camera renders nothing in its range as +inf, which the mapper casts free up to its own range: a
-  // mapper reaching farther cleared the walls between the two ranges.
+  // mapper reaching farther would clear the walls between the two ranges.
   if (!(map.occupancy.max_range <= camera.max_range))
     return common::Status::Error("occupancy: max_range must not exceed depth_camera: max_range (" +
                                  std::to_string(camera.max_range) + " m): beyond it the camera's 'nothing in range' "

@@ -9,8 +9,9 @@ namespace go_feap::frontier {
 
 common::Status FrontierConfig::validate() const {
   if (min_cluster_cells < 1) return common::Status::Error("frontier: min_cluster_cells must be >= 1");
-  // Finite, and squared too (the finder compares squared distances): an infinite extent split no cluster, and
-  // an infinite s_near made every frontier near every other, which zeroed every omission likelihood (beta).
+  // Finite, and squared too (the finder compares squared distances): an infinite extent would split no
+  // cluster, and an infinite s_near would make every frontier near every other, which zeroes every omission
+  // likelihood (beta) once there are more than n_max frontiers.
   if (!(max_cluster_extent > 0.0) || !std::isfinite(max_cluster_extent * max_cluster_extent))
     return common::Status::Error("frontier: max_cluster_extent must be finite and > 0");
   if (!(s_near > 0.0) || !std::isfinite(s_near * s_near))

@@ -84,7 +84,7 @@ class EsdfMapper : public nodelet::Nodelet {
                                "parameter '" + p.fullName("mapper/tf_queue") + "' must be in [1, 1000] frames");
     ros_params::requireOrThrow(std::isfinite(max_tf_gap_) && max_tf_gap_ > 0.0, me,
                                "parameter '" + p.fullName("mapper/max_tf_gap") + "' must be finite and > 0");
-    // At most an hour: ROS throttles from time 0, so a period past the clock silenced the warnings for good.
+    // At most an hour: ROS throttles from time 0, so a period past the clock would silence the warnings.
     ros_params::requireOrThrow(warn_period_ > 0.0 && warn_period_ <= 3600.0, me,
                                "parameter '" + p.fullName("mapper/warn_period") + "' must be in (0, 3600] s");
     ros_params::requireOrThrow(std::isfinite(slice_height_), me,

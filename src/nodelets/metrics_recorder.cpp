@@ -73,7 +73,7 @@ class MetricsRecorder : public nodelet::Nodelet {
     ros_params::requireOrThrow(!planner_.empty(), getName(),
                                "parameter '" + p.fullName("metrics/planner") + "' must name the planner (summary.json's)");
     // The results folder made (or found) writable now, not when the run is over: a folder that cannot be
-    // made lost the whole run's figures at its end, with only an error logged.
+    // made would lose the whole run's figures at its end, with only an error logged.
     if (!output_dir_.empty()) {
       std::error_code ec;
       std::filesystem::create_directories(output_dir_, ec);

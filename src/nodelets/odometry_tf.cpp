@@ -39,7 +39,7 @@ class OdometryTf : public nodelet::Nodelet {
                                "parameter '" + p.fullName("camera_frame") + "' must name a frame other than the world");
     ros_params::requireOrThrow(world_frame_ != body_frame_, getName(),
                                "parameters 'world_frame' and 'body_frame' must name two different frames");
-    // At most an hour: ROS throttles from time 0, so a period past the clock silenced the warnings for good.
+    // At most an hour: ROS throttles from time 0, so a period past the clock would silence the warnings.
     ros_params::requireOrThrow(warn_period_ > 0.0 && warn_period_ <= 3600.0, getName(),
                                "parameter '" + p.fullName("warn_period") + "' must be in (0, 3600] s");
     // Sent once every parameter has passed: a nodelet that does not start leaves no TF behind.

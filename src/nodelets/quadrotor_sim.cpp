@@ -56,11 +56,11 @@ class QuadrotorSim : public nodelet::Nodelet {
     ros_params::requireOrThrow(world_frame_ != body_frame_, me,
                                "parameter '" + p.fullName("simulation/body_frame") + "' must differ from '" +
                                    p.fullName("simulation/world_frame") + "' (a TF from a frame to itself)");
-    // At least 0.01: at 1e-9 the first step waited 1e7 s of wall time, the clock stood still.
+    // At least 0.01: at 1e-9 the first step would wait 1e7 s of wall time, the clock standing still.
     ros_params::requireOrThrow(rate_factor_ >= 0.01 && rate_factor_ <= 1000.0, me,
                                "parameter '" + p.fullName("simulation/rate_factor") + "' must be in [0.01, 1000]");
-    // NaN would switch the command checks off (no norm is > NaN), and a limit of 1e308 let through the
-    // commands they guard against (the controller's gains times 1e308 m/s overflowed, its thrust went NaN).
+    // NaN would switch the command checks off (no norm is > NaN), and a limit of 1e308 would let through the
+    // commands they guard against (the controller's gains times 1e308 m/s overflow, its thrust goes NaN).
     ros_params::requireOrThrow(max_cmd_acc_ > 0.0 && max_cmd_acc_ <= 1000.0, me,
                                "parameter '" + p.fullName("simulation/max_command_acceleration") + "' must be in (0, 1000]");
     ros_params::requireOrThrow(max_cmd_speed_ > 0.0 && max_cmd_speed_ <= 1000.0, me,

@@ -42,8 +42,8 @@ Status DepthCameraConfig::validate() const {
   }
   if (!(min_range >= 0.0 && std::isfinite(min_range))) return err("min_range", "must be >= 0");
   if (!(max_range > min_range && std::isfinite(max_range))) return err("max_range", "must be > min_range");
-  // At most 1 (100 % of the depth per metre): 1e12 sent half the returns past max_range, which the mapper
-  // took for free space through the walls. A dropout of 1 left no return to map.
+  // At most 1 (100 % of the depth per metre): 1e12 would send half the returns past max_range, which the
+  // mapper takes for free space through the walls. A dropout of 1 leaves no return to map.
   if (!(noise_stddev_per_m >= 0.0 && noise_stddev_per_m <= 1.0))
     return err("noise_stddev_per_m", "must be in [0, 1]");
   if (!(dropout_probability >= 0.0 && dropout_probability < 1.0))

@@ -53,7 +53,7 @@ Status OptimizerConfig::validate() const {
   if (!(feasibility_margin > 0.0 && feasibility_margin <= 1.0))
     return err("feasibility_margin", "must be in (0, 1]");
   if (!non_negative(limit_tolerance)) return err("limit_tolerance", "must be finite and >= 0");
-  // The optimiser's only time budget: 2^31 evaluations ran for hours.
+  // The optimiser's only time budget: 2^31 evaluations could run for hours.
   if (max_iterations < 1 || max_iterations > 100000) return err("max_iterations", "must be in [1, 100000]");
   if (!(relative_tolerance >= 0.0 && relative_tolerance < 1.0))
     return err("relative_tolerance", "must be in [0, 1)");

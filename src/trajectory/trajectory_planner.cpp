@@ -28,7 +28,7 @@ TrajectorySample sampleTrajectory(const Trajectory& trajectory, double t) {
 common::Status TrajectoryPlannerConfig::validate() const {
   auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
   // At least 5 cm, half the shipped voxel (a finer resampling of the voxel path adds nothing): the spline fit
-  // is dense in the samples, and 1 mm asked for gigabytes per plan.
+  // is dense in the samples (8000 of them for an 8 m horizon at 1 mm: half a gigabyte per matrix).
   if (!(std::isfinite(path_spacing) && path_spacing >= 0.05))
     return common::Status::Error("planner: path_spacing must be finite and >= 0.05 m");
   if (!positive(collision_horizon))
@@ -46,7 +46,7 @@ common::Status TrajectoryPlannerConfig::validate() const {
   if (!std::isfinite(max_slowdown) || max_slowdown < 1.0)
     return common::Status::Error("planner: max_slowdown must be finite and >= 1");
   // At most 3 m: the search waives its checks of unseen space within it around the start, so a large radius
-  // let flights brush unseen space unchecked (and 5 km overflowed its squared voxel count).
+  // would let flights brush unseen space unchecked (and 5 km overflows its squared voxel count).
   if (!std::isfinite(snap_radius) || snap_radius < 0.0 || snap_radius > 3.0)
     return common::Status::Error("planner: snap_radius must be in [0, 3] m");
   if (!std::isfinite(goal_tolerance) || goal_tolerance < 0.0)

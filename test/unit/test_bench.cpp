@@ -630,7 +630,7 @@ TEST(Bench, EveryRateAndTheTimeLimitAreCheckedNamingTheKey) {
     EXPECT_NE(st.message().find(what), std::string::npos) << st.message();
   };
   {
-    // A mapper reaching past the camera's range took its "nothing in range" for free space through walls.
+    // A mapper reaching past the camera's range would take its "nothing in range" for free space through walls.
     bench::ExplorationConfig c = base;
     c.map.occupancy.max_range = c.camera.max_range + 0.5;
     says(c, "occupancy: max_range must not exceed depth_camera: max_range");

@@ -421,7 +421,7 @@ TEST(BsplineOptimizer, ImpossibleProblemsFailAndReturnNothing) {
   EXPECT_NE(bad.validate().message().find("feasibility_margin"), std::string::npos);
   bad.feasibility_margin = 1.0;
   EXPECT_TRUE(bad.validate().ok()) << bad.validate().message();
-  for (int iterations : {0, -1, 100001, std::numeric_limits<int>::max()}) {  // the top: hours of evaluations
+  for (int iterations : {0, -1, 100001, std::numeric_limits<int>::max()}) {  // the only time budget
     bad = config;
     bad.max_iterations = iterations;
     EXPECT_NE(bad.validate().message().find("max_iterations"), std::string::npos) << iterations;
@@ -897,7 +897,7 @@ TEST(Replan, EachReasonInPriorityOrder) {
     planner.collision_horizon = horizon;
     EXPECT_NE(planner.validate().message().find("collision_horizon"), std::string::npos) << horizon;
   }
-  // Path samples at least 5 cm apart (1 mm asked for gigabytes in the dense fit); a snap radius of at most 3 m
+  // Path samples at least 5 cm apart (1 mm would ask for gigabytes in the dense fit); a snap radius of at most 3 m
   // (the search waives its unseen-space checks within it).
   for (double spacing : {0.0, 0.001, 0.049}) {
     traj::TrajectoryPlannerConfig planner;

@@ -711,8 +711,8 @@ TEST(FrontierFinder, ReviveFactorBelowOneIsRejected) {
   EXPECT_FALSE(cfg.validate().ok());
 }
 
-// Distances the finder squares must be finite squared: an infinite s_near made every frontier near every other
-// (N_near past n_max, so every omission likelihood 0), an infinite extent split no cluster.
+// Distances the finder squares must be finite squared: an infinite s_near would make every frontier near every
+// other (N_near past n_max, so every omission likelihood 0), an infinite extent would split no cluster.
 TEST(FrontierFinder, InfiniteDistancesAreRejectedByName) {
   for (const double bad : {std::numeric_limits<double>::infinity(), 1e155}) {
     frontier::FrontierConfig cfg;
