@@ -79,6 +79,8 @@ TEST(Parameters, ANodeletWithAnInvalidOrMissingParameterDoesNotStartAndNamesIt) 
       {"bad_command_speed", "go_feap/QuadrotorSim", "simulation/max_command_speed"},  // 1e308: a guard letting anything by
       {"bad_warn_period", "go_feap/EsdfMapper", "mapper/warn_period"},          // 1e9 s: every warning silenced
       {"bad_output_dir", "go_feap/MetricsRecorder", "metrics/output_dir"},      // not makeable: the results lost at the end
+      {"bad_odometry_warn_period", "go_feap/OdometryTf", "warn_period"},         // 1e9 s: every warning silenced
+      {"empty_planner_name", "go_feap/MetricsRecorder", "metrics/planner"},     // summary.json's rows unnamed
   };
   for (const Case& c : cases) {
     const std::string full = std::string("/") + c.name + "/" + c.key;
