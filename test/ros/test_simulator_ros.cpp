@@ -1,4 +1,5 @@
 // rostest: QuadrotorSim + DepthCamera + SceneServer in one manager with use_sim_time.
+#include <cv_bridge/cv_bridge.h>
 #include <geometry_msgs/PoseStamped.h>
 #include <gtest/gtest.h>
 #include <nav_msgs/Odometry.h>
@@ -13,7 +14,6 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <deque>
 #include <limits>
 #include <mutex>
@@ -432,28 +432,28 @@ TEST_F(SimulatorTest, NoiseAndDropoutsEachApplyAlone) {
       },
       30.0))
       << noisy.frames.size() << " noisy and " << dropping.frames.size() << " dropping frames";
-  auto depthAt = [](const sensor_msgs::Image& image, std::size_t i) {
-    float d;
-    std::memcpy(&d, image.data.data() + 4 * i, 4);
-    return d;
-  };
-  const sensor_msgs::Image &a = *noisy.frames[0], &b = *noisy.frames[1];
-  ASSERT_EQ(a.encoding, "32FC1");
+  // Read as the mapper reads them, through cv_bridge.
+  ASSERT_EQ(noisy.frames[0]->encoding, "32FC1");
+  ASSERT_EQ(dropping.frames[0]->encoding, "32FC1");
+  const cv::Mat a = cv_bridge::toCvShare(noisy.frames[0], "32FC1")->image;
+  const cv::Mat b = cv_bridge::toCvShare(noisy.frames[1], "32FC1")->image;
   std::size_t both = 0, differ = 0;
-  for (std::size_t i = 0; i < a.width * a.height; ++i)
-    if (std::isfinite(depthAt(a, i)) && std::isfinite(depthAt(b, i))) {
-      ++both;
-      differ += depthAt(a, i) != depthAt(b, i);
-    }
+  for (int v = 0; v < a.rows; ++v)
+    for (int u = 0; u < a.cols; ++u)
+      if (std::isfinite(a.at<float>(v, u)) && std::isfinite(b.at<float>(v, u))) {
+        ++both;
+        differ += a.at<float>(v, u) != b.at<float>(v, u);
+      }
   ASSERT_GT(both, 1000u) << "the pose sees too little";
   EXPECT_GT(differ, both / 2) << differ << " of " << both << " returns differ between two frames from one pose";
-  const sensor_msgs::Image& d = *dropping.frames[0];
+  const cv::Mat d = cv_bridge::toCvShare(dropping.frames[0], "32FC1")->image;
   std::size_t returns = 0, dropped = 0;
-  for (std::size_t i = 0; i < d.width * d.height; ++i) {
-    const float v = depthAt(d, i);
-    dropped += std::isnan(v);
-    returns += std::isnan(v) || std::isfinite(v);  // +-inf: nothing in range, or too near
-  }
+  for (int v = 0; v < d.rows; ++v)
+    for (int u = 0; u < d.cols; ++u) {
+      const float depth = d.at<float>(v, u);
+      dropped += std::isnan(depth);
+      returns += std::isnan(depth) || std::isfinite(depth);  // +-inf: nothing in range, or too near
+    }
   ASSERT_GT(returns, 1000u);
   EXPECT_NEAR(static_cast<double>(dropped) / static_cast<double>(returns), 0.2, 0.05) << dropped << " of " << returns;
 }
