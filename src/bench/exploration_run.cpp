@@ -7,6 +7,7 @@
 #include <iomanip>
 #include <sstream>
 #include <stdexcept>
+#include <tuple>
 
 #include "go_feap/common/config_groups.h"
 #include "go_feap/common/transform.h"
@@ -55,12 +56,39 @@ common::Status ExplorationConfig::validate() const {
     return common::Status::Error("planner: rate must be in (0, 1000] Hz");
   if (!common::isRigidTransform(T_B_C.matrix()))
     return common::Status::Error("depth_camera: T_B_C must be a finite rigid transform");
+  // The mapper takes rays within 85 degrees of the optical axis: a wider camera (an hfov_deg of 175) passed
+  // the camera's own check and then had every frame refused, a run that mapped nothing without a word.
+  if (camera.validate().ok()) {
+    const auto K = camera.intrinsics();
+    if (const common::Status st = map::DepthIntrinsics{K.width, K.height, K.fx, K.fy, K.cx, K.cy}.validate(); !st.ok())
+      return common::Status::Error("depth_camera: hfov_deg and vfov_deg (or fx, fy, cx, cy) are too wide for the "
+                                   "mapper: " + st.message());
+  }
   // The camera renders nothing in its range as +inf, which the mapper casts free up to its own range: a
   // mapper reaching farther would clear the walls between the two ranges.
   if (!(map.occupancy.max_range <= camera.max_range))
     return common::Status::Error("occupancy: max_range must not exceed depth_camera: max_range (" +
                                  std::to_string(camera.max_range) + " m): beyond it the camera's 'nothing in range' "
                                  "would be cast free through walls");
+  // The viewpoints' sensor model must fit the camera and the mapper: a wider or longer one scores viewpoints on
+  // frontier cells the map will not take from there, flights that clear nothing, retried until blacklisted.
+  if (!(viewpoints.sensor_range <= map.occupancy.max_range))
+    return common::Status::Error("viewpoints: sensor_range (" + std::to_string(viewpoints.sensor_range) +
+                                 " m) must not exceed occupancy: max_range (" + std::to_string(map.occupancy.max_range) +
+                                 " m): viewpoints would be scored on cells the map does not take from them");
+  if (camera.validate().ok()) {
+    // The camera's symmetric field of view: the pixels' outer edges (half a pixel past the outer centres),
+    // on the narrower side of the principal point; a thousandth of a radian for a FOV written in rounded radians.
+    const auto K = camera.intrinsics();
+    const double hfov = 2.0 * std::atan(std::min(K.cx + 0.5, K.width - 0.5 - K.cx) / K.fx);
+    const double vfov = 2.0 * std::atan(std::min(K.cy + 0.5, K.height - 0.5 - K.cy) / K.fy);
+    for (const auto& [key, model, cam] : {std::make_tuple("hfov", viewpoints.hfov, hfov),
+                                          std::make_tuple("vfov", viewpoints.vfov, vfov)})
+      if (!(model <= cam + 1e-3))
+        return common::Status::Error(std::string("viewpoints: ") + key + " (" + std::to_string(model) +
+                                     " rad) must not exceed the depth camera's (" + std::to_string(cam) +
+                                     " rad): viewpoints would be scored on cells the camera does not see");
+  }
   // Each stage runs at most once a control step: a faster one ran at the control rate without a word.
   for (const auto& [key, r] : {std::make_pair("depth_camera: rate", camera_rate), std::make_pair("global: rate", loop.plan_rate),
                                std::make_pair("planner: rate", planner_rate), std::make_pair("layers: rate", layer_rate),

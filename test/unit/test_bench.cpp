@@ -637,6 +637,45 @@ TEST(Bench, EveryRateAndTheTimeLimitAreCheckedNamingTheKey) {
     c.map.occupancy.max_range = c.camera.max_range;
     EXPECT_TRUE(c.validate().ok()) << c.validate().message();
   }
+  {
+    // A camera wider than the mapper takes (rays within 85 degrees of the axis) had every frame refused in silence.
+    bench::ExplorationConfig c = base;
+    c.camera.hfov_deg = 175.0;
+    says(c, "depth_camera: hfov_deg and vfov_deg (or fx, fy, cx, cy) are too wide for the mapper");
+    c.camera.hfov_deg = 160.0;
+    EXPECT_TRUE(c.validate().ok()) << c.validate().message();
+    c = base;
+    c.camera.fx = c.camera.fy = 1.0;  // given intrinsics: a focal length of one pixel
+    c.camera.cx = 0.5 * c.camera.width;
+    c.camera.cy = 0.5 * c.camera.height;
+    says(c, "are too wide for the mapper: camera intrinsics are invalid");
+  }
+  {
+    // A viewpoint model that sees farther or wider than the mapper and the camera scores viewpoints on cells
+    // a flight there does not map. Equal is fine: the shipped 80 x 60 degrees are written in rounded radians.
+    bench::ExplorationConfig c = base;
+    c.viewpoints.sensor_range = c.map.occupancy.max_range + 0.5;
+    says(c, "viewpoints: sensor_range (5.000000 m) must not exceed occupancy: max_range (4.500000 m)");
+    c.viewpoints.sensor_range = c.map.occupancy.max_range;
+    c.viewpoints.hfov = c.camera.hfov_deg * M_PI / 180.0;
+    c.viewpoints.vfov = c.camera.vfov_deg * M_PI / 180.0;
+    EXPECT_TRUE(c.validate().ok()) << c.validate().message();
+    c.viewpoints.hfov += 0.01;
+    says(c, "viewpoints: hfov (1.406263 rad) must not exceed the depth camera's (1.396263 rad)");
+    c.viewpoints.hfov -= 0.01;
+    c.viewpoints.vfov += 0.01;
+    says(c, "viewpoints: vfov");
+    // Given intrinsics: a principal point 100 pixels off centre narrows the symmetric view to its near side.
+    c = base;
+    const auto K = c.camera.intrinsics();
+    c.camera.fx = K.fx;
+    c.camera.fy = K.fy;
+    c.camera.cx = K.cx - 100.0;
+    c.camera.cy = K.cy;
+    says(c, "viewpoints: hfov");
+    c.viewpoints.hfov = 2.0 * std::atan((K.cx - 99.5) / K.fx);
+    EXPECT_TRUE(c.validate().ok()) << c.validate().message();
+  }
   for (const double bad : {0.0, -5.0, std::numeric_limits<double>::quiet_NaN()}) {
     bench::ExplorationConfig c = base;
     c.layer_rate = bad;  // at 0 the state machine never stepped again; below, the run ended at once
