@@ -63,7 +63,8 @@ common::Status OccupancyConfig::validate() const {
   if (!(p_occupied > 0.5 && p_occupied < p_max)) return bad("p_occupied", "must be in (0.5, p_max)");
   if (!(min_range >= 0.0)) return bad("min_range", "must be >= 0");
   if (!(max_range > min_range && std::isfinite(max_range))) return bad("max_range", "must be finite and > min_range");
-  if (skip_pixel < 1) return bad("skip_pixel", "must be >= 1");
+  // At most the largest image side the cameras take: 2^31 - 1 overflowed the pixel loops' int steps.
+  if (skip_pixel < 1 || skip_pixel > 8192) return bad("skip_pixel", "must be in [1, 8192] pixels");
   if (!(max_plausible_depth > max_range && std::isfinite(max_plausible_depth)))
     return bad("max_plausible_depth", "must be finite and > max_range");
   // One byte per voxel: log-odds * 50 must fit in [-127, 127].

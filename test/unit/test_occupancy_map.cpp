@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <set>
 #include <string>
 #include <utility>
@@ -477,6 +478,8 @@ TEST(OccupancyMap, ConfigsThatWouldBreakTheMapAreRefusedByName) {
   for (const auto& [key, broken] : std::vector<std::pair<std::string, std::function<void(map::OccupancyConfig&)>>>{
            {"skip_pixel", [](map::OccupancyConfig& o) { o.skip_pixel = 0; }},
            {"skip_pixel", [](map::OccupancyConfig& o) { o.skip_pixel = -3; }},
+           {"skip_pixel", [](map::OccupancyConfig& o) { o.skip_pixel = std::numeric_limits<int>::max(); }},
+           {"skip_pixel", [](map::OccupancyConfig& o) { o.skip_pixel = 8193; }},
            {"max_plausible_depth", [](map::OccupancyConfig& o) { o.max_plausible_depth = 3.0; }},
            {"max_plausible_depth", [](map::OccupancyConfig& o) { o.max_plausible_depth = 4.5; }},
            {"p_min/p_max", [](map::OccupancyConfig& o) { o.p_max = 0.95; }},
@@ -492,6 +495,8 @@ TEST(OccupancyMap, ConfigsThatWouldBreakTheMapAreRefusedByName) {
   }
   map::OccupancyConfig wider;
   wider.max_plausible_depth = 5.0;  // above max_range: valid
+  EXPECT_TRUE(wider.validate()) << wider.validate().message();
+  wider.skip_pixel = 8192;  // the largest image side: only the corner pixel of each frame is cast
   EXPECT_TRUE(wider.validate()) << wider.validate().message();
 }
 
