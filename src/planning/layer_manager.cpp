@@ -16,8 +16,9 @@ common::Status LayerManagerConfig::validate() const {
   if (!(layer_height >= 0.5) || !std::isfinite(layer_height)) return bad("layer_height", "must be finite and >= 0.5 m");
   if (!(settle_time >= 0.0) || !std::isfinite(settle_time)) return bad("settle_time", "must be finite and >= 0");
   if (max_retries < 1) return bad("max_retries", "must be >= 1");
-  if (!(time_limit > 0.0)) return bad("time_limit", "must be > 0");
-  if (!(stuck_timeout > 0.0)) return bad("stuck_timeout", "must be > 0");
+  // .inf is the way to say "no limit" (a real flight ended by its pilot); NaN, 0 and below are refused.
+  if (!(time_limit > 0.0)) return bad("time_limit", "must be > 0 s (.inf for none)");
+  if (!(stuck_timeout > 0.0)) return bad("stuck_timeout", "must be > 0 s (.inf for none)");
   if (!(progress_travel >= 0.0) || !std::isfinite(progress_travel)) return bad("progress_travel", "must be finite and >= 0");
   return common::Status::Ok();
 }

@@ -410,6 +410,17 @@ TEST(LayerManager, ValidateNamesKeys) {
   }
   EXPECT_STREQ(toString(FinishReason::kStuck), "stuck");
   EXPECT_STREQ(toString(ExplorationState::kFinalPass), "FINAL_PASS");
+  // .inf is "no limit": accepted, and a run that stops growing its map for a day is neither stuck nor late.
+  c = config();
+  c.time_limit = c.stuck_timeout = std::numeric_limits<double>::infinity();
+  ASSERT_TRUE(c.validate()) << c.validate().message();
+  LayerManager m(c, kBox, 0.5);
+  LayerInputs trig = frontiers({1}, {1}, 0);
+  trig.trigger = true;
+  m.step(trig, 0.0);
+  LayerOutputs out;
+  for (double t = 0.5; t < 86400.0; t += 600.0) out = m.step(frontiers({1}, {1}, 7), t);
+  EXPECT_EQ(out.state, ExplorationState::kExplore);
 }
 
 // A start facing a wall sees too little for a frontier: the band is not counted explored, and the chain
