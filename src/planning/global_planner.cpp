@@ -38,6 +38,10 @@ Status GlobalPlannerConfig::validate() const {
                              " with a rest leg (rest_weight > 0): its node is solved with the candidates")
                                 .c_str());
   if (Status s = omission.validate(); !s) return s;  // "omission: ...", as its keys omission/*
+  // One frontier's lambda xi is at most lambda alpha_max w_t n_t, each key finite alone: 1e200 twice made
+  // tour costs of inf, and no tour was ever chosen, without a key named. Past 1e6 travel time no longer counts.
+  if (!(lambda * omission.alpha_max * omission.w_t * omission.n_t <= 1e6))
+    return err("lambda", "times omission: alpha_max * w_t * n_t (the largest lambda xi of a frontier) must be <= 1e6");
   return Status::Ok();
 }
 

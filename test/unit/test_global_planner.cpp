@@ -120,12 +120,28 @@ TEST(GlobalPlannerConfig, ValidateNamesTheKey) {
       {[](GlobalPlannerConfig& c) { c.rest_weight = std::nan(""); }, "global: rest_weight must be finite and >= 0"},
       {[](GlobalPlannerConfig& c) { c.rest_frontiers = 0; }, "global: rest_frontiers must be >= 1"},
       {[](GlobalPlannerConfig& c) { c.omission.t_max = -1.0; }, "omission: t_max must be > 0"},
+      {[](GlobalPlannerConfig& c) {  // each finite, their product inf
+         c.omission.alpha_max = 1e200;
+         c.omission.w_t = 1e200;
+       },
+       "global: lambda times omission: alpha_max * w_t * n_t (the largest lambda xi of a frontier) must be <= 1e6"},
+      {[](GlobalPlannerConfig& c) {
+         c.lambda = 1e4;
+         c.omission.n_t = 1e3;
+       },
+       "global: lambda times omission: alpha_max * w_t * n_t (the largest lambda xi of a frontier) must be <= 1e6"},
   };
   for (const Row& r : rows) {
     GlobalPlannerConfig c;
     r.spoil(c);
     EXPECT_EQ(c.validate().message(), r.message);
   }
+  GlobalPlannerConfig most;  // the bound itself: 1 * 1 * 2 * 5e5
+  most.lambda = 1.0;
+  most.omission.alpha_max = 1.0;
+  most.omission.w_t = 2.0;
+  most.omission.n_t = 5e5;
+  EXPECT_TRUE(most.validate().ok()) << most.validate().message();
 }
 
 TEST(SelectCandidates, NearOnesSortedByDistanceInactiveExcluded) {
