@@ -7,7 +7,6 @@
 #include <iomanip>
 #include <sstream>
 #include <stdexcept>
-#include <tuple>
 
 #include "go_feap/common/config_groups.h"
 #include "go_feap/common/transform.h"
@@ -23,6 +22,12 @@ double msSince(Clock::time_point t0) {
 }
 
 bool positiveFinite(double v) { return std::isfinite(v) && v > 0.0; }
+
+// The rendered images' intrinsics, as the mapper takes them.
+map::DepthIntrinsics depthIntrinsics(const sim::DepthCameraConfig& camera) {
+  const auto K = camera.intrinsics();
+  return {K.width, K.height, K.fx, K.fy, K.cx, K.cy};
+}
 
 }  // namespace
 
@@ -58,12 +63,9 @@ common::Status ExplorationConfig::validate() const {
     return common::Status::Error("depth_camera: T_B_C must be a finite rigid transform");
   // The mapper takes rays within 85 degrees of the optical axis: a wider camera (an hfov_deg of 175) passed
   // the camera's own check and then had every frame refused, a run that mapped nothing without a word.
-  if (camera.validate().ok()) {
-    const auto K = camera.intrinsics();
-    if (const common::Status st = map::DepthIntrinsics{K.width, K.height, K.fx, K.fy, K.cx, K.cy}.validate(); !st.ok())
-      return common::Status::Error("depth_camera: hfov_deg and vfov_deg (or fx, fy, cx, cy) are too wide for the "
-                                   "mapper: " + st.message());
-  }
+  if (const common::Status st = depthIntrinsics(camera).validate(); !st.ok())
+    return common::Status::Error("depth_camera: hfov_deg and vfov_deg (or fx, fy, cx, cy) are too wide for the "
+                                 "mapper: " + st.message());
   // The camera renders nothing in its range as +inf, which the mapper casts free up to its own range: a
   // mapper reaching farther would clear the walls between the two ranges.
   if (!(map.occupancy.max_range <= camera.max_range))
@@ -72,23 +74,8 @@ common::Status ExplorationConfig::validate() const {
                                  "would be cast free through walls");
   // The viewpoints' sensor model must fit the camera and the mapper: a wider or longer one scores viewpoints on
   // frontier cells the map will not take from there, flights that clear nothing, retried until blacklisted.
-  if (!(viewpoints.sensor_range <= map.occupancy.max_range))
-    return common::Status::Error("viewpoints: sensor_range (" + std::to_string(viewpoints.sensor_range) +
-                                 " m) must not exceed occupancy: max_range (" + std::to_string(map.occupancy.max_range) +
-                                 " m): viewpoints would be scored on cells the map does not take from them");
-  if (camera.validate().ok()) {
-    // The camera's symmetric field of view: the pixels' outer edges (half a pixel past the outer centres),
-    // on the narrower side of the principal point; a thousandth of a radian for a FOV written in rounded radians.
-    const auto K = camera.intrinsics();
-    const double hfov = 2.0 * std::atan(std::min(K.cx + 0.5, K.width - 0.5 - K.cx) / K.fx);
-    const double vfov = 2.0 * std::atan(std::min(K.cy + 0.5, K.height - 0.5 - K.cy) / K.fy);
-    for (const auto& [key, model, cam] : {std::make_tuple("hfov", viewpoints.hfov, hfov),
-                                          std::make_tuple("vfov", viewpoints.vfov, vfov)})
-      if (!(model <= cam + 1e-3))
-        return common::Status::Error(std::string("viewpoints: ") + key + " (" + std::to_string(model) +
-                                     " rad) must not exceed the depth camera's (" + std::to_string(cam) +
-                                     " rad): viewpoints would be scored on cells the camera does not see");
-  }
+  for (const common::Status& st : {viewpoints.fitsMapper(map.occupancy), viewpoints.fitsCamera(depthIntrinsics(camera))})
+    if (!st.ok()) return st;
   // Each stage runs at most once a control step: a faster one ran at the control rate without a word.
   for (const auto& [key, r] : {std::make_pair("depth_camera: rate", camera_rate), std::make_pair("global: rate", loop.plan_rate),
                                std::make_pair("planner: rate", planner_rate), std::make_pair("layers: rate", layer_rate),
@@ -164,8 +151,7 @@ ExplorationRun::ExplorationRun(const world::Scene& scene, const ExplorationConfi
   for (const common::Status& st : {config.validate(), world::validateScene(scene)})
     if (!st.ok()) throw std::invalid_argument(st.message());
   if (!positiveFinite(max_sim_time)) throw std::invalid_argument("max_sim_time must be finite and > 0");
-  const auto K = config.camera.intrinsics();
-  intrinsics_ = {K.width, K.height, K.fx, K.fy, K.cx, K.cy};
+  intrinsics_ = depthIntrinsics(config.camera);
   map_ = std::make_unique<map::VoxelMap>(config.map, scene.box);
   finder_ = std::make_unique<frontier::FrontierFinder>(config.frontier, map_->geometry(), scene.box);
   distance_astar_ = std::make_unique<planning::Astar>(map_->occupancy(), map_->esdf(), config.distance_astar);

@@ -1,7 +1,7 @@
 // LocalPlanner: picks the next viewpoint. Samples candidate viewpoints around the first
 // frontiers of the global tour, filters them by frontier type (near or cluttered: steering
 // rate; open: N_view) and runs the viewpoint DAG. In: global_tour, frontiers, odom, depth
-// (obstacle-ratio window), layer, map_handle, map_update (forgets the cached viewpoints of the frontiers
+// (obstacle-ratio window), camera_info (the viewpoints' FOV checked against the camera's), layer, map_handle, map_update (forgets the cached viewpoints of the frontiers
 // a change reaches), frontier_failed (drops a failed target). Out:
 // local_target (go_feap/ViewpointPath, numbered: a kept target is repeated with its number),
 // frontier_failed, viewpoint_markers, tour_wanted (std_msgs/Bool, with each tour: planning::planDue() for
@@ -16,17 +16,20 @@
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
 #include <ros/ros.h>
+#include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <visualization_msgs/MarkerArray.h>
 
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <mutex>
 #include <shared_mutex>
 #include <std_msgs/Bool.h>
 #include <std_msgs/UInt32.h>
 #include <optional>
+#include <vector>
 
 #include "go_feap/ExplorationStatus.h"
 #include "go_feap/FrontierArray.h"
@@ -74,6 +77,7 @@ class LocalPlanner : public nodelet::Nodelet {
     handle_sub_ = ros_guard::subscribe(nh, getName(), "map_handle", 1, &LocalPlanner::onHandle, this);
     odom_sub_ = ros_guard::subscribe(nh, getName(), "odom", 5, &LocalPlanner::onOdom, this);
     depth_sub_ = ros_guard::subscribe(nh, getName(), "depth", 2, &LocalPlanner::onDepth, this);
+    info_sub_ = ros_guard::subscribe(nh, getName(), "camera_info", 2, &LocalPlanner::onInfo, this);
     layer_sub_ = ros_guard::subscribe(nh, getName(), "layer", 1, &LocalPlanner::onLayer, this);
     frontier_sub_ = ros_guard::subscribe(nh, getName(), "frontiers", 2, &LocalPlanner::onFrontiers, this);
     tour_sub_ = ros_guard::subscribe(nh, getName(), "global_tour", 2, &LocalPlanner::onTour, this);
@@ -104,9 +108,11 @@ class LocalPlanner : public nodelet::Nodelet {
       NODELET_ERROR_STREAM_THROTTLE(10.0, getName() << ": " << map.message());
       return;
     }
-    // Astar's constructor throws otherwise; a viewpoint clearance past max_distance passes no viewpoint.
+    // Astar's constructor throws otherwise; a viewpoint clearance past max_distance passes no viewpoint, and a
+    // sensor_range past the mapper's scores viewpoints on cells never mapped from them.
     const map::EsdfConfig& esdf = (*map)->map->config().esdf;
-    for (const common::Status& st : {astar_config_.validate(esdf), viewpoint_config_.validate(esdf)})
+    for (const common::Status& st : {astar_config_.validate(esdf), viewpoint_config_.validate(esdf),
+                                     viewpoint_config_.fitsMapper((*map)->map->config().occupancy)})
       if (!st) {
         ros_params::stopManager(getName(), st.message());
         return;
@@ -183,6 +189,27 @@ class LocalPlanner : public nodelet::Nodelet {
       return;
     }
     window_->push(*ratio);
+  }
+  // The viewpoints' field of view against the depth camera's, once for each camera_info not checked before: a
+  // wider model scores viewpoints on cells the camera does not see (their flights clear nothing, and the
+  // frontiers go on until blacklisted). Said, not refused: a camera whose driver restarted with a narrower
+  // image must not stop a flight. Not throttled: a throttle on the simulated clock swallows what comes in its
+  // first period. One the mapper cannot take is left to the mapper to name.
+  void onInfo(const sensor_msgs::CameraInfo::ConstPtr& info) {
+    const auto side = [](std::uint32_t n) { return static_cast<int>(std::min<std::uint32_t>(n, std::numeric_limits<int>::max())); };
+    const map::DepthIntrinsics K{side(info->width), side(info->height), info->K[0], info->K[4], info->K[2], info->K[5]};
+    if (!K.validate()) return;
+    const auto same = [&K](const map::DepthIntrinsics& o) {
+      return o.width == K.width && o.height == K.height && o.fx == K.fx && o.fy == K.fy && o.cx == K.cx && o.cy == K.cy;
+    };
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (std::any_of(checked_cameras_.begin(), checked_cameras_.end(), same)) return;
+    if (checked_cameras_.size() >= 16) checked_cameras_.erase(checked_cameras_.begin());  // a camera re-calibrating
+    checked_cameras_.push_back(K);
+    if (const common::Status st = viewpoint_config_.fitsCamera(K); !st)
+      NODELET_WARN_STREAM(getName() << ": " << st.message() << " (camera_info " << K.width << "x" << K.height << ", fx "
+                                    << K.fx << ", fy " << K.fy << ", cx " << K.cx << ", cy " << K.cy
+                                    << "); set the viewpoints' hfov and vfov to at most the camera's");
   }
   void onLayer(const LayerBounds::ConstPtr& msg) {
     const std::string bad = ros_check::layerBoundsProblem(*msg);
@@ -457,8 +484,9 @@ class LocalPlanner : public nodelet::Nodelet {
   double committed_at_ = 0.0, speed_ = 0.0, frontier_extent_ = 2.0, max_input_speed_ = 20.0;
   std::string speed_limit_name_;  ///< local/max_input_speed's full name, for the messages
   double last_plan_ = -1e9;  ///< s (ROS time), when a tour was last planned against (planning::planDue())
-  ros::Subscriber handle_sub_, odom_sub_, depth_sub_, layer_sub_, frontier_sub_, tour_sub_, failed_sub_, status_sub_,
-      update_sub_;
+  ros::Subscriber handle_sub_, odom_sub_, depth_sub_, info_sub_, layer_sub_, frontier_sub_, tour_sub_, failed_sub_,
+      status_sub_, update_sub_;
+  std::vector<map::DepthIntrinsics> checked_cameras_;  ///< the last 16 camera_infos the FOV was checked against
   std::uint64_t last_update_ = 0;  ///< sequence of the last map_update
 };
 

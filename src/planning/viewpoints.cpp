@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <string>
+#include <tuple>
 
 namespace go_feap::planning {
 
@@ -48,6 +49,26 @@ Status ViewpointConfig::validate(const map::EsdfConfig& esdf) const {
     return Status::Error("viewpoints: clearance must be <= the ESDF's max_distance (" +
                          std::to_string(esdf.max_distance) + " m, where distances are truncated: no viewpoint " +
                          "would pass), got " + std::to_string(clearance));
+  return Status::Ok();
+}
+
+Status ViewpointConfig::fitsMapper(const map::OccupancyConfig& occupancy) const {
+  if (!(sensor_range <= occupancy.max_range))
+    return Status::Error("viewpoints: sensor_range (" + std::to_string(sensor_range) +
+                         " m) must not exceed occupancy: max_range (" + std::to_string(occupancy.max_range) +
+                         " m): viewpoints would be scored on cells the map does not take from them");
+  return Status::Ok();
+}
+
+Status ViewpointConfig::fitsCamera(const map::DepthIntrinsics& K) const {
+  const double camera_hfov = 2.0 * std::atan(std::min(K.cx + 0.5, K.width - 0.5 - K.cx) / K.fx);
+  const double camera_vfov = 2.0 * std::atan(std::min(K.cy + 0.5, K.height - 0.5 - K.cy) / K.fy);
+  for (const auto& [key, model, camera] : {std::make_tuple("hfov", hfov, camera_hfov),
+                                           std::make_tuple("vfov", vfov, camera_vfov)})
+    if (!(model <= camera + 1e-3))
+      return Status::Error(std::string("viewpoints: ") + key + " (" + std::to_string(model) +
+                           " rad) must not exceed the depth camera's (" + std::to_string(camera) +
+                           " rad): viewpoints would be scored on cells the camera does not see");
   return Status::Ok();
 }
 

@@ -11,6 +11,7 @@
 #include <nav_msgs/Path.h>
 #include <ros/ros.h>
 #include <rosgraph_msgs/Log.h>
+#include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <std_srvs/Trigger.h>
 #include <tf2_eigen/tf2_eigen.h>
@@ -19,6 +20,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <vector>
 
 #include "go_feap/Bspline.h"
@@ -201,28 +203,49 @@ TEST(Onboard, RunsTheChainOnD435iDepthAndVioOdometry) {
     EXPECT_EQ(unmatched(), 0u) << "flown_path poses that are no odometry position, of " << shown->poses.size();
     for (const auto& q : shown->poses) EXPECT_EQ(q.header.frame_id, "world");
   }
+  // The simulated camera's 80 x 60 degrees are the viewpoints' (config/exploration.yaml): nothing said of them.
+  // A narrower camera_info on the onboard topic (a driver restarted at another resolution) is named by the
+  // local planner, which hears it there too: its viewpoints would be scored on cells the camera does not see.
+  for (const std::string& w : warnings) EXPECT_EQ(w.find("must not exceed the depth camera's"), std::string::npos) << w;
+  ros::Publisher info_pub = nh.advertise<sensor_msgs::CameraInfo>("vehicle/camera_info", 1);
+  // One connection: the mapper and the local planner share the manager's process.
+  ASSERT_TRUE(spinUntil([&] { return info_pub.getNumSubscribers() >= 1; }, 20.0)) << "vehicle/camera_info unheard";
+  sensor_msgs::CameraInfo narrow;
+  narrow.header.frame_id = depth->header.frame_id;
+  narrow.width = 640, narrow.height = 480;
+  narrow.K = {500.0, 0.0, 319.5, 0.0, 500.0, 239.5, 0.0, 0.0, 1.0};  // 65 x 51 degrees
+  // Sent every `every` s (of the simulated clock) until a warning holds `said`.
+  auto sendUntilSaid = [&](const std::function<void()>& send, double every, const std::string& said, double timeout) {
+    ros::Time sent;
+    return spinUntil([&] {
+      if (sent.isZero() || (ros::Time::now() - sent).toSec() > every) {
+        send();
+        sent = ros::Time::now();
+      }
+      return std::any_of(warnings.begin(), warnings.end(), [&](const std::string& w) { return w.find(said) != std::string::npos; });
+    }, timeout);
+  };
+  EXPECT_TRUE(sendUntilSaid([&] {
+    narrow.header.stamp = ros::Time::now();
+    info_pub.publish(narrow);
+  }, 1.0, "/local_planner: viewpoints: hfov (1.396300 rad) must not exceed the depth camera's (1.138626 rad)", 30.0))
+      << "the local planner said nothing of a camera narrower than its viewpoints";
   // The local planner hears the onboard depth topic too (its obstacle window judges the clutter): an rgb8
   // image sent there is refused by it, by name. Unconnected, nothing would be said and the window would stay
   // empty, silently.
   ros::Publisher rgb_pub = nh.advertise<sensor_msgs::Image>("vehicle/depth", 1);
   ASSERT_TRUE(spinUntil([&] { return rgb_pub.getNumSubscribers() >= 2; }, 20.0))
-      << "vehicle/depth has " << rgb_pub.getNumSubscribers() << " subscribers (the mapper and the local planner)";
+      << "vehicle/depth has " << rgb_pub.getNumSubscribers() << " subscribers (the manager's and this test's)";
   sensor_msgs::Image rgb = *depth;
   rgb.encoding = "rgb8";
   rgb.step = rgb.width * 3;
   rgb.data.assign(std::size_t{rgb.step} * rgb.height, 0);
   // Sent again past the warning's 5 s throttle (of the simulated clock) until heard.
-  ros::Time sent;
-  EXPECT_TRUE(spinUntil([&] {
-    if (sent.isZero() || (ros::Time::now() - sent).toSec() > 5.5) {
-      rgb.header.stamp = ros::Time::now();
-      rgb_pub.publish(rgb);
-      sent = ros::Time::now();
-    }
-    return std::any_of(warnings.begin(), warnings.end(), [](const std::string& w) {
-      return w.find("/local_planner: depth image refused") != std::string::npos;
-    });
-  }, 60.0)) << "the local planner said nothing of an rgb8 image on the onboard depth topic";
+  EXPECT_TRUE(sendUntilSaid([&] {
+    rgb.header.stamp = ros::Time::now();
+    rgb_pub.publish(rgb);
+  }, 5.5, "/local_planner: depth image refused", 60.0))
+      << "the local planner said nothing of an rgb8 image on the onboard depth topic";
 }
 
 }  // namespace

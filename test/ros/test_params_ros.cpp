@@ -112,34 +112,35 @@ TEST(Parameters, ANodeletWithAnInvalidOrMissingParameterDoesNotStartAndNamesIt) 
 // A parameter that conflicts with the mapper's (viewpoints/clearance past esdf/max_distance: no viewpoint
 // would pass) is found when the map comes, not at the start: the local planner starts, then names it in a
 // fatal message and stops its manager, as a refused parameter ends a launch (it used to log an error every
-// 10 s and plan nothing for good). params.test runs a mapper in a manager of its own, /conflict/manager;
+// 10 s and plan nothing for good). params.test runs a mapper in a manager of its own, /NS/manager;
 // the test feeds it frames, with each of which it sends its map's handle in the process.
-TEST(Parameters, AClearanceThatConflictsWithTheMappersStopsTheManagerAndNamesIt) {
+// `ns` is the group of the manager, the mapper and the planner's parameters; `expected` begins the fatal message.
+void expectTheConflictStopsTheManager(const std::string& ns, const std::string& expected) {
   ros::NodeHandle nh;
   std::vector<std::string> fatal;
   auto log_sub = nh.subscribe<rosgraph_msgs::Log>("/rosout", 200, [&](const rosgraph_msgs::Log::ConstPtr& m) {
     if (m->level >= rosgraph_msgs::Log::FATAL) fatal.push_back(m->msg);
   });
-  ros::Publisher info_pub = nh.advertise<sensor_msgs::CameraInfo>("conflict/camera_info", 1, /*latch=*/true);
-  ros::Publisher depth_pub = nh.advertise<sensor_msgs::Image>("conflict/depth", 5);
-  ros::Publisher pose_pub = nh.advertise<geometry_msgs::PoseStamped>("conflict/camera_pose", 5);
-  ASSERT_TRUE(ros::service::waitForService("conflict/manager/load_nodelet", ros::Duration(30.0)));
+  ros::Publisher info_pub = nh.advertise<sensor_msgs::CameraInfo>(ns + "/camera_info", 1, /*latch=*/true);
+  ros::Publisher depth_pub = nh.advertise<sensor_msgs::Image>(ns + "/depth", 5);
+  ros::Publisher pose_pub = nh.advertise<geometry_msgs::PoseStamped>(ns + "/camera_pose", 5);
+  ASSERT_TRUE(ros::service::waitForService(ns + "/manager/load_nodelet", ros::Duration(30.0)));
   // This test hears the manager's /rosout before the planner is loaded (a message would be lost before),
   // and the mapper hears the test.
   std::vector<std::string> publishers;
   ASSERT_TRUE(spinUntil(
       [&] {
         publishers = go_feap::test::publishersOf("/rosout");  // this node's own publisher among them
-        return std::count(publishers.begin(), publishers.end(), "/conflict/manager") == 1 &&
+        return std::count(publishers.begin(), publishers.end(), "/" + ns + "/manager") == 1 &&
                log_sub.getNumPublishers() >= publishers.size() && info_pub.getNumSubscribers() > 0 &&
                depth_pub.getNumSubscribers() > 0 && pose_pub.getNumSubscribers() > 0;
       },
       20.0))
       << "/rosout: " << log_sub.getNumPublishers() << " connected of " << ::testing::PrintToString(publishers);
   nodelet::NodeletLoad srv;
-  srv.request.name = "/conflict/local_planner";
+  srv.request.name = "/" + ns + "/local_planner";
   srv.request.type = "go_feap/LocalPlanner";
-  ASSERT_TRUE(ros::service::call("conflict/manager/load_nodelet", srv) && srv.response.success)
+  ASSERT_TRUE(ros::service::call(ns + "/manager/load_nodelet", srv) && srv.response.success)
       << "its own parameters are valid: it starts";
 
   sensor_msgs::CameraInfo info;
@@ -158,7 +159,6 @@ TEST(Parameters, AClearanceThatConflictsWithTheMappersStopsTheManagerAndNamesIt)
   pose.header.frame_id = "world";
   pose.pose.position.z = 1.0;
   pose.pose.orientation.w = 1.0;
-  const std::string expected = "/conflict/local_planner: viewpoints: clearance must be <=";
   ros::WallTime sent;
   EXPECT_TRUE(spinUntil(
       [&] {
@@ -171,9 +171,20 @@ TEST(Parameters, AClearanceThatConflictsWithTheMappersStopsTheManagerAndNamesIt)
         return std::any_of(fatal.begin(), fatal.end(), [&](const std::string& m) { return m.find(expected) != std::string::npos; });
       },
       20.0))
-      << "no fatal message naming viewpoints/clearance; fatal messages: " << ::testing::PrintToString(fatal);
-  EXPECT_TRUE(spinUntil([&] { return !ros::service::exists("conflict/manager/load_nodelet", false); }, 20.0))
+      << "no fatal message '" << expected << "'; fatal messages: " << ::testing::PrintToString(fatal);
+  EXPECT_TRUE(spinUntil([&] { return !ros::service::exists(ns + "/manager/load_nodelet", false); }, 20.0))
       << "the manager still runs";
+}
+
+TEST(Parameters, AClearanceThatConflictsWithTheMappersStopsTheManagerAndNamesIt) {
+  expectTheConflictStopsTheManager("conflict", "/conflict/local_planner: viewpoints: clearance must be <=");
+}
+
+// A sensor_range past the mapper's max_range likewise.
+TEST(Parameters, ASensorRangePastTheMappersStopsTheManagerAndNamesIt) {
+  expectTheConflictStopsTheManager("conflict_range",
+                                   "/conflict_range/local_planner: viewpoints: sensor_range (4.500000 m) must not "
+                                   "exceed occupancy: max_range (4.000000 m)");
 }
 
 }  // namespace

@@ -41,6 +41,15 @@ struct ViewpointConfig {
   /// validate() plus clearance <= esdf.max_distance (distances are truncated there: a larger clearance
   /// passes no viewpoint, and every frontier would be blacklisted).
   common::Status validate(const map::EsdfConfig& esdf) const;
+  /// Checks hfov and vfov against a depth camera: neither may exceed the camera's symmetric field of view,
+  /// twice the angle from the principal point to the nearer image edge (the outer pixels' outer edges), by
+  /// more than 1e-3 rad (a FOV written in rounded radians). A wider model scores viewpoints on frontier cells
+  /// the camera does not see from them. The message names the key, e.g. "viewpoints: vfov (...) must not
+  /// exceed the depth camera's (...)".
+  common::Status fitsCamera(const map::DepthIntrinsics& K) const;
+  /// Checks sensor_range against the mapper's: it must not exceed occupancy.max_range, past which returns
+  /// are not mapped (viewpoints would be scored on cells a flight there does not map).
+  common::Status fitsMapper(const map::OccupancyConfig& occupancy) const;
 };
 
 /// `a` wrapped to (-pi, pi].
