@@ -21,6 +21,7 @@
 #include "go_feap/common/transform.h"
 #include "go_feap/ros/conversions.h"
 #include "go_feap/ros/guarded.h"
+#include "go_feap/ros/log_throttle.h"
 #include "go_feap/ros/params.h"
 #include "go_feap/sim/depth_camera.h"
 #include "go_feap/world/scene.h"
@@ -28,6 +29,8 @@
 namespace go_feap {
 
 class DepthCamera : public nodelet::Nodelet {
+  // Declared first: it outlives whatever callback the other members' destruction still lets run.
+  ros_log::Throttle log_throttle_;  ///< this nodelet's throttled messages
  private:
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
@@ -90,7 +93,7 @@ class DepthCamera : public nodelet::Nodelet {
     // A refused message is as if it never came: it takes no frame's turn and no part in the stamp checks.
     const std::string bad = ros_conv::odometryPoseProblem(*odom, world_frame_);
     if (!bad.empty()) {
-      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": odometry refused: " << bad);
+      GO_FEAP_NODELET_THROTTLE(WARN, 2.0, getName() << ": odometry refused: " << bad);
       return;
     }
     const ros::Time stamp = odom->header.stamp;
@@ -99,7 +102,7 @@ class DepthCamera : public nodelet::Nodelet {
     // come kStallMessages times in a row, and again every 5 s while it lasts.
     if (stamp == last_stamp_) {
       if (++repeats_ >= kStallMessages)
-        NODELET_WARN_STREAM_THROTTLE(5.0, getName() << ": odometry stamp " << stamp.toSec() << " s repeated in "
+        GO_FEAP_NODELET_THROTTLE(WARN, 5.0, getName() << ": odometry stamp " << stamp.toSec() << " s repeated in "
                                                     << repeats_ + 1 << " messages in a row: no depth frame until it advances");
       return;
     }

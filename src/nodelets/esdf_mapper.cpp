@@ -41,6 +41,7 @@
 #include "go_feap/ros/compute_time.h"
 #include "go_feap/ros/conversions.h"
 #include "go_feap/ros/guarded.h"
+#include "go_feap/ros/log_throttle.h"
 #include "go_feap/ros/message_checks.h"
 #include "go_feap/ros/params.h"
 #include "go_feap/ros/shared_map.h"
@@ -49,6 +50,8 @@
 namespace go_feap {
 
 class EsdfMapper : public nodelet::Nodelet {
+  // Declared first: it outlives whatever callback the other members' destruction still lets run.
+  ros_log::Throttle log_throttle_;  ///< this nodelet's throttled messages
   using ExactPolicy = message_filters::sync_policies::ExactTime<sensor_msgs::Image, geometry_msgs::PoseStamped>;
   using ApproxPolicy = message_filters::sync_policies::ApproximateTime<sensor_msgs::Image, geometry_msgs::PoseStamped>;
 
@@ -84,7 +87,7 @@ class EsdfMapper : public nodelet::Nodelet {
                                "parameter '" + p.fullName("mapper/tf_queue") + "' must be in [1, 1000] frames");
     ros_params::requireOrThrow(std::isfinite(max_tf_gap_) && max_tf_gap_ > 0.0, me,
                                "parameter '" + p.fullName("mapper/max_tf_gap") + "' must be finite and > 0");
-    // At most an hour: ROS throttles from time 0, so a period past the clock would silence the warnings.
+    // At most an hour: after the first warning, a longer period leaves a flight's bad input unsaid.
     ros_params::requireOrThrow(warn_period_ > 0.0 && warn_period_ <= 3600.0, me,
                                "parameter '" + p.fullName("mapper/warn_period") + "' must be in (0, 3600] s");
     ros_params::requireOrThrow(std::isfinite(slice_height_), me,
@@ -113,14 +116,14 @@ class EsdfMapper : public nodelet::Nodelet {
       tf_filter_->registerCallback(&EsdfMapper::onDepthTransformable, this);
       tf_filter_->registerFailureCallback(
           [this](const sensor_msgs::Image::ConstPtr& depth, tf2_ros::filter_failure_reasons::FilterFailureReason why) {
-            ros_guard::run(getName(), "the TF filter's drop callback", [&] { onDepthDropped(depth, why); });
+            ros_guard::run(getName(), "the TF filter's drop callback", log_throttle_, [&] { onDepthDropped(depth, why); });
           });
     } else {
       pose_sub_.subscribe(nh, "camera_pose", 20);
       // A pair is the only callback: count the images, so that frames that never pair (poses stamped
       // otherwise, or none) are said, not dropped in silence.
       depth_sub_.registerCallback([this](const sensor_msgs::Image::ConstPtr&) {
-        ros_guard::run(getName(), "the depth counter", [&] { onDepthArrived(); });
+        ros_guard::run(getName(), "the depth counter", log_throttle_, [&] { onDepthArrived(); });
       });
       if (sync_mode_ == "exact") {
         exact_sync_ = std::make_unique<message_filters::Synchronizer<ExactPolicy>>(ExactPolicy(kSyncQueue), depth_sub_, pose_sub_);
@@ -132,12 +135,12 @@ class EsdfMapper : public nodelet::Nodelet {
         approx_sync_ = std::make_unique<message_filters::Synchronizer<ApproxPolicy>>(ApproxPolicy(kSyncQueue));
         approx_sync_->registerCallback(&EsdfMapper::onDepthPair, this);
         depth_sub_.registerCallback([this](const sensor_msgs::Image::ConstPtr& m) {
-          ros_guard::run(getName(), "the depth synchroniser", [&] {
+          ros_guard::run(getName(), "the depth synchroniser", log_throttle_, [&] {
             if (pairableStamp("depth image", m->header.stamp)) approx_sync_->add<0>(m);
           });
         });
         pose_sub_.registerCallback([this](const geometry_msgs::PoseStamped::ConstPtr& m) {
-          ros_guard::run(getName(), "the camera_pose synchroniser", [&] {
+          ros_guard::run(getName(), "the camera_pose synchroniser", log_throttle_, [&] {
             if (pairableStamp("camera_pose", m->header.stamp)) approx_sync_->add<1>(m);
           });
         });
@@ -159,7 +162,7 @@ class EsdfMapper : public nodelet::Nodelet {
     const common::Status st = K.validate();
     std::lock_guard<std::mutex> lock(input_mutex_);
     if (!st.ok()) {
-      NODELET_WARN_STREAM_THROTTLE(warn_period_, getName() << ": camera_info refused: " << st.message() << "; "
+      GO_FEAP_NODELET_THROTTLE(WARN, warn_period_, getName() << ": camera_info refused: " << st.message() << "; "
                                                            << (intrinsics_ ? "the last valid intrinsics stay"
                                                                            : "no frame is integrated until a valid one"));
       return;
@@ -170,7 +173,7 @@ class EsdfMapper : public nodelet::Nodelet {
 
   // The synchroniser's callback, under ros_guard like every other.
   void onDepthPair(const sensor_msgs::Image::ConstPtr& depth, const geometry_msgs::PoseStamped::ConstPtr& pose) {
-    ros_guard::run(getName(), "the depth and camera_pose callback", [&] { onDepthPose(depth, pose); });
+    ros_guard::run(getName(), "the depth and camera_pose callback", log_throttle_, [&] { onDepthPose(depth, pose); });
   }
 
   /// Whether a message stamped `stamp` may enter the approximate synchroniser (ros_conv::pairableStamp():
@@ -213,7 +216,7 @@ class EsdfMapper : public nodelet::Nodelet {
 
   // The TF filter's callback, under ros_guard like every other.
   void onDepthTransformable(const sensor_msgs::Image::ConstPtr& depth) {
-    ros_guard::run(getName(), "the depth callback (TF)", [&] { onDepthTf(depth); });
+    ros_guard::run(getName(), "the depth callback (TF)", log_throttle_, [&] { onDepthTf(depth); });
   }
 
   void onDepthDropped(const sensor_msgs::Image::ConstPtr& depth, tf2_ros::filter_failure_reasons::FilterFailureReason why) {
@@ -296,7 +299,7 @@ class EsdfMapper : public nodelet::Nodelet {
     // image aligned to the colour camera) would project every ray wrongly: said, not refused, as a driver
     // may name the two frames differently for the same camera.
     if (!K_frame.empty() && !msg->header.frame_id.empty() && K_frame != msg->header.frame_id)
-      NODELET_WARN_STREAM_THROTTLE(warn_period_, getName() << ": camera_info is in frame '" << K_frame
+      GO_FEAP_NODELET_THROTTLE(WARN, warn_period_, getName() << ": camera_info is in frame '" << K_frame
                                                            << "' but the depth image in '" << msg->header.frame_id
                                                            << "': are the intrinsics this camera's? (integrated)");
     if (!T_W_C.matrix().allFinite() ||
@@ -341,12 +344,12 @@ class EsdfMapper : public nodelet::Nodelet {
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     ros_conv::publishComputeTime(compute_pub_, "mapping", t0);
     if (info->frame.pixels_used == 0)  // a covered lens, an emitter off, the wrong topic: mapping has stopped
-      NODELET_WARN_STREAM_THROTTLE(warn_period_, getName() << ": no usable depth pixel in the frame stamped "
+      GO_FEAP_NODELET_THROTTLE(WARN, warn_period_, getName() << ": no usable depth pixel in the frame stamped "
                                                            << msg->header.stamp.toSec() << " s (all "
                                                            << info->frame.pixels_invalid
                                                            << " sampled were 0, NaN or nearer than min_range): nothing mapped");
     else if (info->frame.pixels_invalid > 0)
-      NODELET_DEBUG_STREAM_THROTTLE(warn_period_, getName() << ": " << info->frame.pixels_invalid
+      GO_FEAP_NODELET_THROTTLE(DEBUG, warn_period_, getName() << ": " << info->frame.pixels_invalid
                                                             << " invalid depth pixels in the latest frame");
 
     MapUpdate update;

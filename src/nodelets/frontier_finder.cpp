@@ -17,6 +17,7 @@
 #include "go_feap/LayerBounds.h"
 #include "go_feap/MapUpdate.h"
 #include "go_feap/ros/conversions.h"
+#include "go_feap/ros/log_throttle.h"
 #include "go_feap/ros/message_checks.h"
 #include "go_feap/common/config_groups.h"
 #include "go_feap/ros/compute_time.h"
@@ -27,6 +28,8 @@
 namespace go_feap {
 
 class FrontierFinder : public nodelet::Nodelet {
+  // Declared first: it outlives whatever callback the other members' destruction still lets run.
+  ros_log::Throttle log_throttle_;  ///< this nodelet's throttled messages
  private:
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
@@ -63,12 +66,12 @@ class FrontierFinder : public nodelet::Nodelet {
     std::lock_guard<std::mutex> lock(mutex_);
     if (shared_) {
       if (const std::string other = ros_map::otherMapProblem(*msg, shared_); !other.empty())
-        NODELET_ERROR_STREAM_THROTTLE(10.0, getName() << ": " << other);
+        GO_FEAP_NODELET_THROTTLE(ERROR, 10.0, getName() << ": " << other);
       return;
     }
     auto map = ros_map::acceptHandle(*msg);
     if (!map) {
-      NODELET_ERROR_STREAM_THROTTLE(10.0, getName() << ": " << map.message());
+      GO_FEAP_NODELET_THROTTLE(ERROR, 10.0, getName() << ": " << map.message());
       return;
     }
     shared_ = *map;
@@ -77,7 +80,7 @@ class FrontierFinder : public nodelet::Nodelet {
   void onLayer(const LayerBounds::ConstPtr& msg) {
     const std::string bad = ros_check::layerBoundsProblem(*msg);
     if (!bad.empty()) {
-      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": layer refused: " << bad << "; the band stays as it was");
+      GO_FEAP_NODELET_THROTTLE(WARN, 2.0, getName() << ": layer refused: " << bad << "; the band stays as it was");
       return;
     }
     std::lock_guard<std::mutex> lock(mutex_);
@@ -94,12 +97,12 @@ class FrontierFinder : public nodelet::Nodelet {
     const std::string bad = ros_check::mapUpdateProblem(*msg);
     if (!bad.empty()) {
       // Not counted as received: the next update then shows a gap, and every frontier is recomputed.
-      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": map_update " << msg->sequence << " refused: " << bad);
+      GO_FEAP_NODELET_THROTTLE(WARN, 2.0, getName() << ": map_update " << msg->sequence << " refused: " << bad);
       return;
     }
     std::lock_guard<std::mutex> lock(mutex_);
     if (!shared_) {
-      NODELET_WARN_THROTTLE(5.0, "%s: map_update before map_handle; waiting for the map", getName().c_str());
+      GO_FEAP_NODELET_THROTTLE(WARN, 5.0, getName() << ": map_update before map_handle; waiting for the map");
       return;
     }
     const auto t_compute = ros_conv::WallClock::now();
@@ -163,7 +166,7 @@ class FrontierFinder : public nodelet::Nodelet {
     if (ros::master::execute("setParam", params, result, payload, /*wait_for_master=*/false)) {
       id_reserved_ = next + kIdReserve;
     } else {
-      NODELET_WARN_STREAM_THROTTLE(10.0, getName() << ": the ROS master did not take ~id_reserved " << next + kIdReserve
+      GO_FEAP_NODELET_THROTTLE(WARN, 10.0, getName() << ": the ROS master did not take ~id_reserved " << next + kIdReserve
                                                    << "; a finder loaded after this one may hand out ids from "
                                                    << id_reserved_ << " again");
     }

@@ -25,6 +25,7 @@
 #include "go_feap/FrontierArray.h"
 #include "go_feap/GlobalTour.h"
 #include "go_feap/ros/conversions.h"
+#include "go_feap/ros/log_throttle.h"
 #include "go_feap/ros/message_checks.h"
 #include "go_feap/common/config_groups.h"
 #include "go_feap/ros/compute_time.h"
@@ -36,6 +37,8 @@
 namespace go_feap {
 
 class GlobalPlanner : public nodelet::Nodelet {
+  // Declared first: it outlives whatever callback the other members' destruction still lets run.
+  ros_log::Throttle log_throttle_;  ///< this nodelet's throttled messages
  private:
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
@@ -81,12 +84,12 @@ class GlobalPlanner : public nodelet::Nodelet {
     std::lock_guard<std::mutex> lock(mutex_);
     if (shared_) {
       if (const std::string other = ros_map::otherMapProblem(*msg, shared_); !other.empty())
-        NODELET_ERROR_STREAM_THROTTLE(10.0, getName() << ": " << other);
+        GO_FEAP_NODELET_THROTTLE(ERROR, 10.0, getName() << ": " << other);
       return;
     }
     auto map = ros_map::acceptHandle(*msg);
     if (!map) {
-      NODELET_ERROR_STREAM_THROTTLE(10.0, getName() << ": " << map.message());
+      GO_FEAP_NODELET_THROTTLE(ERROR, 10.0, getName() << ": " << map.message());
       return;
     }
     if (const common::Status st = astar_config_.validate((*map)->map->config().esdf); !st) {
@@ -105,7 +108,7 @@ class GlobalPlanner : public nodelet::Nodelet {
   void onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
     const std::string bad = ros_conv::odometryPoseProblem(*msg, world_frame_);
     if (!bad.empty()) {
-      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": odometry refused: " << bad);
+      GO_FEAP_NODELET_THROTTLE(WARN, 2.0, getName() << ": odometry refused: " << bad);
       return;
     }
     const auto& p = msg->pose.pose.position;
@@ -122,14 +125,14 @@ class GlobalPlanner : public nodelet::Nodelet {
   void onFrontiers(const FrontierArray::ConstPtr& msg) {
     const std::string bad = ros_check::frontierArrayProblem(*msg);
     if (!bad.empty()) {
-      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": frontiers refused: " << bad);
+      GO_FEAP_NODELET_THROTTLE(WARN, 2.0, getName() << ": frontiers refused: " << bad);
       return;
     }
     std::lock_guard<std::mutex> lock(mutex_);
     last_frontiers_ = msg;
     if (!gate_.open()) return;  // before the trigger, or FINISHED
     if (!shared_ || !uav_) {
-      NODELET_WARN_THROTTLE(5.0, "%s: waiting for %s", getName().c_str(), !shared_ ? "map_handle" : "odom");
+      GO_FEAP_NODELET_THROTTLE(WARN, 5.0, getName() << ": waiting for " << (!shared_ ? "map_handle" : "odom"));
       return;
     }
     // Plan at most at global/rate (frontiers arrive with every depth frame).
@@ -155,7 +158,7 @@ class GlobalPlanner : public nodelet::Nodelet {
   void plan(const FrontierArray& msg) {
     const std::string outside = ros_check::frontierOutside(msg, shared_->map->geometry().bounds());
     if (!outside.empty()) {
-      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": frontiers refused: " << outside);
+      GO_FEAP_NODELET_THROTTLE(WARN, 2.0, getName() << ": frontiers refused: " << outside);
       return;
     }
     std::vector<planning::FrontierSummary> frontiers;
@@ -180,7 +183,7 @@ class GlobalPlanner : public nodelet::Nodelet {
     ros_conv::publishComputeTime(compute_pub_, "global", t0);
     const double ms = std::chrono::duration<double, std::milli>(ros_conv::WallClock::now() - t0).count();
     if (!tour) {
-      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": no tour: " << tour.message());
+      GO_FEAP_NODELET_THROTTLE(WARN, 2.0, getName() << ": no tour: " << tour.message());
       return;
     }
     NODELET_DEBUG_STREAM(getName() << ": tour of " << tour->frontier_ids.size() << " frontiers in " << ms << " ms ("

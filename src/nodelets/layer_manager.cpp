@@ -29,6 +29,7 @@
 #include "go_feap/planning/layer_manager.h"
 #include "go_feap/common/config_groups.h"
 #include "go_feap/ros/conversions.h"
+#include "go_feap/ros/log_throttle.h"
 #include "go_feap/ros/message_checks.h"
 #include "go_feap/ros/guarded.h"
 #include "go_feap/ros/params.h"
@@ -36,6 +37,8 @@
 namespace go_feap {
 
 class LayerManager : public nodelet::Nodelet {
+  // Declared first: it outlives whatever callback the other members' destruction still lets run.
+  ros_log::Throttle log_throttle_;  ///< this nodelet's throttled messages
  private:
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
@@ -71,7 +74,7 @@ class LayerManager : public nodelet::Nodelet {
   void onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
     const std::string bad = ros_conv::odometryPoseProblem(*msg, world_frame_);
     if (!bad.empty()) {
-      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": odometry refused: " << bad);
+      GO_FEAP_NODELET_THROTTLE(WARN, 2.0, getName() << ": odometry refused: " << bad);
       return;
     }
     std::lock_guard<std::mutex> lock(mutex_);
@@ -84,7 +87,7 @@ class LayerManager : public nodelet::Nodelet {
       if (const std::optional<double> step = ros_conv::flownStep(last_position_, p, max_odom_step_)) {
         distance_ += *step;
       } else {
-        NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": " << ros_conv::odometryJump(*last_position_, p));
+        GO_FEAP_NODELET_THROTTLE(WARN, 2.0, getName() << ": " << ros_conv::odometryJump(*last_position_, p));
         relocalised_ = true;  // the next step measures progress from here
       }
     }
@@ -98,7 +101,7 @@ class LayerManager : public nodelet::Nodelet {
   void onFrontiers(const FrontierArray::ConstPtr& msg) {
     const std::string bad = ros_check::frontierArrayProblem(*msg);
     if (!bad.empty()) {
-      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": frontiers refused: " << bad);
+      GO_FEAP_NODELET_THROTTLE(WARN, 2.0, getName() << ": frontiers refused: " << bad);
       return;
     }
     std::lock_guard<std::mutex> lock(mutex_);
@@ -107,7 +110,7 @@ class LayerManager : public nodelet::Nodelet {
   void onMapUpdate(const MapUpdate::ConstPtr& msg) {
     const std::string bad = ros_check::mapUpdateProblem(*msg);
     if (!bad.empty()) {
-      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": map_update " << msg->sequence << " refused: " << bad);
+      GO_FEAP_NODELET_THROTTLE(WARN, 2.0, getName() << ": map_update " << msg->sequence << " refused: " << bad);
       return;
     }
     std::lock_guard<std::mutex> lock(mutex_);
@@ -174,7 +177,7 @@ class LayerManager : public nodelet::Nodelet {
     relocalised_ = false;
     if (!frontiers_ && (manager_->state() == planning::ExplorationState::kExplore ||
                         manager_->state() == planning::ExplorationState::kFinalPass))
-      NODELET_WARN_STREAM_THROTTLE(5.0, getName() << ": no frontiers yet (from the frontier finder): no band counts as "
+      GO_FEAP_NODELET_THROTTLE(WARN, 5.0, getName() << ": no frontiers yet (from the frontier finder): no band counts as "
                                                      "explored until they come");
     if (frontiers_) {
       for (const auto& f : frontiers_->frontiers) {

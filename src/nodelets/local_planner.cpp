@@ -40,6 +40,7 @@
 #include "go_feap/planning/local_planner.h"
 #include "go_feap/planning/viewpoints.h"
 #include "go_feap/ros/conversions.h"
+#include "go_feap/ros/log_throttle.h"
 #include "go_feap/ros/message_checks.h"
 #include "go_feap/common/config_groups.h"
 #include "go_feap/ros/compute_time.h"
@@ -50,6 +51,8 @@
 namespace go_feap {
 
 class LocalPlanner : public nodelet::Nodelet {
+  // Declared first: it outlives whatever callback the other members' destruction still lets run.
+  ros_log::Throttle log_throttle_;  ///< this nodelet's throttled messages
  private:
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
@@ -100,12 +103,12 @@ class LocalPlanner : public nodelet::Nodelet {
     std::lock_guard<std::mutex> lock(mutex_);
     if (shared_) {
       if (const std::string other = ros_map::otherMapProblem(*msg, shared_); !other.empty())
-        NODELET_ERROR_STREAM_THROTTLE(10.0, getName() << ": " << other);
+        GO_FEAP_NODELET_THROTTLE(ERROR, 10.0, getName() << ": " << other);
       return;
     }
     auto map = ros_map::acceptHandle(*msg);
     if (!map) {
-      NODELET_ERROR_STREAM_THROTTLE(10.0, getName() << ": " << map.message());
+      GO_FEAP_NODELET_THROTTLE(ERROR, 10.0, getName() << ": " << map.message());
       return;
     }
     // Astar's constructor throws otherwise; a viewpoint clearance past max_distance passes no viewpoint, and a
@@ -157,7 +160,7 @@ class LocalPlanner : public nodelet::Nodelet {
     const std::string bad =
         ros_conv::odometryProblem(*msg, world_frame_, max_input_speed_, speed_limit_name_, v_world);
     if (!bad.empty()) {
-      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": odometry refused: " << bad);
+      GO_FEAP_NODELET_THROTTLE(WARN, 2.0, getName() << ": odometry refused: " << bad);
       return;
     }
     const auto& p = msg->pose.pose.position;
@@ -172,20 +175,20 @@ class LocalPlanner : public nodelet::Nodelet {
   void onDepth(const sensor_msgs::Image::ConstPtr& msg) {
     const std::string bad = ros_check::depthImageProblem(*msg);
     if (!bad.empty()) {
-      NODELET_WARN_STREAM_THROTTLE(5.0, getName() << ": depth image refused: " << bad << "; frame not counted");
+      GO_FEAP_NODELET_THROTTLE(WARN, 5.0, getName() << ": depth image refused: " << bad << "; frame not counted");
       return;
     }
     cv_bridge::CvImageConstPtr image;
     try {
       image = cv_bridge::toCvShare(msg);
     } catch (const std::exception& e) {  // cv_bridge::Exception, or cv::Exception from OpenCV under it
-      NODELET_WARN_STREAM_THROTTLE(5.0, getName() << ": depth image unreadable (" << e.what() << "); skipped");
+      GO_FEAP_NODELET_THROTTLE(WARN, 5.0, getName() << ": depth image unreadable (" << e.what() << "); skipped");
       return;
     }
     const auto ratio = planning::obstacleRatio(image->image, local_config_.max_range);
     std::lock_guard<std::mutex> lock(mutex_);
     if (!ratio) {
-      NODELET_WARN_STREAM_THROTTLE(5.0, getName() << ": " << ratio.message() << "; frame not counted");
+      GO_FEAP_NODELET_THROTTLE(WARN, 5.0, getName() << ": " << ratio.message() << "; frame not counted");
       return;
     }
     window_->push(*ratio);
@@ -214,7 +217,7 @@ class LocalPlanner : public nodelet::Nodelet {
   void onLayer(const LayerBounds::ConstPtr& msg) {
     const std::string bad = ros_check::layerBoundsProblem(*msg);
     if (!bad.empty()) {
-      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": layer refused: " << bad << "; the band stays as it was");
+      GO_FEAP_NODELET_THROTTLE(WARN, 2.0, getName() << ": layer refused: " << bad << "; the band stays as it was");
       return;
     }
     std::lock_guard<std::mutex> lock(mutex_);
@@ -225,7 +228,7 @@ class LocalPlanner : public nodelet::Nodelet {
     // had subscribed (a start under load) was otherwise lost, and the vehicle never turned.
     if (!msg->look_around || !position_ || !gate_.open()) return;
     if (idle()) {
-      NODELET_INFO_STREAM_THROTTLE(2.0, getName() << ": no frontier in view before a look round: turning in place");
+      GO_FEAP_NODELET_THROTTLE(INFO, 2.0, getName() << ": no frontier in view before a look round: turning in place");
       turnInPlace(msg->header.stamp);
     } else {
       repeatTarget();
@@ -284,7 +287,7 @@ class LocalPlanner : public nodelet::Nodelet {
   void onFrontiers(const FrontierArray::ConstPtr& msg) {
     const std::string bad = ros_check::frontierArrayProblem(*msg);
     if (!bad.empty()) {
-      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": frontiers refused: " << bad);
+      GO_FEAP_NODELET_THROTTLE(WARN, 2.0, getName() << ": frontiers refused: " << bad);
       return;
     }
     std::lock_guard<std::mutex> lock(mutex_);
@@ -294,14 +297,14 @@ class LocalPlanner : public nodelet::Nodelet {
   void onTour(const GlobalTour::ConstPtr& tour) {
     const std::string bad = ros_check::globalTourProblem(*tour);
     if (!bad.empty()) {
-      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": global_tour refused: " << bad);
+      GO_FEAP_NODELET_THROTTLE(WARN, 2.0, getName() << ": global_tour refused: " << bad);
       return;
     }
     std::lock_guard<std::mutex> lock(mutex_);
     if (!gate_.open() || !shared_ || !position_ || !frontiers_) return;
     const std::string outside = ros_check::frontierOutside(*frontiers_, shared_->map->geometry().bounds());
     if (!outside.empty()) {
-      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": frontiers refused: " << outside);
+      GO_FEAP_NODELET_THROTTLE(WARN, 2.0, getName() << ": frontiers refused: " << outside);
       return;
     }
     const auto t_compute = ros_conv::WallClock::now();
@@ -372,7 +375,7 @@ class LocalPlanner : public nodelet::Nodelet {
       map_lock.unlock();
       // Nothing to fly to: look around, unless already flying somewhere or turning.
       if (idle()) {
-        NODELET_INFO_STREAM_THROTTLE(2.0, getName() << ": no local plan (" << plan.message()
+        GO_FEAP_NODELET_THROTTLE(INFO, 2.0, getName() << ": no local plan (" << plan.message()
                                                     << "): turning in place to look around");
         // Each look around is a failed attempt for the tour's frontiers (none had a viewpoint): a
         // frontier that stays unchanged through max_retries of them is blacklisted, not scanned for ever.

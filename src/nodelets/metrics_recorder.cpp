@@ -27,6 +27,7 @@
 #include "go_feap/ExplorationStatus.h"
 #include "go_feap/metrics/metrics.h"
 #include "go_feap/ros/conversions.h"
+#include "go_feap/ros/log_throttle.h"
 #include "go_feap/ros/message_checks.h"
 #include "go_feap/ros/guarded.h"
 #include "go_feap/ros/params.h"
@@ -36,6 +37,8 @@
 namespace go_feap {
 
 class MetricsRecorder : public nodelet::Nodelet {
+  // Declared first: it outlives whatever callback the other members' destruction still lets run.
+  ros_log::Throttle log_throttle_;  ///< this nodelet's throttled messages
  public:
   // A run that began and did not finish (Ctrl-C, a launch that ended, a replayed bag's end, the hang
   // guard) still writes its figures so far, with finish_reason "stopped": before, output_dir stayed empty.
@@ -109,12 +112,12 @@ class MetricsRecorder : public nodelet::Nodelet {
     std::lock_guard<std::mutex> lock(mutex_);
     if (shared_) {
       if (const std::string other = ros_map::otherMapProblem(*msg, shared_); !other.empty())
-        NODELET_ERROR_STREAM_THROTTLE(10.0, getName() << ": " << other);
+        GO_FEAP_NODELET_THROTTLE(ERROR, 10.0, getName() << ": " << other);
       return;
     }
     auto map = ros_map::acceptHandle(*msg);
     if (!map) {
-      NODELET_ERROR_STREAM_THROTTLE(10.0, getName() << ": " << map.message());
+      GO_FEAP_NODELET_THROTTLE(ERROR, 10.0, getName() << ": " << map.message());
       return;
     }
     shared_ = *map;
@@ -124,7 +127,7 @@ class MetricsRecorder : public nodelet::Nodelet {
   void onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
     const std::string bad = ros_conv::odometryPoseProblem(*msg, world_frame_);
     if (!bad.empty()) {
-      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": odometry refused: " << bad);
+      GO_FEAP_NODELET_THROTTLE(WARN, 2.0, getName() << ": odometry refused: " << bad);
       return;
     }
     const auto& q = msg->pose.pose.position;
@@ -135,7 +138,7 @@ class MetricsRecorder : public nodelet::Nodelet {
     if (const std::optional<double> step = ros_conv::flownStep(last_position_, p, max_odom_step_))
       distance_ += *step;
     else
-      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": " << ros_conv::odometryJump(*last_position_, p));
+      GO_FEAP_NODELET_THROTTLE(WARN, 2.0, getName() << ": " << ros_conv::odometryJump(*last_position_, p));
     last_position_ = p;
     if (!collisions_) return;
     if (collisions_->update(p))
@@ -150,7 +153,7 @@ class MetricsRecorder : public nodelet::Nodelet {
     // The chain's blocks only: another name (from a tool, or bytes that are not text) would be a key of
     // summary.json of its own, and "total" would clash with the sum.
     if (!metrics::isComputeBlock(msg->block) || !std::isfinite(msg->ms) || msg->ms < 0.0) {
-      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": compute_time refused: block '" << msg->block << "' ("
+      GO_FEAP_NODELET_THROTTLE(WARN, 2.0, getName() << ": compute_time refused: block '" << msg->block << "' ("
                                                   << msg->block.size() << " bytes), " << msg->ms
                                                   << " ms; blocks are mapping, frontier, global, local and trajectory, "
                                                      "times finite and >= 0");
@@ -163,7 +166,7 @@ class MetricsRecorder : public nodelet::Nodelet {
   void onStatus(const ExplorationStatus::ConstPtr& msg) {
     const std::string bad = ros_check::explorationStatusProblem(*msg);
     if (!bad.empty()) {
-      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": status refused: " << bad);
+      GO_FEAP_NODELET_THROTTLE(WARN, 2.0, getName() << ": status refused: " << bad);
       return;
     }
     std::lock_guard<std::mutex> lock(mutex_);

@@ -19,11 +19,14 @@
 #include "go_feap/common/transform.h"
 #include "go_feap/ros/conversions.h"
 #include "go_feap/ros/guarded.h"
+#include "go_feap/ros/log_throttle.h"
 #include "go_feap/ros/params.h"
 
 namespace go_feap {
 
 class OdometryTf : public nodelet::Nodelet {
+  // Declared first: it outlives whatever callback the other members' destruction still lets run.
+  ros_log::Throttle log_throttle_;  ///< this nodelet's throttled messages
  private:
   void onInit() override {
     ros_params::ParamReader p(getPrivateNodeHandle());
@@ -39,7 +42,7 @@ class OdometryTf : public nodelet::Nodelet {
                                "parameter '" + p.fullName("camera_frame") + "' must name a frame other than the world");
     ros_params::requireOrThrow(world_frame_ != body_frame_, getName(),
                                "parameters 'world_frame' and 'body_frame' must name two different frames");
-    // At most an hour: ROS throttles from time 0, so a period past the clock would silence the warnings.
+    // At most an hour: after the first warning, a longer period leaves a flight's bad input unsaid.
     ros_params::requireOrThrow(warn_period_ > 0.0 && warn_period_ <= 3600.0, getName(),
                                "parameter '" + p.fullName("warn_period") + "' must be in (0, 3600] s");
     // Sent once every parameter has passed: a nodelet that does not start leaves no TF behind.
@@ -58,13 +61,13 @@ class OdometryTf : public nodelet::Nodelet {
     const std::string bad = ros_conv::odometryPoseProblem(*msg, world_frame_);
     if (!bad.empty()) {
       ++refused_;
-      NODELET_WARN_STREAM_THROTTLE(warn_period_, getName() << ": odometry refused: " << bad << " (" << refused_
+      GO_FEAP_NODELET_THROTTLE(WARN, warn_period_, getName() << ": odometry refused: " << bad << " (" << refused_
                                                            << " refused so far)");
       return;
     }
     if (msg->header.stamp.isZero()) {  // (it equalled the unset last_stamp_: "stamp 0 s repeated", no TF ever)
       ++refused_;
-      NODELET_WARN_STREAM_THROTTLE(warn_period_, getName() << ": odometry refused: header.stamp is unset (0): a TF "
+      GO_FEAP_NODELET_THROTTLE(WARN, warn_period_, getName() << ": odometry refused: header.stamp is unset (0): a TF "
                                                            << "at time 0 dates no depth frame (" << refused_
                                                            << " refused so far)");
       return;
@@ -76,7 +79,7 @@ class OdometryTf : public nodelet::Nodelet {
       // A copy is harmless; another pose under the same stamp is a source stamping alike, and is said.
       const double apart = (position - last_position_).norm();
       if (apart > 1e-6)
-        NODELET_WARN_STREAM_THROTTLE(warn_period_, getName() << ": odometry stamp " << last_stamp_.toSec()
+        GO_FEAP_NODELET_THROTTLE(WARN, warn_period_, getName() << ": odometry stamp " << last_stamp_.toSec()
                                                              << " s repeated with a pose " << apart
                                                              << " m from the first: dropped, the TF keeps the first");
       return;

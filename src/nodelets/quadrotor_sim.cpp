@@ -18,6 +18,7 @@
 #include "go_feap/PositionCommand.h"
 #include "go_feap/common/config_groups.h"
 #include "go_feap/ros/guarded.h"
+#include "go_feap/ros/log_throttle.h"
 #include "go_feap/ros/message_checks.h"
 #include "go_feap/ros/params.h"
 #include "go_feap/sim/vehicle.h"
@@ -26,6 +27,8 @@
 namespace go_feap {
 
 class QuadrotorSim : public nodelet::Nodelet {
+  // Declared first: it outlives whatever callback the other members' destruction still lets run.
+  ros_log::Throttle log_throttle_;  ///< this nodelet's throttled messages
  public:
   ~QuadrotorSim() override {
     running_ = false;
@@ -105,7 +108,7 @@ class QuadrotorSim : public nodelet::Nodelet {
     running_ = true;
     // An exception escaping a thread ends the process: here it ends the simulation, logged, and the
     // nodelets in the manager keep what they have (the odometry timeouts then hold the chain).
-    thread_ = std::thread([this] { ros_guard::run(getName(), "the simulation thread", [this] { loop(); }); });
+    thread_ = std::thread([this] { ros_guard::run(getName(), "the simulation thread", log_throttle_, [this] { loop(); }); });
   }
 
   void onCommand(const PositionCommand::ConstPtr& msg) {
@@ -122,7 +125,7 @@ class QuadrotorSim : public nodelet::Nodelet {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!bad.empty()) {
       ++refused_;
-      NODELET_WARN_STREAM_THROTTLE(1.0, getName() << ": refused " << refused_ << " position_cmd so far (latest: "
+      GO_FEAP_NODELET_THROTTLE(WARN, 1.0, getName() << ": refused " << refused_ << " position_cmd so far (latest: "
                                                   << bad << "); holding the last valid command");
       return;
     }

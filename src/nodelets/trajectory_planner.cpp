@@ -21,6 +21,7 @@
 #include "go_feap/PositionCommand.h"
 #include "go_feap/ViewpointPath.h"
 #include "go_feap/ros/conversions.h"
+#include "go_feap/ros/log_throttle.h"
 #include "go_feap/ros/message_checks.h"
 #include "go_feap/ros/bspline_conversion.h"
 #include "go_feap/common/config_groups.h"
@@ -33,6 +34,8 @@
 namespace go_feap {
 
 class TrajectoryPlanner : public nodelet::Nodelet {
+  // Declared first: it outlives whatever callback the other members' destruction still lets run.
+  ros_log::Throttle log_throttle_;  ///< this nodelet's throttled messages
  private:
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
@@ -82,12 +85,12 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     std::lock_guard<std::mutex> lock(mutex_);
     if (shared_) {
       if (const std::string other = ros_map::otherMapProblem(*msg, shared_); !other.empty())
-        NODELET_ERROR_STREAM_THROTTLE(10.0, getName() << ": " << other);
+        GO_FEAP_NODELET_THROTTLE(ERROR, 10.0, getName() << ": " << other);
       return;
     }
     auto map = ros_map::acceptHandle(*msg);
     if (!map) {
-      NODELET_ERROR_STREAM_THROTTLE(10.0, getName() << ": " << map.message());
+      GO_FEAP_NODELET_THROTTLE(ERROR, 10.0, getName() << ": " << map.message());
       return;
     }
     const map::EsdfConfig& esdf = (*map)->map->config().esdf;
@@ -115,7 +118,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     const std::string bad =
         ros_conv::odometryProblem(*msg, world_frame_, max_input_speed_, speed_limit_name_, v);
     if (!bad.empty()) {
-      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": odometry refused: " << bad);
+      GO_FEAP_NODELET_THROTTLE(WARN, 2.0, getName() << ": odometry refused: " << bad);
       return;
     }
     const auto& p = msg->pose.pose.position;
@@ -134,7 +137,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
       bad = ros_conv::velocityProblem(common::Vec3(msg->velocity.x, msg->velocity.y, msg->velocity.z), max_input_speed_,
                                       speed_limit_name_);
     if (!bad.empty()) {
-      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": position_cmd refused: " << bad);
+      GO_FEAP_NODELET_THROTTLE(WARN, 2.0, getName() << ": position_cmd refused: " << bad);
       return;
     }
     std::lock_guard<std::mutex> lock(mutex_);
@@ -144,7 +147,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
   // flight in progress to its end, at rest at its viewpoint.
   void onStatus(const ExplorationStatus::ConstPtr& msg) {
     if (const std::string bad = ros_check::explorationStatusProblem(*msg); !bad.empty()) {
-      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": status refused: " << bad);
+      GO_FEAP_NODELET_THROTTLE(WARN, 2.0, getName() << ": status refused: " << bad);
       return;
     }
     std::lock_guard<std::mutex> lock(mutex_);
@@ -158,14 +161,14 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     if (aborted_) return;  // stopped: nothing is flown to any more
     if (msg->positions.empty()) return;
     if (msg->yaws.size() != msg->positions.size()) {
-      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": local_target refused: " << msg->positions.size()
+      GO_FEAP_NODELET_THROTTLE(WARN, 2.0, getName() << ": local_target refused: " << msg->positions.size()
                                                   << " positions but " << msg->yaws.size() << " yaws");
       return;
     }
     const auto& p = msg->positions.front();
     const common::Vec3 target(p.x, p.y, p.z);
     if (!target.allFinite() || !std::isfinite(msg->yaws.front())) {
-      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": local_target refused: its first viewpoint (" << p.x << ", "
+      GO_FEAP_NODELET_THROTTLE(WARN, 2.0, getName() << ": local_target refused: its first viewpoint (" << p.x << ", "
                                                   << p.y << ", " << p.z << ", yaw " << msg->yaws.front()
                                                   << ") is not finite");
       return;
@@ -199,7 +202,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
       return;
     }
     if (target_ && (!shared_ || !odom_position_)) {  // a target to fly to, and nothing to plan it on: said
-      NODELET_WARN_STREAM_THROTTLE(5.0, getName() << ": a target but no " << (shared_ ? "odometry" : "map_handle")
+      GO_FEAP_NODELET_THROTTLE(WARN, 5.0, getName() << ": a target but no " << (shared_ ? "odometry" : "map_handle")
                                                   << " yet: not planning");
       return;
     }
@@ -267,7 +270,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     try {
       plan(now, reason);
     } catch (const std::exception& e) {  // a core precondition broken by odd input: never crash the manager
-      NODELET_ERROR_STREAM_THROTTLE(1.0, getName() << ": planning aborted: " << e.what() << "; stopping");
+      GO_FEAP_NODELET_THROTTLE(ERROR, 1.0, getName() << ": planning aborted: " << e.what() << "; stopping");
       target_.reset();
       // The trajectory flown may be the one just found to collide: brake to a stop instead of flying it on.
       try {
@@ -275,7 +278,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
         const ros::Time start_time = startState(now, stop);
         publish(now, start_time, trajectory::stopTrajectory(stop.start, stop.velocity, stop.yaw, optimizer_));
       } catch (const std::exception& e2) {
-        NODELET_ERROR_STREAM_THROTTLE(1.0, getName() << ": no stop trajectory either: " << e2.what());
+        GO_FEAP_NODELET_THROTTLE(ERROR, 1.0, getName() << ": no stop trajectory either: " << e2.what());
       }
     }
   }

@@ -31,11 +31,14 @@
 #include "go_feap/ros/bspline_conversion.h"
 #include "go_feap/ros/conversions.h"
 #include "go_feap/ros/guarded.h"
+#include "go_feap/ros/log_throttle.h"
 #include "go_feap/ros/params.h"
 
 namespace go_feap {
 
 class TrajectoryServer : public nodelet::Nodelet {
+  // Declared first: it outlives whatever callback the other members' destruction still lets run.
+  ros_log::Throttle log_throttle_;  ///< this nodelet's throttled messages
  private:
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
@@ -137,7 +140,7 @@ class TrajectoryServer : public nodelet::Nodelet {
   // then on (a refused first trajectory is held where the vehicle is: its EMPTY flag tells the planner to plan
   // again).
   void refuse(std::int64_t id, const std::string& why) {
-    NODELET_WARN_STREAM_THROTTLE(1.0, getName() << ": trajectory " << id << " refused: " << why
+    GO_FEAP_NODELET_THROTTLE(WARN, 1.0, getName() << ": trajectory " << id << " refused: " << why
                                                 << "; the reference stays as it was");
     commanding_ = commanding_ || hold_;
   }
@@ -179,7 +182,7 @@ class TrajectoryServer : public nodelet::Nodelet {
   void onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
     const std::string bad = ros_conv::odometryPoseProblem(*msg, world_frame_);
     if (!bad.empty()) {
-      NODELET_WARN_STREAM_THROTTLE(2.0, getName() << ": odometry refused: " << bad);
+      GO_FEAP_NODELET_THROTTLE(WARN, 2.0, getName() << ": odometry refused: " << bad);
       return;
     }
     const auto& p = msg->pose.pose.position;

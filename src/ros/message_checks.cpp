@@ -154,7 +154,7 @@ std::string explorationStatusProblem(const ExplorationStatus& msg) {
 bool ExplorationGate::update(const ExplorationStatus& msg, const std::string& node) {
   const std::string bad = explorationStatusProblem(msg);
   if (!bad.empty()) {
-    ROS_WARN_STREAM_THROTTLE(2.0, node << ": status refused: " << bad);
+    if (throttle_.pass("status refused", 2.0, ros::Time::now().toSec())) ROS_WARN_STREAM(node << ": status refused: " << bad);
     return false;
   }
   const bool open = msg.state == ExplorationStatus::EXPLORE || msg.state == ExplorationStatus::FINAL_PASS;

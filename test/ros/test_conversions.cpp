@@ -710,10 +710,61 @@ TEST(Guarded, AnExceptionFromACallbackStaysInItAndTheNextMessageIsTaken) {
   EXPECT_NO_THROW(callback(one));
   EXPECT_NO_THROW(callback(zero));
   EXPECT_EQ(object.calls, 3);
-  EXPECT_FALSE(guard::run("/probe", "a block", [] { throw std::out_of_range("index"); }));
-  EXPECT_TRUE(guard::run("/probe", "a block", [] {}));
+  go_feap::ros_log::Throttle throttle;
+  EXPECT_FALSE(guard::run("/probe", "a block", throttle, [] { throw std::out_of_range("index"); }));
+  EXPECT_TRUE(guard::run("/probe", "a block", throttle, [] {}));
   // Only std::exception: others (boost::thread_interrupted stops the manager's threads) pass on.
-  EXPECT_THROW(guard::run("/probe", "a block", [] { throw 7; }), int);
+  EXPECT_THROW(guard::run("/probe", "a block", throttle, [] { throw 7; }), int);
+}
+
+// The messages a test hears from rosconsole, as a nodelet's would go to /rosout.
+class HeardLog : public ros::console::LogAppender {
+ public:
+  HeardLog() { ros::console::register_appender(this); }
+  ~HeardLog() override { ros::console::deregister_appender(this); }
+  void log(ros::console::Level, const char* str, const char*, const char*, int) override { lines.emplace_back(str); }
+  std::size_t count(const std::string& part) const {
+    return std::count_if(lines.begin(), lines.end(), [&](const std::string& l) { return l.find(part) != std::string::npos; });
+  }
+  std::vector<std::string> lines;
+};
+
+// A site's first message passes at once, whatever the clock says, then one a period; sites and throttles
+// are apart; a clock that went back lets one pass at once. rosconsole's own throttle, one static per call
+// site for the whole process counted from time 0, dropped every message of a simulation's first period.
+TEST(LogThrottle, TheFirstMessagePassesThenOneAPeriodForEachSiteAndThrottle) {
+  go_feap::ros_log::Throttle a, b;
+  EXPECT_TRUE(a.pass("odometry", 2.0, 0.5));
+  EXPECT_FALSE(a.pass("odometry", 2.0, 1.0));
+  EXPECT_FALSE(a.pass("odometry", 2.0, 2.49));
+  EXPECT_TRUE(a.pass("odometry", 2.0, 2.5));
+  EXPECT_FALSE(a.pass("odometry", 2.0, 4.0));
+  EXPECT_TRUE(a.pass("depth", 2.0, 4.0));  // another site
+  EXPECT_TRUE(b.pass("odometry", 2.0, 4.0));  // another nodelet's
+  EXPECT_TRUE(a.pass("odometry", 2.0, 0.1));  // the clock went back (a bag looped)
+  EXPECT_FALSE(a.pass("odometry", 2.0, 0.2));
+}
+
+// Under a simulated clock at 0.5 s, a callback's first exception is logged, by each nodelet's callback;
+// the same one again within the second is not, and a second later it is.
+TEST(Guarded, TheFirstExceptionOfASimulationIsLogged) {
+  namespace guard = go_feap::ros_guard;
+  ros::Time::setNow(ros::Time(0.5));
+  HeardLog heard;
+  ThrowsOnZero one, other;
+  const auto callback = guard::wrap("/one", "the callback of 'count'", &ThrowsOnZero::onMessage, &one);
+  const auto others = guard::wrap("/other", "the callback of 'count'", &ThrowsOnZero::onMessage, &other);
+  auto zero = boost::make_shared<std_msgs::UInt32>();
+  callback(zero);
+  callback(zero);
+  others(zero);
+  EXPECT_EQ(heard.count("/one: the callback of 'count' aborted by an exception: zero"), 1u);
+  EXPECT_EQ(heard.count("/other: the callback of 'count' aborted by an exception: zero"), 1u);
+  ros::Time::setNow(ros::Time(1.5));
+  callback(zero);
+  EXPECT_EQ(heard.count("/one: the callback of 'count' aborted"), 2u);
+  EXPECT_EQ(one.calls, 3);
+  ros::Time::init();  // the system clock again, for the tests after
 }
 
 }  // namespace

@@ -2,8 +2,8 @@
 // callback is not caught by roscpp: it reaches std::terminate and takes down the whole nodelet manager,
 // with every nodelet and the map in it (a status message once did that to the chain through the
 // metrics recorder). The nodelets subscribe through these helpers: such an exception is logged as an
-// error naming the nodelet, the callback and what was thrown (at most once a second for each nodelet
-// class and message type), and the nodelet goes on with the next message. Only std::exception is
+// error naming the nodelet, the callback and what was thrown (at most once a second for each callback of
+// each nodelet, the first at once), and the nodelet goes on with the next message. Only std::exception is
 // caught: anything else (as boost::thread_interrupted, with which the nodelet manager stops its worker
 // threads) passes on.
 #pragma once
@@ -15,21 +15,24 @@
 #include <cstdint>
 #include <exception>
 #include <string>
+#include <memory>
 #include <utility>
+
+#include "go_feap/ros/log_throttle.h"
 
 namespace go_feap::ros_guard {
 
-/// Runs fn(); a std::exception escaping it is logged (who: the nodelet, what: the callback) and
-/// swallowed. Returns whether fn() ran to its end.
+/// Runs fn(); a std::exception escaping it is logged (who: the nodelet, what: the callback; at most once a
+/// second for each `what` in `throttle`) and swallowed. Returns whether fn() ran to its end.
 template <typename Fn>
-bool run(const std::string& who, const std::string& what, Fn&& fn) {
+bool run(const std::string& who, const std::string& what, ros_log::Throttle& throttle, Fn&& fn) {
   try {
     std::forward<Fn>(fn)();
     return true;
   } catch (const std::exception& e) {
-    ROS_ERROR_STREAM_THROTTLE_NAMED(1.0, who,
-                                    who << ": " << what << " aborted by an exception: " << e.what()
-                                        << "; the nodelet goes on with the next one");
+    if (throttle.pass(what, 1.0, ros::Time::now().toSec()))
+      ROS_ERROR_STREAM_NAMED(who, who << ": " << what << " aborted by an exception: " << e.what()
+                                      << "; the nodelet goes on with the next one");
   }
   return false;
 }
@@ -39,9 +42,8 @@ template <typename T, typename M>
 boost::function<void(const boost::shared_ptr<M const>&)> wrap(
     const std::string& who, const std::string& what, void (T::*callback)(const boost::shared_ptr<M const>&),
     T* object) {
-  return [who, what, callback, object](const boost::shared_ptr<M const>& msg) {
-    run(who, what, [&] { (object->*callback)(msg); });
-  };
+  return [who, what, callback, object, throttle = std::make_shared<ros_log::Throttle>()](
+             const boost::shared_ptr<M const>& msg) { run(who, what, *throttle, [&] { (object->*callback)(msg); }); };
 }
 
 /// nh.subscribe(topic, queue, callback, object, hints), the callback under run().
@@ -58,8 +60,9 @@ template <typename T>
 ros::Timer timer(ros::NodeHandle& nh, const std::string& who, const ros::Duration& period,
                  void (T::*callback)(const ros::TimerEvent&), T* object) {
   return nh.createTimer(period, boost::function<void(const ros::TimerEvent&)>(
-                                    [who, callback, object](const ros::TimerEvent& e) {
-                                      run(who, "the timer callback", [&] { (object->*callback)(e); });
+                                    [who, callback, object, throttle = std::make_shared<ros_log::Throttle>()](
+                                        const ros::TimerEvent& e) {
+                                      run(who, "the timer callback", *throttle, [&] { (object->*callback)(e); });
                                     }));
 }
 
@@ -68,9 +71,10 @@ template <typename T, typename Req, typename Res>
 ros::ServiceServer service(ros::NodeHandle& nh, const std::string& who, const std::string& name,
                            bool (T::*callback)(Req&, Res&), T* object) {
   return nh.advertiseService<Req, Res>(
-      name, boost::function<bool(Req&, Res&)>([who, name, callback, object](Req& req, Res& res) {
+      name, boost::function<bool(Req&, Res&)>([who, name, callback, object,
+                                               throttle = std::make_shared<ros_log::Throttle>()](Req& req, Res& res) {
         bool ok = false;
-        run(who, "the service '" + name + "'", [&] { ok = (object->*callback)(req, res); });
+        run(who, "the service '" + name + "'", *throttle, [&] { ok = (object->*callback)(req, res); });
         return ok;
       }));
 }

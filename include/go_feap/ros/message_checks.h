@@ -18,6 +18,7 @@
 #include "go_feap/MapUpdate.h"
 #include "go_feap/PositionCommand.h"
 #include "go_feap/common/grid.h"
+#include "go_feap/ros/log_throttle.h"
 
 namespace go_feap::ros_check {
 
@@ -65,6 +66,7 @@ class ExplorationGate {
  private:
   std::string open_says_, closed_says_;
   bool open_ = false;
+  ros_log::Throttle throttle_;  ///< of the refusals
 };
 
 /// In `world_frame`, with position, velocity, acceleration, yaw and yaw rate all finite (the trajectory
