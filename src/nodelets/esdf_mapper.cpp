@@ -94,6 +94,10 @@ class EsdfMapper : public nodelet::Nodelet {
                                "parameter '" + p.fullName("mapper/esdf_slice_height") + "' must be finite");
 
     shared_ = std::make_shared<ros_map::SharedMap>(std::make_unique<map::VoxelMap>(c, box));
+    // Said before the first subscription: a frame integrated beside onInit would grow what this reads.
+    const auto& geo = shared_->map->geometry();
+    NODELET_INFO_STREAM(me << ": map " << geo.dims().transpose() << " voxels at " << geo.resolution() << " m ("
+                           << shared_->map->memoryBytes() / (1024 * 1024) << " MiB), sync " << sync_mode_);
     compute_pub_ = nh.advertise<ComputeTime>("compute_time", 20);
     update_pub_ = nh.advertise<MapUpdate>("map_update", 10);
     handle_pub_ = nh.advertise<ros_map::MapHandle>("map_handle", 1, /*latch=*/true);
@@ -147,9 +151,6 @@ class EsdfMapper : public nodelet::Nodelet {
       }
     }
     publishHandle();
-    const auto& geo = shared_->map->geometry();
-    NODELET_INFO_STREAM(me << ": map " << geo.dims().transpose() << " voxels at " << geo.resolution() << " m ("
-                           << shared_->map->memoryBytes() / (1024 * 1024) << " MiB), sync " << sync_mode_);
   }
 
   // A camera_info that cannot describe the images (a driver restarting, a zero K) is refused: the frames

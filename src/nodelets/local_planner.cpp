@@ -77,6 +77,10 @@ class LocalPlanner : public nodelet::Nodelet {
     compute_pub_ = nh.advertise<ComputeTime>("compute_time", 20);
     target_pub_ = nh.advertise<ViewpointPath>("local_target", 2);
     marker_pub_ = nh.advertise<visualization_msgs::MarkerArray>("viewpoint_markers", 2);
+    // Every publisher before the first subscription: onInit runs beside this nodelet's callbacks (a tour
+    // heard at once, by a planner loaded into a running exploration, used them while they were assigned).
+    failed_pub_ = nh.advertise<std_msgs::UInt32>("frontier_failed", 100);
+    wanted_pub_ = nh.advertise<std_msgs::Bool>("tour_wanted", 2);
     handle_sub_ = ros_guard::subscribe(nh, getName(), "map_handle", 1, &LocalPlanner::onHandle, this);
     odom_sub_ = ros_guard::subscribe(nh, getName(), "odom", 5, &LocalPlanner::onOdom, this);
     depth_sub_ = ros_guard::subscribe(nh, getName(), "depth", 2, &LocalPlanner::onDepth, this);
@@ -85,8 +89,6 @@ class LocalPlanner : public nodelet::Nodelet {
     frontier_sub_ = ros_guard::subscribe(nh, getName(), "frontiers", 2, &LocalPlanner::onFrontiers, this);
     tour_sub_ = ros_guard::subscribe(nh, getName(), "global_tour", 2, &LocalPlanner::onTour, this);
     update_sub_ = ros_guard::subscribe(nh, getName(), "map_update", 20, &LocalPlanner::onMapUpdate, this);
-    failed_pub_ = nh.advertise<std_msgs::UInt32>("frontier_failed", 100);
-    wanted_pub_ = nh.advertise<std_msgs::Bool>("tour_wanted", 2);
     failed_sub_ = ros_guard::subscribe(nh, getName(), "frontier_failed", 100, &LocalPlanner::onFailed, this);
     status_sub_ = ros_guard::subscribe(nh, getName(), "status", 2, &LocalPlanner::onStatus, this);
   }
