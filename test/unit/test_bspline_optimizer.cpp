@@ -1451,6 +1451,30 @@ TEST(TrajectoryPlanner, AStartVelocityAcrossThePathFadesOutInTheTimedFit) {
   EXPECT_LE(a, (1.0 + optimizer.limit_tolerance) * optimizer.a_max);
 }
 
+// A fade that outlasts the flight would move the timed fit's end off the path's: a 1 m/s start across a 2 m
+// hop fades over Te = 4 / sqrt(1.9^2 - 1.8^2) = 6.6 s at profile_acceleration 0.9. That fit is not flown
+// (it ended a metre beside the goal); what is flown ends at the target.
+TEST(TrajectoryPlanner, ATimedFitWhoseFadeOutlastsTheFlightIsNotFlown) {
+  OpenRoom room(Vec3(12, 12, 3));
+  const OptimizerConfig optimizer = optimizerConfig();
+  traj::TrajectoryPlannerConfig planner;
+  planner.profile_acceleration = 0.9;
+  planner.profile_max_cross_speed = 1.0;
+  ASSERT_TRUE(planner.validate()) << planner.validate().message();
+  traj::PlanRequest request;
+  request.start = Vec3(4.05, 6.05, 1.55);
+  request.target = Vec3(6.05, 6.05, 1.55);
+  request.velocity = Vec3(0.3, 1.0, 0.0);
+  traj::PlanReport report;
+  const auto planned = traj::planTrajectory(request, room.astar, room.world.esdf(), optimizer, planner, &report);
+  ASSERT_TRUE(planned) << planned.message();
+  EXPECT_FALSE(report.profiled);
+  EXPECT_FALSE(planned->partial);
+  const Vec3 end = planned->position.position(planned->duration());
+  EXPECT_LT((end - request.target).norm(), 0.5 * std::sqrt(3.0) * kRes) << end.transpose();
+  EXPECT_LT((traj::sampleTrajectory(*planned, 0.0).velocity - request.velocity).norm(), 1e-6);
+}
+
 // A path longer than the horizon is flown only that far along it (partial, the goal kept), and such a
 // trajectory is replanned when little time is left on it, while one that ends at its goal is not; a goal
 // farther than target_tolerance from the target is a new target. Without a horizon the whole corridor is
