@@ -47,7 +47,7 @@ common::Status ExplorationConfig::validate() const {
   for (const common::Status& st :
        {quadrotor.validate(), controller.validate(), camera.validate(), map.validate(), frontier.validate(),
         global.validate(), distance_astar.validate(map.esdf), layers.validate(), viewpoints.validate(map.esdf),
-        local.validate(), optimizer.validate(map.esdf), replan.validate(), planner.validate(),
+        local.validate(), optimizer.validate(map.esdf), replan.validate(), planner.validate(map.occupancy),
         flight_astar.validate(map.esdf), scout_astar.validate(map.esdf), coarse_astar.validate(map.esdf),
         loop.validate()})
     if (!st.ok()) return st;

@@ -95,7 +95,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     }
     const map::EsdfConfig& esdf = (*map)->map->config().esdf;
     for (const common::Status& st : {optimizer_.validate(esdf), astar_config_.validate(esdf), scout_config_.validate(esdf),
-                                     coarse_config_.validate(esdf)})
+                                     coarse_config_.validate(esdf), planner_.validate((*map)->map->config().occupancy)})
       if (!st) {
         ros_params::stopManager(getName(), st.message());
         return;

@@ -75,6 +75,17 @@ common::Status TrajectoryPlannerConfig::validate() const {
   return common::Status::Ok();
 }
 
+common::Status TrajectoryPlannerConfig::validate(const map::OccupancyConfig& occupancy) const {
+  if (common::Status st = validate(); !st) return st;
+  const double half_diagonal = 0.5 * std::sqrt(3.0) * occupancy.resolution;
+  if (!(goal_tolerance >= half_diagonal))
+    return common::Status::Error("planner: goal_tolerance must be at least half a voxel's diagonal (" +
+                                 std::to_string(half_diagonal) + " m at the map's resolution of " +
+                                 std::to_string(occupancy.resolution) +
+                                 " m): a path ends at a voxel's centre, and targets off it were refused as blocked");
+  return common::Status::Ok();
+}
+
 double flyableClearance(const OptimizerConfig& optimizer, double resolution) {
   return optimizer.min_clearance - 0.5 * std::sqrt(3.0) * resolution;
 }

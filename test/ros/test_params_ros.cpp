@@ -114,8 +114,10 @@ TEST(Parameters, ANodeletWithAnInvalidOrMissingParameterDoesNotStartAndNamesIt) 
 // fatal message and stops its manager, as a refused parameter ends a launch (it used to log an error every
 // 10 s and plan nothing for good). params.test runs a mapper in a manager of its own, /NS/manager;
 // the test feeds it frames, with each of which it sends its map's handle in the process.
-// `ns` is the group of the manager, the mapper and the planner's parameters; `expected` begins the fatal message.
-void expectTheConflictStopsTheManager(const std::string& ns, const std::string& expected) {
+// `ns` is the group of the manager, the mapper and the parameters of the nodelet `name` of `type`; `expected`
+// begins the fatal message.
+void expectTheConflictStopsTheManager(const std::string& ns, const std::string& name, const std::string& type,
+                                      const std::string& expected) {
   ros::NodeHandle nh;
   std::vector<std::string> fatal;
   auto log_sub = nh.subscribe<rosgraph_msgs::Log>("/rosout", 200, [&](const rosgraph_msgs::Log::ConstPtr& m) {
@@ -138,8 +140,8 @@ void expectTheConflictStopsTheManager(const std::string& ns, const std::string& 
       20.0))
       << "/rosout: " << log_sub.getNumPublishers() << " connected of " << ::testing::PrintToString(publishers);
   nodelet::NodeletLoad srv;
-  srv.request.name = "/" + ns + "/local_planner";
-  srv.request.type = "go_feap/LocalPlanner";
+  srv.request.name = "/" + ns + "/" + name;
+  srv.request.type = type;
   ASSERT_TRUE(ros::service::call(ns + "/manager/load_nodelet", srv) && srv.response.success)
       << "its own parameters are valid: it starts";
 
@@ -177,14 +179,22 @@ void expectTheConflictStopsTheManager(const std::string& ns, const std::string& 
 }
 
 TEST(Parameters, AClearanceThatConflictsWithTheMappersStopsTheManagerAndNamesIt) {
-  expectTheConflictStopsTheManager("conflict", "/conflict/local_planner: viewpoints: clearance must be <=");
+  expectTheConflictStopsTheManager("conflict", "local_planner", "go_feap/LocalPlanner",
+                                   "/conflict/local_planner: viewpoints: clearance must be <=");
 }
 
 // A sensor_range past the mapper's max_range likewise.
 TEST(Parameters, ASensorRangePastTheMappersStopsTheManagerAndNamesIt) {
-  expectTheConflictStopsTheManager("conflict_range",
+  expectTheConflictStopsTheManager("conflict_range", "local_planner", "go_feap/LocalPlanner",
                                    "/conflict_range/local_planner: viewpoints: sensor_range (4.500000 m) must not "
                                    "exceed occupancy: max_range (4.000000 m)");
+}
+
+// And a goal_tolerance under half the mapper's voxel diagonal, in the trajectory planner.
+TEST(Parameters, AGoalToleranceUnderHalfTheMappersVoxelDiagonalStopsTheManagerAndNamesIt) {
+  expectTheConflictStopsTheManager("conflict_goal", "trajectory_planner", "go_feap/TrajectoryPlanner",
+                                   "/conflict_goal/trajectory_planner: planner: goal_tolerance must be at least half "
+                                   "a voxel's diagonal (0.086603 m");
 }
 
 }  // namespace

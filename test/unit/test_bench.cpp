@@ -651,6 +651,12 @@ TEST(Bench, EveryRateAndTheTimeLimitAreCheckedNamingTheKey) {
     says(c, "are too wide for the mapper: camera intrinsics are invalid");
   }
   {
+    // A path ends at a voxel's centre: a goal tolerance under half a voxel's diagonal refused targets as blocked.
+    bench::ExplorationConfig c = base;
+    c.planner.goal_tolerance = 0.05;
+    says(c, "planner: goal_tolerance must be at least half a voxel's diagonal (0.086603 m");
+  }
+  {
     // A viewpoint model that sees farther or wider than the mapper and the camera scores viewpoints on cells
     // a flight there does not map. Equal is fine: the shipped 80 x 60 degrees are written in rounded radians.
     bench::ExplorationConfig c = base;

@@ -1157,6 +1157,33 @@ TEST(TrajectoryPlanner, AGoalSnappedFartherThanTheToleranceIsRefused) {
   EXPECT_NE(planned.message().find("goal_blocked"), std::string::npos) << planned.message();
 }
 
+// A path ends at its voxel's centre, up to half a voxel's diagonal from the target: a goal_tolerance below that
+// refused a target at a voxel's corner in open space as blocked. It is refused against the map's resolution.
+TEST(TrajectoryPlanner, AGoalToleranceUnderHalfAVoxelsDiagonalIsRefusedAgainstTheMap) {
+  OpenRoom room(Vec3(6, 4, 3));
+  const OptimizerConfig optimizer = optimizerConfig();
+  traj::TrajectoryPlannerConfig planner;
+  planner.goal_tolerance = 0.05;
+  ASSERT_TRUE(planner.validate()) << planner.validate().message();
+  traj::PlanRequest request;
+  request.start = Vec3(1.05, 2.05, 1.55);
+  request.target = Vec3(3.0, 2.0, 1.5);  // a voxel's corner, 0.087 m from the centres around it
+  traj::PlanReport report;
+  EXPECT_FALSE(traj::planTrajectory(request, room.astar, room.world.esdf(), optimizer, planner, &report));
+  EXPECT_EQ(report.path_status, PathStatus::kGoalBlocked);
+  OccupancyConfig occupancy;
+  occupancy.resolution = kRes;
+  EXPECT_EQ(planner.validate(occupancy).message(),
+            "planner: goal_tolerance must be at least half a voxel's diagonal (0.086603 m at the map's resolution of "
+            "0.100000 m): a path ends at a voxel's centre, and targets off it were refused as blocked");
+  planner.goal_tolerance = 0.09;
+  EXPECT_TRUE(planner.validate(occupancy)) << planner.validate(occupancy).message();
+  const auto planned = traj::planTrajectory(request, room.astar, room.world.esdf(), optimizer, planner, &report);
+  ASSERT_TRUE(planned) << planned.message();
+  planner.goal_tolerance = std::numeric_limits<double>::quiet_NaN();  // validate() names it first
+  EXPECT_NE(planner.validate(occupancy).message().find("planner: goal_tolerance must be finite and >= 0"), std::string::npos);
+}
+
 TEST(TrajectoryPlanner, AStartTooNearAWallIsPlannedAway) {
   OpenRoom room(Vec3(6, 4, 3));
   World& world = room.world;

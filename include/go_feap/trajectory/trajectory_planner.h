@@ -103,6 +103,9 @@ struct TrajectoryPlannerConfig {
   double profile_max_cross_speed = 0.1;
   /// Checks every key; the message names the bad one, e.g. "planner: path_spacing must be > 0".
   common::Status validate() const;
+  /// validate() plus goal_tolerance against the map's voxels: at least half a voxel's diagonal. A path ends
+  /// at a voxel's centre, so a smaller tolerance refused targets off their voxel's centre as blocked.
+  common::Status validate(const map::OccupancyConfig& occupancy) const;
 };
 
 /// Start state and goal of one plan.
