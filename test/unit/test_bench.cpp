@@ -331,8 +331,9 @@ TEST(Bench, SceneToolWritesTheScenesFiguresAndFiles) {
 }
 
 // scripts/test's last line and exit status come from scripts/lib/count_results.py: a failure, an error, a
-// skip without a reason (a failing SetUpTestSuite), an unreadable result, a make run that stopped early and
-// a folder without results all count as failed; a skip with a reason and a test not run count as skipped.
+// skip without a reason (a failing SetUpTestSuite), an unreadable result, a make run that stopped early, a
+// failed rostest wrapper and a folder without results all count as failed; a skip with a reason and a test
+// not run count as skipped; a passed rostest wrapper (its node's cases are counted) does not count.
 TEST(Bench, TheTestCountCountsEveryOutcome) {
   namespace fs = std::filesystem;
   const fs::path dir = fs::temp_directory_path() / ("go_feap_count_results_" + std::to_string(getpid()));
@@ -351,6 +352,14 @@ TEST(Bench, TheTestCountCountsEveryOutcome) {
          "</testsuite></testsuites>\n";
   std::ofstream(dir / "good" / "b.xml") << "<testsuites><testsuite name=\"S\"><testcase classname=\"S\" name=\"ok\" "
                                            "status=\"run\"/></testsuite></testsuites>\n";
+  // A rostest's wrapper case: its node's cases have a result of their own, so a pass of it is not counted
+  // again; a failure of it (the node crashed or timed out) is.
+  std::ofstream(dir / "good" / "rostest-x.xml")
+      << "<testsuite errors=\"0\" failures=\"0\" tests=\"1\"><testcase classname=\"rostest.runner.RosTest\" "
+         "name=\"testx\" time=\"3.8\" /></testsuite>\n";
+  std::ofstream(dir / "mixed" / "rostest-y.xml")
+      << "<testsuite errors=\"1\" failures=\"0\" tests=\"1\"><testcase classname=\"rostest.runner.RosTest\" "
+         "name=\"testy\"><error message=\"test [y] did not generate test results\"/></testcase></testsuite>\n";
   const std::string count = "/usr/bin/python3 " GO_FEAP_CONFIG_DIR "/../scripts/lib/count_results.py ";
   auto lastLine = [](const std::string& out) {
     const std::size_t end = out.find_last_not_of('\n');
@@ -359,15 +368,16 @@ TEST(Bench, TheTestCountCountsEveryOutcome) {
   {
     const auto [rc, out] = runCommand(count + (dir / "mixed").string());
     EXPECT_EQ(rc, 1) << out;
-    EXPECT_EQ(lastLine(out), "1 passed, 3 failed") << out;
+    EXPECT_EQ(lastLine(out), "1 passed, 4 failed") << out;
     for (const char* line : {"FAILED S.bad: x.cpp:3\n", "FAILED S.err: crashed\n", "FAILED S.bare: skipped with no reason given",
+                             "FAILED rostest.runner.RosTest.testy: test [y] did not generate test results\n",
                              "\n2 skipped\n"})
       EXPECT_NE(out.find(line), std::string::npos) << line << "\n" << out;
   }
   {  // make stopped (124: its timeout) before every test ran
     const auto [rc, out] = runCommand(count + (dir / "mixed").string() + " 124");
     EXPECT_EQ(rc, 1) << out;
-    EXPECT_EQ(lastLine(out), "1 passed, 4 failed") << out;
+    EXPECT_EQ(lastLine(out), "1 passed, 5 failed") << out;
     EXPECT_NE(out.find("make run_tests exited 124"), std::string::npos) << out;
   }
   {
