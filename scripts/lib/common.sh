@@ -3,6 +3,9 @@
 
 GO_FEAP_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 GO_FEAP_BUILD="${GO_FEAP_BUILD:-$GO_FEAP_ROOT/build}"
+# Without trailing slashes: the logs go beside the folder, as $GO_FEAP_BUILD.build.log ("build/" put them
+# inside one not yet made).
+while [ "${#GO_FEAP_BUILD}" -gt 1 ] && [ "${GO_FEAP_BUILD%/}" != "$GO_FEAP_BUILD" ]; do GO_FEAP_BUILD="${GO_FEAP_BUILD%/}"; done
 # ROS tools need Debian's python3 (with catkin_pkg), not a pyenv/venv one found first.
 export PATH="/usr/bin:/bin:/usr/sbin:/sbin:$PATH"
 
@@ -63,6 +66,8 @@ install_dependencies() {
 build_package() {
   local shared="${GO_FEAP_SHARED_DIR:-$GO_FEAP_ROOT/../shared}"
   log "building in $GO_FEAP_BUILD"
+  # The logs go beside the build folder, whose parent may not be made yet (cmake makes the folder itself).
+  mkdir -p -- "$(dirname -- "$GO_FEAP_BUILD")" || { log "cannot make the parent of $GO_FEAP_BUILD"; return 1; }
   cmake -S "$GO_FEAP_ROOT" -B "$GO_FEAP_BUILD" -DCMAKE_BUILD_TYPE=Release \
     -DPYTHON_EXECUTABLE=/usr/bin/python3 -DGO_FEAP_SHARED_DIR="$shared" \
     >"$GO_FEAP_BUILD.configure.log" 2>&1 ||
@@ -98,6 +103,19 @@ prepare_build() {
     { log "--no-build: there is no build in $GO_FEAP_BUILD (run once without --no-build)"; return 2; }
   source_setup
   log "--no-build: using the build in $GO_FEAP_BUILD as it is"
+}
+
+# new_folder BASE: makes a new folder BASE, or BASE-2, BASE-3, ... when it is there already (two runs
+# started in the same second), and prints its path. mkdir is atomic: two callers never get the same one.
+new_folder() {
+  local path=$1 n=1
+  mkdir -p -- "$(dirname -- "$1")" || return 1
+  until mkdir -- "$path" 2>/dev/null; do
+    n=$((n + 1))
+    [ "$n" -le 1000 ] || { log "cannot make a folder $1 (nor $1-N)"; return 1; }
+    path="$1-$n"
+  done
+  printf '%s\n' "$path"
 }
 
 # Kills (KILL) every process whose environment holds GO_FEAP_SESSION_TOKEN=$1.

@@ -25,6 +25,7 @@
 #include <fstream>
 #include <iomanip>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -379,6 +380,40 @@ TEST_F(Replay, RecordedFlightRebuildsTheWallsItSaw) {
   EXPECT_GT(occupied, 1000u) << "the flight saw walls: the replayed map must hold them";
   EXPECT_GE(static_cast<double>(on_walls), 0.98 * static_cast<double>(occupied));
   EXPECT_GT(free_cells, 100u);
+}
+
+// Runs started together get folders of their own (the default name has one-second steps: two runs shared
+// one, and one reported the other's summary as its own); a build folder given with a trailing slash keeps its
+// logs beside it (they went inside a folder not yet made, and the configure "failed").
+TEST_F(Replay, RunsStartedTogetherGetFoldersOfTheirOwn) {
+  const fs::path base = dir_ / "runs" / "maze-now";
+  const auto [status, out] = runCommand("bash -c 'source " GO_FEAP_SOURCE_DIR "/scripts/lib/common.sh; for i in 1 2 3 4; "
+                                        "do new_folder " + inQuotes(base) + " & done; wait'");
+  EXPECT_EQ(status, 0) << out;
+  std::set<std::string> printed;
+  std::istringstream lines(out);
+  for (std::string line; std::getline(lines, line);) printed.insert(line);
+  const std::set<std::string> expected{base.string(), base.string() + "-2", base.string() + "-3", base.string() + "-4"};
+  EXPECT_EQ(printed, expected) << out;
+  for (const std::string& folder : expected) EXPECT_TRUE(fs::is_directory(folder)) << folder;
+  const auto [rc, build] = runCommand("GO_FEAP_BUILD=" + inQuotes((dir_ / "b").string() + "//") + " bash -c 'source " GO_FEAP_SOURCE_DIR
+                                      "/scripts/lib/common.sh; echo \"$GO_FEAP_BUILD\"'");
+  EXPECT_EQ(build, (dir_ / "b").string() + "\n");
+}
+
+// A recording cut short (here a Ctrl-C 10 s into a 60 s one) keeps its bag and says it is short, exit 1:
+// roslaunch ends 0 whenever the recorder stops, and the script used to report the short bag as a success.
+TEST_F(Replay, ARecordingCutShortIsSaidToBeShort) {
+  const fs::path bag = data_ / "short.bag", log = dir_ / "short.log";  // to a file, as scripts/run's test
+  const int status = std::system(("GO_FEAP_BUILD=" + inQuotes(GO_FEAP_BUILD_DIR) +
+                                  " timeout --preserve-status --signal=INT --kill-after=60 10 " GO_FEAP_SOURCE_DIR
+                                  "/scripts/record_flight --no-build --duration 60 --out " +
+                                  inQuotes(bag) + " > " + inQuotes(log) + " 2>&1 < /dev/null").c_str());
+  const std::string out = readText(log);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 1) << "status " << status << "\n" << out;
+  EXPECT_NE(out.find("the recording stopped after"), std::string::npos) << out;
+  EXPECT_NE(out.find(" of the 60 s asked"), std::string::npos) << out;
+  EXPECT_TRUE(fs::is_regular_file(bag)) << "the short bag was not kept\n" << out;
 }
 
 TEST_F(Replay, ABagWithoutDepthIsRefusedNamingTheMissingTopic) {
