@@ -39,6 +39,7 @@ namespace go_feap {
 class GlobalPlanner : public nodelet::Nodelet {
   // Declared first: it outlives whatever callback the other members' destruction still lets run.
   ros_log::Throttle log_throttle_;  ///< this nodelet's throttled messages
+  ros_map::EmptyHandles empty_handles_{10.0};  ///< map_handles without a map, said only when they last
  private:
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
@@ -89,7 +90,8 @@ class GlobalPlanner : public nodelet::Nodelet {
     }
     auto map = ros_map::acceptHandle(*msg);
     if (!map) {
-      GO_FEAP_NODELET_THROTTLE(ERROR, 10.0, getName() << ": " << map.message());
+      if (empty_handles_.due(ros::Time::now().toSec()))
+        NODELET_ERROR_STREAM(getName() << ": for " << empty_handles_.patience() << " s: " << map.message());
       return;
     }
     if (const common::Status st = astar_config_.validate((*map)->map->config().esdf); !st) {

@@ -53,6 +53,7 @@ namespace go_feap {
 class LocalPlanner : public nodelet::Nodelet {
   // Declared first: it outlives whatever callback the other members' destruction still lets run.
   ros_log::Throttle log_throttle_;  ///< this nodelet's throttled messages
+  ros_map::EmptyHandles empty_handles_{10.0};  ///< map_handles without a map, said only when they last
  private:
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
@@ -110,7 +111,8 @@ class LocalPlanner : public nodelet::Nodelet {
     }
     auto map = ros_map::acceptHandle(*msg);
     if (!map) {
-      GO_FEAP_NODELET_THROTTLE(ERROR, 10.0, getName() << ": " << map.message());
+      if (empty_handles_.due(ros::Time::now().toSec()))
+        NODELET_ERROR_STREAM(getName() << ": for " << empty_handles_.patience() << " s: " << map.message());
       return;
     }
     // Astar's constructor throws otherwise; a viewpoint clearance past max_distance passes no viewpoint, and a

@@ -39,6 +39,7 @@ namespace go_feap {
 class MetricsRecorder : public nodelet::Nodelet {
   // Declared first: it outlives whatever callback the other members' destruction still lets run.
   ros_log::Throttle log_throttle_;  ///< this nodelet's throttled messages
+  ros_map::EmptyHandles empty_handles_{10.0};  ///< map_handles without a map, said only when they last
  public:
   // A run that began and did not finish (Ctrl-C, a launch that ended, a replayed bag's end, the hang
   // guard) still writes its figures so far, with finish_reason "stopped": before, output_dir stayed empty.
@@ -117,7 +118,8 @@ class MetricsRecorder : public nodelet::Nodelet {
     }
     auto map = ros_map::acceptHandle(*msg);
     if (!map) {
-      GO_FEAP_NODELET_THROTTLE(ERROR, 10.0, getName() << ": " << map.message());
+      if (empty_handles_.due(ros::Time::now().toSec()))
+        NODELET_ERROR_STREAM(getName() << ": for " << empty_handles_.patience() << " s: " << map.message());
       return;
     }
     shared_ = *map;

@@ -729,6 +729,21 @@ class HeardLog : public ros::console::LogAppender {
   std::vector<std::string> lines;
 };
 
+// Handles without a map are normal at start-up (a latched copy; the mapper's next frame brings the map): said
+// only once they have come for the whole patience, then once a patience; a clock gone back waits again.
+TEST(SharedMap, EmptyHandlesAreSaidOnlyWhenTheyLast) {
+  go_feap::ros_map::EmptyHandles empty(10.0);
+  EXPECT_FALSE(empty.due(1.0));
+  EXPECT_FALSE(empty.due(5.0));
+  EXPECT_FALSE(empty.due(10.99));
+  EXPECT_TRUE(empty.due(11.0));
+  EXPECT_FALSE(empty.due(20.0));
+  EXPECT_TRUE(empty.due(21.0));
+  EXPECT_FALSE(empty.due(0.5));  // the clock went back
+  EXPECT_FALSE(empty.due(10.0));
+  EXPECT_TRUE(empty.due(10.5));
+}
+
 // A site's first message passes at once, whatever the clock says, then one a period; sites and throttles
 // are apart; a clock that went back lets one pass at once. rosconsole's own throttle, one static per call
 // site for the whole process counted from time 0, dropped every message of a simulation's first period.

@@ -12,6 +12,7 @@
 #include <ros/serialization.h>
 
 #include <memory>
+#include <optional>
 #include <shared_mutex>
 #include <string>
 
@@ -43,6 +44,31 @@ inline common::Result<std::shared_ptr<SharedMap>> acceptHandle(const MapHandle& 
                                          "it in the EsdfMapper's manager)");
   return handle.shared;
 }
+
+/// When to say that the handles coming carry no map. At start-up that is normal (a copy latched before the
+/// nodelet subscribed; the mapper's next frame brings the map), so it is said only once handles without a
+/// map have come for `patience` s, then every `patience` s: a mapper outside this nodelet's manager.
+class EmptyHandles {
+ public:
+  explicit EmptyHandles(double patience) : patience_(patience) {}
+  /// An empty handle came at time `now` (s): true when that is to be said. A clock that went back (a
+  /// simulation restarted) starts the wait again.
+  bool due(double now) {
+    if (!first_ || now < *first_ || (said_ && now < *said_)) {
+      first_ = now;
+      said_.reset();
+      return false;
+    }
+    if (now - *first_ < patience_ || (said_ && now - *said_ < patience_)) return false;
+    said_ = now;
+    return true;
+  }
+  double patience() const { return patience_; }
+
+ private:
+  double patience_;
+  std::optional<double> first_, said_;
+};
 
 /// What to log when a handle to another map than the one `held` comes (the mapper was reloaded into the
 /// manager): a reader keeps the map it planned on, whose state it holds; "" for the same map (the mapper
