@@ -382,6 +382,22 @@ TEST_F(Replay, RecordedFlightRebuildsTheWallsItSaw) {
   EXPECT_GT(free_cells, 100u);
 }
 
+// A TERM to scripts/run alone (`timeout 600 scripts/run`, a supervisor) stops the chain it started, which
+// writes what it had (a run "stopped"), and the script ends with status 1 and leaves no process behind: it
+// used to die at once and leave the whole chain running until its wall-clock guard (35 min for a maze).
+TEST_F(Replay, ATermToScriptsRunStopsItsChain) {
+  const fs::path out = data_ / "termed", log = dir_ / "termed.log";
+  const auto [status, said] = runCommand(
+      "bash -c 'GO_FEAP_BUILD=" + inQuotes(GO_FEAP_BUILD_DIR) + " " GO_FEAP_SOURCE_DIR "/scripts/run " GO_FEAP_SOURCE_DIR
+      "/config/scenes/maze_small.yaml --no-build --out " + inQuotes(out) + " > " + inQuotes(log) +
+      " 2>&1 < /dev/null & run=$!; sleep 10; kill -TERM $run; wait $run; echo \"status $?\"; "
+      "pgrep -f " + inQuotes("[o]utput_dir:=" + out.string()) + " | wc -l'");  // [o]: not this shell's own line
+  const std::string text = readText(log);
+  EXPECT_NE(said.find("status 1\n0\n"), std::string::npos) << said << "\n" << text;
+  EXPECT_NE(text.find("the run was stopped before exploration finished"), std::string::npos) << text;
+  EXPECT_TRUE(fs::is_regular_file(out / "summary.json")) << text;
+}
+
 // Runs started together get folders of their own (the default name has one-second steps: two runs shared
 // one, and one reported the other's summary as its own); a build folder given with a trailing slash keeps its
 // logs beside it (they went inside a folder not yet made, and the configure "failed").
