@@ -14,8 +14,8 @@
 #include <boost/shared_ptr.hpp>
 #include <cstdint>
 #include <exception>
-#include <string>
 #include <memory>
+#include <string>
 #include <utility>
 
 #include "go_feap/ros/log_throttle.h"

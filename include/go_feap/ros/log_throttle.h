@@ -13,8 +13,8 @@
 
 namespace go_feap::ros_log {
 
-/// When each message site last logged, by the site's key. Thread-safe (a nodelet's callbacks may run on
-/// several of the manager's threads).
+/// When each message site last logged, by the site's key. Thread-safe (the simulator's own thread logs
+/// beside its callbacks, and onInit runs beside them).
 class Throttle {
  public:
   /// True when the message of `site` is to be logged at ROS time `now` (s): the site's first message, one
