@@ -59,8 +59,9 @@ common::Status ExplorationConfig::validate() const {
     return common::Status::Error("layers: rate must be in (0, 1000] Hz");
   if (!positiveFinite(planner_rate) || planner_rate > 1000.0)
     return common::Status::Error("planner: rate must be in (0, 1000] Hz");
-  if (!common::isRigidTransform(T_B_C.matrix()))
-    return common::Status::Error("depth_camera: T_B_C must be a finite rigid transform");
+  if (!common::isCameraMount(T_B_C.matrix()))
+    return common::Status::Error("depth_camera: T_B_C must be a finite rigid transform with a translation of at most " +
+                                 std::to_string(common::kMaxMountOffset) + " m (a camera on the vehicle; metres, not millimetres)");
   // The mapper takes rays within 85 degrees of the optical axis: a wider camera (an hfov_deg of 175) passed
   // the camera's own check and then had every frame refused, a run that mapped nothing without a word.
   if (const common::Status st = depthIntrinsics(camera).validate(); !st.ok())

@@ -64,7 +64,9 @@ class DepthCamera : public nodelet::Nodelet {
                                "parameter '" + p.fullName("depth_camera/rate") + "' (" + std::to_string(rate_) +
                                    " Hz) must be <= '" + p.fullName("simulation/odom_rate") + "' (" +
                                    std::to_string(odom_rate) + " Hz): frames are rendered at odometry stamps");
-    ros_params::requireOrThrow(common::isRigidTransform(T_B_C), me, "parameter '" + p.fullName("depth_camera/T_B_C") + "' must be a rigid transform");
+    ros_params::requireOrThrow(common::isCameraMount(T_B_C), me,
+                               "parameter '" + p.fullName("depth_camera/T_B_C") + "' must be a rigid transform with a translation of at most " +
+                                   std::to_string(common::kMaxMountOffset) + " m (a camera on the vehicle; metres, not millimetres)");
     T_B_C_.matrix() = T_B_C;
     rng_.seed(static_cast<std::uint64_t>(seed));
     config_ = c;

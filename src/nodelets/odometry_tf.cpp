@@ -35,7 +35,9 @@ class OdometryTf : public nodelet::Nodelet {
     p.getFrame("world_frame", world_frame_).getFrame("body_frame", body_frame_).get("warn_period", warn_period_);
     p.getFrame("camera_frame", camera_frame).getMatrix4("T_B_C", T_B_C);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
-    ros_params::requireOrThrow(common::isRigidTransform(T_B_C), getName(), "parameter '" + p.fullName("T_B_C") + "' must be a rigid transform");
+    ros_params::requireOrThrow(common::isCameraMount(T_B_C), getName(),
+                               "parameter '" + p.fullName("T_B_C") + "' must be a rigid transform with a translation of at most " +
+                                   std::to_string(common::kMaxMountOffset) + " m (a camera on the vehicle; metres, not millimetres)");
     ros_params::requireOrThrow(camera_frame != body_frame_, getName(),  // getFrame refused empty ones
                                "parameter '" + p.fullName("camera_frame") + "' must name a frame other than the body");
     ros_params::requireOrThrow(camera_frame != world_frame_, getName(),  // world -> body -> world: a loop

@@ -65,6 +65,8 @@ TEST(Parameters, ANodeletWithAnInvalidOrMissingParameterDoesNotStartAndNamesIt) 
       {"bad_map_size", "go_feap/EsdfMapper", "exploration_box"},                // 1e6 m long: 2.9e10 voxels
       {"bad_cluster_extent", "go_feap/LocalPlanner", "frontier/max_cluster_extent"},  // NaN
       {"bad_camera_extrinsic", "go_feap/DepthCamera", "depth_camera/T_B_C"},    // a NaN translation
+      {"bad_camera_offset", "go_feap/DepthCamera", "depth_camera/T_B_C"},      // 100 mm written as 100 m
+      {"bad_odometry_camera_offset", "go_feap/OdometryTf", "T_B_C"},            // likewise, on board
       {"bad_camera_range", "go_feap/DepthCamera", "depth_camera/max_range"},    // 70 m in 16-bit millimetres
       {"bad_camera_rate", "go_feap/DepthCamera", "depth_camera/rate"},          // 30 Hz on 20 Hz odometry: came at 20 in silence
       {"bad_command_limit", "go_feap/QuadrotorSim", "simulation/max_command_acceleration"},  // NaN

@@ -706,6 +706,11 @@ TEST(Bench, EveryRateAndTheTimeLimitAreCheckedNamingTheKey) {
   bench::ExplorationConfig scaled = base;
   scaled.T_B_C.linear() *= 2.0;
   says(scaled, "depth_camera: T_B_C must be a finite rigid transform");
+  bench::ExplorationConfig far = base;  // 100 mm written as metres
+  far.T_B_C.translation() = go_feap::common::Vec3(100.0, 0.0, 20.0);
+  says(far, "depth_camera: T_B_C must be a finite rigid transform with a translation of at most 2.000000 m");
+  far.T_B_C.translation() = go_feap::common::Vec3(1.2, 0.0, 1.6);  // 2 m: a mount on a large vehicle
+  EXPECT_TRUE(far.validate().ok()) << far.validate().message();
   // Each stage runs at most once a control step: a faster rate is refused by name (it ran at the control rate).
   const double control = base.loop.control_rate;
   auto faster = [&](auto set, const std::string& key) {

@@ -14,4 +14,13 @@ inline bool isRigidTransform(const Eigen::Matrix4d& T) {
          (R.transpose() * R).isApprox(Eigen::Matrix3d::Identity(), 1e-6) && R.determinant() > 0.0;
 }
 
+/// Metres a camera may sit from the body's origin: a mount on the vehicle. A translation written in
+/// millimetres (100 for 0.1 m) put the camera 100 m off, and every frame was mapped there.
+constexpr double kMaxMountOffset = 2.0;
+
+/// A rigid transform (isRigidTransform) whose translation is at most kMaxMountOffset: a camera's extrinsic.
+inline bool isCameraMount(const Eigen::Matrix4d& T) {
+  return isRigidTransform(T) && T.topRightCorner<3, 1>().norm() <= kMaxMountOffset;
+}
+
 }  // namespace go_feap::common
