@@ -118,6 +118,14 @@ new_folder() {
   printf '%s\n' "$path"
 }
 
+# read_pid FILE: the pid a part of a background pipeline wrote to FILE, waited for up to 5 s (a signal may
+# come before it is written); nothing when it never came.
+read_pid() {
+  local i
+  for i in $(seq 50); do [ -s "$1" ] && break; sleep 0.1; done
+  cat -- "$1" 2>/dev/null
+}
+
 # Kills (KILL) every process whose environment holds GO_FEAP_SESSION_TOKEN=$1.
 kill_token_holders() {
   local pids

@@ -194,9 +194,7 @@ common::Result<FrameChange> OccupancyMap::integrate(const cv::Mat& depth, const 
   // camera-frame length of the pixel's ray; computed once per intrinsics.
   const int step = config_.skip_pixel;
   const std::size_t per_row = static_cast<std::size_t>((depth.cols + step - 1) / step);
-  if (behind_.empty() || behind_for_.width != K.width || behind_for_.height != K.height || behind_for_.fx != K.fx ||
-      behind_for_.fy != K.fy || behind_for_.cx != K.cx || behind_for_.cy != K.cy ||
-      behind_.size() != per_row * static_cast<std::size_t>((depth.rows + step - 1) / step)) {
+  if (behind_.empty() || behind_for_ != K || behind_.size() != per_row * static_cast<std::size_t>((depth.rows + step - 1) / step)) {
     behind_.clear();
     for (int v = 0; v < depth.rows; v += step)
       for (int u = 0; u < depth.cols; u += step)

@@ -27,7 +27,6 @@
 #include <cmath>
 #include <cstdint>
 #include <iomanip>
-#include <limits>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -156,10 +155,7 @@ class EsdfMapper : public nodelet::Nodelet {
   // A camera_info that cannot describe the images (a driver restarting, a zero K) is refused: the frames
   // go on with the last valid intrinsics instead of all being skipped until a valid one comes.
   void onInfo(const sensor_msgs::CameraInfo::ConstPtr& info) {
-    const auto side = [](std::uint32_t n) {  // pixels, within int (an image's sides are ints)
-      return static_cast<int>(std::min<std::uint32_t>(n, std::numeric_limits<int>::max()));
-    };
-    const map::DepthIntrinsics K{side(info->width), side(info->height), info->K[0], info->K[4], info->K[2], info->K[5]};
+    const map::DepthIntrinsics K = ros_conv::depthIntrinsics(*info);
     const common::Status st = K.validate();
     std::lock_guard<std::mutex> lock(input_mutex_);
     if (!st.ok()) {

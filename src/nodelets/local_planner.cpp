@@ -23,7 +23,6 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
-#include <limits>
 #include <mutex>
 #include <shared_mutex>
 #include <std_msgs/Bool.h>
@@ -203,14 +202,10 @@ class LocalPlanner : public nodelet::Nodelet {
   // image must not stop a flight. Not throttled: a throttle on the simulated clock swallows what comes in its
   // first period. One the mapper cannot take is left to the mapper to name.
   void onInfo(const sensor_msgs::CameraInfo::ConstPtr& info) {
-    const auto side = [](std::uint32_t n) { return static_cast<int>(std::min<std::uint32_t>(n, std::numeric_limits<int>::max())); };
-    const map::DepthIntrinsics K{side(info->width), side(info->height), info->K[0], info->K[4], info->K[2], info->K[5]};
+    const map::DepthIntrinsics K = ros_conv::depthIntrinsics(*info);
     if (!K.validate()) return;
-    const auto same = [&K](const map::DepthIntrinsics& o) {
-      return o.width == K.width && o.height == K.height && o.fx == K.fx && o.fy == K.fy && o.cx == K.cx && o.cy == K.cy;
-    };
     std::lock_guard<std::mutex> lock(mutex_);
-    if (std::any_of(checked_cameras_.begin(), checked_cameras_.end(), same)) return;
+    if (std::find(checked_cameras_.begin(), checked_cameras_.end(), K) != checked_cameras_.end()) return;
     if (checked_cameras_.size() >= 16) checked_cameras_.erase(checked_cameras_.begin());  // a camera re-calibrating
     checked_cameras_.push_back(K);
     if (const common::Status st = viewpoint_config_.fitsCamera(K); !st)

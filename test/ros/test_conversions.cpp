@@ -729,6 +729,19 @@ class HeardLog : public ros::console::LogAppender {
   std::vector<std::string> lines;
 };
 
+// A camera_info's intrinsics are K's fx (K[0]), fy (K[4]), cx (K[2]) and cy (K[5]); sides past int's range
+// are clamped to it (then refused by DepthIntrinsics::validate() for an image that big, not wrapped negative).
+TEST(Conversions, CameraInfoGivesKsIntrinsicsAndSidesWithinInt) {
+  sensor_msgs::CameraInfo info;
+  info.width = 640, info.height = 480;
+  info.K = {381.0, 0.0, 319.5, 0.0, 382.0, 239.5, 0.0, 0.0, 1.0};
+  const go_feap::map::DepthIntrinsics K = go_feap::ros_conv::depthIntrinsics(info);
+  EXPECT_EQ(K, (go_feap::map::DepthIntrinsics{640, 480, 381.0, 382.0, 319.5, 239.5}));
+  EXPECT_NE(K, (go_feap::map::DepthIntrinsics{640, 480, 381.0, 382.0, 319.5, 239.0}));
+  info.width = std::numeric_limits<std::uint32_t>::max();
+  EXPECT_EQ(go_feap::ros_conv::depthIntrinsics(info).width, std::numeric_limits<int>::max());
+}
+
 // Handles without a map are normal at start-up (a latched copy; the mapper's next frame brings the map): said
 // only once they have come for the whole patience, then once a patience; a clock gone back waits again.
 TEST(SharedMap, EmptyHandlesAreSaidOnlyWhenTheyLast) {

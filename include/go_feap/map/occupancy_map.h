@@ -45,6 +45,10 @@ struct DepthIntrinsics {
 
   /// Error naming what is wrong unless width and height are > 0, fx and fy finite and > 0, cx and cy finite.
   common::Status validate() const;
+  bool operator==(const DepthIntrinsics& o) const {
+    return width == o.width && height == o.height && fx == o.fx && fy == o.fy && cx == o.cx && cy == o.cy;
+  }
+  bool operator!=(const DepthIntrinsics& o) const { return !(*this == o); }
 };
 
 /// What one integrated frame changed.

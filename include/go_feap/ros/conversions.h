@@ -6,15 +6,20 @@
 #include <geometry_msgs/Quaternion.h>
 #include <geometry_msgs/Vector3.h>
 #include <nav_msgs/Odometry.h>
+#include <sensor_msgs/CameraInfo.h>
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <optional>
 #include <sstream>
 #include <string>
 
 #include "go_feap/common/grid.h"
+#include "go_feap/map/occupancy_map.h"
 
 namespace go_feap::ros_conv {
 
@@ -27,6 +32,15 @@ inline geometry_msgs::Point toPoint(const common::Vec3& v) {
 }
 
 inline common::Vec3 toVec3(const geometry_msgs::Point& p) { return common::Vec3(p.x, p.y, p.z); }
+
+/// The pinhole intrinsics a camera_info gives (K's fx, fy, cx, cy), its sides clamped to int (an image's
+/// sides are ints; DepthIntrinsics::validate() judges the rest).
+inline map::DepthIntrinsics depthIntrinsics(const sensor_msgs::CameraInfo& info) {
+  const auto side = [](std::uint32_t n) {
+    return static_cast<int>(std::min<std::uint32_t>(n, static_cast<std::uint32_t>(std::numeric_limits<int>::max())));
+  };
+  return {side(info.width), side(info.height), info.K[0], info.K[4], info.K[2], info.K[5]};
+}
 
 /// Heading (rad, about world z) of an orientation; a quaternion of any nonzero length gives the heading of
 /// its rotation.
