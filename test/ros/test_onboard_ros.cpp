@@ -203,8 +203,10 @@ TEST(Onboard, RunsTheChainOnD435iDepthAndVioOdometry) {
     EXPECT_EQ(unmatched(), 0u) << "flown_path poses that are no odometry position, of " << shown->poses.size();
     for (const auto& q : shown->poses) EXPECT_EQ(q.header.frame_id, "world");
   }
-  // The simulated camera's 80 x 60 degrees are the viewpoints' (config/exploration.yaml): nothing said of them.
-  // A narrower camera_info on the onboard topic (a driver restarted at another resolution) is named by the
+  // onboard.launch lays the D435i's sensor model (config/d435i_viewpoints.yaml, 1.34 x 0.98 rad) over
+  // exploration.yaml's: nothing is said of the simulated camera's 80 x 60 degrees, nor of a D435i's
+  // camera_info at any of its depth profiles (sent below, before the narrow one, on the same topic). A
+  // narrower camera_info on the onboard topic (a driver restarted at another resolution) is named by the
   // local planner, which hears it there too: its viewpoints would be scored on cells the camera does not see.
   for (const std::string& w : warnings) EXPECT_EQ(w.find("must not exceed the depth camera's"), std::string::npos) << w;
   ros::Publisher info_pub = nh.advertise<sensor_msgs::CameraInfo>("vehicle/camera_info", 1);
@@ -214,6 +216,15 @@ TEST(Onboard, RunsTheChainOnD435iDepthAndVioOdometry) {
   narrow.header.frame_id = depth->header.frame_id;
   narrow.width = 640, narrow.height = 480;
   narrow.K = {500.0, 0.0, 319.5, 0.0, 500.0, 239.5, 0.0, 0.0, 1.0};  // 65 x 51 degrees
+  // D435i depth profiles, with a focal length at the long end of the units' spread and the principal point
+  // 3.5 px off the centre towards a corner: 848 x 480 (88.8 x 57.6 degrees), 640 x 480 (77.9 x 62.1 degrees,
+  // the sides cropped), 1280 x 720 (88.8 x 57.5 degrees).
+  std::vector<sensor_msgs::CameraInfo> d435i(3, narrow);
+  d435i[0].width = 848, d435i[0].height = 480;
+  d435i[0].K = {430.0, 0.0, 420.5, 0.0, 430.0, 236.0, 0.0, 0.0, 1.0};
+  d435i[1].K = {392.0, 0.0, 316.5, 0.0, 392.0, 243.5, 0.0, 0.0, 1.0};
+  d435i[2].width = 1280, d435i[2].height = 720;
+  d435i[2].K = {650.0, 0.0, 636.5, 0.0, 650.0, 356.0, 0.0, 0.0, 1.0};
   // Sent every `every` s (of the simulated clock) until a warning holds `said`.
   auto sendUntilSaid = [&](const std::function<void()>& send, double every, const std::string& said, double timeout) {
     ros::Time sent;
@@ -225,11 +236,20 @@ TEST(Onboard, RunsTheChainOnD435iDepthAndVioOdometry) {
       return std::any_of(warnings.begin(), warnings.end(), [&](const std::string& w) { return w.find(said) != std::string::npos; });
     }, timeout);
   };
+  // Each D435i profile 0.25 s (simulated) before the next, the narrow camera last: far enough apart for the
+  // planner's queue of 2 among the simulator's own camera_info (15 Hz), so the D435i's have been checked once
+  // the narrow one is named.
+  std::size_t sends = 0;
   EXPECT_TRUE(sendUntilSaid([&] {
-    narrow.header.stamp = ros::Time::now();
-    info_pub.publish(narrow);
-  }, 1.0, "/local_planner: viewpoints: hfov (1.396300 rad) must not exceed the depth camera's (1.138626 rad)", 30.0))
+    sensor_msgs::CameraInfo& info = sends % 4 < 3 ? d435i[sends % 4] : narrow;
+    ++sends;
+    info.header.stamp = ros::Time::now();
+    info_pub.publish(info);
+  }, 0.25, "/local_planner: viewpoints: hfov (1.340000 rad) must not exceed the depth camera's (1.138626 rad)", 30.0))
       << "the local planner said nothing of a camera narrower than its viewpoints";
+  for (const std::string& w : warnings)
+    if (w.find("must not exceed the depth camera's") != std::string::npos)
+      EXPECT_NE(w.find("(1.138626 rad)"), std::string::npos) << "a D435i's camera_info was judged too narrow: " << w;
   // The local planner hears the onboard depth topic too (its obstacle window judges the clutter): an rgb8
   // image sent there is refused by it, by name. Unconnected, nothing would be said and the window would stay
   // empty, silently.

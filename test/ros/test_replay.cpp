@@ -140,6 +140,7 @@ TEST_F(Replay, LaunchArgumentsReachTheNodesTheyName) {
   ASSERT_TRUE(replaceOnce(config / "mapping.yaml", "pose_tolerance: 0.02", "pose_tolerance: 0.03"));
   ASSERT_TRUE(replaceOnce(config / "trajectory.yaml", "lambda_smooth: 1.0", "lambda_smooth: 1.25"));
   ASSERT_TRUE(replaceOnce(config / "d435i.yaml", "T_B_C: [0, 0, 1, 0.10,", "T_B_C: [0, 0, 1, 0.12,"));
+  ASSERT_TRUE(replaceOnce(config / "d435i_viewpoints.yaml", "vfov: 0.98", "vfov: 0.97"));
   const std::string box = " box_min:=[-3.5,-2.5,0.5] box_max:=[4.5,3.5,2.5] world_frame:=vio";
   const std::string mine = " config_dir:=" + inQuotes(config) + " camera_config:=" + inQuotes(config / "d435i.yaml");
   for (const std::string& launch : {std::string("onboard.launch"), "replay.launch bag:=" + inQuotes(data_ / "x.bag")}) {
@@ -163,6 +164,18 @@ TEST_F(Replay, LaunchArgumentsReachTheNodesTheyName) {
       ASSERT_EQ(T.size(), 16u);
       EXPECT_DOUBLE_EQ(T[3], 0.12) << "the extrinsic is not the camera_config's";
     }
+    // The local planner's sensor model: on board the D435i's, from the config folder, over exploration.yaml's
+    // simulated camera; a replay keeps exploration.yaml's unless told the flight's.
+    const bool onboard = launch == "onboard.launch";
+    EXPECT_DOUBLE_EQ(p["/local_planner/viewpoints/vfov"].as<double>(0.0), onboard ? 0.97 : 1.0472) << launch;
+    EXPECT_DOUBLE_EQ(p["/local_planner/viewpoints/hfov"].as<double>(0.0), onboard ? 1.34 : 1.3963) << launch;
+    EXPECT_DOUBLE_EQ(p["/local_planner/viewpoints/sensor_range"].as<double>(0.0), 4.5) << launch;
+  }
+  {
+    const YAML::Node p = dumpYaml("replay.launch bag:=" + inQuotes(data_ / "x.bag") + mine +
+                                  " viewpoint_config:=" + inQuotes(config / "d435i_viewpoints.yaml"));
+    EXPECT_DOUBLE_EQ(p["/local_planner/viewpoints/vfov"].as<double>(0.0), 0.97);
+    EXPECT_DOUBLE_EQ(p["/local_planner/viewpoints/hfov"].as<double>(0.0), 1.34);
   }
   // The planner mode: each key of modes/fuel.yaml, with its value, in every nodelet that loads a mode.
   {
