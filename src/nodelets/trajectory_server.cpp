@@ -4,7 +4,9 @@
 // first trajectory it sends nothing (the flight stack hovers the vehicle where the pilot took it), or,
 // with server/hold_before_trajectory, holds the first pose.
 // When odometry stops for longer than server/odom_timeout the current trajectory is dropped
-// and the reference holds where it was; a trajectory that arrives before odometry is back is refused
+// and the reference holds where it was; when the odometry lies farther than server/max_start_offset from the
+// reference (a jump, a VIO re-initialised, a controller that lost it), it is dropped too and the reference
+// holds where the vehicle is; a trajectory that arrives before odometry is back is refused
 // (its start was checked against nothing but a stale pose), and the next one after resumes (the planner
 // replans once odometry is back). A trajectory whose reference, when it is taken (now, or at its start if that is
 // later), lies farther than server/max_start_offset from the vehicle's odometry is refused: the
@@ -207,13 +209,19 @@ class TrajectoryServer : public nodelet::Nodelet {
       hold_position_ = Eigen::Vector3d(p.x, p.y, p.z);
       hold_yaw_ = ros_conv::yawOf(q);
       hold_ = true;
-    } else if (!current_ && (*odom_position_ - hold_position_).norm() > max_start_offset_) {
-      // No trajectory runs, and the vehicle is farther than server/max_start_offset from the held reference
-      // (its odometry jumped, a VIO re-initialised, or it was moved by hand): held where it is now. The old
-      // reference pulled it the whole way at once, and every plan, starting from that command, was refused
-      // as starting too far from the odometry, until the vehicle had flown back.
-      NODELET_WARN_STREAM(getName() << ": the vehicle is " << (*odom_position_ - hold_position_).norm()
-                                    << " m from the held reference with no trajectory running: holding where it is");
+    } else if (const double off = (*odom_position_ - hold_position_).norm(); off > max_start_offset_) {
+      // The vehicle is farther than server/max_start_offset from the reference last sent (its odometry jumped,
+      // a VIO re-initialised, it was moved by hand, or the controller lost the trajectory): held where it is
+      // now, the trajectory dropped, running or ended. The old reference pulled it the whole way at once, into
+      // space nothing had checked, and every plan starting from that command was refused as starting too far
+      // from the odometry. An ended trajectory stays the current one (its end is held, COMPLETED): this was
+      // only checked with none, so a jump after the first flight, or while hovering after a stop, was chased.
+      std::ostringstream what;
+      if (current_) what << " of trajectory " << current_->id;
+      NODELET_WARN_STREAM(getName() << ": the vehicle is " << off << " m from the reference" << what.str()
+                                    << " (more than server/max_start_offset " << max_start_offset_
+                                    << " m): " << (current_ ? "trajectory dropped, " : "") << "holding where it is");
+      current_.reset();
       hold_position_ = *odom_position_;
       hold_yaw_ = ros_conv::yawOf(q);
     }

@@ -763,6 +763,49 @@ TEST_F(ProbeServerTest, OdometryBackAfterAGapIsHeldWhereItSays) {
   EXPECT_LT((probe.commanded() - probe.vehicle).norm(), 1e-9) << "not held where the odometry came back";
 }
 
+// Odometry jumping farther than server/max_start_offset from the reference with no gap (a VIO re-initialised,
+// a loop closure applied at once, the vehicle carried): the trajectory is dropped, ended or running, and the
+// reference holds where the vehicle now is. This was checked only with no trajectory at all: after the first
+// flight the ended one's end stayed the reference (COMPLETED), and the controller flew the whole jump at once,
+// through space nothing had checked, while hovering after a stop or waiting for a plan.
+TEST_F(ProbeServerTest, AnOdometryJumpDropsTheTrajectoryEndedOrRunning) {
+  using go_feap::PositionCommand;
+  const double max_offset = param("server/max_start_offset");
+  const Vec3 start = probe.vehicle;
+  probe.fly(start, start + Vec3(1.0, 0.0, 0.0), 961, ros::Time::now());
+  ASSERT_TRUE(spinUntil([&] { return probe.hover(0.05)->trajectory_id == 961u; }, 20.0)) << "the trajectory was refused";
+  probe.vehicle = start + Vec3(1.0, 0.0, 0.0);
+  probe.hover(3.5);  // past its 3 s
+  ASSERT_EQ(probe.command->trajectory_flag, PositionCommand::TRAJECTORY_STATUS_COMPLETED);
+  const Vec3 end = probe.commanded();
+  // A drift within the offset leaves the end held.
+  probe.vehicle = end + Vec3(0.0, 0.0, 0.8 * max_offset);
+  probe.hover(0.5);
+  EXPECT_EQ(probe.command->trajectory_flag, PositionCommand::TRAJECTORY_STATUS_COMPLETED);
+  EXPECT_LT((probe.commanded() - end).norm(), 1e-9) << "a drift moved the reference";
+  // A jump past it: held where the vehicle is.
+  probe.vehicle = end + Vec3(0.0, 1.2 * max_offset, 0.0);
+  probe.hover(0.3);
+  EXPECT_EQ(probe.command->trajectory_flag, PositionCommand::TRAJECTORY_STATUS_EMPTY);
+  EXPECT_LT((probe.commanded() - probe.vehicle).norm(), 1e-9) << "the ended trajectory's end is still the reference";
+  // Running: 0.5 s into a 3 s flight the odometry jumps sideways; the rest of it is not flown.
+  const Vec3 from = probe.vehicle;
+  probe.fly(from, from + Vec3(1.0, 0.0, 0.0), 962, ros::Time::now());
+  ASSERT_TRUE(spinUntil([&] { return probe.hover(0.05)->trajectory_id == 962u; }, 20.0)) << "the trajectory was refused";
+  probe.hover(0.5);
+  ASSERT_EQ(probe.command->trajectory_flag, PositionCommand::TRAJECTORY_STATUS_READY);
+  probe.vehicle = from + Vec3(0.0, -1.2 * max_offset, 0.0);
+  probe.hover(0.3);
+  probe.history.clear();
+  probe.hover(1.0);
+  ASSERT_FALSE(probe.history.empty());
+  for (const auto& c : probe.history) {
+    EXPECT_EQ(c->trajectory_flag, PositionCommand::TRAJECTORY_STATUS_EMPTY) << "trajectory " << c->trajectory_id;
+    EXPECT_LT((Vec3(c->position.x, c->position.y, c->position.z) - probe.vehicle).norm(), 1e-9)
+        << "not held where the vehicle jumped to";
+  }
+}
+
 }  // namespace
 
 GO_FEAP_ROSTEST_MAIN("test_trajectory_ros")
