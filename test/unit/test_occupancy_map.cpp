@@ -231,6 +231,50 @@ TEST(OccupancyMap, ConfigsWhoseByteStepsVanishAreRefusedAndAcceptedOnesMapObstac
   EXPECT_EQ(refused, 7 * 6 * 3 - accepted);
 }
 
+// The clamps p_min and p_max hold a voxel's log-odds (to the byte step, 1/50), so that evidence on either side
+// is undone by a bounded number of frames: a surface seen through many times is at p_min and becomes occupied
+// after as many returns as it takes from there to pass p_occupied, and a surface seen many times is at p_max
+// and becomes free after as many misses as it takes from there to fall to it. For two configurations: the
+// shipped one, and one whose clamps lie nearer the threshold.
+TEST(OccupancyMap, TheClampsBoundTheEvidenceEachWay) {
+  const map::DepthIntrinsics K{8, 6, 8.0, 8.0, 4.0, 3.0};
+  world::Scene empty = world::makeEmptyScene("empty", {Vec3(-1, -3, 0), Vec3(5, 3, 3)}, 0.1, 0.0);
+  const auto T = cameraPose(Vec3(0, 0, 1.5), 0.0);
+  const cv::Mat wall(K.height, K.width, CV_32FC1, cv::Scalar(2.05f)), through(K.height, K.width, CV_32FC1, cv::Scalar(9.0f));
+  const Vec3 surface(2.052, 0.0, 1.5);  // where the return on the optical axis is marked, just behind the face
+  auto logit = [](double p) { return std::log(p / (1.0 - p)); };
+  for (auto [p_min, p_max] : {std::pair{0.12, 0.90}, std::pair{0.3, 0.86}}) {
+    map::MapConfig c = mapConfig();
+    c.occupancy.skip_pixel = 1;
+    c.occupancy.p_min = p_min, c.occupancy.p_max = p_max;
+    SCOPED_TRACE("p_min " + std::to_string(p_min) + ", p_max " + std::to_string(p_max));
+    ASSERT_TRUE(c.occupancy.validate().ok());
+    const double hit = logit(c.occupancy.p_hit), miss = logit(c.occupancy.p_miss), occupied = logit(c.occupancy.p_occupied);
+    map::VoxelMap m(c, empty.box);
+    const common::Index3 idx = m.occupancy().geometry().coordToIndex(surface);
+    auto integrate = [&](const cv::Mat& depth, int times) {
+      for (int i = 0; i < times; ++i) ASSERT_TRUE(m.integrate(depth, K, T));
+    };
+    // How many frames of `depth` until the surface is `wanted`.
+    auto framesUntil = [&](const cv::Mat& depth, VoxelState wanted) {
+      for (int i = 1; i <= 50; ++i) {
+        EXPECT_TRUE(m.integrate(depth, K, T));
+        if (m.occupancy().state(surface) == wanted) return i;
+      }
+      return 0;
+    };
+    integrate(wall, 40);
+    ASSERT_EQ(m.occupancy().state(surface), VoxelState::kOccupied);
+    EXPECT_NEAR(logit(m.occupancy().probability(idx)), logit(p_max), 0.011) << "a surface seen 40 times";
+    // From p_max: the misses it takes to fall to p_occupied or below.
+    EXPECT_EQ(framesUntil(through, VoxelState::kFree), static_cast<int>(std::floor((logit(p_max) - occupied) / -miss)) + 1);
+    integrate(through, 40);
+    EXPECT_NEAR(logit(m.occupancy().probability(idx)), logit(p_min), 0.011) << "a surface seen through 40 times";
+    // From p_min: the returns it takes to pass p_occupied.
+    EXPECT_EQ(framesUntil(wall, VoxelState::kOccupied), static_cast<int>(std::floor((occupied - logit(p_min)) / hit)) + 1);
+  }
+}
+
 // REP 117's values: +inf (no return within the range) is free space to max_range whatever
 // invalid_as_free says; -inf and a depth below min_range (a surface too near to measure) are never cast
 // free, with invalid_as_free or without: the ray would pass through that surface. The rendered frames of a

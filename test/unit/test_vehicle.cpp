@@ -167,13 +167,15 @@ TEST(Quadrotor, SaturationKeepsRollAndPitchThenThrustThenYaw) {
     return f.maxCoeff() <= p.motor_max_thrust + 1e-9 && f.minCoeff() >= p.motor_min_thrust - 1e-9;
   };
   // All rotors asked for more than their maximum, and a pitch moment: the moment is kept whole, the thrust
-  // is what is left (each rotor clamped on its own would have given no moment at all).
+  // is what is left (each rotor clamped on its own would have given no moment at all), all of it: the
+  // moment M takes M / (4 d) from each front rotor and gives it to each rear one (d the arm's projection),
+  // the rear ones at their maximum, so the thrust is 4 max - M / d.
   const Wrench climb{4.0 * p.motor_max_thrust + 5.0, Eigen::Vector3d(0.0, 0.3, 0.0)};
   const Wrench a = q.saturate(climb);
   EXPECT_TRUE(within(a));
   EXPECT_LT((a.moment - climb.moment).norm(), 1e-9);
-  EXPECT_LT(a.thrust, 4.0 * p.motor_max_thrust);
-  EXPECT_GT(a.thrust, 4.0 * p.motor_max_thrust - 4.0 * 0.3 / (p.arm_length / std::sqrt(2.0)));
+  EXPECT_NEAR(a.thrust, 4.0 * p.motor_max_thrust - 0.3 / (p.arm_length / std::sqrt(2.0)), 1e-9);
+  EXPECT_NEAR(q.rotorThrusts(a).maxCoeff(), p.motor_max_thrust, 1e-9);
   // More roll and pitch than the rotors can span: the direction is kept, the size scaled down.
   const Wrench tumble{10.0, Eigen::Vector3d(50.0, -25.0, 0.0)};
   const Wrench b = q.saturate(tumble);
