@@ -233,6 +233,7 @@ FrontierDelta FrontierFinder::regrow(std::unordered_set<std::uint32_t> affected,
     regions.push_back(std::move(region));
   }
   for (std::size_t l : visited) common::clearBit(scratch_, l);
+  delta.filled_cells = visited.size();
 
   // 5. Regions -> clusters: drop small ones, split wide ones, inherit the oldest age (of the removed
   // clusters that held their cells: owner_ still names them here).

@@ -328,13 +328,15 @@ TEST(FrontierFinder, CutOffCellsOfRebuiltClustersAreNotLostPastTheRegrowLimit) {
 
 // Past max_regrow_cells, a change at one end of a long frontier ring rebuilds the clusters there and
 // keeps the others (ids and all): the cost of an update is the size of what it touches, not of the
-// connected region.
+// connected region. The clusters it may touch are those with a cell 26-adjacent to S, the changed voxels
+// and their face neighbours (whose frontier status may change): the fill visits no more than their cells
+// and the frontier cells no cluster held before; every other cluster is kept whole, its id unchanged.
 TEST(FrontierFinder, UpdateKeepsTheClustersItDoesNotTouch) {
   map::OccupancyMap m(mapConfig(), kBox);
   frontier::FrontierFinder f = noRegrowFinder(m, Vec3(0.2, 0.5, 0.0), Vec3(2.5, 1.5, 1.0), 0.4);
   const frontier::FrontierConfig cfg = noRegrowConfig(0.4);
-  const std::size_t before = f.frontiers().size();
-  ASSERT_GT(before, 8u);
+  const std::vector<frontier::Frontier> before = f.frontiers();
+  ASSERT_GT(before.size(), 8u);
   // Grow the free block by 0.2 m at its x end.
   std::vector<std::size_t> changed;
   Index3 a, b;
@@ -345,15 +347,52 @@ TEST(FrontierFinder, UpdateKeepsTheClustersItDoesNotTouch) {
         if (m.state(Index3(x, y, z)) != VoxelState::kFree) changed.push_back(m.geometry().linear(Index3(x, y, z)));
   paint(m, Vec3(2.5, 0.5, 0.0), Vec3(2.7, 1.5, 1.0), VoxelState::kFree);
   ASSERT_FALSE(changed.empty());
-  const frontier::FrontierDelta delta = f.update(m, changed, 1.0);
-  EXPECT_FALSE(delta.removed.empty());
-  EXPECT_LT(delta.removed.size(), before / 2);
-  // Every removed cluster was near the change; the far end's clusters are untouched.
-  for (const auto& fr : f.frontiers()) {
-    if (fr.average.x() < 1.5) {
-      EXPECT_DOUBLE_EQ(fr.first_seen, 0.0);
+  // S, and the clusters within reach of it.
+  const auto& geo = m.geometry();
+  std::set<std::size_t> s;
+  for (std::size_t l : changed) {
+    const Index3 c = geo.unlinear(l);
+    s.insert(l);
+    for (const Index3& o : common::faceNeighbours())
+      if (geo.inside(c + o)) s.insert(geo.linear(c + o));
+  }
+  auto nearS = [&](const Index3& c) {
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx)
+          if (const Index3 n = c + Index3(dx, dy, dz); geo.inside(n) && s.count(geo.linear(n))) return true;
+    return false;
+  };
+  std::set<std::size_t> held;  // the cells of every cluster before
+  std::size_t near_cells = 0, near = 0;
+  std::vector<const frontier::Frontier*> far;
+  for (const frontier::Frontier& fr : before) {
+    for (const Index3& c : fr.cells) held.insert(geo.linear(c));
+    if (std::any_of(fr.cells.begin(), fr.cells.end(), nearS)) {
+      near_cells += fr.cells.size();
+      ++near;
+    } else {
+      far.push_back(&fr);
     }
   }
+  ASSERT_GT(near, 0u);
+  ASSERT_GT(far.size(), before.size() / 2);
+  const frontier::FrontierDelta delta = f.update(m, changed, 1.0);
+  EXPECT_FALSE(delta.removed.empty());
+  EXPECT_LE(delta.removed.size(), near);
+  for (const frontier::Frontier* fr : far) {
+    const frontier::Frontier* now = f.find(fr->id);
+    ASSERT_NE(now, nullptr) << "cluster " << fr->id << ", far from the change, is gone";
+    EXPECT_EQ(now->cells, fr->cells) << "cluster " << fr->id << ", far from the change, changed";
+    EXPECT_DOUBLE_EQ(now->first_seen, fr->first_seen);
+  }
+  std::size_t unheld = 0;  // frontier cells now that no cluster held before
+  for (int z = 0; z < geo.dims().z(); ++z)
+    for (int y = 0; y < geo.dims().y(); ++y)
+      for (int x = 0; x < geo.dims().x(); ++x)
+        unheld += f.isFrontierCell(Index3(x, y, z)) && !held.count(geo.linear(Index3(x, y, z)));
+  EXPECT_GT(delta.filled_cells, 0u);
+  EXPECT_LE(delta.filled_cells, near_cells + unheld) << near << " clusters near the change";
   for (std::uint32_t id : delta.added) {
     const frontier::Frontier* fr = f.find(id);
     ASSERT_NE(fr, nullptr);

@@ -62,6 +62,7 @@ struct Frontier {
 struct FrontierDelta {
   std::vector<std::uint32_t> removed;
   std::vector<std::uint32_t> added;
+  std::size_t filled_cells = 0;  ///< frontier cells the update's flood fill visited: its cost
   bool empty() const { return removed.empty() && added.empty(); }
 };
 
