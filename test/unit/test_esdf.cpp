@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <iostream>
+#include <limits>
 #include <random>
 #include <stdexcept>
 #include <vector>
@@ -144,8 +145,8 @@ class Scenario {
     }
   }
 
-  /// Updates the map and the ground truth; checks what update() returned, and lastChangedRange(),
-  /// against the distances that really changed.
+  /// Updates the map and the ground truth; checks what update() returned, and lastChangedRange() (the
+  /// bounding box of the changed voxels, exactly), against the distances that really changed.
   void apply(const std::vector<std::size_t>& inserted, const std::vector<std::size_t>& removed) {
     const std::vector<double> before = distances(esdf_);
     const std::size_t reported = esdf_.update(inserted, removed);
@@ -154,17 +155,21 @@ class Scenario {
     const std::vector<double> after = distances(esdf_);
     const GridGeometry& g = esdf_.geometry();
     std::size_t changed = 0;
-    Index3 lo, hi;
+    Index3 lo, hi, least = Index3::Constant(std::numeric_limits<int>::max()), most = Index3::Constant(-1);
     const bool any = esdf_.lastChangedRange(lo, hi);
     for (std::size_t l = 0; l < after.size(); ++l) {
       if (after[l] == before[l]) continue;
       ++changed;
       const Index3 v = g.unlinear(l);
-      ASSERT_TRUE(any && (v.array() >= lo.array()).all() && (v.array() < hi.array()).all())
-          << "changed voxel outside lastChangedRange";
+      least = least.cwiseMin(v);
+      most = most.cwiseMax(v);
     }
     EXPECT_EQ(reported, changed);
-    EXPECT_EQ(any, changed > 0);
+    ASSERT_EQ(any, changed > 0);
+    if (any) {
+      EXPECT_EQ(lo, least) << "lastChangedRange's lower corner";
+      EXPECT_EQ(hi, Index3(most + Index3::Ones())) << "lastChangedRange's upper corner (one past)";
+    }
   }
 
  private:

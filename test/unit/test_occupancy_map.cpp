@@ -481,6 +481,12 @@ TEST(OccupancyMap, AReturnBeyondTheMapEdgeMarksNoObstacleAtTheBorder) {
   for (std::size_t l = 0; l < m.geometry().size(); ++l)
     ASSERT_NE(m.stateAt(l), VoxelState::kOccupied) << m.geometry().unlinear(l).transpose();
   EXPECT_EQ(m.state(Vec3(0.95, 0.0, 1.0)), VoxelState::kFree);  // the border voxel the axis leaves through
+  // Points outside the map, however far or not numbers at all, are unknown (their index was cast to int
+  // from the raw floor: undefined past INT_MAX voxels, and for NaN).
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (const Vec3& p : {Vec3(1.05, 0.0, 1.0), Vec3(1e30, 0.0, 1.0), Vec3(0.0, -1e30, 1.0), Vec3(nan, 0.0, 1.0),
+                        Vec3(0.95, 0.0, nan), Vec3(std::numeric_limits<double>::infinity(), 0.0, 1.0)})
+    EXPECT_EQ(m.state(p), VoxelState::kUnknown) << p.transpose();
 }
 
 // A return is marked a fiftieth of a voxel behind the measured surface, so that a depth that reads a hair

@@ -77,7 +77,8 @@ class OccupancyMap {
     if (!geo_.inside(idx)) return VoxelState::kUnknown;
     return stateOf(logodds_[geo_.linear(idx)]);
   }
-  VoxelState state(const Vec3& p) const { return state(geo_.coordToIndex(p)); }
+  /// Of the voxel holding `p`: unknown outside the grid, for any point (NaN, 1e30: clampedIndex()).
+  VoxelState state(const Vec3& p) const { return state(geo_.clampedIndex(p)); }
   VoxelState stateAt(std::size_t linear) const { return stateOf(logodds_[linear]); }
   /// Occupancy probability of a known voxel; 0.5 for unknown.
   double probability(const Index3& idx) const;
