@@ -1,7 +1,10 @@
 // OdometryTf: republishes an odometry stream (e.g. VINS-Fusion's) as the TF world -> body, and the
 // camera extrinsic (config/d435i.yaml T_B_C) as the static TF body -> camera, so the mapper can look
 // up the camera pose at each depth stamp (mapper/sync_mode: tf) on a real drone. Odometry with a
-// non-finite pose or a non-unit orientation is refused (counted, logged once per warn period).
+// non-finite pose or a non-unit orientation is refused (counted, logged once per warn period). Odometry
+// whose body z axis lies more than max_body_tilt from the world's up is said (and still sent): the planners
+// take the body frame as FLU (x forward, y left, z up), and a VIO reporting its camera IMU's frame (x right,
+// y down, z forward, as VINS-Fusion's stock D435i set-up does) turns the heading and the depth rays.
 // In: odom. Out: TF `world_frame` -> `body_frame`, static TF `body_frame` -> `camera_frame`.
 #include <geometry_msgs/TransformStamped.h>
 #include <nav_msgs/Odometry.h>
@@ -14,6 +17,7 @@
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <cmath>
 
 #include "go_feap/common/transform.h"
@@ -33,6 +37,7 @@ class OdometryTf : public nodelet::Nodelet {
     std::string camera_frame;
     Eigen::Matrix4d T_B_C;
     p.getFrame("world_frame", world_frame_).getFrame("body_frame", body_frame_).get("warn_period", warn_period_);
+    p.get("max_body_tilt", max_body_tilt_);
     p.getFrame("camera_frame", camera_frame).getMatrix4("T_B_C", T_B_C);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
     ros_params::requireOrThrow(common::isCameraMount(T_B_C), getName(),
@@ -47,6 +52,9 @@ class OdometryTf : public nodelet::Nodelet {
     // At most an hour: after the first warning, a longer period leaves a flight's bad input unsaid.
     ros_params::requireOrThrow(warn_period_ > 0.0 && warn_period_ <= 3600.0, getName(),
                                "parameter '" + p.fullName("warn_period") + "' must be in (0, 3600] s");
+    // Below pi: at pi no pose would ever be said (an upside-down z axis is pi from up).
+    ros_params::requireOrThrow(max_body_tilt_ > 0.0 && max_body_tilt_ < M_PI, getName(),
+                               "parameter '" + p.fullName("max_body_tilt") + "' must be in (0, pi) rad");
     // Sent once every parameter has passed: a nodelet that does not start leaves no TF behind.
     Eigen::Isometry3d extrinsic;
     extrinsic.matrix() = T_B_C;
@@ -88,6 +96,16 @@ class OdometryTf : public nodelet::Nodelet {
     }
     last_stamp_ = msg->header.stamp;
     last_position_ = position;
+    // The body's z axis in the world, R e_z: its z component is cos(tilt) for a unit quaternion.
+    const double norm2 = q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z;
+    const double tilt = std::acos(std::clamp(1.0 - 2.0 * (q.x * q.x + q.y * q.y) / norm2, -1.0, 1.0));
+    if (tilt > max_body_tilt_)
+      GO_FEAP_NODELET_THROTTLE(WARN, warn_period_, getName() << ": the odometry's body z axis lies " << tilt * 180.0 / M_PI
+                                                           << " deg from the world's up (more than max_body_tilt "
+                                                           << max_body_tilt_ << " rad): the body frame must be FLU "
+                                                           << "(x forward, y left, z up); a VIO reporting its camera IMU's "
+                                                           << "frame (x right, y down, z forward) turns the heading and "
+                                                           << "the depth rays: relay its odometry rotated into an FLU body");
     geometry_msgs::TransformStamped t;
     t.header.stamp = msg->header.stamp;
     t.header.frame_id = world_frame_;
@@ -99,6 +117,7 @@ class OdometryTf : public nodelet::Nodelet {
 
   std::string world_frame_, body_frame_;
   double warn_period_ = 2.0;
+  double max_body_tilt_ = 1.0;  ///< rad
   std::uint64_t refused_ = 0;
   ros::Time last_stamp_;
   Eigen::Vector3d last_position_ = Eigen::Vector3d::Zero();  ///< of the odometry stamped last_stamp_

@@ -82,6 +82,7 @@ TEST(Parameters, ANodeletWithAnInvalidOrMissingParameterDoesNotStartAndNamesIt) 
       {"bad_warn_period", "go_feap/EsdfMapper", "mapper/warn_period"},          // 1e9 s: every warning silenced
       {"bad_output_dir", "go_feap/MetricsRecorder", "metrics/output_dir"},      // not makeable: the results lost at the end
       {"bad_odometry_warn_period", "go_feap/OdometryTf", "warn_period"},         // 1e9 s: every warning silenced
+      {"bad_odometry_tilt", "go_feap/OdometryTf", "max_body_tilt"},             // 3.2 rad: past pi, nothing ever said
       {"empty_planner_name", "go_feap/MetricsRecorder", "metrics/planner"},     // summary.json's rows unnamed
   };
   for (const Case& c : cases) {

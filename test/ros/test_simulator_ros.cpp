@@ -356,6 +356,14 @@ TEST_F(SimulatorTest, OdometryTfSendsOnlyOdometryInTheWorldFrame) {
   const geometry_msgs::TransformStamped camera = buffer.lookupTransform("probe_body", "probe_camera", ros::Time(0));
   EXPECT_NEAR(camera.transform.translation.x, 0.10, 1e-9);
   EXPECT_NEAR(camera.transform.translation.z, 0.02, 1e-9);
+  // Level odometry said nothing of its frame; a body whose z axis points along the world's x (a camera IMU's
+  // frame, z forward, as VINS-Fusion's stock D435i set-up reports it) is named, and still sent.
+  EXPECT_FALSE(heard("from the world's up")) << "level odometry was said to be tilted";
+  nav_msgs::Odometry imu = odometry("world", t0 + 0.3, Eigen::Vector3d(1.4, 0.0, 1.0));
+  imu.pose.pose.orientation.w = std::sqrt(0.5), imu.pose.pose.orientation.y = std::sqrt(0.5);
+  odom_pub.publish(imu);
+  EXPECT_TRUE(spinUntil([&] { return heard("odometry's body z axis lies 90"); }, 10.0)) << "no word of a body on its side";
+  EXPECT_TRUE(spinUntil([&] { return buffer.canTransform("world", "probe_body", ros::Time(t0 + 0.3)); }, 10.0));
 }
 
 // The probe camera runs at 50 Hz: on odometry every 0.01 s it sends a frame with every other stamp. Its
