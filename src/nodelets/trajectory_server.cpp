@@ -4,7 +4,7 @@
 // first trajectory it sends nothing (the flight stack hovers the vehicle where the pilot took it), or,
 // with server/hold_before_trajectory, holds the first pose.
 // When odometry stops for longer than server/odom_timeout the current trajectory is dropped
-// and the reference holds where it was; when the odometry lies farther than server/max_start_offset from the
+// and the reference holds where it was, flagged ABORT until odometry is back; when the odometry lies farther than server/max_start_offset from the
 // reference (a jump, a VIO re-initialised, a controller that lost it), it is dropped too and the reference
 // holds where the vehicle is; a trajectory that arrives before odometry is back is refused
 // (its start was checked against nothing but a stale pose), and the next one after resumes (the planner
@@ -266,7 +266,9 @@ class TrajectoryServer : public nodelet::Nodelet {
       commanding_ = true;
     } else if (hold_ && (commanding_ || hold_before_trajectory_)) {
       p = hold_position_;
-      cmd.trajectory_flag = PositionCommand::TRAJECTORY_STATUS_EMPTY;
+      // Through an odometry gap the hold is ABORT: the vehicle is held blind, and a bridge can tell that from
+      // a hold at rest (EMPTY) and act on it (its own position hold, a landing); as EMPTY it could not.
+      cmd.trajectory_flag = odom_gap_ ? PositionCommand::TRAJECTORY_STATUS_ABORT : PositionCommand::TRAJECTORY_STATUS_EMPTY;
     } else {
       // Nothing known yet, or no trajectory flown yet: a hold of the pose at launch, on the ground, would
       // pull a vehicle the pilot then took off by hand back down when the bridge took the commands, and the
