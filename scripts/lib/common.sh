@@ -91,8 +91,8 @@ source_setup() {
 
 # prepare_build NO_BUILD: install and build (NO_BUILD false), or, with --no-build (true), use the build
 # already in $GO_FEAP_BUILD as it is, refused when there is none. The test suite runs the scripts so from
-# inside `make run_tests`, where configuring the same build folder again would rewrite the makefiles that
-# make is running; a user can run on a build while editing sources not meant to be built yet.
+# inside `ctest`, where configuring or building the same build folder again would rewrite the files the
+# running tests use; a user can run on a build while editing sources not meant to be built yet.
 prepare_build() {
   if [ "$1" != true ]; then
     install_dependencies

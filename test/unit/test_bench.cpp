@@ -331,9 +331,11 @@ TEST(Bench, SceneToolWritesTheScenesFiguresAndFiles) {
 }
 
 // scripts/test's last line and exit status come from scripts/lib/count_results.py: a failure, an error, a
-// skip without a reason (a failing SetUpTestSuite), an unreadable result, a make run that stopped early, a
+// skip without a reason (a failing SetUpTestSuite), an unreadable result, a ctest run that stopped early, a
 // failed rostest wrapper and a folder without results all count as failed; a skip with a reason and a test
-// not run count as skipped; a passed rostest wrapper (its node's cases are counted) does not count.
+// not run count as skipped; a passed rostest wrapper (its node's cases are counted) does not count. A gtest
+// binary ctest lists as failed whose result passed (it crashed after writing it) counts once more, by name;
+// one whose result shows its failures adds nothing; another test listed when no result failed counts once.
 TEST(Bench, TheTestCountCountsEveryOutcome) {
   namespace fs = std::filesystem;
   const fs::path dir = fs::temp_directory_path() / ("go_feap_count_results_" + std::to_string(getpid()));
@@ -374,16 +376,45 @@ TEST(Bench, TheTestCountCountsEveryOutcome) {
                              "\n2 skipped\n"})
       EXPECT_NE(out.find(line), std::string::npos) << line << "\n" << out;
   }
-  {  // make stopped (124: its timeout) before every test ran
+  {  // ctest stopped (124: its timeout) before every test ran
     const auto [rc, out] = runCommand(count + (dir / "mixed").string() + " 124");
     EXPECT_EQ(rc, 1) << out;
     EXPECT_EQ(lastLine(out), "1 passed, 5 failed") << out;
-    EXPECT_NE(out.find("make run_tests exited 124"), std::string::npos) << out;
+    EXPECT_NE(out.find("ctest exited 124 with no test failed"), std::string::npos) << out;
   }
   {
     const auto [rc, out] = runCommand(count + (dir / "good").string() + " 0");
     EXPECT_EQ(rc, 0) << out;
     EXPECT_EQ(lastLine(out), "1 passed, 0 failed") << out;
+  }
+  // ctest's list of failed tests ('N:name'), catkin's names: gtest-c.xml passed though its binary exited
+  // non-zero; gtest-d.xml holds the failure its binary exited for.
+  std::ofstream(dir / "good" / "gtest-c.xml") << "<testsuites><testsuite name=\"C\"><testcase classname=\"C\" name=\"ok\" "
+                                                 "status=\"run\"/></testsuite></testsuites>\n";
+  std::ofstream(dir / "failed.log") << "3:_ctest_go_feap_gtest_c\n";
+  {
+    const auto [rc, out] = runCommand(count + (dir / "good").string() + " 8 " + (dir / "failed.log").string());
+    EXPECT_EQ(rc, 1) << out;
+    EXPECT_EQ(lastLine(out), "2 passed, 1 failed") << out;
+    EXPECT_NE(out.find("FAILED _ctest_go_feap_gtest_c: exited non-zero, and its result gtest-c.xml shows no failure"),
+              std::string::npos) << out;
+    EXPECT_EQ(out.find("ctest exited"), std::string::npos) << "the status is the listed test's\n" << out;
+  }
+  std::ofstream(dir / "mixed" / "gtest-d.xml") << "<testsuites><testsuite name=\"D\"><testcase classname=\"D\" name=\"bad\" "
+                                                  "status=\"run\"><failure message=\"d.cpp:1\"/></testcase></testsuite></testsuites>\n";
+  std::ofstream(dir / "failed.log") << "4:_ctest_go_feap_gtest_d\n5:_ctest_go_feap_rostest_test_ros_y.test\n";
+  {
+    const auto [rc, out] = runCommand(count + (dir / "mixed").string() + " 8 " + (dir / "failed.log").string());
+    EXPECT_EQ(rc, 1) << out;
+    EXPECT_EQ(lastLine(out), "1 passed, 5 failed") << out;  // the 4 before and D.bad, nothing more
+  }
+  std::ofstream(dir / "failed.log") << "5:_ctest_go_feap_rostest_test_ros_z.test\n";
+  {  // a rostest that exited non-zero with every result passed
+    const auto [rc, out] = runCommand(count + (dir / "good").string() + " 8 " + (dir / "failed.log").string());
+    EXPECT_EQ(rc, 1) << out;
+    EXPECT_EQ(lastLine(out), "2 passed, 1 failed") << out;
+    EXPECT_NE(out.find("FAILED _ctest_go_feap_rostest_test_ros_z.test: exited non-zero, and no result shows a failure"),
+              std::string::npos) << out;
   }
   for (const fs::path& nothing : {dir / "empty", dir / "missing"}) {
     const auto [rc, out] = runCommand(count + nothing.string());
