@@ -6,7 +6,7 @@
 // coverage.png to `metrics/output_dir` (if set) and, with `metrics/shutdown_on_finish`, ends
 // the process so a headless run returns. In: map_handle, odom, status, compute_time.
 // Out: status_text (visualization_msgs/Marker), coverage (std_msgs/Float64), flown_path
-// (nav_msgs/Path, one pose per sample).
+// (nav_msgs/Path, one pose per sample, thinned to every other one whenever it reaches 4096).
 #include <nav_msgs/Odometry.h>
 #include <nav_msgs/Path.h>
 #include <nodelet/nodelet.h>

@@ -42,7 +42,7 @@ int usage(const char* why) {
          "                     [--planner go_feap|fuel|nearest[,...]] [--max-sim-time T] [--out DIR]\n"
          "                     [--jobs J] [--perf] [--config DIR]\n"
          "Runs N explorations per scene and planner (seeds S .. S+N-1) in simulated lock-step time and\n"
-         "writes DIR/<scene>/<planner>/seed<k>/{summary.json,metrics.csv,coverage.png}, DIR/table.md,\n"
+         "writes DIR/<scene>/<planner>/seed<k>/{summary.json,metrics.csv,coverage.png,events.log}, DIR/table.md,\n"
          "DIR/table.json and DIR/<scene>_coverage.png; with several planners the first against each other,\n"
          "paired by seed, in table.md and DIR/comparison.json. Defaults: maze, seed 0, 1 run, go_feap,\n"
          "900 s, results/bench-<UTC time>, 1 job, config " GO_FEAP_CONFIG_DIR ".\n"
