@@ -202,8 +202,11 @@ TEST_F(TrajectoryTargetTest, AnOdometryJumpAwayFromTheReferenceIsPlannedFromTheO
   });
   // The probe planner saying it has had no odometry (this test held up past the timeout).
   bool gap = false;
+  std::vector<std::string> refusals;  // the probe planner's
   auto log_sub = nh_.subscribe<rosgraph_msgs::Log>("/rosout", 100, [&](const rosgraph_msgs::Log::ConstPtr& m) {
     gap = gap || (m->msg.find("probe_jump_planner: no odometry for") != std::string::npos);
+    if (m->msg.find("probe_jump_planner:") != std::string::npos && m->msg.find(" refused: ") != std::string::npos)
+      refusals.push_back(m->msg);
   });
   ASSERT_TRUE(spinUntil(
       [&] {
@@ -214,14 +217,20 @@ TEST_F(TrajectoryTargetTest, AnOdometryJumpAwayFromTheReferenceIsPlannedFromTheO
       << "the probe planner is not connected";
   // Where the real vehicle is: seen all round by the tests above, so the probe plans in known space.
   const Vec3 here = position_;
-  Vec3 pose = here, velocity = Vec3(0.4, 0.0, 0.0);  // the probe vehicle's odometry (world frame, level, yaw 0)
+  // The probe vehicle's odometry: level, heading 0.9 rad, its velocity (0.4, 0, 0) in the world given in the
+  // body frame (child_frame_id), as nav_msgs/Odometry defines it: a plan from the odometry starts at the
+  // world velocity, the body's turned by the heading.
+  Vec3 pose = here, velocity = Vec3(0.4, 0.0, 0.0);
+  const double heading = 0.9;
   auto odometry = [&] {
     nav_msgs::Odometry m;
     m.header.stamp = ros::Time::now();
     m.header.frame_id = "world";
+    m.child_frame_id = "probe_body";
     m.pose.pose.position.x = pose.x(), m.pose.pose.position.y = pose.y(), m.pose.pose.position.z = pose.z();
-    m.pose.pose.orientation.w = 1.0;
-    m.twist.twist.linear.x = velocity.x(), m.twist.twist.linear.y = velocity.y(), m.twist.twist.linear.z = velocity.z();
+    m.pose.pose.orientation.w = std::cos(0.5 * heading), m.pose.pose.orientation.z = std::sin(0.5 * heading);
+    const Vec3 body = Eigen::AngleAxisd(-heading, Vec3::UnitZ()) * velocity;
+    m.twist.twist.linear.x = body.x(), m.twist.twist.linear.y = body.y(), m.twist.twist.linear.z = body.z();
     return m;
   };
   // The server's command: the reference of the planner's last trajectory, at rest at its start.
@@ -252,6 +261,25 @@ TEST_F(TrajectoryTargetTest, AnOdometryJumpAwayFromTheReferenceIsPlannedFromTheO
         },
         until);
   };
+  // Odometry and a command in a VIO's own frame, not the map's, are refused by name before anything is
+  // planned (a pose there would be a plan's start in the wrong frame).
+  {
+    nav_msgs::Odometry elsewhere = odometry();
+    elsewhere.header.frame_id = "odom";
+    go_feap::PositionCommand command_elsewhere;
+    command_elsewhere.header.frame_id = "odom";
+    command_elsewhere.header.stamp = ros::Time::now();
+    command_elsewhere.position.x = pose.x(), command_elsewhere.position.y = pose.y(), command_elsewhere.position.z = pose.z();
+    auto heard = [&](const std::string& what) {
+      return std::any_of(refusals.begin(), refusals.end(), [&](const std::string& m) { return m.find(what) != std::string::npos; });
+    };
+    EXPECT_TRUE(spinUntil([&] {
+      odom_pub.publish(elsewhere);
+      cmd_pub.publish(command_elsewhere);
+      return spinUntil([&] { return heard("odometry refused: odometry is in frame 'odom'") &&
+                                    heard("position_cmd refused: the command is in frame 'odom'"); }, 0.5);
+    }, 20.0)) << "odometry or a command in frame 'odom' was not refused by name";
+  }
   ASSERT_TRUE(play(10.0, [&] { return !planned.empty(); })) << "the probe planned no trajectory";
   // On the reference: nothing new. A window in which this test was held up past the planner's odometry
   // timeout (it then replans when the odometry is back, rightly) says nothing, and is played again.
@@ -276,7 +304,7 @@ TEST_F(TrajectoryTargetTest, AnOdometryJumpAwayFromTheReferenceIsPlannedFromTheO
                                                  << ", the odometry is at " << pose.transpose()
                                                  << ", the reference was at " << reference.transpose();
   EXPECT_LT((next.velocity - velocity).norm(), 0.02) << "not from the odometry's velocity " << velocity.transpose()
-                                                     << " but " << next.velocity.transpose();
+                                                     << " (in the world) but " << next.velocity.transpose();
 
   // Commands that are not finite (a broken bridge) are no start for a plan: a new target while only such
   // commands come is planned from the odometry.
@@ -390,7 +418,8 @@ TEST_F(TrajectoryTargetTest, AnOdometryJumpAwayFromTheReferenceIsPlannedFromTheO
 
 // A second trajectory server (probe/...) fed only by this test. It holds the first usable odometry pose
 // until a trajectory comes. Odometry it cannot use is refused whole: a finite position with a NaN or
-// unset orientation once became a hold with a NaN heading, sent on to the controller.
+// unset orientation once became a hold with a NaN heading, sent on to the controller; a pose in another
+// frame than the world's would be held as a world position.
 TEST(TrajectoryServerOdometry, UnusableOdometryIsRefusedAndTheFirstGoodPoseIsHeld) {
   ros::NodeHandle nh;
   auto odom_pub = nh.advertise<nav_msgs::Odometry>("probe/odom", 10);
@@ -411,10 +440,13 @@ TEST(TrajectoryServerOdometry, UnusableOdometryIsRefusedAndTheFirstGoodPoseIsHel
     return m;
   };
   const Vec3 held(1.0, -0.5, 1.2);
+  nav_msgs::Odometry elsewhere = odometry(held, 1.0, 0.0, 0.0, 0.0);
+  elsewhere.header.frame_id = "odom";  // a VIO's own frame, not the map's: no pose to hold in the world
   const nav_msgs::Odometry bad[] = {
-      odometry(held, nan, 0.0, 0.0, nan),                    // orientation not finite
-      odometry(held, 0.0, 0.0, 0.0, 0.0),                    // orientation left unset
-      odometry(Vec3(nan, 0.0, 1.0), 1.0, 0.0, 0.0, 0.0)};  // position not finite
+      odometry(held, nan, 0.0, 0.0, nan),                  // orientation not finite
+      odometry(held, 0.0, 0.0, 0.0, 0.0),                  // orientation left unset
+      odometry(Vec3(nan, 0.0, 1.0), 1.0, 0.0, 0.0, 0.0),  // position not finite
+      elsewhere};
   // Each unusable kind for 0.5 s of simulated time at 20 Hz: no command follows any.
   for (const nav_msgs::Odometry& m : bad) {
     Every send(0.05);
@@ -631,6 +663,70 @@ TEST_F(ProbeServerTest, ATrajectoryFasterThanTheServerTakesIsRefused) {
   probe.fly(vehicle, vehicle + Vec3(0.5, 0.0, 0.0), 952, ros::Time::now());
   EXPECT_TRUE(spinUntil([&] { return probe.hover(0.05)->trajectory_id == 952u; }, 20.0))
       << "the same line over 3 s was refused";
+}
+
+// Each of the server's motion limits refuses on its own (the trajectory above breaks speed and acceleration
+// at once): a straight line at 1.5 x server/max_speed with no acceleration, a jitter of 1 cm whose polygon
+// accelerates at twice server/max_acceleration at a walking pace, and a slow line whose heading turns at
+// twice server/max_yaw_rate; each refused by name, the reference held.
+TEST_F(ProbeServerTest, EachMotionLimitRefusesOnItsOwn) {
+  const double max_speed = param("server/max_speed"), max_acceleration = param("server/max_acceleration"),
+               max_yaw_rate = param("server/max_yaw_rate");
+  std::vector<std::string> said;
+  ros::NodeHandle nh;
+  auto log_sub = nh.subscribe<rosgraph_msgs::Log>("/rosout", 100, [&](const rosgraph_msgs::Log::ConstPtr& m) {
+    if (m->msg.find("/probe_trajectory_server: trajectory") != std::string::npos) said.push_back(m->msg);
+  });
+  ASSERT_TRUE(spinUntil([&] { return log_sub.getNumPublishers() > 0; }, 20.0));
+  probe.hover(3.5);  // whatever an earlier test left running has ended: the reference is held
+  const Vec3 a = probe.vehicle;
+  auto trajectory = [&](std::int64_t id, const Eigen::MatrixXd& q, double span, const Eigen::MatrixXd& yaw, double yaw_span) {
+    go_feap::ros_traj::Trajectory t;
+    t.position = go_feap::trajectory::UniformBspline(q, 3, span);
+    t.yaw = go_feap::trajectory::UniformBspline(yaw, 3, yaw_span);
+    t.id = id;
+    t.start_time = ros::Time::now();
+    return t;
+  };
+  const Eigen::MatrixXd level = Eigen::MatrixXd::Zero(1, 4);
+  // Speed: control points evenly along x (the polygon's acceleration 0), 1.5 x max_speed, starting 2 cm ahead.
+  const double span = 0.002, step = 1.5 * max_speed * span;
+  Eigen::MatrixXd fast(3, 7), jitter(3, 7), slow(3, 7);
+  for (int i = 0; i < 7; ++i) {
+    fast.col(i) = a + Vec3(0.02 + (i - 1) * step, 0.0, 0.0);
+    jitter.col(i) = a + Vec3(i % 2 ? 0.01 : 0.0, 0.0, 0.0);
+    slow.col(i) = a + Vec3(0.05 * i / 6.0, 0.0, 0.0);
+  }
+  // Acceleration: 1 cm back and forth every `dt`, (0.02 / dt^2) = 2 x max_acceleration; speed 0.01 / dt.
+  const double dt = std::sqrt(0.02 / (2.0 * max_acceleration));
+  ASSERT_LT(0.01 / dt, max_speed);
+  // Heading: 0 to 3 x max_yaw_rate x yaw_span over three spans: twice the limit on one of them at least.
+  const double yaw_span = 0.5;
+  Eigen::MatrixXd turn(1, 4);
+  turn << 0.0, 0.0, 2.0 * max_yaw_rate * yaw_span, 2.0 * max_yaw_rate * yaw_span;
+  const struct {
+    go_feap::ros_traj::Trajectory t;
+    std::string why;
+  } cases[] = {{trajectory(971, fast, span, level, 1.0), "m/s, above"},
+               {trajectory(972, jitter, dt, level, 1.0), "m/s^2, above"},
+               {trajectory(973, slow, 0.5, turn, yaw_span), "rad/s, above"}};
+  for (const auto& c : cases) {
+    const Vec3 held = probe.commanded();
+    said.clear();
+    probe.send(c.t);
+    probe.hover(1.5);  // more than the refusal's 1 s throttle: the next one is said too
+    EXPECT_NE(probe.command->trajectory_id, static_cast<std::uint32_t>(c.t.id)) << "trajectory " << c.t.id << " was taken";
+    EXPECT_LT((probe.commanded() - held).norm(), 1e-9) << "the held reference moved";
+    EXPECT_TRUE(spinUntil([&] {
+      return std::any_of(said.begin(), said.end(), [&](const std::string& m) {
+        return m.find("trajectory " + std::to_string(c.t.id) + " refused") != std::string::npos &&
+               m.find(c.why) != std::string::npos;
+      });
+    }, 5.0)) << "trajectory " << c.t.id << " not refused for '" << c.why << "'";
+  }
+  // Within every limit, the slow line with a level heading is followed.
+  probe.send(trajectory(974, slow, 0.5, level, 1.0));
+  EXPECT_TRUE(spinUntil([&] { return probe.hover(0.05)->trajectory_id == 974u; }, 20.0)) << "the slow line was refused";
 }
 
 // A trajectory that reaches the server while its odometry is silent (one planned just before the odometry
