@@ -110,8 +110,10 @@ class FrontierPlannerTest : public ::testing::Test {
 };
 
 // First: before the trigger, with frontiers in view, neither mode's planners send a tour or a target (they
-// used to plan and send targets at once: only the layer manager waited for the trigger). Then the trigger
-// starts the start band, once.
+// used to plan and send targets at once: only the layer manager waited for the trigger). The local planner
+// waits for it on its own too: the probe local planner, fed a tour of the frontiers in view by this test
+// (the global planners send none yet), sends no target before the trigger, and does after it. Then the
+// trigger starts the start band, once.
 TEST_F(FrontierPlannerTest, NothingIsPlannedBeforeTheTriggerWhichStartsTheStartBandOnce) {
   auto scene = go_feap::test::sceneFromParams();
   ASSERT_TRUE(scene) << scene.message();
@@ -124,13 +126,44 @@ TEST_F(FrontierPlannerTest, NothingIsPlannedBeforeTheTriggerWhichStartsTheStartB
                                      nh_.subscribe<go_feap::GlobalTour>("fuel/global_tour", 10, tour_seen),
                                      nh_.subscribe<go_feap::ViewpointPath>("local_target", 10, target_seen),
                                      nh_.subscribe<go_feap::ViewpointPath>("fuel/local_target", 10, target_seen)};
+  int probe_targets = 0;
+  go_feap::ViewpointPath::ConstPtr probe_target;
+  const ros::Subscriber probe_target_sub = nh_.subscribe<go_feap::ViewpointPath>(
+      "probe/local_target", 10, [&](const go_feap::ViewpointPath::ConstPtr& m) {
+        ++probe_targets;
+        probe_target = m;
+      });
+  ros::Publisher probe_tour_pub = nh_.advertise<go_feap::GlobalTour>("probe/global_tour", 10);
+  ros::Publisher probe_failed_pub = nh_.advertise<std_msgs::UInt32>("probe/frontier_failed", 10);
   ASSERT_TRUE(spinUntil(
       [&] {
         return std::all_of(std::begin(counted), std::end(counted),
-                           [](const ros::Subscriber& c) { return c.getNumPublishers() > 0; });
+                           [](const ros::Subscriber& c) { return c.getNumPublishers() > 0; }) &&
+               probe_target_sub.getNumPublishers() > 0 && probe_tour_pub.getNumSubscribers() > 0 &&
+               probe_failed_pub.getNumSubscribers() > 0;
       },
       30.0))
       << "the planners' outputs are not connected";
+  // A tour of the active frontiers in view, in the order they come, sent every 0.1 s until `done`.
+  const auto feedOwnTour = [&](double seconds, const std::function<bool()>& done) {
+    ros::Time last;
+    const ros::Time start = ros::Time::now();
+    return spinUntil([&] {
+      if (last.isZero() || (ros::Time::now() - last).toSec() >= 0.1) {
+        go_feap::GlobalTour tour;
+        tour.header.stamp = ros::Time::now();
+        tour.header.frame_id = frontiers_->header.frame_id;
+        for (const go_feap::Frontier& f : frontiers_->frontiers)
+          if (f.active) {
+            tour.frontier_ids.push_back(f.id);
+            tour.waypoints.push_back(f.average);
+          }
+        probe_tour_pub.publish(tour);
+        last = ros::Time::now();
+      }
+      return (ros::Time::now() - start).toSec() >= seconds || done();
+    }, 60.0);
+  };
   // A turn in place until active frontiers are in view, then 3 s more (30 global planner periods).
   ASSERT_TRUE(go_feap::test::turnInPlace(
       cmd_pub_, scene->start.position,
@@ -141,13 +174,25 @@ TEST_F(FrontierPlannerTest, NothingIsPlannedBeforeTheTriggerWhichStartsTheStartB
       150.0))
       << "no active frontier in view";
   spinUntil([] { return false; }, 3.0);
+  feedOwnTour(2.0, [] { return false; });
+  spinUntil([] { return false; }, 0.5);
   EXPECT_EQ(status_->state, go_feap::ExplorationStatus::WAIT_TRIGGER);
   EXPECT_EQ(sent, 0) << "tours or targets before the trigger";
+  EXPECT_EQ(probe_targets, 0) << "the probe local planner sent targets before the trigger, from a tour it was fed";
   std_srvs::Trigger trigger;
   ASSERT_TRUE(ros::service::waitForService("trigger", ros::Duration(10.0)));
   ASSERT_TRUE(ros::service::call("trigger", trigger));
   EXPECT_TRUE(trigger.response.success) << trigger.response.message;
   ASSERT_TRUE(spinUntil([&] { return status_->state == go_feap::ExplorationStatus::EXPLORE; }, 30.0));
+  EXPECT_TRUE(feedOwnTour(30.0, [&] { return probe_targets > 0; }) && probe_targets > 0)
+      << "the probe local planner sent no target from the same kind of tour after the trigger";
+  // Its target dropped again (reported failed), so that the probe holds nothing for the tests below.
+  if (probe_target && !probe_target->frontier_ids.empty()) {
+    std_msgs::UInt32 drop;
+    drop.data = probe_target->frontier_ids.front();
+    probe_failed_pub.publish(drop);
+    spinUntil([] { return false; }, 0.5);
+  }
   // The maze start is at z = 1.0: band 1 of 1 m bands, [1, 2].
   ASSERT_TRUE(spinUntil([&] { return layer_->index == 1; }, 10.0));
   EXPECT_DOUBLE_EQ(layer_->z_min, 1.0);
