@@ -797,6 +797,24 @@ TEST_F(ProbeServerTest, ATrajectoryStartingLaterWaitsWhileTheRunningOneIsFollowe
   EXPECT_EQ(probe.command->trajectory_flag, go_feap::PositionCommand::TRAJECTORY_STATUS_READY);
 }
 
+// A trajectory starting now replaces one still waiting for its start as well as the running one: the
+// superseded waiting one is not taken over when its start time comes (it was planned before the one now
+// flown).
+TEST_F(ProbeServerTest, ATrajectoryStartingNowReplacesOneWaiting) {
+  const Vec3 vehicle = probe.vehicle;
+  probe.hover(3.5);  // whatever an earlier test left running has ended
+  const ros::Time later = ros::Time::now() + ros::Duration(1.0);
+  probe.fly(vehicle + Vec3(0.0, 0.3, 0.0), vehicle + Vec3(0.0, 1.3, 0.0), 981, later);
+  probe.hover(0.2);
+  probe.fly(vehicle, vehicle + Vec3(1.0, 0.0, 0.0), 982, ros::Time::now());
+  ASSERT_TRUE(spinUntil([&] { return probe.hover(0.05)->trajectory_id == 982u; }, 20.0))
+      << "the trajectory starting now was not followed";
+  while (ros::ok() && ros::Time::now() < later + ros::Duration(0.5)) {
+    probe.hover(0.05);
+    ASSERT_EQ(probe.command->trajectory_id, 982u) << "the superseded waiting trajectory was taken over";
+  }
+}
+
 // Every command of a followed trajectory is the trajectory sampled at the command's stamp: position,
 // velocity, acceleration, heading and yaw rate (the feed-forward terms the controller flies by); the heading
 // within (-pi, pi], as a flight controller's bridge takes it, though the spline's lies a turn above.
