@@ -114,6 +114,29 @@ TEST(Bench, AnInterruptedRunEndsWhereItStands) {
   EXPECT_FALSE(run.step());  // ended for good
 }
 
+// go_feap_bench's own SIGTERM (SIGINT alike): blocked in every thread and taken by its signal thread. The run
+// in progress ends where it stands and is written (finish reason "interrupted", the tables too), the runs not
+// started are skipped by name, and the process exits 130. (The test above raises the run's flag itself.)
+TEST(Bench, ATermToTheBenchWritesTheRunInProgressAndSkipsTheRest) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("go_feap_bench_term_" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  // 5 s in: the maze's seed 0 (about 100 s simulated, 10 s or more of wall time here) is under way.
+  const auto [rc, said] = runCommand("timeout --preserve-status -s TERM 5 " + std::string(GO_FEAP_BENCH_BIN) +
+                                     " --scene maze --runs 3 --jobs 1 --out " + dir.string() + " 2>&1");
+  EXPECT_EQ(rc, 130) << said;
+  const fs::path first = dir / "maze" / "go_feap" / "seed0" / "summary.json";
+  ASSERT_TRUE(fs::exists(first)) << said;
+  const nlohmann::json summary = nlohmann::json::parse(std::ifstream(first));
+  EXPECT_EQ(summary["finish_reason"], "interrupted") << said;
+  for (const char* seed : {"seed1", "seed2"}) EXPECT_FALSE(fs::exists(dir / "maze" / "go_feap" / seed)) << seed;
+  EXPECT_NE(said.find("seed 1 failed: not run: interrupted"), std::string::npos) << said;
+  EXPECT_NE(said.find("seed 2 failed: not run: interrupted"), std::string::npos) << said;
+  EXPECT_TRUE(fs::exists(dir / "table.json"));
+  EXPECT_TRUE(fs::exists(dir / "table.md"));
+  fs::remove_all(dir);
+}
+
 TEST(Bench, SameSeedAndOptionsGiveTheSameRun) {
   // 20 s: well before seed 1 of the small maze is explored (35.0 s), so the limit ends the run.
   const Outcome a = explore("go_feap", 1, 20.0), b = explore("go_feap", 1, 20.0);

@@ -258,21 +258,32 @@ TEST_F(PowerplantTest, ReachableFreeSpaceUnderOverhangs) {
   std::vector<char> reach;
   const std::size_t n = reachableFree(*scene_, &reach);
   EXPECT_GT(n, 1000000u);
-  // Columns where a reachable free voxel at least 2 m above the floor has structure
-  // above it, with open space below it down to the floor: standing under an overhang.
+  // Columns where a reachable free voxel 2 m above the floor has structure above it that is no roof: a
+  // slab (an intermediate floor, the platform, the gallery, the boiler on its legs) at most 16 m up with
+  // reachable free space on it, so that the space on either side is explored from its own side. The hall's
+  // roof (18 m and more) alone covers some 160 m^2 and does not count.
   const auto& g = scene_->geometry();
   Index3 lo, hi;
   g.centreRange(scene_->box, lo, hi);
-  const int k = lo.z() + static_cast<int>(2.0 / scene_->resolution());
+  const double r = scene_->resolution();
+  const int k = lo.z() + static_cast<int>(2.0 / r), top = lo.z() + static_cast<int>(16.0 / r);
   std::size_t under = 0;
   for (int y = lo.y(); y < hi.y(); ++y)
     for (int x = lo.x(); x < hi.x(); ++x) {
       if (!reach[g.linear({x, y, k})]) continue;
-      bool roof = false;
-      for (int z = k + 1; z < hi.z() && !roof; ++z) roof = scene_->occupied.at({x, y, z}) != 0;
-      under += roof;
+      int z = k + 1;
+      while (z < hi.z() && !scene_->occupied.at({x, y, z})) ++z;  // the first structure above
+      if (z >= top) continue;
+      while (z < hi.z() && scene_->occupied.at({x, y, z})) ++z;  // through it
+      bool above = false;
+      for (; z < hi.z() && !above; ++z) above = reach[g.linear({x, y, z})] != 0;
+      under += above;
     }
-  EXPECT_GT(under * scene_->resolution() * scene_->resolution(), 50.0) << "m^2 of reachable ground under structure";
+  const double area = under * r * r;
+  std::printf("[ overhang ] %.1f m^2 of reachable ground under a slab with reachable space on it\n", area);
+  // The two intermediate floors each cover about half the 12 x 15 m hall, the platform 30 m^2: without
+  // them the boiler, the stair towers and the rest leave under 100 m^2.
+  EXPECT_GT(area, 150.0) << "m^2 of reachable ground under a slab";
 }
 
 // The chimney is capped: its inside (within 1.12 m of its axis wherever the seed puts it; the tube's inner

@@ -372,6 +372,23 @@ TEST(PlanTour, LowerBoundSkipsFrontiersThatCannotBeCandidates) {
       EXPECT_EQ(got->indices, want->indices) << "n_max " << n_max << " s_near " << s_near;
       EXPECT_NEAR(got->cost, want->cost, 1e-12);
       EXPECT_EQ(std::count(asked.begin(), asked.end(), 6u), 0);  // inactive
+      // Exactly those the rule asks about: in increasing bound, until the cap (n_max_tsp, plus rest_frontiers
+      // with a rest leg) nearest distances found so far are all no larger than the next bound.
+      const std::size_t cap = static_cast<std::size_t>(n_max) +
+                              (c.rest_weight > 0.0 ? static_cast<std::size_t>(c.rest_frontiers) : 0u);
+      std::vector<std::pair<double, std::size_t>> by_bound;
+      for (std::size_t j = 0; j < fx.frontiers.size(); ++j)
+        if (fx.frontiers[j].active) by_bound.emplace_back((fx.frontiers[j].average - fx.uav).norm(), j);
+      std::stable_sort(by_bound.begin(), by_bound.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+      std::vector<double> found;
+      std::size_t expected = 0;
+      for (const auto& [bound, j] : by_bound) {
+        std::sort(found.begin(), found.end());
+        if (found.size() >= cap && bound >= found[cap - 1]) break;
+        ++expected;
+        found.push_back(full.from_uav(j));
+      }
+      EXPECT_EQ(asked.size(), expected) << "n_max " << n_max << " s_near " << s_near;
       if (n_max <= 2) {
         EXPECT_LT(asked.size(), 6u) << "n_max " << n_max;
       }

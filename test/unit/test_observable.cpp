@@ -1,6 +1,8 @@
 // Observable set and coverage on a hand-built room with a sealed cavity.
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+
 #include <cmath>
 #include <random>
 
@@ -87,31 +89,54 @@ TEST(ValidateScene, RejectsStartInObstacleOrOutsideBox) {
   EXPECT_NE(st.message().find("outside the exploration box"), std::string::npos) << st.message();
 }
 
+// A hollow cylinder is the ring between radius - wall and radius, a solid one (wall 0) the disc: every voxel
+// centre against the closed form.
 TEST(Shapes, HollowCylinderLeavesTheAxisFree) {
-  Scene s = makeEmptyScene("tube", {Vec3(-2, -2, 0), Vec3(2, 2, 2)}, 0.1, 0.0);
-  fillVerticalCylinder(s, 0.0, 0.0, 1.0, 0.0, 2.0, 0.3);
-  EXPECT_FALSE(s.isOccupied(Vec3(0.05, 0.05, 1.0)));
-  EXPECT_TRUE(s.isOccupied(Vec3(0.85, 0.05, 1.0)));
-  EXPECT_FALSE(s.isOccupied(Vec3(1.15, 0.05, 1.0)));
+  for (const double wall : {0.3, 0.0}) {
+    SCOPED_TRACE("wall " + std::to_string(wall));
+    Scene s = makeEmptyScene("tube", {Vec3(-2, -2, 0), Vec3(2, 2, 2)}, 0.1, 0.0);
+    const double cx = 0.03, cy = -0.02, radius = 1.0;
+    fillVerticalCylinder(s, cx, cy, radius, 0.0, 2.0, wall);
+    EXPECT_EQ(s.isOccupied(Vec3(0.05, 0.05, 1.0)), wall == 0.0);
+    const auto& g = s.geometry();
+    std::size_t mismatches = 0, inside = 0;
+    for (std::size_t l = 0; l < g.size(); ++l) {
+      const Vec3 c = g.indexToCoord(g.unlinear(l));
+      const double d = std::hypot(c.x() - cx, c.y() - cy);
+      const bool expect = d <= radius && (wall == 0.0 || d >= radius - wall);
+      inside += expect;
+      mismatches += expect != (s.occupied.at(g.unlinear(l)) != 0);
+    }
+    EXPECT_GT(inside, 0u);
+    EXPECT_EQ(mismatches, 0u);
+  }
 }
 
 // A pipe is the solid cylinder between its end points, capped flat there: every voxel centre against the
-// closed form (within the radius of the axis, between the ends along it).
+// closed form (within the radius of the axis, between the ends along it), for pipes along x, along y (as the
+// powerplant's first rack) and askew.
 TEST(Shapes, APipeFillsItsCylinderBetweenItsEnds) {
-  Scene s = makeEmptyScene("pipe", {Vec3(-2, -1, 0), Vec3(2, 1, 2)}, 0.1, 0.0);
-  const Vec3 a(-0.98, 0.02, 1.03), b(0.98, 0.02, 1.03);
   const double radius = 0.27;
-  fillPipe(s, a, b, radius);
-  const auto& g = s.geometry();
-  std::size_t mismatches = 0, inside = 0;
-  for (std::size_t l = 0; l < g.size(); ++l) {
-    const Vec3 c = g.indexToCoord(g.unlinear(l));
-    const bool expect = c.x() >= a.x() && c.x() <= b.x() && std::hypot(c.y() - a.y(), c.z() - a.z()) <= radius;
-    inside += expect;
-    mismatches += expect != (s.occupied.at(g.unlinear(l)) != 0);
+  for (const auto& [a, b] : {std::pair{Vec3(-0.98, 0.02, 1.03), Vec3(0.98, 0.02, 1.03)},
+                             std::pair{Vec3(0.02, -0.87, 1.03), Vec3(0.02, 0.91, 1.03)},
+                             std::pair{Vec3(-0.9, -0.6, 0.5), Vec3(0.8, 0.7, 1.4)}}) {
+    SCOPED_TRACE("from " + std::to_string(a.x()) + " " + std::to_string(a.y()) + " to " + std::to_string(b.x()) + " " +
+                 std::to_string(b.y()));
+    Scene s = makeEmptyScene("pipe", {Vec3(-2, -2, 0), Vec3(2, 2, 2)}, 0.1, 0.0);
+    fillPipe(s, a, b, radius);
+    const auto& g = s.geometry();
+    const Vec3 u = (b - a) / (b - a).norm();
+    std::size_t mismatches = 0, inside = 0;
+    for (std::size_t l = 0; l < g.size(); ++l) {
+      const Vec3 c = g.indexToCoord(g.unlinear(l));
+      const double t = (c - a).dot(u);
+      const bool expect = t >= 0.0 && t <= (b - a).norm() && (c - a).cross(u).norm() <= radius;
+      inside += expect;
+      mismatches += expect != (s.occupied.at(g.unlinear(l)) != 0);
+    }
+    EXPECT_GT(inside, 100u);
+    EXPECT_EQ(mismatches, 0u);
   }
-  EXPECT_GT(inside, 0u);
-  EXPECT_EQ(mismatches, 0u);
 }
 
 // The scan-line fill against a plain breadth-first fill over face neighbours (the oracle), on random
