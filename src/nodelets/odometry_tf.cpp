@@ -100,12 +100,13 @@ class OdometryTf : public nodelet::Nodelet {
     const double norm2 = q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z;
     const double tilt = std::acos(std::clamp(1.0 - 2.0 * (q.x * q.x + q.y * q.y) / norm2, -1.0, 1.0));
     if (tilt > max_body_tilt_)
-      GO_FEAP_NODELET_THROTTLE(WARN, warn_period_, getName() << ": the odometry's body z axis lies " << tilt * 180.0 / M_PI
-                                                           << " deg from the world's up (more than max_body_tilt "
-                                                           << max_body_tilt_ << " rad): the body frame must be FLU "
-                                                           << "(x forward, y left, z up); a VIO reporting its camera IMU's "
-                                                           << "frame (x right, y down, z forward) turns the heading and "
-                                                           << "the depth rays: relay its odometry rotated into an FLU body");
+      GO_FEAP_NODELET_THROTTLE(WARN, warn_period_,
+                               getName() << ": the odometry's body z axis lies " << tilt * 180.0 / M_PI
+                                         << " deg from the world's up (more than max_body_tilt "
+                                         << max_body_tilt_ << " rad): the body frame must be FLU "
+                                         << "(x forward, y left, z up); a VIO reporting its camera IMU's "
+                                         << "frame (x right, y down, z forward) turns the heading and "
+                                         << "the depth rays: relay its odometry rotated into an FLU body");
     geometry_msgs::TransformStamped t;
     t.header.stamp = msg->header.stamp;
     t.header.frame_id = world_frame_;

@@ -3,12 +3,12 @@
 // position where the last trajectory ended, or where the vehicle was, when none is active. Before the
 // first trajectory it sends nothing (the flight stack hovers the vehicle where the pilot took it), or,
 // with server/hold_before_trajectory, holds the first pose.
-// When odometry stops for longer than server/odom_timeout the current trajectory is dropped
-// and the reference holds where it was, flagged ABORT until odometry is back; when the odometry lies farther than server/max_start_offset from the
-// reference (a jump, a VIO re-initialised, a controller that lost it), it is dropped too and the reference
-// holds where the vehicle is; a trajectory that arrives before odometry is back is refused
-// (its start was checked against nothing but a stale pose), and the next one after resumes (the planner
-// replans once odometry is back). A trajectory whose reference, when it is taken (now, or at its start if that is
+// When odometry stops for longer than server/odom_timeout the current trajectory is dropped and the
+// reference holds where it was, flagged ABORT until odometry is back; when the odometry lies farther than
+// server/max_start_offset from the reference (a jump, a VIO re-initialised, a controller that lost it), it
+// is dropped too and the reference holds where the vehicle is; a trajectory that arrives before odometry is
+// back is refused (its start was checked against nothing but a stale pose), and the next one after resumes
+// (the planner replans once odometry is back). A trajectory whose reference, when it is taken (now, or at its start if that is
 // later), lies farther than server/max_start_offset from the vehicle's odometry is refused: the
 // controller would chase a step that large at once (a stale trajectory from a bag, another planner, a
 // start time long past). So is one whose control polygon moves faster than server/max_speed or
@@ -210,17 +210,18 @@ class TrajectoryServer : public nodelet::Nodelet {
       hold_yaw_ = ros_conv::yawOf(q);
       hold_ = true;
     } else if (const double off = (*odom_position_ - hold_position_).norm(); off > max_start_offset_) {
-      // The vehicle is farther than server/max_start_offset from the reference last sent (its odometry jumped,
-      // a VIO re-initialised, it was moved by hand, or the controller lost the trajectory): held where it is
-      // now, the trajectory dropped, running or ended. The old reference pulled it the whole way at once, into
-      // space nothing had checked, and every plan starting from that command was refused as starting too far
-      // from the odometry. An ended trajectory stays the current one (its end is held, COMPLETED): this was
-      // only checked with none, so a jump after the first flight, or while hovering after a stop, was chased.
+      // The vehicle is farther than server/max_start_offset from the reference last sent (its odometry
+      // jumped, a VIO re-initialised, it was moved by hand, or the controller lost the trajectory): held
+      // where it is now, the trajectory dropped, running or ended. The old reference pulled it the whole way
+      // at once, into space nothing had checked, and every plan starting from that command was refused as
+      // starting too far from the odometry. An ended trajectory stays the current one (its end is held,
+      // COMPLETED): this was only checked with none, so a jump after the first flight, or while hovering
+      // after a stop, was chased.
       std::ostringstream what;
       if (current_) what << " of trajectory " << current_->id;
       NODELET_WARN_STREAM(getName() << ": the vehicle is " << off << " m from the reference" << what.str()
-                                    << " (more than server/max_start_offset " << max_start_offset_
-                                    << " m): " << (current_ ? "trajectory dropped, " : "") << "holding where it is");
+                                    << " (more than server/max_start_offset " << max_start_offset_ << " m): "
+                                    << (current_ ? "trajectory dropped, " : "") << "holding where it is");
       current_.reset();
       hold_position_ = *odom_position_;
       hold_yaw_ = ros_conv::yawOf(q);
@@ -268,7 +269,8 @@ class TrajectoryServer : public nodelet::Nodelet {
       p = hold_position_;
       // Through an odometry gap the hold is ABORT: the vehicle is held blind, and a bridge can tell that from
       // a hold at rest (EMPTY) and act on it (its own position hold, a landing); as EMPTY it could not.
-      cmd.trajectory_flag = odom_gap_ ? PositionCommand::TRAJECTORY_STATUS_ABORT : PositionCommand::TRAJECTORY_STATUS_EMPTY;
+      cmd.trajectory_flag =
+          odom_gap_ ? PositionCommand::TRAJECTORY_STATUS_ABORT : PositionCommand::TRAJECTORY_STATUS_EMPTY;
     } else {
       // Nothing known yet, or no trajectory flown yet: a hold of the pose at launch, on the ground, would
       // pull a vehicle the pilot then took off by hand back down when the bridge took the commands, and the
