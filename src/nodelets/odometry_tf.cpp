@@ -55,6 +55,7 @@ class OdometryTf : public nodelet::Nodelet {
     // Below pi: at pi no pose would ever be said (an upside-down z axis is pi from up).
     ros_params::requireOrThrow(max_body_tilt_ > 0.0 && max_body_tilt_ < M_PI, getName(),
                                "parameter '" + p.fullName("max_body_tilt") + "' must be in (0, pi) rad");
+    min_up_ = std::cos(max_body_tilt_);
     // Sent once every parameter has passed: a nodelet that does not start leaves no TF behind.
     Eigen::Isometry3d extrinsic;
     extrinsic.matrix() = T_B_C;
@@ -97,11 +98,11 @@ class OdometryTf : public nodelet::Nodelet {
     last_stamp_ = msg->header.stamp;
     last_position_ = position;
     // The body's z axis in the world, R e_z: its z component is cos(tilt) for a unit quaternion.
-    const double norm2 = q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z;
-    const double tilt = std::acos(std::clamp(1.0 - 2.0 * (q.x * q.x + q.y * q.y) / norm2, -1.0, 1.0));
-    if (tilt > max_body_tilt_)
+    const double up = 1.0 - 2.0 * (q.x * q.x + q.y * q.y) / (q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z);
+    if (up < min_up_)
       GO_FEAP_NODELET_THROTTLE(WARN, warn_period_,
-                               getName() << ": the odometry's body z axis lies " << tilt * 180.0 / M_PI
+                               getName() << ": the odometry's body z axis lies "
+                                         << std::acos(std::clamp(up, -1.0, 1.0)) * 180.0 / M_PI
                                          << " deg from the world's up (more than max_body_tilt "
                                          << max_body_tilt_ << " rad): the body frame must be FLU "
                                          << "(x forward, y left, z up); a VIO reporting its camera IMU's "
@@ -119,6 +120,7 @@ class OdometryTf : public nodelet::Nodelet {
   std::string world_frame_, body_frame_;
   double warn_period_ = 2.0;
   double max_body_tilt_ = 1.0;  ///< rad
+  double min_up_ = 0.0;         ///< cos(max_body_tilt_): the least z component of the body's z axis
   std::uint64_t refused_ = 0;
   ros::Time last_stamp_;
   Eigen::Vector3d last_position_ = Eigen::Vector3d::Zero();  ///< of the odometry stamped last_stamp_

@@ -72,21 +72,28 @@ class FrontierPlannerTest : public ::testing::Test {
     target_ = m;
     target_tour_ = tour_;
   }
-  /// Publishes the chain's latest tour (its frontiers exist), changed by `change`, on `pub` every 0.1 s of
-  /// the clock, until `seconds` of it have passed or `done()`.
-  template <class Change, class Done>
-  bool feedTours(ros::Publisher& pub, Change change, double seconds, Done done) {
+  /// Publishes the tour `make()` gives on `pub` every 0.1 s of the clock, until `seconds` of it have passed
+  /// or `done()`.
+  template <class Make, class Done>
+  bool sendTours(ros::Publisher& pub, Make make, double seconds, Done done) {
     const ros::Time start = ros::Time::now();
     ros::Time last;
     return spinUntil([&] {
       if (last.isZero() || (ros::Time::now() - last).toSec() >= 0.1) {
-        go_feap::GlobalTour tour = *tour_;
-        change(tour);
-        pub.publish(tour);
+        pub.publish(make());
         last = ros::Time::now();
       }
       return (ros::Time::now() - start).toSec() >= seconds || done();
     }, 60.0);
+  }
+  /// sendTours() of the chain's latest tour (its frontiers exist), changed by `change`.
+  template <class Change, class Done>
+  bool feedTours(ros::Publisher& pub, Change change, double seconds, Done done) {
+    return sendTours(pub, [&] {
+      go_feap::GlobalTour tour = *tour_;
+      change(tour);
+      return tour;
+    }, seconds, done);
   }
 
   ros::NodeHandle nh_;
@@ -144,25 +151,17 @@ TEST_F(FrontierPlannerTest, NothingIsPlannedBeforeTheTriggerWhichStartsTheStartB
       },
       30.0))
       << "the planners' outputs are not connected";
-  // A tour of the active frontiers in view, in the order they come, sent every 0.1 s until `done`.
-  const auto feedOwnTour = [&](double seconds, const std::function<bool()>& done) {
-    ros::Time last;
-    const ros::Time start = ros::Time::now();
-    return spinUntil([&] {
-      if (last.isZero() || (ros::Time::now() - last).toSec() >= 0.1) {
-        go_feap::GlobalTour tour;
-        tour.header.stamp = ros::Time::now();
-        tour.header.frame_id = frontiers_->header.frame_id;
-        for (const go_feap::Frontier& f : frontiers_->frontiers)
-          if (f.active) {
-            tour.frontier_ids.push_back(f.id);
-            tour.waypoints.push_back(f.average);
-          }
-        probe_tour_pub.publish(tour);
-        last = ros::Time::now();
+  // A tour of the active frontiers in view, in the order they come.
+  const auto ownTour = [&] {
+    go_feap::GlobalTour tour;
+    tour.header.stamp = ros::Time::now();
+    tour.header.frame_id = frontiers_->header.frame_id;
+    for (const go_feap::Frontier& f : frontiers_->frontiers)
+      if (f.active) {
+        tour.frontier_ids.push_back(f.id);
+        tour.waypoints.push_back(f.average);
       }
-      return (ros::Time::now() - start).toSec() >= seconds || done();
-    }, 60.0);
+    return tour;
   };
   // A turn in place until active frontiers are in view, then 3 s more (30 global planner periods).
   ASSERT_TRUE(go_feap::test::turnInPlace(
@@ -174,7 +173,7 @@ TEST_F(FrontierPlannerTest, NothingIsPlannedBeforeTheTriggerWhichStartsTheStartB
       150.0))
       << "no active frontier in view";
   spinUntil([] { return false; }, 3.0);
-  feedOwnTour(2.0, [] { return false; });
+  sendTours(probe_tour_pub, ownTour, 2.0, [] { return false; });
   spinUntil([] { return false; }, 0.5);
   EXPECT_EQ(status_->state, go_feap::ExplorationStatus::WAIT_TRIGGER);
   EXPECT_EQ(sent, 0) << "tours or targets before the trigger";
@@ -184,7 +183,7 @@ TEST_F(FrontierPlannerTest, NothingIsPlannedBeforeTheTriggerWhichStartsTheStartB
   ASSERT_TRUE(ros::service::call("trigger", trigger));
   EXPECT_TRUE(trigger.response.success) << trigger.response.message;
   ASSERT_TRUE(spinUntil([&] { return status_->state == go_feap::ExplorationStatus::EXPLORE; }, 30.0));
-  EXPECT_TRUE(feedOwnTour(30.0, [&] { return probe_targets > 0; }) && probe_targets > 0)
+  EXPECT_TRUE(sendTours(probe_tour_pub, ownTour, 30.0, [&] { return probe_targets > 0; }) && probe_targets > 0)
       << "the probe local planner sent no target from the same kind of tour after the trigger";
   // Its target dropped again (reported failed), so that the probe holds nothing for the tests below.
   if (probe_target && !probe_target->frontier_ids.empty()) {

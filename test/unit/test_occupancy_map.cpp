@@ -84,6 +84,26 @@ std::set<std::size_t> visibleSurface(const Fixture& f, const sim::DepthRenderer&
   return seen;
 }
 
+// A tiny camera 1.5 m up looking along +x at a wall 2.05 m ahead (`wall`), or through it at nothing within
+// 9 m (`through`); the return on the optical axis is marked at `surface`, just behind the wall's face.
+struct WallAhead {
+  const map::DepthIntrinsics K{8, 6, 8.0, 8.0, 4.0, 3.0};
+  const world::Scene empty = world::makeEmptyScene("empty", {Vec3(-1, -3, 0), Vec3(5, 3, 3)}, 0.1, 0.0);
+  const Eigen::Isometry3d T = cameraPose(Vec3(0, 0, 1.5), 0.0);
+  const cv::Mat wall{K.height, K.width, CV_32FC1, cv::Scalar(2.05f)};
+  const cv::Mat through{K.height, K.width, CV_32FC1, cv::Scalar(9.0f)};
+  const Vec3 surface{2.052, 0.0, 1.5};
+
+  /// How many frames of `depth` integrated into `m` until the surface is `wanted` (0: not within `limit`).
+  int framesUntil(map::VoxelMap& m, const cv::Mat& depth, VoxelState wanted, int limit) const {
+    for (int i = 1; i <= limit; ++i) {
+      EXPECT_TRUE(m.integrate(depth, K, T));
+      if (m.occupancy().state(surface) == wanted) return i;
+    }
+    return 0;
+  }
+};
+
 }  // namespace
 
 TEST(OccupancyMap, RenderedMazeMatchesGroundTruthSurfaceAndFreeSpace) {
@@ -190,11 +210,7 @@ TEST(OccupancyMap, InvalidPixelsAreFreeOrSkippedByParameter) {
 // named; every configuration that is accepted must map a surface seen again and again as occupied and the
 // same voxel, then seen through again and again, as free (which those refused ones never did).
 TEST(OccupancyMap, ConfigsWhoseByteStepsVanishAreRefusedAndAcceptedOnesMapObstacles) {
-  const map::DepthIntrinsics K{8, 6, 8.0, 8.0, 4.0, 3.0};
-  world::Scene empty = world::makeEmptyScene("empty", {Vec3(-1, -3, 0), Vec3(5, 3, 3)}, 0.1, 0.0);
-  const auto T = cameraPose(Vec3(0, 0, 1.5), 0.0);
-  const cv::Mat wall(K.height, K.width, CV_32FC1, cv::Scalar(2.05f)), through(K.height, K.width, CV_32FC1, cv::Scalar(9.0f));
-  const Vec3 surface(2.052, 0.0, 1.5);  // where the return on the optical axis is marked, just behind the face
+  const WallAhead view;
   int accepted = 0, refused = 0;
   for (double p_hit : {0.5005, 0.502, 0.503, 0.51, 0.65, 0.927, 0.95})
     for (double p_miss : {0.4995, 0.498, 0.497, 0.35, 0.073, 0.05})
@@ -215,17 +231,11 @@ TEST(OccupancyMap, ConfigsWhoseByteStepsVanishAreRefusedAndAcceptedOnesMapObstac
           continue;
         }
         ++accepted;
-        map::VoxelMap m(c, empty.box);
-        auto seeUntil = [&](const cv::Mat& depth, VoxelState wanted) {
-          for (int i = 0; i < 300; ++i) {
-            EXPECT_TRUE(m.integrate(depth, K, T)) << what;
-            if (m.occupancy().state(surface) == wanted) return true;
-          }
-          return false;
-        };
-        EXPECT_TRUE(seeUntil(wall, VoxelState::kOccupied)) << what << ": a surface seen 300 times is not occupied";
-        EXPECT_TRUE(seeUntil(through, VoxelState::kFree)) << what << ": seen through 300 times, still not free";
-        EXPECT_TRUE(seeUntil(wall, VoxelState::kOccupied)) << what << ": seen again 300 times, not occupied";
+        SCOPED_TRACE(what);
+        map::VoxelMap m(c, view.empty.box);
+        EXPECT_GT(view.framesUntil(m, view.wall, VoxelState::kOccupied, 300), 0) << "a surface seen 300 times is not occupied";
+        EXPECT_GT(view.framesUntil(m, view.through, VoxelState::kFree, 300), 0) << "seen through 300 times, still not free";
+        EXPECT_GT(view.framesUntil(m, view.wall, VoxelState::kOccupied, 300), 0) << "seen again 300 times, not occupied";
       }
   EXPECT_EQ(accepted, 4 * 3 * 2);  // p_hit 0.503 to 0.927, p_miss 0.497 down to 0.073, the two real margins
   EXPECT_EQ(refused, 7 * 6 * 3 - accepted);
@@ -237,11 +247,7 @@ TEST(OccupancyMap, ConfigsWhoseByteStepsVanishAreRefusedAndAcceptedOnesMapObstac
 // and becomes free after as many misses as it takes from there to fall to it. For two configurations: the
 // shipped one, and one whose clamps lie nearer the threshold.
 TEST(OccupancyMap, TheClampsBoundTheEvidenceEachWay) {
-  const map::DepthIntrinsics K{8, 6, 8.0, 8.0, 4.0, 3.0};
-  world::Scene empty = world::makeEmptyScene("empty", {Vec3(-1, -3, 0), Vec3(5, 3, 3)}, 0.1, 0.0);
-  const auto T = cameraPose(Vec3(0, 0, 1.5), 0.0);
-  const cv::Mat wall(K.height, K.width, CV_32FC1, cv::Scalar(2.05f)), through(K.height, K.width, CV_32FC1, cv::Scalar(9.0f));
-  const Vec3 surface(2.052, 0.0, 1.5);  // where the return on the optical axis is marked, just behind the face
+  const WallAhead view;
   auto logit = [](double p) { return std::log(p / (1.0 - p)); };
   for (auto [p_min, p_max] : {std::pair{0.12, 0.90}, std::pair{0.3, 0.86}}) {
     map::MapConfig c = mapConfig();
@@ -250,28 +256,22 @@ TEST(OccupancyMap, TheClampsBoundTheEvidenceEachWay) {
     SCOPED_TRACE("p_min " + std::to_string(p_min) + ", p_max " + std::to_string(p_max));
     ASSERT_TRUE(c.occupancy.validate().ok());
     const double hit = logit(c.occupancy.p_hit), miss = logit(c.occupancy.p_miss), occupied = logit(c.occupancy.p_occupied);
-    map::VoxelMap m(c, empty.box);
-    const common::Index3 idx = m.occupancy().geometry().coordToIndex(surface);
+    map::VoxelMap m(c, view.empty.box);
+    const common::Index3 idx = m.occupancy().geometry().coordToIndex(view.surface);
     auto integrate = [&](const cv::Mat& depth, int times) {
-      for (int i = 0; i < times; ++i) ASSERT_TRUE(m.integrate(depth, K, T));
+      for (int i = 0; i < times; ++i) ASSERT_TRUE(m.integrate(depth, view.K, view.T));
     };
-    // How many frames of `depth` until the surface is `wanted`.
-    auto framesUntil = [&](const cv::Mat& depth, VoxelState wanted) {
-      for (int i = 1; i <= 50; ++i) {
-        EXPECT_TRUE(m.integrate(depth, K, T));
-        if (m.occupancy().state(surface) == wanted) return i;
-      }
-      return 0;
-    };
-    integrate(wall, 40);
-    ASSERT_EQ(m.occupancy().state(surface), VoxelState::kOccupied);
+    integrate(view.wall, 40);
+    ASSERT_EQ(m.occupancy().state(view.surface), VoxelState::kOccupied);
     EXPECT_NEAR(logit(m.occupancy().probability(idx)), logit(p_max), 0.011) << "a surface seen 40 times";
     // From p_max: the misses it takes to fall to p_occupied or below.
-    EXPECT_EQ(framesUntil(through, VoxelState::kFree), static_cast<int>(std::floor((logit(p_max) - occupied) / -miss)) + 1);
-    integrate(through, 40);
+    EXPECT_EQ(view.framesUntil(m, view.through, VoxelState::kFree, 50),
+              static_cast<int>(std::floor((logit(p_max) - occupied) / -miss)) + 1);
+    integrate(view.through, 40);
     EXPECT_NEAR(logit(m.occupancy().probability(idx)), logit(p_min), 0.011) << "a surface seen through 40 times";
     // From p_min: the returns it takes to pass p_occupied.
-    EXPECT_EQ(framesUntil(wall, VoxelState::kOccupied), static_cast<int>(std::floor((occupied - logit(p_min)) / hit)) + 1);
+    EXPECT_EQ(view.framesUntil(m, view.wall, VoxelState::kOccupied, 50),
+              static_cast<int>(std::floor((occupied - logit(p_min)) / hit)) + 1);
   }
 }
 
