@@ -128,6 +128,10 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     std::lock_guard<std::mutex> lock(mutex_);
     odom_position_ = common::Vec3(p.x, p.y, p.z);
     odom_time_ = ros::Time::now();
+    // When the pose held: a plan from it starts then (a VIO's latency behind its arrival). A stamp after
+    // the arrival or older than planner/odom_timeout (another clock, a bag's) says nothing: the arrival.
+    const double age = (odom_time_ - msg->header.stamp).toSec();
+    odom_stamp_ = age >= 0.0 && age <= odom_timeout_ ? msg->header.stamp : odom_time_;
     odom_yaw_ = ros_conv::yawOf(q);
     odom_velocity_ = v;
   }
@@ -292,9 +296,10 @@ class TrajectoryPlanner : public nodelet::Nodelet {
   }
 
   // Start state: the commanded state when recent (continuity of the reference), else odometry (also
-  // right after the vehicle was found far from the reference). Returns when that state held: the
-  // trajectory starts then, so that the server, which takes it over later, samples it where the
-  // reference is by then instead of a command period or an odometry age behind.
+  // right after the vehicle was found far from the reference). Returns when that state held (the
+  // command's stamp, the odometry's): the trajectory starts then, so that the server, which takes it
+  // over later, samples it where the reference is by then instead of a command period or an odometry
+  // age behind.
   ros::Time startState(const ros::Time& now, trajectory::PlanRequest& request) const {
     if (!from_odometry_ && commandRecent(now)) {
       request.start = common::Vec3(command_->position.x, command_->position.y, command_->position.z);
@@ -309,7 +314,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
     request.velocity = odom_velocity_;
     request.acceleration.setZero();
     request.yaw = odom_yaw_;
-    return std::min(now, odom_time_);
+    return std::min(now, odom_stamp_);
   }
 
   void plan(const ros::Time& now, trajectory::ReplanReason reason) {
@@ -410,7 +415,8 @@ class TrajectoryPlanner : public nodelet::Nodelet {
   bool brake_pending_ = false;  ///< and the flight in progress is to brake at the next timer call
   bool from_odometry_ = false;  ///< the next plan starts from the odometry: it was far from the reference
   common::Vec3 odom_velocity_ = common::Vec3::Zero();  ///< world frame
-  ros::Time odom_time_;
+  ros::Time odom_time_;   ///< when the last odometry arrived
+  ros::Time odom_stamp_;  ///< when its pose held (its stamp, when plausible)
   bool odom_gap_ = false;
   std::string world_frame_;
   std::mutex mutex_;

@@ -222,9 +222,12 @@ TEST_F(TrajectoryTargetTest, AnOdometryJumpAwayFromTheReferenceIsPlannedFromTheO
   // world velocity, the body's turned by the heading.
   Vec3 pose = here, velocity = Vec3(0.4, 0.0, 0.0);
   const double heading = 0.9;
+  double odometry_age = 0.0;        // s, how old each odometry message is stamped when sent (a VIO's latency)
+  std::vector<double> odom_stamps;  // every odometry stamp sent
   auto odometry = [&] {
     nav_msgs::Odometry m;
-    m.header.stamp = ros::Time::now();
+    m.header.stamp = ros::Time::now() - ros::Duration(odometry_age);
+    odom_stamps.push_back(m.header.stamp.toSec());
     m.header.frame_id = "world";
     m.child_frame_id = "probe_body";
     m.pose.pose.position.x = pose.x(), m.pose.pose.position.y = pose.y(), m.pose.pose.position.z = pose.z();
@@ -294,11 +297,18 @@ TEST_F(TrajectoryTargetTest, AnOdometryJumpAwayFromTheReferenceIsPlannedFromTheO
   }
   EXPECT_FALSE(gap) << "three windows held up past the odometry timeout";
   EXPECT_EQ(planned.size(), before) << "replanned with the odometry on the reference";
-  // The odometry jumps 1.5 m (more than planner/max_tracking_error) while the server goes on.
+  // The odometry jumps 1.5 m (more than planner/max_tracking_error) while the server goes on. It comes
+  // 0.12 s after its pose held (within planner/odom_timeout, 0.5 s): the plan from it starts at its stamp,
+  // where the vehicle was, not when it arrived.
   const std::int64_t old_id = planned.back().id;
   const Vec3 reference = pose;
   pose = reference + 1.5 * forward_;
+  odometry_age = 0.12;
   ASSERT_TRUE(play(5.0, [&] { return planned.back().id != old_id; })) << "no new trajectory after the odometry jumped";
+  const double jump_start = planned.back().start_time.toSec();
+  EXPECT_NE(std::find(odom_stamps.begin(), odom_stamps.end(), jump_start), odom_stamps.end())
+      << "the plan from the odometry starts at " << jump_start << " (arrived " << received.back()
+      << "), not at the stamp of an odometry message";
   const go_feap::trajectory::TrajectorySample next = go_feap::trajectory::sampleTrajectory(planned.back(), 0.0);
   EXPECT_LT((next.position - pose).norm(), 0.02) << "the new trajectory starts at " << next.position.transpose()
                                                  << ", the odometry is at " << pose.transpose()
@@ -307,7 +317,9 @@ TEST_F(TrajectoryTargetTest, AnOdometryJumpAwayFromTheReferenceIsPlannedFromTheO
                                                      << " (in the world) but " << next.velocity.transpose();
 
   // Commands that are not finite (a broken bridge) are no start for a plan: a new target while only such
-  // commands come is planned from the odometry.
+  // commands come is planned from the odometry. Its stamps are 5 s old now (another clock): no time the
+  // pose held, so the plan starts when the odometry arrived (within planner/odom_timeout of the plan).
+  odometry_age = 5.0;
   auto broken = [&] {
     go_feap::PositionCommand m = command();
     m.velocity.y = std::numeric_limits<double>::quiet_NaN();
@@ -332,6 +344,11 @@ TEST_F(TrajectoryTargetTest, AnOdometryJumpAwayFromTheReferenceIsPlannedFromTheO
   const go_feap::trajectory::TrajectorySample from = go_feap::trajectory::sampleTrajectory(planned.back(), 0.0);
   ASSERT_TRUE(from.position.allFinite() && from.velocity.allFinite());
   EXPECT_LT((from.position - odometry_pose).norm(), 0.02) << "starts at " << from.position.transpose();
+  const double stale_start = planned.back().start_time.toSec();
+  EXPECT_GT(stale_start, received.back() - 0.5) << "starts at " << stale_start << ", arrived " << received.back()
+                                                << ": at an odometry stamp 5 s old?";
+  EXPECT_LE(stale_start, received.back());
+  odometry_age = 0.0;
 
   // Velocities no vehicle flies (1e7 m/s: finite, corrupt) in every command and in every other odometry
   // message: refused (planner/max_input_speed), so a new target is planned from the good odometry. Taken,
