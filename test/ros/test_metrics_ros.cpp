@@ -42,6 +42,7 @@
 #include "go_feap/MapUpdate.h"
 #include "go_feap/PositionCommand.h"
 #include "go_feap/ViewpointPath.h"
+#include "flight_util.h"
 #include "ros_test_util.h"
 
 namespace {
@@ -884,6 +885,65 @@ TEST(TrajectoryPlanner, PlansAgainFromTheOdometryWhenTheClockGoesBack) {
   ASSERT_TRUE(first_since) << trajectories.size() << " trajectories in 3 s after the clock went back 80 s, none since";
   EXPECT_LT((startOf(*first_since) - at_odometry).norm(), 0.1)
       << "starts at " << startOf(*first_since).transpose() << ", not at the odometry";
+}
+
+// A trajectory server (probe/ts/... in metrics.test) follows a 3 s flight along x when the clock goes
+// back to 0.5 s before the flight's start (a bag played again): the flight's times are void. Kept, it
+// started over once the clock came back to its start, the reference leaping back to where the vehicle
+// had been, with none of the checks a trajectory taken over gets. It is dropped: the last reference is
+// held at rest, and the next trajectory sent is followed.
+TEST(TrajectoryServer, DropsItsTrajectoryWhenTheClockGoesBack) {
+  ros::NodeHandle nh;
+  auto clock_pub = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
+  auto odom_pub = nh.advertise<nav_msgs::Odometry>("probe/ts/odom", 10);
+  auto bspline_pub = nh.advertise<go_feap::Bspline>("probe/ts/bspline", 10);
+  std::vector<go_feap::PositionCommand> commands;
+  auto cmd_sub = nh.subscribe<go_feap::PositionCommand>(
+      "probe/ts/position_cmd", 200, [&](const go_feap::PositionCommand::ConstPtr& m) { commands.push_back(*m); });
+  ASSERT_TRUE(spinUntil([&] {
+    return cmd_sub.getNumPublishers() > 0 && clock_pub.getNumSubscribers() > 0 && odom_pub.getNumSubscribers() > 0 &&
+           bspline_pub.getNumSubscribers() > 0;
+  }, 30.0)) << "the probe trajectory server is not connected";
+  auto positionOf = [](const go_feap::PositionCommand& c) { return Vec3(c.position.x, c.position.y, c.position.z); };
+  // The odometry on the reference (where a controller keeps the vehicle), at the start before any.
+  Vec3 vehicle(0.0, 0.0, 1.0);
+  auto run = [&](double& now, double seconds) {
+    playClock(clock_pub, now, seconds, 0.05, 0.02, [&](double t) {
+      if (!commands.empty()) vehicle = positionOf(commands.back());
+      odom_pub.publish(odometryAt(vehicle, t));
+    });
+  };
+  // A straight 3 s flight from a to b, heading 0, from `start`.
+  auto fly = [&](const Vec3& a, const Vec3& b, std::int64_t id, double start) {
+    bspline_pub.publish(go_feap::ros_traj::toMsg(go_feap::test::straightFlight(a, b, id, ros::Time(start))));
+  };
+  double now = 1000.0;
+  run(now, 0.5);
+  const double start = now;
+  fly(vehicle, vehicle + Vec3(3.0, 0.0, 0.0), 1, start);
+  run(now, 1.5);
+  ASSERT_FALSE(commands.empty()) << "no command while the flight was sent";
+  ASSERT_EQ(commands.back().trajectory_id, 1u);
+  ASSERT_EQ(commands.back().trajectory_flag, go_feap::PositionCommand::TRAJECTORY_STATUS_READY);
+  const Vec3 held = positionOf(commands.back());
+  ASSERT_GT(held.x(), 0.5) << "the flight has not moved on";
+  spinUntil([] { return false; }, 0.2);  // the commands in flight; none comes while the clock stands
+  commands.clear();
+  now = start - 0.5;
+  run(now, 2.0);  // 1.5 s past the flight's start: it would be flown from the start again by now
+  ASSERT_GE(commands.size(), 20u) << "the server fell silent after the clock went back";
+  for (const go_feap::PositionCommand& c : commands) {
+    EXPECT_EQ(c.trajectory_flag, go_feap::PositionCommand::TRAJECTORY_STATUS_EMPTY)
+        << "at " << c.header.stamp.toSec() << ": trajectory " << c.trajectory_id << " flag " << int(c.trajectory_flag)
+        << " at " << positionOf(c).transpose();
+    EXPECT_LT((positionOf(c) - held).norm(), 1e-6) << "at " << c.header.stamp.toSec() << ": not the last reference";
+    EXPECT_EQ(Vec3(c.velocity.x, c.velocity.y, c.velocity.z).norm(), 0.0);
+  }
+  // The next trajectory, timed on the clock as it is now, is followed.
+  fly(held, held + Vec3(0.0, 1.0, 0.0), 2, now);
+  run(now, 1.0);
+  EXPECT_EQ(commands.back().trajectory_id, 2u);
+  EXPECT_GT(positionOf(commands.back()).y(), 0.2) << "the next trajectory is not followed";
 }
 
 // A run that began and is stopped before it finishes (the launch ends: here the recorder is unloaded)

@@ -22,6 +22,7 @@
 #include "go_feap/ViewpointPath.h"
 #include "go_feap/ros/bspline_conversion.h"
 #include "go_feap/world/scene_files.h"
+#include "flight_util.h"
 #include "ros_test_util.h"
 
 namespace {
@@ -544,16 +545,9 @@ class ProbeServer {
         seconds, [&] { if (send_.due() && !silent) publish_odometry(); }, [] { return false; }, 30.0);
     return command;
   }
-  // A straight flight from a to b over 4 knot spans of `span` s (7 control points; 3 s by default), heading `yaw`.
+  // A straight flight from a to b over 4 knot spans of `span` s (3 s by default), heading `yaw`.
   void fly(const Vec3& a, const Vec3& b, std::int64_t id, const ros::Time& start, double yaw = 0.0, double span = 0.75) {
-    Eigen::MatrixXd q(3, 7), y = Eigen::MatrixXd::Constant(1, 4, yaw);
-    for (int i = 0; i < 7; ++i) q.col(i) = a + (b - a) * std::clamp((i - 1) / 4.0, 0.0, 1.0);
-    go_feap::ros_traj::Trajectory t;
-    t.position = go_feap::trajectory::UniformBspline(q, 3, span);
-    t.yaw = go_feap::trajectory::UniformBspline(y, 3, span);
-    t.id = id;
-    t.start_time = start;
-    bspline_pub_.publish(go_feap::ros_traj::toMsg(t));
+    send(go_feap::test::straightFlight(a, b, id, start, yaw, span));
   }
   void send(const go_feap::ros_traj::Trajectory& t) { bspline_pub_.publish(go_feap::ros_traj::toMsg(t)); }
   Vec3 commanded() const { return Vec3(command->position.x, command->position.y, command->position.z); }
