@@ -10,6 +10,20 @@
 
 namespace go_feap::world {
 
+namespace {
+
+// Whole cells of at least `cell` along `size` (a hair under a whole number of cells counts as that number:
+// 6 / 2 need not be exactly 3 in floating point), at least `least`; bounded for any finite input.
+int wholeCells(double size, double cell, int least) {
+  const double n = std::floor(size / cell + 1e-9);
+  return n >= least ? static_cast<int>(std::min(n, 1e6)) : least;
+}
+
+}  // namespace
+
+int MazeConfig::cellsX() const { return wholeCells(size_x, cell_size, 2); }
+int MazeConfig::cellsY() const { return wholeCells(size_y, cell_size, 1); }
+
 common::Status MazeConfig::validate() const {
   auto err = [](const char* key, const char* why) {
     return common::Status::Error(std::string("maze: ") + key + " " + why);
@@ -28,7 +42,7 @@ common::Status MazeConfig::validate() const {
   // Bounded like a file scene's grid, and in cells (the generator's dead-end search grows with the square
   // of the cells: 400 x 400 m did not finish; 1e6 x 1e6 m overflowed the cell count and crashed).
   if (!(size_x <= 1e4 && size_y <= 1e4 && height <= 1e3)) return err("size_x/size_y/height", "must be at most 10 km x 10 km x 1 km");
-  if (!(std::round(size_x / cell_size) * std::round(size_y / cell_size) <= 2500.0))
+  if (!(static_cast<double>(cellsX()) * cellsY() <= 2500.0))
     return err("size_x/size_y", "must hold at most 2500 cells");
   const double voxels = sceneVoxelCount({Vec3(-0.5 * size_x, -0.5 * size_y, 0.0), Vec3(0.5 * size_x, 0.5 * size_y, height)},
                                         resolution, margin);
@@ -51,8 +65,10 @@ Vec3 MazeLayout::cellCentre(const MazeConfig& config, int cell, double z) const 
 common::Result<Scene> generateMaze(const MazeConfig& config, std::uint64_t seed, MazeLayout* layout_out) {
   if (auto st = config.validate(); !st) return st;
   MazeLayout layout;
-  layout.cells_x = std::max(2, static_cast<int>(std::lround(config.size_x / config.cell_size)));
-  layout.cells_y = std::max(1, static_cast<int>(std::lround(config.size_y / config.cell_size)));
+  // Whole cells no shorter than cell_size: rounded to the nearest count, a 3 m side of 2 m cells made two
+  // cells of 1.5 m, corridors of 1.2 m along the outer walls.
+  layout.cells_x = config.cellsX();
+  layout.cells_y = config.cellsY();
   const int nx = layout.cells_x, ny = layout.cells_y, n = nx * ny;
   std::mt19937_64 rng(seed);
 

@@ -104,9 +104,8 @@ TEST_P(MazeSeeds, WallsAreFullHeight) {
 
 // Corridor width: every free voxel of a horizontal slice lies in some fully free
 // 1.5 m x 1.5 m square (morphological opening with that square leaves free space intact).
-TEST_P(MazeSeeds, CorridorsAtLeast1p5MetresWide) {
-  auto s = generateMaze(MazeConfig(), GetParam());
-  ASSERT_TRUE(s);
+void expectCorridorsAtLeast1p5MetresWide(const common::Result<Scene>& s) {
+  ASSERT_TRUE(s) << s.message();
   const auto& g = s->geometry();
   Index3 lo, hi;
   g.centreRange(s->box, lo, hi);
@@ -129,6 +128,25 @@ TEST_P(MazeSeeds, CorridorsAtLeast1p5MetresWide) {
       if (!s->occupied.at({lo.x() + x, lo.y() + y, k})) {
         ASSERT_TRUE(covered[y * nx + x]) << "free voxel (" << x << ", " << y << ") lies in a passage under 1.5 m";
       }
+}
+
+TEST_P(MazeSeeds, CorridorsAtLeast1p5MetresWide) { expectCorridorsAtLeast1p5MetresWide(generateMaze(MazeConfig(), GetParam())); }
+
+// A side that is no whole number of cells (a scene YAML's 10 x 3 m, 5 x 4 m, 7.3 x 5.1 m) is split into whole
+// cells no shorter than cell_size, the corridors as wide as ever: rounded to the nearest count, 3 m made two
+// cells of 1.5 m (corridors of 1.2 m along the outer walls), 5 m two of 2.5 m but 7 m three of 2.33 m.
+TEST(Maze, SidesOfNoWholeNumberOfCellsKeepTheCorridorsWide) {
+  for (auto [x, y, cells_x, cells_y] : std::vector<std::tuple<double, double, int, int>>{
+           {10.0, 3.0, 5, 1}, {5.0, 4.0, 2, 2}, {7.3, 5.1, 3, 2}, {10.0, 6.0, 5, 3}}) {
+    SCOPED_TRACE(std::to_string(x) + " x " + std::to_string(y));
+    MazeConfig cfg;
+    cfg.size_x = x, cfg.size_y = y;
+    MazeLayout layout;
+    auto s = generateMaze(cfg, 0, &layout);
+    EXPECT_EQ(layout.cells_x, cells_x);
+    EXPECT_EQ(layout.cells_y, cells_y);
+    expectCorridorsAtLeast1p5MetresWide(s);
+  }
 }
 
 TEST_P(MazeSeeds, HasADeadEndAndALoopMatchingTheVoxels) {

@@ -14,14 +14,17 @@ struct MazeConfig {
   double size_x = 20.0;          ///< box length along x (m); box is centred on x = 0
   double size_y = 10.0;          ///< box width along y (m); centred on y = 0
   double height = 3.0;           ///< box height (m), floor at z = 0
-  double cell_size = 2.0;        ///< pitch of the maze cells (m)
-  double wall_thickness = 0.2;   ///< wall thickness (m); corridors are cell_size - wall wide
+  double cell_size = 2.0;        ///< least pitch of the maze cells (m): each side is split into whole cells this long or longer
+  double wall_thickness = 0.2;   ///< wall thickness (m); corridors are the pitch - wall wide (- 1.5 walls along the outer walls)
   int extra_openings = 3;        ///< walls removed after the spanning tree, creating loops
   double resolution = 0.1;       ///< voxel size (m)
   double margin = 0.5;           ///< grid margin around the box (m)
   double start_height = 1.0;     ///< start altitude (m)
 
   common::Status validate() const;
+  /// Cells along x and y: as many whole cells of at least cell_size as fit (2 x 1 at least).
+  int cellsX() const;
+  int cellsY() const;
 };
 
 /// The maze's cell graph: cells (i, j), i along x, j along y; an open passage joins two
