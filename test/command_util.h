@@ -8,9 +8,14 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <cmath>
+#include <cstdlib>
 #include <iterator>
+#include <map>
+#include <sstream>
 #include <string>
 #include <utility>
+#include <vector>
 
 namespace go_feap::test {
 
@@ -31,6 +36,33 @@ inline std::pair<int, std::string> runCommand(const std::string& command) {
 inline std::string readText(const std::filesystem::path& file) {
   std::ifstream in(file);
   return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+/// A CSV file of numbers with a header line: one map from column name to value per row. A cell that is no
+/// number is NaN (a test then fails on it rather than reading 0).
+inline std::vector<std::map<std::string, double>> readCsv(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  std::string line;
+  std::vector<std::string> names;
+  if (std::getline(in, line)) {
+    std::istringstream header(line);
+    for (std::string name; std::getline(header, name, ',');) names.push_back(name);
+  }
+  std::vector<std::map<std::string, double>> rows;
+  while (std::getline(in, line)) {
+    if (line.empty()) continue;
+    std::istringstream cells(line);
+    std::map<std::string, double> row;
+    std::string cell;
+    for (const std::string& name : names) {
+      if (!std::getline(cells, cell, ',')) cell.clear();
+      char* end = nullptr;
+      const double v = std::strtod(cell.c_str(), &end);
+      row[name] = !cell.empty() && end == cell.c_str() + cell.size() ? v : std::nan("");
+    }
+    rows.push_back(std::move(row));
+  }
+  return rows;
 }
 
 /// Replaces `from` by `to` in `file`, where `from` must occur exactly once (a test editing a config value

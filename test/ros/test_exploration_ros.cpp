@@ -26,6 +26,7 @@
 #include "go_feap/bench/exploration_run.h"
 #include "go_feap/planning/omission.h"
 #include "go_feap/world/scene_files.h"
+#include "../command_util.h"
 #include "ros_test_util.h"
 
 namespace {
@@ -177,6 +178,27 @@ TEST(Exploration, SmallMazeFinishesCompleteWithFullCoverageAndNoCollision) {
   EXPECT_NEAR(live_coverage.back(), summary["coverage"].get<double>(), 0.02);
   for (const char* key : {"scene", "seed", "planner", "exploration_time_s", "flight_distance_m", "compute_ms"})
     EXPECT_TRUE(summary.contains(key)) << key;
+  // metrics.csv: time, known volume and distance never go back; its last row is the run as it finished, its
+  // known volume the map's known voxels (the saved map's, taken a little later, once the vehicle held).
+  {
+    const auto rows = go_feap::test::readCsv(output_dir + "/metrics.csv");
+    ASSERT_GE(rows.size(), 10u);
+    for (std::size_t i = 1; i < rows.size(); ++i)
+      for (const char* column : {"t", "explored_m3", "distance"})
+        EXPECT_GE(rows[i].at(column), rows[i - 1].at(column)) << column << ", row " << i;
+    double known_m3 = 0.0;
+    for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) known_m3 += std::pow(it.getSize(), 3);
+    const auto& last = rows.back();
+    std::cout << "metrics.csv: " << rows.size() << " rows, last " << last.at("explored_m3") << " m^3 known (the saved map "
+              << known_m3 << " m^3), " << last.at("distance") << " m\n";
+    EXPECT_LE(last.at("explored_m3"), known_m3 + 1e-3);
+    EXPECT_GE(last.at("explored_m3"), 0.95 * known_m3);
+    EXPECT_NEAR(last.at("t"), summary["exploration_time_s"].get<double>(), 1e-3);
+    EXPECT_NEAR(last.at("distance"), summary["flight_distance_m"].get<double>(), 1e-3);
+    EXPECT_NEAR(last.at("coverage"), summary["coverage"].get<double>(), 1e-5);
+    EXPECT_LT((Vec3(last.at("x"), last.at("y"), last.at("z")) - path.back()).norm(), 0.3)
+        << "the last row's position is not where the vehicle ended";
+  }
 
   // The bench runs the same core classes in lock-step simulated time: same outcome within tolerance.
   std::string config_dir;

@@ -42,6 +42,7 @@
 #include "go_feap/MapUpdate.h"
 #include "go_feap/PositionCommand.h"
 #include "go_feap/ViewpointPath.h"
+#include "../command_util.h"
 #include "flight_util.h"
 #include "ros_test_util.h"
 
@@ -240,6 +241,8 @@ TEST(MetricsRecorder, SummaryHoldsThePlayedRunAndOddStatusesNeitherEndNorCountIn
   go_feap::ExplorationStatus finished = status(go_feap::ExplorationStatus::FINISHED, "FINISHED", 42.5);
   finished.finish_reason = "complete";
   finished.blacklisted_frontiers = 2;
+  finished.layer = 2;
+  finished.frontier_count = 17;
   send(finished);
   const std::string summary_path = output_dir + "/summary.json";
   // The recorder renames each file into place whole, summary.json last: once it is there, all three are.
@@ -264,6 +267,22 @@ TEST(MetricsRecorder, SummaryHoldsThePlayedRunAndOddStatusesNeitherEndNorCountIn
   EXPECT_TRUE(warned("/metrics_recorder: compute_time refused: block 'frontier'"));
   for (const char* f : {"metrics.csv", "coverage.png"})
     EXPECT_TRUE(std::filesystem::exists(output_dir + "/" + f)) << f;
+  // metrics.csv's rows: the flight distance so far, never shrinking; the last row is the run as it finished
+  // (its time, distance, band, frontier count and the vehicle's last position). No map here: no coverage.
+  const auto rows = go_feap::test::readCsv(output_dir + "/metrics.csv");
+  ASSERT_GE(rows.size(), 2u);
+  for (std::size_t i = 1; i < rows.size(); ++i)
+    EXPECT_GE(rows[i].at("distance"), rows[i - 1].at("distance")) << "row " << i;
+  const auto& last = rows.back();
+  EXPECT_NEAR(last.at("t"), 42.5, 1e-9);
+  EXPECT_NEAR(last.at("distance"), length, 1e-3);
+  EXPECT_EQ(last.at("layer"), 2.0);
+  EXPECT_EQ(last.at("frontiers"), 17.0);
+  EXPECT_EQ(last.at("coverage"), -1.0);
+  EXPECT_EQ(last.at("explored_m3"), 0.0);
+  const Vec3 flown_to = start + Vec3(1.15, 0.0, 0.0);
+  EXPECT_LT((Vec3(last.at("x"), last.at("y"), last.at("z")) - flown_to).norm(), 2e-3)
+      << "the last row's position is not the last odometry " << flown_to.transpose();
 
   // A recorder that first hears the exploration finished (loaded after the run) says so and writes nothing:
   // started by that status, the next one wrote a summary of a run it never saw.
