@@ -489,6 +489,36 @@ TEST(OccupancyMap, AReturnBeyondTheMapEdgeMarksNoObstacleAtTheBorder) {
     EXPECT_EQ(m.state(p), VoxelState::kUnknown) << p.transpose();
 }
 
+// A camera outside the map (a take-off short of a tight box) maps what it sees inside: the part of each ray
+// within the map is cast free and the returns there are marked, every voxel as a larger map holding the
+// camera has it (the oracle: the same rays, unclipped). Before, none of its rays cast free space: no free
+// voxel, so no frontier, and no exploration could start.
+TEST(OccupancyMap, ACameraOutsideTheMapMapsTheRaysWithinIt) {
+  // Nothing in round numbers: a ray through a voxel's edge or corner may take either side, depending on
+  // where its walk started.
+  const map::DepthIntrinsics K{16, 12, 12.3, 12.1, 7.9, 6.2};
+  map::OccupancyConfig c;
+  c.margin = 0.0;
+  c.skip_pixel = 1;
+  map::OccupancyMap inside_map(c, {Vec3(-1, -1, 0), Vec3(3, 1, 2)}), holding(c, {Vec3(-2, -1, 0), Vec3(3, 1, 2)});
+  const Eigen::Isometry3d T = cameraPose(Vec3(-1.537, 0.013, 1.021), 0.07);  // short of the map's x = -1 face
+  ASSERT_FALSE(inside_map.geometry().bounds().contains(T.translation()));
+  cv::Mat depth(K.height, K.width, CV_32FC1, cv::Scalar(2.973f));  // a wall 1.4 m into the map ...
+  depth(cv::Rect(0, 0, 4, K.height)) = std::numeric_limits<float>::infinity();  // ... and no return to the left
+  ASSERT_TRUE(inside_map.integrate(depth, K, T));
+  ASSERT_TRUE(holding.integrate(depth, K, T));
+  std::size_t free = 0, occupied = 0;
+  for (std::size_t l = 0; l < inside_map.geometry().size(); ++l) {
+    const Vec3 p = inside_map.geometry().indexToCoord(inside_map.geometry().unlinear(l));
+    ASSERT_EQ(inside_map.stateAt(l), holding.state(p)) << "at " << p.transpose();
+    free += inside_map.stateAt(l) == VoxelState::kFree;
+    occupied += inside_map.stateAt(l) == VoxelState::kOccupied;
+  }
+  EXPECT_GT(free, 500u);
+  EXPECT_GT(occupied, 10u);
+  EXPECT_EQ(inside_map.state(Vec3(-0.95, 0.05, 1.05)), VoxelState::kFree);  // where the optical axis enters
+}
+
 // A return is marked a fiftieth of a voxel behind the measured surface, so that a depth that reads a hair
 // short of a voxel face (1.9985 m for a face at 2 m) marks the wall's voxel, not the free one before it.
 TEST(OccupancyMap, AReturnJustShortOfAVoxelFaceMarksTheVoxelBehindIt) {
