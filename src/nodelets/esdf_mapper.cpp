@@ -166,6 +166,11 @@ class EsdfMapper : public nodelet::Nodelet {
     }
     intrinsics_ = K;
     intrinsics_frame_ = info->header.frame_id;
+    if (ros_conv::hasDistortion(*info))
+      GO_FEAP_NODELET_THROTTLE(WARN, warn_period_, getName() << ": camera_info gives lens distortion (D of model '"
+                                                           << info->distortion_model << "' is not 0): the depth images "
+                                                              "are taken as rectified, distortion not undone; feed "
+                                                              "the rectified image (image_rect) and its camera_info");
   }
 
   // The synchroniser's callback, under ros_guard like every other.

@@ -729,17 +729,26 @@ class HeardLog : public ros::console::LogAppender {
   std::vector<std::string> lines;
 };
 
-// A camera_info's intrinsics are K's fx (K[0]), fy (K[4]), cx (K[2]) and cy (K[5]); sides past int's range
-// are clamped to it (then refused by DepthIntrinsics::validate() for an image that big, not wrapped negative).
-TEST(Conversions, CameraInfoGivesKsIntrinsicsAndSidesWithinInt) {
+// A camera_info's intrinsics are the rectified image's, P's fx (P[0]), fy (P[5]), cx (P[2]) and cy (P[6]),
+// which may differ from K's (the raw image's); K's fx (K[0]), fy (K[4]), cx (K[2]) and cy (K[5]) where P is
+// unset (a driver filling K alone). Sides past int's range are clamped to it (then refused by
+// DepthIntrinsics::validate() for an image that big, not wrapped negative). Distortion is any D not 0.
+TEST(Conversions, CameraInfoGivesTheRectifiedIntrinsicsAndSidesWithinInt) {
   sensor_msgs::CameraInfo info;
   info.width = 640, info.height = 480;
   info.K = {381.0, 0.0, 319.5, 0.0, 382.0, 239.5, 0.0, 0.0, 1.0};
   const go_feap::map::DepthIntrinsics K = go_feap::ros_conv::depthIntrinsics(info);
   EXPECT_EQ(K, (go_feap::map::DepthIntrinsics{640, 480, 381.0, 382.0, 319.5, 239.5}));
   EXPECT_NE(K, (go_feap::map::DepthIntrinsics{640, 480, 381.0, 382.0, 319.5, 239.0}));
+  info.P = {371.0, 0.0, 318.0, 0.0, 0.0, 372.0, 241.0, 0.0, 0.0, 0.0, 1.0, 0.0};
+  EXPECT_EQ(go_feap::ros_conv::depthIntrinsics(info), (go_feap::map::DepthIntrinsics{640, 480, 371.0, 372.0, 318.0, 241.0}));
   info.width = std::numeric_limits<std::uint32_t>::max();
   EXPECT_EQ(go_feap::ros_conv::depthIntrinsics(info).width, std::numeric_limits<int>::max());
+  EXPECT_FALSE(go_feap::ros_conv::hasDistortion(info));  // none given
+  info.D = {0.0, 0.0, 0.0, 0.0, 0.0};
+  EXPECT_FALSE(go_feap::ros_conv::hasDistortion(info));
+  info.D[3] = -1e-4;
+  EXPECT_TRUE(go_feap::ros_conv::hasDistortion(info));
 }
 
 // Handles without a map are normal at start-up (a latched copy; the mapper's next frame brings the map): said

@@ -327,15 +327,20 @@ struct Probe {
 TEST_F(MapperTest, ACameraInfoThatCannotBeUsedIsRefusedAndTheLastValidOneStays) {
   Probe probe;
   ASSERT_TRUE(probe.connect());
+  // The intrinsics are P's (the rectified image's), K's where P is unset: each broken in the one used.
   sensor_msgs::CameraInfo zero_k = *probe.info;
   std::fill(zero_k.K.begin(), zero_k.K.end(), 0.0);
+  std::fill(zero_k.P.begin(), zero_k.P.end(), 0.0);
   sensor_msgs::CameraInfo nan_fx = *probe.info;
-  nan_fx.K[0] = std::numeric_limits<double>::quiet_NaN();
+  nan_fx.P[0] = std::numeric_limits<double>::quiet_NaN();
   sensor_msgs::CameraInfo no_size = *probe.info;
   no_size.width = no_size.height = 0;
   // Finite and > 0, but every ray NaN: it was taken, and each frame then cast rays of 2^31 steps.
   sensor_msgs::CameraInfo tiny_fy = *probe.info;
-  tiny_fy.K[4] = 1e-310;
+  tiny_fy.P[5] = 1e-310;
+  sensor_msgs::CameraInfo tiny_fy_in_k = tiny_fy;
+  std::fill(tiny_fy_in_k.P.begin(), tiny_fy_in_k.P.end(), 0.0);
+  tiny_fy_in_k.K[4] = 1e-310;
 
   probe.info_pub.publish(zero_k);  // before any valid one: the frame is skipped
   spinUntil([] { return false; }, 0.3);
@@ -343,13 +348,14 @@ TEST_F(MapperTest, ACameraInfoThatCannotBeUsedIsRefusedAndTheLastValidOneStays) 
   EXPECT_EQ(probe.updates, 0u) << "a frame integrated with a zero K";
   probe.info_pub.publish(*probe.info);
   ASSERT_TRUE(probe.sendRealUntilIntegrated()) << "after a valid camera_info";
-  for (const sensor_msgs::CameraInfo& bad : {zero_k, nan_fx, no_size, tiny_fy}) {
+  for (const sensor_msgs::CameraInfo& bad : {zero_k, nan_fx, no_size, tiny_fy, tiny_fy_in_k}) {
     const std::size_t before = probe.updates;
     probe.info_pub.publish(bad);
     spinUntil([] { return false; }, 0.3);
     probe.sendReal();
     EXPECT_TRUE(spinUntil([&] { return probe.updates == before + 1; }, 10.0))
-        << "no frame integrated after a camera_info with K " << bad.K[0] << ", " << bad.K[4] << ", " << bad.width << "x"
+        << "no frame integrated after a camera_info with P " << bad.P[0] << ", " << bad.P[5] << ", K " << bad.K[0] << ", "
+        << bad.K[4] << ", " << bad.width << "x"
         << bad.height;
   }
 }
@@ -383,6 +389,38 @@ TEST_F(MapperTest, ACameraInfoInAnotherFrameThanTheDepthImageIsNamedInAWarning) 
   probe.sendReal();
   EXPECT_TRUE(spinUntil([&] { return probe.updates > before; }, 10.0)) << "the frame was not integrated";
   EXPECT_TRUE(spinUntil(warned, 10.0)) << "no warning naming both frames";
+}
+
+// A camera_info with lens distortion (a coefficient of D not 0: an image that is not rectified) is used and
+// said; the simulated camera's, D all 0, is not.
+TEST_F(MapperTest, ACameraInfoWithLensDistortionIsSaid) {
+  Probe probe;
+  ASSERT_TRUE(probe.connect());
+  std::vector<std::string> warnings;
+  ros::Subscriber log_sub = nh_.subscribe<rosgraph_msgs::Log>("/rosout", 100, [&](const rosgraph_msgs::Log::ConstPtr& m) {
+    if (m->level == rosgraph_msgs::Log::WARN && m->msg.find("/probe_mapper: ") != std::string::npos)
+      warnings.push_back(m->msg);
+  });
+  ASSERT_TRUE(spinUntil([&] { return log_sub.getNumPublishers() > 0; }, 30.0));
+  auto warned = [&] {
+    return std::any_of(warnings.begin(), warnings.end(), [&](const std::string& w) {
+      return w.find("camera_info gives lens distortion (D of model 'plumb_bob' is not 0)") != std::string::npos;
+    });
+  };
+  ASSERT_FALSE(probe.info->D.empty());
+  probe.info_pub.publish(*probe.info);
+  ASSERT_TRUE(probe.sendRealUntilIntegrated());
+  spinUntil([] { return false; }, 1.0);
+  EXPECT_FALSE(warned()) << "warned of the simulated camera's D, all 0";
+  sensor_msgs::CameraInfo raw = *probe.info;
+  raw.distortion_model = "plumb_bob";
+  raw.D.back() = 0.01;
+  probe.info_pub.publish(raw);
+  spinUntil([] { return false; }, 0.3);
+  const std::size_t before = probe.updates;
+  probe.sendReal();
+  EXPECT_TRUE(spinUntil([&] { return probe.updates > before; }, 10.0)) << "the frame was not integrated";
+  EXPECT_TRUE(spinUntil(warned, 10.0)) << "no word of the distortion";
 }
 
 // Frames that would put wrong data in the map, or read past an image's buffer, are skipped and the mapper

@@ -33,13 +33,23 @@ inline geometry_msgs::Point toPoint(const common::Vec3& v) {
 
 inline common::Vec3 toVec3(const geometry_msgs::Point& p) { return common::Vec3(p.x, p.y, p.z); }
 
-/// The pinhole intrinsics a camera_info gives (K's fx, fy, cx, cy), its sides clamped to int (an image's
-/// sides are ints; DepthIntrinsics::validate() judges the rest).
+/// The pinhole intrinsics of the rectified image a camera_info describes: P's fx, fy, cx, cy (P[0], P[5],
+/// P[2], P[6]), which sensor_msgs/CameraInfo gives for rectified images (a depth camera's image_rect_raw, as
+/// depth_image_proc reads it), or K's where P is unset (its fx or fy 0: a driver filling K alone); its sides
+/// clamped to int (an image's sides are ints; DepthIntrinsics::validate() judges the rest).
 inline map::DepthIntrinsics depthIntrinsics(const sensor_msgs::CameraInfo& info) {
   const auto side = [](std::uint32_t n) {
     return static_cast<int>(std::min<std::uint32_t>(n, static_cast<std::uint32_t>(std::numeric_limits<int>::max())));
   };
+  if (info.P[0] != 0.0 && info.P[5] != 0.0)
+    return {side(info.width), side(info.height), info.P[0], info.P[5], info.P[2], info.P[6]};
   return {side(info.width), side(info.height), info.K[0], info.K[4], info.K[2], info.K[5]};
+}
+
+/// Whether a camera_info gives lens distortion (a coefficient of D not 0): its image is then not the
+/// rectified one the mapper takes.
+inline bool hasDistortion(const sensor_msgs::CameraInfo& info) {
+  return std::any_of(info.D.begin(), info.D.end(), [](double d) { return d != 0.0; });
 }
 
 /// Heading (rad, about world z) of an orientation; a quaternion of any nonzero length gives the heading of
