@@ -77,6 +77,7 @@ TEST(Parameters, ANodeletWithAnInvalidOrMissingParameterDoesNotStartAndNamesIt) 
       {"bad_server_tolerance", "go_feap/TrajectoryServer", "optimizer: limit_tolerance"},  // NaN: read as 0 in silence
       {"bad_server_start_offset", "go_feap/TrajectoryServer", "server/max_start_offset"},  // 0.8 m, below the planner's 1 m tracking error
       {"bad_start", "go_feap/QuadrotorSim", "start"},                           // 100 m outside the maze
+      {"bad_start_in_wall", "go_feap/QuadrotorSim", "start' must lie in the scene's box, in free space"},  // in the outer wall
       {"bad_rate_factor", "go_feap/QuadrotorSim", "simulation/rate_factor"},    // 1e-9: the first step would wait 1e7 s
       {"bad_command_speed", "go_feap/QuadrotorSim", "simulation/max_command_speed"},  // 1e308: a guard letting anything by
       {"bad_warn_period", "go_feap/EsdfMapper", "mapper/warn_period"},          // 1e9 s: every warning silenced
