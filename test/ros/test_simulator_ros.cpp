@@ -8,6 +8,7 @@
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/PointCloud2.h>
+#include <sensor_msgs/point_cloud2_iterator.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
 
@@ -22,6 +23,7 @@
 
 #include "go_feap/PositionCommand.h"
 #include "go_feap/ros/conversions.h"
+#include "go_feap/world/scene_files.h"
 #include "ros_test_util.h"
 
 namespace {
@@ -88,7 +90,25 @@ TEST_F(SimulatorTest, CommandMovesOdomCameraStampsMatchNanIsIgnored) {
       },
       60.0))
       << "no odom or scene_cloud, or the camera's topics are not connected";
-  EXPECT_GT(cloud_->width * cloud_->height, 10000u);
+  // scene_cloud is the scene's occupied voxels, each once, at its centre, in the world frame.
+  {
+    auto scene = go_feap::world::makeScene("maze", 0);
+    ASSERT_TRUE(scene) << scene.message();
+    EXPECT_EQ(cloud_->header.frame_id, "world");
+    ASSERT_EQ(std::size_t{cloud_->width} * cloud_->height, scene->occupiedCount());
+    const auto& geo = scene->geometry();
+    std::vector<char> seen(geo.size(), 0);
+    std::size_t wrong = 0;
+    sensor_msgs::PointCloud2ConstIterator<float> x(*cloud_, "x"), y(*cloud_, "y"), z(*cloud_, "z");
+    for (; x != x.end(); ++x, ++y, ++z) {
+      const Eigen::Vector3d p(*x, *y, *z);
+      const go_feap::common::Index3 i = geo.coordToIndex(p);
+      if (!geo.inside(i) || !scene->occupied[geo.linear(i)] || (geo.indexToCoord(i) - p).norm() > 1e-5 ||
+          seen[geo.linear(i)]++)
+        ++wrong;
+    }
+    EXPECT_EQ(wrong, 0u) << "points not at the centre of an occupied voxel, or repeated";
+  }
   const Eigen::Vector3d start = position();
   // Maze seed 0 starts at the centre of cell (0, 0): (-9, -4, 1); 1 m ahead is free.
   EXPECT_LT((start - Eigen::Vector3d(-9, -4, 1)).norm(), 0.05);
