@@ -15,6 +15,7 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <map>
 #include <cstdint>
 #include <cmath>
 #include <filesystem>
@@ -320,6 +321,48 @@ struct Probe {
     return ::testing::AssertionFailure() << "none of 10 real frames was integrated";
   }
 };
+
+// esdf_slice, beside the occupied_cloud of the same stamp (published together), holds the known voxels of the
+// layer at mapper/esdf_slice_height, each with the distance to the nearest mapped obstacle: at least the
+// brute-force distance between voxel centres over the cloud's obstacles, at most a voxel diagonal more (the
+// ESDF's bound), truncated at esdf/max_distance.
+TEST_F(MapperTest, TheEsdfSliceHoldsTheDistanceToTheNearestMappedObstacle) {
+  double slice_height = 0.0, max_distance = 0.0, resolution = 0.0;
+  ASSERT_TRUE(ros::param::get("esdf_mapper/mapper/esdf_slice_height", slice_height));
+  ASSERT_TRUE(ros::param::get("esdf_mapper/esdf/max_distance", max_distance));
+  ASSERT_TRUE(ros::param::get("esdf_mapper/occupancy/resolution", resolution));
+  std::map<double, sensor_msgs::PointCloud2::ConstPtr> slices, clouds;
+  auto slice_sub = nh_.subscribe<sensor_msgs::PointCloud2>(
+      "esdf_slice", 5, [&](const sensor_msgs::PointCloud2::ConstPtr& m) { slices[m->header.stamp.toSec()] = m; });
+  auto cloud_sub = nh_.subscribe<sensor_msgs::PointCloud2>(
+      "occupied_cloud", 5, [&](const sensor_msgs::PointCloud2::ConstPtr& m) { clouds[m->header.stamp.toSec()] = m; });
+  double stamp = -1.0;
+  ASSERT_TRUE(spinUntil([&] {
+    for (const auto& [t, m] : slices)
+      if (clouds.count(t) && m->width > 100) stamp = t;
+    return stamp >= 0.0;
+  }, 60.0)) << "no esdf_slice of 100 points or more with its occupied_cloud";
+  std::vector<Vec3> obstacles;
+  for (sensor_msgs::PointCloud2ConstIterator<float> it(*clouds[stamp], "x"); it != it.end(); ++it)
+    obstacles.emplace_back(it[0], it[1], it[2]);
+  ASSERT_FALSE(obstacles.empty());
+  const double layer_z = (std::floor(slice_height / resolution) + 0.5) * resolution;  // the grid is on multiples of it
+  std::size_t points = 0, truncated = 0;
+  sensor_msgs::PointCloud2ConstIterator<float> it(*slices[stamp], "x"), d(*slices[stamp], "distance");
+  for (; it != it.end(); ++it, ++d) {
+    const Vec3 p(it[0], it[1], it[2]);
+    ++points;
+    ASSERT_NEAR(p.z(), layer_z, 1e-4) << "a slice point off the layer at " << slice_height << " m";
+    double best = max_distance;
+    for (const Vec3& o : obstacles) best = std::min(best, (o - p).norm());
+    truncated += best >= max_distance;
+    ASSERT_GE(*d, best - 1e-4) << "at " << p.transpose();
+    ASSERT_LE(*d, std::min(max_distance, best + std::sqrt(3.0) * resolution) + 1e-4) << "at " << p.transpose();
+  }
+  std::cout << points << " slice points, " << truncated << " truncated at " << max_distance << " m, against "
+            << obstacles.size() << " obstacles\n";
+  EXPECT_GT(points - truncated, 100u) << "few distances below the truncation: little tested";
+}
 
 // A camera_info the mapper cannot use (a zero K, NaN, a 0x0 image) is refused and the last valid
 // intrinsics stay, so the next real frame and its pose are integrated (a map_update each), where it used
