@@ -398,4 +398,27 @@ void FrontierFinder::refreshNeighbourCounts() {
   }
 }
 
+UpdatePath applyMapUpdate(FrontierFinder& finder, const map::OccupancyMap& map, std::uint64_t map_sequence,
+                          const std::vector<std::size_t>& map_changed, std::uint64_t last_sequence,
+                          const MapUpdateNote& note, double now) {
+  if (note.sequence != last_sequence + 1) {
+    finder.recomputeAll(map, now);
+    return UpdatePath::kRecomputed;
+  }
+  if (note.changed_voxels == 0) return UpdatePath::kUnchanged;
+  if (map_sequence == note.sequence) {
+    finder.update(map, map_changed, now);
+    return UpdatePath::kListed;
+  }
+  // The box's cubes to their centres, clamped to the map first: a box reaching far outside it would not fit
+  // a voxel index.
+  const auto& geo = map.geometry();
+  const Vec3 h = Vec3::Constant(0.5 * geo.resolution());
+  const Aabb bounds = geo.bounds();
+  const Vec3 lo = (note.changed_min + h).cwiseMax(bounds.min).cwiseMin(bounds.max);
+  const Vec3 hi = (note.changed_max - h).cwiseMax(bounds.min).cwiseMin(bounds.max);
+  finder.update(map, geo.coordToIndex(lo), geo.coordToIndex(hi), now);
+  return UpdatePath::kBoxed;
+}
+
 }  // namespace go_feap::frontier

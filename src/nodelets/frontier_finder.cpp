@@ -113,30 +113,21 @@ class FrontierFinder : public nodelet::Nodelet {
     {
       std::shared_lock<std::shared_mutex> map_lock(shared_->mutex);
       const map::OccupancyMap& occupancy = shared_->map->occupancy();
-      const bool gap = last_sequence_ != 0 && msg->sequence != last_sequence_ + 1;
-      if (!finder_ || gap) {
-        // First update, or updates were missed: the incremental path needs every change.
-        if (gap) NODELET_WARN_STREAM(getName() << ": map updates " << last_sequence_ + 1 << ".." << msg->sequence - 1
-                                               << " missed; recomputing all frontiers");
-        if (!finder_) {
-          finder_ = std::make_unique<frontier::FrontierFinder>(config_, occupancy.geometry(), box_);
-          finder_->continueIdsFrom(first_id_);
-        }
+      if (!finder_) {  // the first update: everything from the map
+        finder_ = std::make_unique<frontier::FrontierFinder>(config_, occupancy.geometry(), box_);
+        finder_->continueIdsFrom(first_id_);
         finder_->setActiveBand(band_.first, band_.second);
         finder_->recomputeAll(occupancy, now);
-      } else if (msg->changed_voxels > 0 && shared_->sequence == msg->sequence) {
-        // The map is still at this frame: its list of changed voxels is exact and cheap.
-        finder_->update(occupancy, shared_->last_changed, now);
-      } else if (msg->changed_voxels > 0) {
-        const auto& geo = occupancy.geometry();
-        const double h = 0.5 * geo.resolution();
-        // Clamped to the map first: a box reaching far outside it would not fit a voxel index.
-        const common::Aabb bounds = geo.bounds();
-        const common::Vec3 lo =
-            common::Vec3(msg->changed_min.x + h, msg->changed_min.y + h, msg->changed_min.z + h).cwiseMax(bounds.min).cwiseMin(bounds.max);
-        const common::Vec3 hi =
-            common::Vec3(msg->changed_max.x - h, msg->changed_max.y - h, msg->changed_max.z - h).cwiseMax(bounds.min).cwiseMin(bounds.max);
-        finder_->update(occupancy, geo.coordToIndex(lo), geo.coordToIndex(hi), now);
+      } else {
+        frontier::MapUpdateNote note;
+        note.sequence = msg->sequence;
+        note.changed_voxels = msg->changed_voxels;
+        note.changed_min = ros_conv::toVec3(msg->changed_min);
+        note.changed_max = ros_conv::toVec3(msg->changed_max);
+        if (frontier::applyMapUpdate(*finder_, occupancy, shared_->sequence, shared_->last_changed, last_sequence_,
+                                     note, now) == frontier::UpdatePath::kRecomputed)
+          NODELET_WARN_STREAM(getName() << ": map updates " << last_sequence_ + 1 << ".." << msg->sequence - 1
+                                        << " missed; recomputing all frontiers");
       }
     }
     ros_conv::publishComputeTime(compute_pub_, "frontier", t_compute);

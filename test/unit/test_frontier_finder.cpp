@@ -5,6 +5,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <optional>
 #include <random>
 #include <set>
 
@@ -226,6 +227,76 @@ TEST(FrontierFinder, IncrementalEqualsFullRecomputationOnRandomUpdates) {
     ASSERT_EQ(clusterSets(box, m.geometry()), clusterSets(full, m.geometry())) << at;
     ASSERT_EQ(clusterSets(list, m.geometry()), clusterSets(full, m.geometry())) << "list, " << at;
   });
+}
+
+// The frontier finder node's way with the mapper's updates (applyMapUpdate), against a finder recomputed from
+// the map after each: an update in order takes its frame's list of changed voxels; one handled after the
+// next frame was integrated takes its own box (the list is the later frame's: taken, this frame's changes
+// were lost); after one missed, everything is recomputed. Random box edits stand for the frames, delivered
+// in turn at once, late, after the next, or never.
+TEST(FrontierFinder, MapUpdatesHandledLateOrAfterAMissedOneEndAsTheMap) {
+  const frontier::FrontierConfig cfg = randomUpdateConfig();
+  for (int seed = 0; seed < 4; ++seed) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> ux(0.0, 3.0), uy(0.0, 2.0), uz(0.0, 1.0), size(0.1, 0.9);
+    std::uniform_int_distribution<int> state(0, 9);
+    map::OccupancyMap m(mapConfig(), kBox);
+    const common::GridGeometry& g = m.geometry();
+    frontier::FrontierFinder f(cfg, g, kBox);
+    f.recomputeAll(m, 0.0);
+    std::uint64_t last = 0;  // the last update the finder took
+    std::optional<frontier::MapUpdateNote> held;
+    std::map<frontier::UpdatePath, int> paths;
+    for (std::uint64_t frame = 1; frame <= 40; ++frame) {
+      const std::string at = "seed " + std::to_string(seed) + " frame " + std::to_string(frame);
+      // The frame: a box painted free, occupied or unknown; its note names the changed voxels' cubes.
+      const Vec3 c(ux(rng), uy(rng), uz(rng)), h(size(rng), size(rng), size(rng));
+      const int k = state(rng);
+      const VoxelState s = k < 6 ? VoxelState::kFree : (k < 9 ? VoxelState::kOccupied : VoxelState::kUnknown);
+      std::vector<std::size_t> changed;
+      Index3 a, b;
+      g.centreRange({c - h, c + h}, a, b);
+      for (int z = a.z(); z < b.z(); ++z)
+        for (int y = a.y(); y < b.y(); ++y)
+          for (int x = a.x(); x < b.x(); ++x)
+            if (m.state(Index3(x, y, z)) != s) changed.push_back(g.linear(Index3(x, y, z)));
+      paint(m, c - h, c + h, s);
+      frontier::MapUpdateNote note;
+      note.sequence = frame;
+      note.changed_voxels = changed.size();
+      if (!changed.empty()) {
+        Index3 lo = g.unlinear(changed.front()), hi = lo;
+        for (std::size_t l : changed) lo = lo.cwiseMin(g.unlinear(l)), hi = hi.cwiseMax(g.unlinear(l));
+        note.changed_min = g.origin() + lo.cast<double>() * g.resolution();
+        note.changed_max = g.origin() + (hi + Index3::Ones()).cast<double>() * g.resolution();
+      }
+      auto deliver = [&](const frontier::MapUpdateNote& n) {
+        const frontier::UpdatePath path = frontier::applyMapUpdate(f, m, frame, changed, last, n, static_cast<double>(frame));
+        ++paths[path];
+        if (n.sequence != last + 1) {
+          EXPECT_EQ(path, frontier::UpdatePath::kRecomputed) << at;
+        } else if (n.changed_voxels == 0) {
+          EXPECT_EQ(path, frontier::UpdatePath::kUnchanged) << at;
+        } else {
+          EXPECT_EQ(path, n.sequence == frame ? frontier::UpdatePath::kListed : frontier::UpdatePath::kBoxed) << at;
+        }
+        last = n.sequence;
+      };
+      switch (frame % 4) {
+        case 1: deliver(note); break;  // at once (after a missed one: recomputed)
+        case 2: held = note; break;    // late: handled after the next frame is in the map
+        case 3: deliver(*held), deliver(note); break;
+        default: break;                // missed
+      }
+      if (frame % 4 == 2 || frame % 4 == 0) continue;  // the map has a change the finder has not heard of (yet)
+      frontier::FrontierFinder full(cfg, g, kBox);
+      full.recomputeAll(m, static_cast<double>(frame));
+      ASSERT_EQ(clusterSets(f, g), clusterSets(full, g)) << at;
+    }
+    EXPECT_GT(paths[frontier::UpdatePath::kBoxed], 5) << "seed " << seed;
+    EXPECT_GT(paths[frontier::UpdatePath::kListed], 5) << "seed " << seed;
+    EXPECT_GT(paths[frontier::UpdatePath::kRecomputed], 5) << "seed " << seed;
+  }
 }
 
 // Without a size limit, the clusters after any update are the oracle's: the 26-connected components of

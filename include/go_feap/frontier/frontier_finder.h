@@ -161,4 +161,26 @@ class FrontierFinder {
   double band_min_ = -1e18, band_max_ = 1e18;
 };
 
+/// One map update as the mapper announces it (go_feap/MapUpdate): its frame's sequence number, how many
+/// voxels changed state, and the world box (m) of those voxels' cubes.
+struct MapUpdateNote {
+  std::uint64_t sequence = 0;
+  std::size_t changed_voxels = 0;
+  Vec3 changed_min = Vec3::Zero(), changed_max = Vec3::Zero();
+};
+
+/// How applyMapUpdate() brought a finder up to the map.
+enum class UpdatePath { kRecomputed, kListed, kBoxed, kUnchanged };
+
+/// Brings `finder`, which has taken every update up to `last_sequence`, up to the map for `note`. The map is at
+/// frame `map_sequence`, whose changed voxels are `map_changed`:
+/// - a gap in the sequence (updates missed or refused): recomputeAll(), the incremental path needs every change;
+/// - the map still at the note's frame: that frame's exact list of changed voxels (cheap);
+/// - the map already past it (the note handled after a later frame was integrated): the note's box, clamped to
+///   the map; the list is the later frame's, which would lose this frame's changes;
+/// - nothing changed: nothing.
+UpdatePath applyMapUpdate(FrontierFinder& finder, const map::OccupancyMap& map, std::uint64_t map_sequence,
+                          const std::vector<std::size_t>& map_changed, std::uint64_t last_sequence,
+                          const MapUpdateNote& note, double now);
+
 }  // namespace go_feap::frontier
