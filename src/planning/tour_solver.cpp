@@ -6,6 +6,7 @@
 #include <limits>
 #include <numeric>
 #include <random>
+#include <stdexcept>
 #include <string>
 #include <utility>
 
@@ -467,6 +468,24 @@ double tourCost(const Eigen::MatrixXd& cost, const std::vector<double>& xi, doub
     prev = k;
   }
   return j;
+}
+
+std::vector<int> insertCheapest(const Eigen::MatrixXd& cost, const std::vector<double>& xi, double lambda,
+                                const std::vector<int>& path, int v) {
+  const int n = static_cast<int>(xi.size());
+  std::vector<bool> on(n + 1, false);
+  for (int k : path) {
+    if (k < 1 || k > n || on[k]) throw std::invalid_argument("insertCheapest: a node out of range or repeated");
+    on[k] = true;
+  }
+  if (v < 1 || v > n || on[v]) throw std::invalid_argument("insertCheapest: the node to insert is out of range or on the path");
+  const std::vector<double> x = nodeXi(xi);
+  OpenPath open(cost, x, lambda);
+  std::vector<int> p{0};
+  p.insert(p.end(), path.begin(), path.end());
+  open.assign(std::move(p));
+  open.insert(v, cheapestInsertion(open, v));
+  return std::vector<int>(open.path().begin() + 1, open.path().end());
 }
 
 TourResult solveExact(const Eigen::MatrixXd& cost, const std::vector<double>& xi, double lambda) {

@@ -7,6 +7,7 @@
 #include <limits>
 #include <numeric>
 #include <random>
+#include <stdexcept>
 
 #include "go_feap/planning/tour_solver.h"
 
@@ -124,6 +125,47 @@ TEST(TourCost, HandComputedExample) {
   const TourResult exact = solveExact(p.cost, p.xi, p.lambda);
   ASSERT_TRUE(exact.status.ok()) << exact.status.message();
   EXPECT_EQ(exact.order, bruteForce(p).order);
+}
+
+// insertCheapest puts the node where J of the path grows least, against J in its arrival-time form at every
+// position; the order of the rest is kept. With lambda > 0 the omission term decides the place as much as
+// the travel does: in many instances the least added travel alone picks another place.
+TEST(InsertCheapest, TheNodeGoesWhereJOfThePathGrowsLeast) {
+  int decided_by_omission = 0;
+  for (unsigned seed = 0; seed < 200; ++seed) {
+    const Problem p = randomProblem(9, 9300 + seed, seed % 2 ? Kind::kUniform : Kind::kEuclidean);
+    std::mt19937 rng(seed);
+    std::vector<int> nodes(9);
+    std::iota(nodes.begin(), nodes.end(), 1);
+    std::shuffle(nodes.begin(), nodes.end(), rng);
+    const int m = static_cast<int>(seed % 9);
+    const std::vector<int> path(nodes.begin(), nodes.begin() + m);
+    const int v = nodes[m];
+    const std::vector<int> got = insertCheapest(p.cost, p.xi, p.lambda, path, v);
+    ASSERT_EQ(got.size(), path.size() + 1);
+    std::vector<int> rest = got;
+    rest.erase(std::find(rest.begin(), rest.end(), v));
+    ASSERT_EQ(rest, path) << "seed " << seed;
+    Problem travel = p;
+    travel.lambda = 0.0;
+    double best = std::numeric_limits<double>::infinity(), best_travel = best;
+    int at = -1, at_travel = -1;
+    for (int q = 0; q <= m; ++q) {
+      std::vector<int> with = path;
+      with.insert(with.begin() + q, v);
+      if (arrivalObjective(p, with) < best) best = arrivalObjective(p, with), at = q;
+      if (arrivalObjective(travel, with) < best_travel) best_travel = arrivalObjective(travel, with), at_travel = q;
+    }
+    EXPECT_NEAR(arrivalObjective(p, got), best, 1e-9 * best) << "seed " << seed << ": not the least J of " << m + 1
+                                                            << " places";
+    decided_by_omission += at != at_travel;
+  }
+  EXPECT_GT(decided_by_omission, 20);
+  const Problem p = randomProblem(5, 1, Kind::kUniform);
+  EXPECT_THROW(insertCheapest(p.cost, p.xi, p.lambda, {1, 2, 1}, 3), std::invalid_argument);
+  EXPECT_THROW(insertCheapest(p.cost, p.xi, p.lambda, {1, 2}, 2), std::invalid_argument);
+  EXPECT_THROW(insertCheapest(p.cost, p.xi, p.lambda, {1, 2}, 0), std::invalid_argument);
+  EXPECT_THROW(insertCheapest(p.cost, p.xi, p.lambda, {1, 6}, 3), std::invalid_argument);
 }
 
 TEST(SolveExact, MatchesBruteForceOnRandomAsymmetricInstances) {

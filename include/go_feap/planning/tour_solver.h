@@ -45,6 +45,13 @@ common::Status checkTourProblem(const Eigen::MatrixXd& cost, const std::vector<d
 double tourCost(const Eigen::MatrixXd& cost, const std::vector<double>& xi, double lambda,
                 const std::vector<int>& order);
 
+/// `path` (distinct frontier nodes of 1..N in visiting order from the UAV, not all of them) with node `v`
+/// (1..N, not on it) inserted where J of the path changes least, J of a path counting the xi of its own
+/// nodes: the step that builds solveHeuristic()'s insertion start and completes its warm start. Throws
+/// std::invalid_argument for a node out of range or repeated (the problem must pass checkTourProblem()).
+std::vector<int> insertCheapest(const Eigen::MatrixXd& cost, const std::vector<double>& xi, double lambda,
+                                const std::vector<int>& path, int v);
+
 /// Optimal order by Held-Karp DP over subsets. Refuses (error status) invalid problems and
 /// N > kMaxExactFrontiers. Ties are broken deterministically.
 TourResult solveExact(const Eigen::MatrixXd& cost, const std::vector<double>& xi, double lambda);
