@@ -270,6 +270,10 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
     Trajectory out;
     out.position = safeStop(request.start, request.velocity, optimizer.a_max);
     out.goal = request.target;
+    // Braking from speed comes to rest past the target (v^2 / 2 a_max, a metre at 2 m/s): short of its goal,
+    // so it is planned again before it ends; taken as ending at the target it was never replanned, and
+    // the vehicle hovered there, past the target, until the target changed.
+    out.partial = (out.position.position(out.position.duration()) - request.target).norm() > config.goal_tolerance;
     rep.path_status = planning::PathStatus::kFound;
     auto yaw = yawTurn(request.yaw, request.target_yaw, 0.0, optimizer, request.yaw_rate);
     if (!yaw) return R::Error("yaw spline failed: " + yaw.message());

@@ -1027,6 +1027,49 @@ TEST(Replan, AnObstacleMappedAheadWithinTheHorizonIsAPredictedCollision) {
   EXPECT_EQ(reason(T - 0.5), ReplanReason::kShortTimeLeft);
 }
 
+// The collision check that asks for a replan is the planner's own: optimizer/min_clearance (a wall mapped beside
+// the way ahead, nearer than that but not touching it, is a predicted collision) and optimizer/leave_distance
+// (a flight leaving a wall it starts near, as every plan from a vehicle that came near one does, is none).
+TEST(Replan, ThePredictedCollisionIsThePlannersClearanceAndLeaveRule) {
+  OptimizerConfig optimizer = optimizerConfig();
+  optimizer.min_clearance = 0.3;
+  const traj::TrajectoryPlannerConfig planner;
+  const ReplanConfig replan;
+  auto flight = [](const Vec3& from, const Vec3& to) {
+    traj::Trajectory t;
+    t.goal = to;
+    t.position = UniformBspline::fitPath(UniformBspline::resamplePolyline({from, to}, 0.3), 0.3, Vec3::Zero(), Vec3::Zero());
+    return t;
+  };
+  auto closest = [](const traj::Trajectory& t, const go_feap::map::Esdf& esdf, double from) {
+    double d = std::numeric_limits<double>::infinity();
+    for (int k = 0; k <= 2000; ++k) d = std::min(d, esdf.distance(t.position.position(from + (t.duration() - from) * k / 2000)));
+    return d;
+  };
+  {
+    World world(Vec3(6.0, 4.0, 2.0));
+    world.addBox(Index3(25, 21, 0), Index3(35, 21, 19));  // a wall beside the way: x 2.5-3.6 m, y 2.1-2.2 m
+    world.sync();
+    const traj::Trajectory beside = flight(Vec3(1.0, 1.95, 1.05), Vec3(5.0, 1.95, 1.05));
+    const double d = closest(beside, world.esdf(), 0.0);
+    ASSERT_GT(d, 0.5 * optimizer.min_clearance);
+    ASSERT_LT(d, optimizer.min_clearance);
+    EXPECT_EQ(traj::replanReason(&beside, 0.2, beside.goal, false, world.esdf(), replan, optimizer, planner),
+              ReplanReason::kPredictedCollision)
+        << "the way passes " << d << " m from the wall";
+  }
+  {
+    World world(Vec3(6.0, 4.0, 2.0));
+    world.addBox(Index3(8, 0, 0), Index3(8, 39, 19));  // a wall behind the start: x 0.8-0.9 m
+    world.sync();
+    const traj::Trajectory away = flight(Vec3(1.05, 2.05, 1.05), Vec3(5.0, 2.05, 1.05));
+    ASSERT_LT(world.esdf().distance(Vec3(1.05, 2.05, 1.05)), optimizer.min_clearance);
+    EXPECT_EQ(traj::replanReason(&away, 0.0, away.goal, false, world.esdf(), replan, optimizer, planner),
+              ReplanReason::kNone)
+        << "a flight leaving the wall it starts " << world.esdf().distance(Vec3(1.05, 2.05, 1.05)) << " m from";
+  }
+}
+
 TEST(Replan, FirstCollisionTimeMatchesFineSampling) {
   World world(Vec3(6.0, 4.0, 2.0));
   world.addBox(Index3(30, 0, 0), Index3(32, 39, 19));  // wall at x in [3.0, 3.3]
@@ -1161,6 +1204,34 @@ TEST(TrajectoryPlanner, TurnsGoOnFromTheReferenceYawRate) {
   }
   const traj::Trajectory look = traj::lookAroundTrajectory(request, planner, optimizer);
   EXPECT_NEAR(traj::sampleTrajectory(look, 0.0).yaw_dot, 0.8, 1e-9);
+}
+
+// A target where the moving reference is (a viewpoint numbered anew as the vehicle passes it) is a turn in
+// place braking first: it comes to rest past the target, so it is partial and planned again before its end
+// (short time left), where it was taken as ending at its target and the vehicle hovered past it for good. From
+// rest the turn ends at the target, and is not replanned for running out.
+TEST(TrajectoryPlanner, ATurnInPlaceBrakingPastItsTargetIsPlannedAgain) {
+  OpenRoom room(Vec3(12, 12, 3));
+  const OptimizerConfig optimizer = optimizerConfig();
+  const traj::TrajectoryPlannerConfig planner;
+  const traj::ReplanConfig replan;
+  traj::PlanRequest request;
+  request.start = request.target = Vec3(4.05, 6.05, 1.55);
+  request.yaw = 0.0;
+  request.target_yaw = 1.0;
+  for (const double speed : {0.0, 1.5}) {
+    request.velocity = Vec3(speed, 0.0, 0.0);
+    const auto planned = traj::planTrajectory(request, room.astar, room.world.esdf(), optimizer, planner);
+    ASSERT_TRUE(planned) << planned.message();
+    const Vec3 end = planned->position.position(planned->position.duration());
+    const double past = (end - request.target).norm();
+    EXPECT_NEAR(past, speed * speed / (2.0 * optimizer.a_max), 0.05) << speed << " m/s";
+    EXPECT_EQ(planned->partial, speed > 0.0) << speed << " m/s: comes to rest " << past << " m past the target";
+    const double t_end = std::max(planned->duration() - 0.5 * replan.min_time_left, 0.0);
+    EXPECT_EQ(traj::replanReason(&*planned, t_end, request.target, false, room.world.esdf(), replan, optimizer, planner),
+              speed > 0.0 ? traj::ReplanReason::kShortTimeLeft : traj::ReplanReason::kNone)
+        << speed << " m/s";
+  }
 }
 
 // The goal may snap to flyable space only goal_tolerance far (the start up to snap_radius): a viewpoint inside a
