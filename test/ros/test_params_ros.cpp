@@ -64,6 +64,10 @@ TEST(Parameters, ANodeletWithAnInvalidOrMissingParameterDoesNotStartAndNamesIt) 
       {"bad_pose_tolerance", "go_feap/EsdfMapper", "mapper/pose_tolerance"},    // 5 s
       {"bad_map_size", "go_feap/EsdfMapper", "exploration_box"},                // 1e6 m long: 2.9e10 voxels
       {"bad_cluster_extent", "go_feap/LocalPlanner", "frontier/max_cluster_extent"},  // NaN
+      {"bad_local_input_speed", "go_feap/LocalPlanner", "local/max_input_speed"},  // NaN: every odometry refused
+      {"bad_global_rate", "go_feap/GlobalPlanner", "global/rate"},              // 0: no tour after the first, in silence
+      {"bad_sample_rate", "go_feap/MetricsRecorder", "metrics/sample_rate"},    // 0 Hz: a timer of infinite period
+      {"bad_progress_period", "go_feap/MetricsRecorder", "metrics/progress_period"},  // NaN
       {"bad_camera_extrinsic", "go_feap/DepthCamera", "depth_camera/T_B_C"},    // a NaN translation
       {"bad_camera_offset", "go_feap/DepthCamera", "depth_camera/T_B_C"},      // 100 mm written as 100 m
       {"bad_odometry_camera_offset", "go_feap/OdometryTf", "T_B_C"},            // likewise, on board
