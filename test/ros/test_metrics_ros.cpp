@@ -640,8 +640,12 @@ TEST(LayerManager, BlacklistFollowsTheFrontiersListed) {
   auto blacklist_sub = nh.subscribe<std_msgs::UInt32MultiArray>(
       "probe/blacklist", 10, [&](const std_msgs::UInt32MultiArray::ConstPtr& m) { lists.push_back(m->data); });
   int statuses = 0;
+  go_feap::ExplorationStatus::ConstPtr last_status;
   auto status_sub = nh.subscribe<go_feap::ExplorationStatus>("probe/status", 50,
-                                                             [&](const go_feap::ExplorationStatus::ConstPtr&) { ++statuses; });
+                                                             [&](const go_feap::ExplorationStatus::ConstPtr& m) {
+                                                               ++statuses;
+                                                               last_status = m;
+                                                             });
   ASSERT_TRUE(spinUntil([&] {
     return frontiers_pub.getNumSubscribers() > 0 && failed_pub.getNumSubscribers() > 0 &&
            blacklist_sub.getNumPublishers() > 0 && status_sub.getNumPublishers() > 0 && clock_pub.getNumSubscribers() > 0;
@@ -678,13 +682,22 @@ TEST(LayerManager, BlacklistFollowsTheFrontiersListed) {
       << " ids, the first " << (lists.back().empty() ? 0u : lists.back().front()) << ")";
   for (const Ids& l : lists)
     for (std::uint32_t id : l) EXPECT_TRUE(id == 5 || id == 6) << "blacklisted " << id;
+  // The status counts the frontiers listed (one, 6) and those of them blacklisted (6): summary.json's
+  // blacklisted_frontiers, how a run "complete" with frontiers left unexplored shows.
+  const int seen = statuses;
+  EXPECT_TRUE(tick_until([&] { return statuses >= seen + 2; }));
+  ASSERT_TRUE(last_status);
+  EXPECT_EQ(last_status->frontier_count, 1u);
+  EXPECT_EQ(last_status->blacklisted_frontiers, 1u);
   // Latched: a subscriber that comes later (a global planner loaded again, rostopic echo) hears the blacklist
   // as it stands, with the clock held.
   std::vector<Ids> late_lists;
   auto late_sub = nh.subscribe<std_msgs::UInt32MultiArray>(
       "probe/blacklist", 10, [&](const std_msgs::UInt32MultiArray::ConstPtr& m) { late_lists.push_back(m->data); });
   EXPECT_TRUE(spinUntil([&] { return !late_lists.empty(); }, 5.0)) << "no blacklist for a later subscriber";
-  if (!late_lists.empty()) EXPECT_EQ(late_lists.back(), Ids{6});
+  if (!late_lists.empty()) {
+    EXPECT_EQ(late_lists.back(), Ids{6});
+  }
 }
 
 // A latched EXPLORE status on `topic`: the probe planners act only while the exploration is under way.
