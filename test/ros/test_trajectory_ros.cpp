@@ -21,6 +21,7 @@
 #include "go_feap/PositionCommand.h"
 #include "go_feap/ViewpointPath.h"
 #include "go_feap/ros/bspline_conversion.h"
+#include "go_feap/ros/conversions.h"
 #include "go_feap/world/scene_files.h"
 #include "flight_util.h"
 #include "ros_test_util.h"
@@ -388,6 +389,7 @@ TEST_F(TrajectoryTargetTest, AnOdometryJumpAwayFromTheReferenceIsPlannedFromTheO
   // odometry): up to five new targets are sent until one is planned from a command.
   std::string tries;
   bool from_command = false;
+  const Vec3 commanded_acceleration(0.3, -0.2, 0.0);
   for (int attempt = 0; attempt < 5 && !from_command; ++attempt) {
     std::vector<double> stamps;
     goal = this->target(odometry_pose, 4 + attempt);
@@ -401,6 +403,10 @@ TEST_F(TrajectoryTargetTest, AnOdometryJumpAwayFromTheReferenceIsPlannedFromTheO
           if (late.due()) {
             go_feap::PositionCommand m = command();
             m.header.stamp = ros::Time::now() - ros::Duration(0.06);
+            // The reference 0.3 m short of the target, accelerating and turning: a plan from it keeps all of it.
+            m.position = go_feap::ros_conv::toPoint(odometry_pose - 0.3 * forward_);
+            m.acceleration.x = commanded_acceleration.x(), m.acceleration.y = commanded_acceleration.y();
+            m.yaw_dot = 0.4;
             stamps.push_back(m.header.stamp.toSec());
             cmd_pub.publish(m);
           }
@@ -413,6 +419,11 @@ TEST_F(TrajectoryTargetTest, AnOdometryJumpAwayFromTheReferenceIsPlannedFromTheO
     tries += " " + std::to_string(start) + " (arrived " + std::to_string(received.back()) + ")";
     if (from_command) {
       EXPECT_LE(start, received.back() - 0.05) << "starts when it was planned, not when its start state held";
+      const go_feap::trajectory::TrajectorySample first = go_feap::trajectory::sampleTrajectory(planned.back(), 0.0);
+      EXPECT_LT((first.position - (odometry_pose - 0.3 * forward_)).norm(), 0.02) << first.position.transpose();
+      EXPECT_LT((first.acceleration - commanded_acceleration).norm(), 1e-6)
+          << "starts at acceleration " << first.acceleration.transpose() << ", not the command's";
+      EXPECT_NEAR(first.yaw_dot, 0.4, 1e-6) << "starts at yaw rate " << first.yaw_dot << ", not the command's";
     }
   }
   EXPECT_TRUE(from_command) << "no plan of five started at the stamp of a command:" << tries;
