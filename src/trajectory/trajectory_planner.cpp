@@ -269,11 +269,11 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
   auto turnInPlace = [&]() -> R {
     Trajectory out;
     out.position = safeStop(request.start, request.velocity, optimizer.a_max);
+    // Braking from speed comes to rest past the target (v^2 / 2 a_max, a metre at 2 m/s), and is taken as
+    // ending there all the same: not replanned back to the target. Marked partial (replanned before its end),
+    // it flew the vehicle back to views it had taken in passing, +96 and +118 s on powerplant seeds 2 and 4
+    // (docs/benchmark-history.md, twenty-ninth session: 8cb9aa4, reverted); the frontier is seen in passing.
     out.goal = request.target;
-    // Braking from speed comes to rest past the target (v^2 / 2 a_max, a metre at 2 m/s): short of its goal,
-    // so it is planned again before it ends; taken as ending at the target it was never replanned, and
-    // the vehicle hovered there, past the target, until the target changed.
-    out.partial = (out.position.position(out.position.duration()) - request.target).norm() > config.goal_tolerance;
     rep.path_status = planning::PathStatus::kFound;
     auto yaw = yawTurn(request.yaw, request.target_yaw, 0.0, optimizer, request.yaw_rate);
     if (!yaw) return R::Error("yaw spline failed: " + yaw.message());

@@ -1206,34 +1206,6 @@ TEST(TrajectoryPlanner, TurnsGoOnFromTheReferenceYawRate) {
   EXPECT_NEAR(traj::sampleTrajectory(look, 0.0).yaw_dot, 0.8, 1e-9);
 }
 
-// A target where the moving reference is (a viewpoint numbered anew as the vehicle passes it) is a turn in
-// place braking first: it comes to rest past the target, so it is partial and planned again before its end
-// (short time left), where it was taken as ending at its target and the vehicle hovered past it for good. From
-// rest the turn ends at the target, and is not replanned for running out.
-TEST(TrajectoryPlanner, ATurnInPlaceBrakingPastItsTargetIsPlannedAgain) {
-  OpenRoom room(Vec3(12, 12, 3));
-  const OptimizerConfig optimizer = optimizerConfig();
-  const traj::TrajectoryPlannerConfig planner;
-  const traj::ReplanConfig replan;
-  traj::PlanRequest request;
-  request.start = request.target = Vec3(4.05, 6.05, 1.55);
-  request.yaw = 0.0;
-  request.target_yaw = 1.0;
-  for (const double speed : {0.0, 1.5}) {
-    request.velocity = Vec3(speed, 0.0, 0.0);
-    const auto planned = traj::planTrajectory(request, room.astar, room.world.esdf(), optimizer, planner);
-    ASSERT_TRUE(planned) << planned.message();
-    const Vec3 end = planned->position.position(planned->position.duration());
-    const double past = (end - request.target).norm();
-    EXPECT_NEAR(past, speed * speed / (2.0 * optimizer.a_max), 0.05) << speed << " m/s";
-    EXPECT_EQ(planned->partial, speed > 0.0) << speed << " m/s: comes to rest " << past << " m past the target";
-    const double t_end = std::max(planned->duration() - 0.5 * replan.min_time_left, 0.0);
-    EXPECT_EQ(traj::replanReason(&*planned, t_end, request.target, false, room.world.esdf(), replan, optimizer, planner),
-              speed > 0.0 ? traj::ReplanReason::kShortTimeLeft : traj::ReplanReason::kNone)
-        << speed << " m/s";
-  }
-}
-
 // The goal may snap to flyable space only goal_tolerance far (the start up to snap_radius): a viewpoint inside a
 // box, whose nearest flyable voxel the search reaches 0.3 .. 1 m off, is refused as goal_blocked, not flown to
 // short of it.
