@@ -139,21 +139,19 @@ class LocalPlanner : public nodelet::Nodelet {
       return;
     }
     std::lock_guard<std::mutex> lock(mutex_);
-    const bool gap = last_update_ != 0 && msg->sequence != last_update_ + 1;
+    frontier::MapUpdateNote note;
+    note.sequence = msg->sequence;
+    note.changed_voxels = msg->changed_voxels;
+    note.changed_min = ros_conv::toVec3(msg->changed_min);
+    note.changed_max = ros_conv::toVec3(msg->changed_max);
+    const std::uint64_t last = last_update_;
     last_update_ = msg->sequence;
-    if (gap) {
-      cache_.retain({});
+    if (!shared_) {  // nothing sampled on a map yet; after a gap, nothing kept
+      if (last != 0 && note.sequence != last + 1) cache_.retain({});
       return;
     }
-    if (msg->changed_voxels == 0 || !shared_) return;
     std::shared_lock<std::shared_mutex> map_lock(shared_->mutex);
-    if (shared_->sequence == msg->sequence) {
-      cache_.forgetChanged(shared_->map->occupancy().geometry(), shared_->last_changed);
-    } else {
-      const common::Vec3 lo(msg->changed_min.x, msg->changed_min.y, msg->changed_min.z);
-      const common::Vec3 hi(msg->changed_max.x, msg->changed_max.y, msg->changed_max.z);
-      cache_.forgetChanged(common::Aabb{lo, hi});
-    }
+    cache_.forgetFor(note, last, shared_->sequence, shared_->map->occupancy().geometry(), shared_->last_changed);
   }
 
   void onOdom(const nav_msgs::Odometry::ConstPtr& msg) {

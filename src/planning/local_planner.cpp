@@ -421,6 +421,20 @@ void ViewpointCache::forgetChanged(const common::Aabb& changed) {
   }
 }
 
+void ViewpointCache::forgetFor(const frontier::MapUpdateNote& note, std::uint64_t last_sequence,
+                               std::uint64_t map_sequence, const common::GridGeometry& geometry,
+                               const std::vector<std::size_t>& map_changed) {
+  if (last_sequence != 0 && note.sequence != last_sequence + 1) {
+    entries_.clear();
+    return;
+  }
+  if (note.changed_voxels == 0) return;
+  if (map_sequence == note.sequence)
+    forgetChanged(geometry, map_changed);
+  else
+    forgetChanged(common::Aabb{note.changed_min, note.changed_max});
+}
+
 void ViewpointCache::retain(const std::vector<std::uint32_t>& ids) {
   std::unordered_map<std::uint32_t, Entry> kept;
   for (std::uint32_t id : ids) {

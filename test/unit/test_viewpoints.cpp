@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -745,6 +746,80 @@ TEST(Viewpoints, CacheGivesWhatSamplingAnewGivesAfterAnyNearbyChange) {
       }
     }
   }
+  EXPECT_GE(moved, 20) << "too few toggles changed the viewpoints for the test to tell";
+}
+
+// The local planner node's way with the mapper's updates (ViewpointCache::forgetFor): one voxel toggled a
+// frame, each frame's update delivered at once, late (after the next frame is in the map: by its box, the
+// map's list being the later frame's), or never (the next one then shows a gap and everything is
+// forgotten). The frames delivered late or never toggle a voxel near the viewpoints, the others one far
+// beyond their reach, which forgets nothing. After each delivery the cache gives what sampling anew gives.
+TEST(Viewpoints, CacheFollowsUpdatesDeliveredLateOrAfterAMissedOne) {
+  ViewpointConfig cfg = testConfig();
+  cfg.min_visible = 1;
+  cfg.height_offsets = {0.0};
+  const double z_min = 0.4, z_max = 1.4;
+  World w(Index3(100, 40, 20));  // 10 m long: the far end lies beyond the viewpoints' reach
+  const Index3 hole(20, 20, 9);
+  w.set(hole, hole, VoxelState::kUnknown);
+  const Frontier f = frontierOf(w);
+  go_feap::planning::ViewpointCache cache;
+  ASSERT_FALSE(cache.get(f, w.map(), w.esdf(), z_min, z_max, cfg).empty());
+  Rng rng(23);
+  const double r = *std::max_element(cfg.ring_radii.begin(), cfg.ring_radii.end());
+  const int n_angles = static_cast<int>(std::lround(2.0 * kPi / cfg.angular_step));
+  std::uint64_t last = 0;
+  std::optional<go_feap::frontier::MapUpdateNote> held;
+  Index3 late_voxel = Index3::Zero();
+  int compared = 0, moved = 0;
+  for (std::uint64_t frame = 1; frame <= 400; ++frame) {
+    // A voxel within the clearance (and a voxel) of a candidate position on the outer ring, toggled.
+    const double theta = 2.0 * kPi * rng(0, n_angles - 1) / n_angles, d = cfg.clearance + kRes;
+    const bool near = frame % 2 == 0;  // the frames delivered late or never
+    const Vec3 p = near ? Vec3(Vec3(f.average.x() + r * std::cos(theta), f.average.y() + r * std::sin(theta), f.average.z()) +
+                               Vec3(rng.uniform(-d, d), rng.uniform(-d, d), rng.uniform(-d, d)))
+                        : Vec3(rng.uniform(7.0, 9.9), rng.uniform(0.0, 3.9), rng.uniform(0.0, 1.9));
+    // The frame never delivered toggles back what the late one toggled: unheard, it leaves the cache short
+    // of a viewpoint that sampling anew finds again.
+    const Index3 idx = frame % 4 == 0 ? late_voxel : w.geo().coordToIndex(p);
+    if (frame % 4 == 2) late_voxel = idx;
+    std::vector<std::size_t> changed;
+    go_feap::frontier::MapUpdateNote note;
+    note.sequence = frame;
+    if (w.geo().inside(idx) && (idx - hole).cwiseAbs().maxCoeff() > 1) {
+      const std::vector<Viewpoint> before = sampleViewpoints(f, w.map(), w.esdf(), z_min, z_max, cfg);
+      w.set(idx, idx, w.map().state(idx) == VoxelState::kOccupied ? VoxelState::kFree : VoxelState::kOccupied);
+      const std::vector<Viewpoint> after = sampleViewpoints(f, w.map(), w.esdf(), z_min, z_max, cfg);
+      moved += before.size() != after.size() ||
+               !std::equal(before.begin(), before.end(), after.begin(),
+                           [](const Viewpoint& a, const Viewpoint& b) { return a.position == b.position; });
+      changed.push_back(w.geo().linear(idx));
+      note.changed_voxels = 1;
+      note.changed_min = w.geo().origin() + idx.cast<double>() * kRes;
+      note.changed_max = note.changed_min + Vec3::Constant(kRes);
+    }
+    auto deliver = [&](const go_feap::frontier::MapUpdateNote& n) {
+      cache.forgetFor(n, last, frame, w.geo(), changed);
+      last = n.sequence;
+    };
+    switch (frame % 4) {
+      case 1: deliver(note); break;
+      case 2: held = note; break;
+      case 3: deliver(*held), deliver(note); break;
+      default: break;  // missed
+    }
+    if (frame % 4 == 2 || frame % 4 == 0) continue;  // the map has a change the cache has not heard of (yet)
+    const std::vector<Viewpoint> want = sampleViewpoints(f, w.map(), w.esdf(), z_min, z_max, cfg);
+    const std::vector<Viewpoint> have = cache.get(f, w.map(), w.esdf(), z_min, z_max, cfg);
+    ++compared;
+    ASSERT_EQ(have.size(), want.size()) << "frame " << frame;
+    for (std::size_t i = 0; i < want.size(); ++i) {
+      ASSERT_EQ(have[i].position, want[i].position) << "frame " << frame;
+      ASSERT_EQ(have[i].yaw, want[i].yaw) << "frame " << frame;
+      ASSERT_EQ(have[i].visible_cells, want[i].visible_cells) << "frame " << frame;
+    }
+  }
+  EXPECT_EQ(compared, 200);
   EXPECT_GE(moved, 20) << "too few toggles changed the viewpoints for the test to tell";
 }
 
