@@ -315,12 +315,12 @@ void ExplorationRun::planStep() {
   }
   const frontier::Viewpoint& vp = plan->path.front();
   const double heading = yaw();
-  const planning::TargetDecision decision = planning::decideTarget(
+  const planning::TargetStep step = planning::stepTarget(
       current ? &*current : nullptr, vp,
       [&](const frontier::Viewpoint& v) { return planning::pathCost(*distance_astar_, position, velocity, heading, v, config_.local); },
-      t_, config_.viewpoints.min_visible, config_.local);
+      t_, config_.viewpoints.min_visible, config_.local, visited_);
+  const planning::TargetDecision decision = step.decision;
   if (decision == planning::TargetDecision::kKeep) return;
-  if (current && current->reached) visited_.add(current->viewpoint, config_.local);
   if (decision == planning::TargetDecision::kReachedInVain) {
     // The frontier the same target is proposed for now (the target's own may have been regrown under a new id).
     const std::uint32_t frontier = plan->frontier_ids.front();
@@ -336,9 +336,7 @@ void ExplorationRun::planStep() {
   what << "target frontier " << plan->frontier_ids.front() << " viewpoint " << vp.position.transpose() << " yaw "
        << vp.yaw << " (tour of " << tour->frontier_ids.size() << ", " << summaries.size() << " frontiers)";
   log(what.str());
-  // Only a target replacing another counts: after a failed plan the same target is chosen anew, which
-  // the failed attempts on its frontier already count.
-  if (current && visited_.choose(vp, t_, config_.local)) {
+  if (step.exhausted) {
     std::ostringstream exhausted;
     exhausted << "this target's place was chosen " << config_.local.max_choices << " times within "
               << config_.local.choice_window << " s: it is not proposed again";

@@ -391,17 +391,17 @@ class LocalPlanner : public nodelet::Nodelet {
     // worth flying to; report a frontier that its reached viewpoint does not clear.
     const frontier::Viewpoint& proposal = plan->path.front();
     // Targets are compared by path, not straight line (pathCost()): under the map lock.
-    const planning::TargetDecision decision = planning::decideTarget(
+    const planning::TargetStep step = planning::stepTarget(
         current ? &*current : nullptr, proposal,
         [&](const frontier::Viewpoint& v) { return planning::pathCost(*astar_, *position_, velocity_, yaw_, v, local_config_); },
-        now, viewpoint_config_.min_visible, local_config_);
+        now, viewpoint_config_.min_visible, local_config_, visited_);
+    const planning::TargetDecision decision = step.decision;
     ros_conv::publishComputeTime(compute_pub_, "local", t_compute);
     map_lock.unlock();
     if (decision == planning::TargetDecision::kKeep) {
       repeatTarget();  // the kept target
       return;
     }
-    if (current && current->reached) visited_.add(current->viewpoint, local_config_);
     if (decision == planning::TargetDecision::kReachedInVain) {
       // The frontier the same target is proposed for now: the target's own may have been regrown under a new
       // id meanwhile, and a failure of an id that is gone is forgotten (it was never blacklisted).
@@ -415,9 +415,7 @@ class LocalPlanner : public nodelet::Nodelet {
       last_out_.reset();
       return;
     }
-    // Only a target replacing another counts: after a failed plan the same target is chosen anew, which
-    // the failed attempts on its frontier already count.
-    if (current && visited_.choose(proposal, now, local_config_))
+    if (step.exhausted)
       NODELET_INFO_STREAM(getName() << ": the place of the target for frontier " << plan->frontier_ids.front()
                                     << " was chosen " << local_config_.max_choices << " times within "
                                     << local_config_.choice_window << " s: it is not proposed again");

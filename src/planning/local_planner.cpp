@@ -421,6 +421,19 @@ void ViewpointCache::forgetChanged(const common::Aabb& changed) {
   }
 }
 
+TargetStep stepTarget(const CurrentTarget* current, const frontier::Viewpoint& proposal,
+                      const std::function<double(const frontier::Viewpoint&)>& cost, double t, int min_visible,
+                      const LocalPlannerConfig& config, VisitedViewpoints& visited) {
+  TargetStep step;
+  step.decision = decideTarget(current, proposal, cost, t, min_visible, config);
+  if (step.decision == TargetDecision::kKeep) return step;
+  if (current && current->reached) visited.add(current->viewpoint, config);
+  // Only a target replacing another counts: after a failed plan the same target is chosen anew, which the
+  // failed attempts on its frontier already count.
+  if (step.decision != TargetDecision::kReachedInVain && current) step.exhausted = visited.choose(proposal, t, config);
+  return step;
+}
+
 void ViewpointCache::forgetFor(const frontier::MapUpdateNote& note, std::uint64_t last_sequence,
                                std::uint64_t map_sequence, const common::GridGeometry& geometry,
                                const std::vector<std::size_t>& map_changed) {

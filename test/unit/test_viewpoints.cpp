@@ -1149,6 +1149,63 @@ TEST(Viewpoints, PosesReachedMaxVisitsTimesAreNoLongerProposed) {
             0.1);
 }
 
+// stepTarget, the rule the LocalPlanner nodelet and go_feap_bench share: a kept target counts nothing; one
+// replaced after it was reached counts a visit, and its replacement a choice of its place; a target reached
+// in vain counts the visit but no choice; the first target (none to replace) no choice. max_choices choices
+// of one place exhaust it, and the step that does says so.
+TEST(Viewpoints, StepTargetCountsVisitsAndChoicesAsTheNodeletAndBenchDo) {
+  go_feap::planning::LocalPlannerConfig local;
+  local.max_choices = 3;
+  local.max_visits = 2;
+  local.commit_time = 1.5;
+  const int min_visible = 5;
+  Viewpoint a, b;
+  a.position = Vec3(1.0, 1.0, 1.0), a.yaw = 0.0;
+  b.position = Vec3(5.0, 1.0, 1.0), b.yaw = 0.0;
+  auto cost = [](const Viewpoint&) { return 1.0; };
+  go_feap::planning::VisitedViewpoints visited;
+  using go_feap::planning::TargetDecision;
+  // The first target: nothing to replace, no choice counted.
+  auto step = go_feap::planning::stepTarget(nullptr, a, cost, 0.0, min_visible, local, visited);
+  EXPECT_EQ(step.decision, TargetDecision::kSwitch);
+  EXPECT_FALSE(step.exhausted);
+  // Kept (committed 0.5 s ago, much left to see): nothing counted.
+  go_feap::planning::CurrentTarget current;
+  current.viewpoint = a, current.committed_at = 0.0, current.remaining_visible = min_visible;
+  step = go_feap::planning::stepTarget(&current, b, cost, 0.5, min_visible, local, visited);
+  EXPECT_EQ(step.decision, TargetDecision::kKeep);
+  EXPECT_EQ(visited.size(), 0u);
+  // a reached, b proposed: a's visit counts, and b's choice.
+  current.reached = true;
+  step = go_feap::planning::stepTarget(&current, b, cost, 2.0, min_visible, local, visited);
+  EXPECT_EQ(step.decision, TargetDecision::kSwitch);
+  EXPECT_EQ(visited.size(), 1u);
+  // b reached in vain (proposed again once there, the camera settled): the visit counts, no choice.
+  current.viewpoint = b, current.committed_at = 2.0, current.reached = true;
+  step = go_feap::planning::stepTarget(&current, b, cost, 4.0, min_visible, local, visited);
+  EXPECT_EQ(step.decision, TargetDecision::kReachedInVain);
+  EXPECT_EQ(visited.size(), 2u);
+  EXPECT_FALSE(step.exhausted);
+  // b chosen twice more to replace a target not reached (seen out): the third choice in the window exhausts it.
+  current.viewpoint = a, current.reached = false, current.remaining_visible = 0;
+  step = go_feap::planning::stepTarget(&current, b, cost, 6.0, min_visible, local, visited);
+  EXPECT_EQ(step.decision, TargetDecision::kSwitch);
+  EXPECT_FALSE(step.exhausted);
+  EXPECT_FALSE(visited.exhausted(b, local));
+  step = go_feap::planning::stepTarget(&current, b, cost, 8.0, min_visible, local, visited);
+  EXPECT_TRUE(step.exhausted);
+  EXPECT_TRUE(visited.exhausted(b, local));
+  EXPECT_EQ(visited.size(), 2u);  // no visit counted for targets not reached
+  // a chosen twice to replace b: two choices of a within the window, its first (no target replaced) not one.
+  current.viewpoint = b;
+  for (const double t : {10.0, 12.0}) {
+    step = go_feap::planning::stepTarget(&current, a, cost, t, min_visible, local, visited);
+    EXPECT_EQ(step.decision, TargetDecision::kSwitch);
+  }
+  EXPECT_FALSE(step.exhausted);
+  EXPECT_FALSE(visited.exhausted(a, local));
+}
+
 // A place chosen max_choices times within choice_window is exhausted, reached or not, at any height within
 // choice_radius and heading within same_target_yaw, and left out of the local plan: two viewpoints whose
 // frontier regrows with a new id on every pass (so that neither is reached nor its frontier failed) cannot

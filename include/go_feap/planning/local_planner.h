@@ -275,6 +275,18 @@ class VisitedViewpoints {
   std::vector<Choice> exhausted_places_;  ///< chosen max_choices times within choice_window
 };
 
+/// A local planning step's target rule, as the LocalPlanner nodelet and go_feap_bench both take it:
+/// decideTarget() on `proposal`; unless the current target is kept, its visit is counted in `visited` when it
+/// was reached, and a proposal that replaces it (not a reached-in-vain one) counts as a choice of its place
+/// (VisitedViewpoints::choose()). `exhausted` says that choice exhausted the place.
+struct TargetStep {
+  TargetDecision decision = TargetDecision::kKeep;
+  bool exhausted = false;
+};
+TargetStep stepTarget(const CurrentTarget* current, const frontier::Viewpoint& proposal,
+                      const std::function<double(const frontier::Viewpoint&)>& cost, double t, int min_visible,
+                      const LocalPlannerConfig& config, VisitedViewpoints& visited);
+
 /// Candidate viewpoints kept per frontier between planning steps (FUEL keeps them in the frontier
 /// the same way): a frontier keeps its id only while its cells are unchanged, so its viewpoints stay
 /// what sampleViewpoints() gave, except where the map has since filled in; get() re-checks each
