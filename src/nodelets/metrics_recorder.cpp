@@ -247,14 +247,9 @@ class MetricsRecorder : public nodelet::Nodelet {
       pose.header.frame_id = world_frame_;
       pose.pose.position.x = position_->x(), pose.pose.position.y = position_->y(), pose.pose.position.z = position_->z();
       pose.pose.orientation.w = 1.0;
-      // Sent whole at every sample: kept below kMaxPathPoses by dropping every other pose (the message and
-      // its copies grew with the run, at sample_rate up to 1000 Hz without bound).
-      if (path_.poses.size() >= kMaxPathPoses) {
-        std::size_t kept = 0;
-        for (std::size_t i = 0; i < path_.poses.size(); i += 2) path_.poses[kept++] = path_.poses[i];
-        path_.poses.resize(kept);
-      }
-      path_.poses.push_back(pose);
+      // Sent whole at every sample: at most kMaxPathPoses poses, evenly over the run, ending at the latest.
+      trail_.add(pose);
+      path_.poses = trail_.items();
       path_.header.stamp = pose.header.stamp;
       if (path_pub_.getNumSubscribers() > 0) path_pub_.publish(path_);
     }
@@ -348,6 +343,7 @@ class MetricsRecorder : public nodelet::Nodelet {
   ros::Publisher text_pub_, coverage_pub_, path_pub_;
   nav_msgs::Path path_;
   static constexpr std::size_t kMaxPathPoses = 4096;  // flown_path for rviz
+  metrics::BoundedTrail<geometry_msgs::PoseStamped> trail_{kMaxPathPoses};
   ros::Subscriber handle_sub_, odom_sub_, status_sub_, compute_sub_;
   ros::Timer timer_;
 };

@@ -48,6 +48,27 @@ go_feap::common::Result<go_feap::world::Scene> smallMaze(std::uint64_t seed) {
 
 // Time and distance are over the finished runs (a run stopped at the time limit, or stuck early, did not explore
 // the scene in its time); coverage and collisions over all.
+// A BoundedTrail stays within its bound for a run of any length and spans the whole run evenly: the first
+// item, every stride-th after it (the stride a power of two), and the latest. (Dropping every other item of
+// the trail as it stood, each new one kept, left the first item and the last few only.)
+TEST(BoundedTrail, StaysBoundedAndSpansTheWholeRunEvenly) {
+  for (const std::size_t max : {std::size_t{3}, std::size_t{64}, std::size_t{4096}}) {
+    go_feap::metrics::BoundedTrail<int> trail(max);
+    for (int i = 0; i < 100000; ++i) {
+      trail.add(i);
+      const std::vector<int>& t = trail.items();
+      ASSERT_LE(t.size(), max) << "after " << i;
+      ASSERT_EQ(t.front(), 0);
+      ASSERT_EQ(t.back(), i);
+      if (i % 997 != 0 && i != 99999) continue;
+      ASSERT_GE(t.size(), std::min<std::size_t>(max / 2, static_cast<std::size_t>(i) + 1)) << "after " << i;
+      const int stride = t.size() > 1 ? t[1] - t[0] : 1;
+      ASSERT_EQ(stride & (stride - 1), 0) << "stride " << stride;
+      for (std::size_t k = 1; k + 1 < t.size(); ++k) ASSERT_EQ(t[k] - t[k - 1], stride) << "after " << i << " at " << k;
+      ASSERT_LE(t.back() - t[t.size() - 2], stride);
+    }
+  }
+}
 TEST(Table, AggregatesPerSceneAndPlannerWithPopulationStd) {
   const std::vector<metrics::Summary> runs = {
       summary("maze", "go_feap", 100, 200, 0.99, 0, "complete", 1.0),

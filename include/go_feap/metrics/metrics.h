@@ -18,6 +18,39 @@
 
 namespace go_feap::metrics {
 
+/// A run's trail (the flown path sent to rviz, whole, at every sample) in at most `max` items for a run of any
+/// length: every stride-th item added is kept, evenly spaced over the whole run, and the latest item added
+/// always ends it. When full, every other kept item goes and the stride doubles. (Dropping every other item
+/// of the trail as it stood, with each new one kept, halved the oldest part at every thinning: after a long
+/// run the trail was its first pose and the last few thousand.)
+template <typename T>
+class BoundedTrail {
+ public:
+  explicit BoundedTrail(std::size_t max) : max_(std::max<std::size_t>(max, 3)) {}
+  void add(T item) {
+    if (latest_) items_.pop_back();  // the previous latest, not a stride item
+    bool on_stride = count_ % stride_ == 0;
+    if (on_stride && items_.size() + 1 >= max_) {
+      // Full of stride items: every other one goes (the first stays), the stride doubles.
+      std::size_t kept = 0;
+      for (std::size_t i = 0; i < items_.size(); i += 2) items_[kept++] = std::move(items_[i]);
+      items_.resize(kept);
+      stride_ *= 2;
+      on_stride = count_ % stride_ == 0;
+    }
+    ++count_;
+    items_.push_back(std::move(item));
+    latest_ = !on_stride;
+  }
+  const std::vector<T>& items() const { return items_; }
+
+ private:
+  std::size_t max_;
+  std::vector<T> items_;
+  std::size_t stride_ = 1, count_ = 0;
+  bool latest_ = false;  ///< the last item is the latest added, not a stride item
+};
+
 /// Distance (m) from `p` to the nearest occupied ground-truth voxel cube, looking no farther than
 /// `radius` (m): `radius` when none is that close; 0 inside an obstacle.
 double obstacleDistance(const world::Scene& scene, const common::Vec3& p, double radius);
