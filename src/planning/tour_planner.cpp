@@ -20,7 +20,11 @@ FrontierSummary summarize(const frontier::Frontier& frontier, double now) {
 
 TourPlanner::Recent TourPlanner::search(const Vec3& a, const Vec3& b, double now) {
   const double cell = config_.reuse_cell;
-  if (!(cell > 0.0)) {
+  // Cells keyed in 64-bit integers: a point 1e12 cells or more away (or not finite) has no key (its cast
+  // would be undefined), and is searched.
+  const bool keyed =
+      cell > 0.0 && ((a / cell).array().abs() < 1e12).all() && ((b / cell).array().abs() < 1e12).all();
+  if (!keyed) {
     ++searches_;
     return {pathDistance(astar_, a, b), now};
   }
@@ -49,8 +53,9 @@ common::Result<GlobalTour> TourPlanner::plan(const std::vector<FrontierSummary>&
   for (const FrontierSummary& f : frontiers) ids.insert(f.id);
   for (auto it = cache_.begin(); it != cache_.end();) {
     const bool listed = ids.count(it->first.first) && ids.count(it->first.second);
-    const bool stale = it->second.distance.euclidean_fallback &&
-                       (now - it->second.time > config_.reuse_time || now < it->second.time);
+    const Recent& length = it->second.length;
+    const bool stale = length.distance.euclidean_fallback &&
+                       (now - length.time > config_.reuse_time || now < length.time);
     it = listed && !stale ? std::next(it) : cache_.erase(it);
   }
   std::size_t local_fallbacks = 0;
@@ -74,10 +79,15 @@ common::Result<GlobalTour> TourPlanner::plan(const std::vector<FrontierSummary>&
     if (frontiers[j].id < frontiers[i].id) std::swap(i, j);
     const auto key = std::make_pair(frontiers[i].id, frontiers[j].id);
     auto it = cache_.find(key);
-    if (it == cache_.end())
-      it = cache_.emplace(key, search(frontiers[i].average, frontiers[j].average, now)).first;
-    if (it->second.distance.euclidean_fallback) fallback_pairs.insert(key);  // asked both ways round, and for rests
-    return it->second.distance.metres;
+    const Vec3 &from = frontiers[i].average, &to = frontiers[j].average;
+    if (it != cache_.end() && (it->second.from != from || it->second.to != to)) {  // the same ids elsewhere
+      cache_.erase(it);
+      it = cache_.end();
+    }
+    if (it == cache_.end()) it = cache_.emplace(key, Pair{search(from, to, now), from, to}).first;
+    const PathDistance& length = it->second.length.distance;
+    if (length.euclidean_fallback) fallback_pairs.insert(key);  // asked both ways round, and for rests
+    return length.metres;
   };
   auto tour = planTour(frontiers, d, config_, last_tour_);
   if (tour) last_tour_ = tour->frontier_ids;

@@ -1251,6 +1251,81 @@ TEST(TourPlanner, SearchesAFallenBackLengthAgainAfterReuseTime) {
   EXPECT_EQ(planner.searches(), searched + 7);  // the legs from the UAV only
 }
 
+// A fallen-back length from a later clock (a bag played again with the planner kept) is searched again at
+// once: its age is unknown. Kept, the straight line across the wall priced a way round that had opened.
+TEST(TourPlanner, AFallenBackLengthFromALaterClockIsSearchedAgain) {
+  World world(Index3(60, 40, 10));
+  cutOffByWall(world);
+  const Astar astar(world.occupancy(), world.esdf(), astarConfig(0.2, true));
+  go_feap::planning::GlobalPlannerConfig config;
+  config.s_near = 100.0;
+  config.reuse_cell = 0.0;
+  config.reuse_time = 1.0;
+  go_feap::planning::TourPlanner planner(config, astar);
+  std::vector<go_feap::planning::FrontierSummary> frontiers(2);
+  frontiers[0].id = 1, frontiers[0].average = Vec3(4.5, 1.0, 0.5);  // beyond the wall
+  frontiers[1].id = 2, frontiers[1].average = Vec3(1.5, 1.0, 0.5);
+  for (auto& f : frontiers) f.cell_count = 100;
+  const Vec3 uav = frontiers[1].average + Vec3(0.0, 0.4, 0.0);
+  std::size_t fallbacks = 0;
+  ASSERT_TRUE(planner.plan(frontiers, uav, 100.0, &fallbacks));
+  ASSERT_EQ(fallbacks, 2u);
+  world.set(Index3(30, 34, 0), Index3(31, 39, 9), VoxelState::kFree);  // a way round opens
+  ASSERT_TRUE(planner.plan(frontiers, uav, 5.0, &fallbacks));
+  EXPECT_EQ(fallbacks, 0u) << "the straight line from the later clock was kept";
+}
+
+// Lengths are cached by id pair, and checked against the averages they were searched between: the same ids
+// at other places (a frontier list from a bag or a tool, whose ids mean other frontiers) are searched again.
+TEST(TourPlanner, TheSameIdsElsewhereAreSearchedAgain) {
+  World world(Index3(60, 40, 10));
+  splitByWallWithGap(world);
+  const Astar astar(world.occupancy(), world.esdf(), astarConfig(0.2, true));
+  go_feap::planning::GlobalPlannerConfig config;
+  config.lambda = 0.0;
+  config.s_near = 100.0;
+  config.reuse_cell = 0.0;
+  go_feap::planning::TourPlanner planner(config, astar);
+  std::vector<go_feap::planning::FrontierSummary> frontiers(2);
+  frontiers[0].id = 1, frontiers[0].average = Vec3(1.0, 1.0, 0.5);
+  frontiers[1].id = 2, frontiers[1].average = Vec3(2.5, 1.0, 0.5);  // the wall's near side
+  for (auto& f : frontiers) f.cell_count = 100;
+  const Vec3 uav(0.5, 1.0, 0.5);
+  ASSERT_TRUE(planner.plan(frontiers, uav, 0.0));
+  frontiers[1].average = Vec3(4.0, 1.0, 0.5);  // id 2 now beyond the wall: the way round through the gap
+  const auto tour = planner.plan(frontiers, uav, 0.1);
+  ASSERT_TRUE(tour) << tour.message();
+  ASSERT_EQ(tour->frontier_ids, (std::vector<unsigned>{1, 2}));
+  const double want = pathDistance(astar, uav, frontiers[0].average).metres +
+                      pathDistance(astar, frontiers[0].average, frontiers[1].average).metres;
+  EXPECT_NEAR(tour->cost, want / config.v_max, 1e-9);
+}
+
+// Beyond the n_max_tsp nearest by straight line (a lower bound of the path), no frontier's path from the UAV
+// is searched: 30 frontiers in open space, all within s_near, cost about the cap's searches from the UAV,
+// not 30.
+TEST(TourPlanner, FrontiersThatCannotBeCandidatesAreNotSearchedFromTheUav) {
+  World world(Index3(60, 40, 10));
+  world.fill(VoxelState::kFree);
+  const Astar astar(world.occupancy(), world.esdf(), astarConfig(0.2, true));
+  go_feap::planning::GlobalPlannerConfig config;
+  config.s_near = 100.0;
+  config.reuse_cell = 0.0;
+  go_feap::planning::TourPlanner planner(config, astar);
+  std::vector<go_feap::planning::FrontierSummary> frontiers;
+  for (int k = 0; k < 30; ++k) {
+    go_feap::planning::FrontierSummary f;
+    f.id = static_cast<unsigned>(k + 1);
+    f.average = Vec3(0.5 + 0.18 * k, 0.5 + 0.1 * (k % 3), 0.5);
+    f.cell_count = 100;
+    frontiers.push_back(f);
+  }
+  ASSERT_TRUE(planner.plan(frontiers, Vec3(0.3, 0.5, 0.5), 0.0));
+  const std::size_t from_uav = planner.searches() - planner.cacheSize();  // each cached pair one search
+  std::cout << from_uav << " searches from the UAV, " << planner.cacheSize() << " pairs\n";
+  EXPECT_LE(from_uav, static_cast<std::size_t>(config.n_max_tsp + config.rest_frontiers + 2));
+}
+
 // Candidates topped up from beyond s_near are chosen by straight-line distance, but their legs from the
 // UAV are priced by path: a frontier 2 m away behind the wall (about 6 m by path through the gap) used to
 // be priced at 2 m and visited first, ahead of one 2.9 m away on the UAV's side.

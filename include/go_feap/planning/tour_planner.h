@@ -33,7 +33,9 @@ class TourPlanner {
   /// cached by id pair; cached lengths of frontiers no longer listed are dropped first, and so are
   /// Euclidean fallbacks (failed searches) older than reuse_time s, which are searched again. A length to
   /// search is first looked up among those searched in the last reuse_time s between the same two
-  /// reuse_cell cells (either way round). `fallbacks` (when not null) counts the distances that fell
+  /// reuse_cell cells (either way round; a point 1e12 cells or more from the origin is searched, not looked
+  /// up). A cached pair whose frontiers' averages are not those it was searched between (ids from outside
+  /// the chain: a bag, a tool) is searched again. `fallbacks` (when not null) counts the distances that fell
   /// back to Euclidean. The last tour warm-starts the next (planTour()'s hint): a large tour is
   /// improved from where it was, not rebuilt from scratch at every call.
   common::Result<GlobalTour> plan(const std::vector<FrontierSummary>& frontiers, const Vec3& uav, double now,
@@ -49,12 +51,16 @@ class TourPlanner {
     PathDistance distance;
     double time;  ///< when it was searched
   };
+  struct Pair {
+    Recent length;
+    Vec3 from, to;  ///< the averages it was searched between (lower id first)
+  };
   /// The length between a and b, searched now or reused from recent_.
   Recent search(const Vec3& a, const Vec3& b, double now);
 
   GlobalPlannerConfig config_;
   const Astar& astar_;
-  std::map<std::pair<unsigned, unsigned>, Recent> cache_;  ///< by id pair, with when it was searched
+  std::map<std::pair<unsigned, unsigned>, Pair> cache_;  ///< by id pair, with when it was searched
   std::map<CellPair, Recent> recent_;
   std::vector<unsigned> last_tour_;  ///< frontier ids of the last tour, in order
   std::size_t searches_ = 0;
