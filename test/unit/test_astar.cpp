@@ -1128,6 +1128,15 @@ void cutOffByWall(World& world) {
   world.set(Index3(30, 0, 0), Index3(31, 39, 9), VoxelState::kOccupied);
 }
 
+// Two frontiers either side of cutOffByWall's wall: id 1 beyond it, id 2 on the UAV's side.
+std::vector<go_feap::planning::FrontierSummary> acrossTheWall() {
+  std::vector<go_feap::planning::FrontierSummary> frontiers(2);
+  frontiers[0].id = 1, frontiers[0].average = Vec3(4.5, 1.0, 0.5);
+  frontiers[1].id = 2, frontiers[1].average = Vec3(1.5, 1.0, 0.5);
+  for (auto& f : frontiers) f.cell_count = 100;
+  return frontiers;
+}
+
 }  // namespace
 
 TEST(TourPlanner, SearchesEachPairOnceAndFindsTheShortestOpenTour) {
@@ -1217,10 +1226,7 @@ TEST(TourPlanner, SearchesAFallenBackLengthAgainAfterReuseTime) {
   config.reuse_cell = 0.0;  // no reuse between cells: every search is one for the pair
   config.reuse_time = 1.0;
   go_feap::planning::TourPlanner planner(config, astar);
-  std::vector<go_feap::planning::FrontierSummary> frontiers(2);
-  frontiers[0].id = 1, frontiers[0].average = Vec3(4.5, 1.0, 0.5);  // beyond the wall
-  frontiers[1].id = 2, frontiers[1].average = Vec3(1.5, 1.0, 0.5);  // the UAV's side
-  for (auto& f : frontiers) f.cell_count = 100;
+  std::vector<go_feap::planning::FrontierSummary> frontiers = acrossTheWall();
   const Vec3 uav = frontiers[1].average + Vec3(0.0, 0.4, 0.0);
   const double straight = (frontiers[0].average - frontiers[1].average).norm();
   ASSERT_TRUE(pathDistance(astar, frontiers[1].average, frontiers[0].average).euclidean_fallback);
@@ -1262,10 +1268,7 @@ TEST(TourPlanner, AFallenBackLengthFromALaterClockIsSearchedAgain) {
   config.reuse_cell = 0.0;
   config.reuse_time = 1.0;
   go_feap::planning::TourPlanner planner(config, astar);
-  std::vector<go_feap::planning::FrontierSummary> frontiers(2);
-  frontiers[0].id = 1, frontiers[0].average = Vec3(4.5, 1.0, 0.5);  // beyond the wall
-  frontiers[1].id = 2, frontiers[1].average = Vec3(1.5, 1.0, 0.5);
-  for (auto& f : frontiers) f.cell_count = 100;
+  std::vector<go_feap::planning::FrontierSummary> frontiers = acrossTheWall();
   const Vec3 uav = frontiers[1].average + Vec3(0.0, 0.4, 0.0);
   std::size_t fallbacks = 0;
   ASSERT_TRUE(planner.plan(frontiers, uav, 100.0, &fallbacks));
