@@ -13,6 +13,7 @@
 #include <nav_msgs/Odometry.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/CompressedImage.h>
+#include <std_msgs/String.h>
 #include <tf2_msgs/TFMessage.h>
 #include <yaml-cpp/yaml.h>
 
@@ -31,6 +32,7 @@
 #include <utility>
 #include <vector>
 
+#include "go_feap/ExplorationStatus.h"
 #include "go_feap/world/scene_files.h"
 #include "../command_util.h"
 #include "free_port.h"
@@ -349,6 +351,7 @@ TEST_F(Replay, RecordedFlightRebuildsTheWallsItSaw) {
     rosbag::Bag in(bag, rosbag::bagmode::Read);
     std::optional<Eigen::Vector3d> first;
     double farthest = 0.0;
+    ros::Time last;
     for (const rosbag::MessageInstance& m : rosbag::View(in, rosbag::TopicQuery("/vins_estimator/odometry"))) {
       const nav_msgs::Odometry::ConstPtr odom = m.instantiate<nav_msgs::Odometry>();
       ASSERT_TRUE(odom);
@@ -356,13 +359,30 @@ TEST_F(Replay, RecordedFlightRebuildsTheWallsItSaw) {
       const Eigen::Vector3d p(q.x, q.y, q.z);
       if (!first) first = p;
       farthest = std::max(farthest, (p - *first).norm());
+      last = m.getTime();
     }
     ASSERT_TRUE(first) << "no odometry in the bag";
     EXPECT_GT(farthest, 1.0) << "the recorded vehicle stayed within 1 m of its start";
+    in.close();
+    // As a bag recorded with -a on a drone: topics the replay must not play, one of them past the end of
+    // those it plays. A status FINISHED from the bag would end the replayed run's recorder with the bag's
+    // reason; a message 30 s past the flight held the replay (the clock stops with the topics played) until
+    // its wait ran out, and it said the bag had not played to its end.
+    rosbag::Bag out(bag, rosbag::bagmode::Append);
+    go_feap::ExplorationStatus finished;
+    finished.header.stamp = last - ros::Duration(2.0);
+    finished.state = go_feap::ExplorationStatus::FINISHED;
+    finished.state_name = "FINISHED";
+    finished.finish_reason = "from_the_bag";
+    out.write("/status", finished.header.stamp, finished);
+    std_msgs::String later;
+    later.data = "recorded past the flight";
+    out.write("/rosout_extra", last + ros::Duration(30.0), later);
   }
   const fs::path results = data_ / "replay_results";
   const std::string rep = launch("replay.launch bag:=" + inQuotes(bag) + " save_map:=" + inQuotes(bt) + " invalid_as_free:=true output_dir:=" + inQuotes(results), 240);
   ASSERT_NE(rep.find("replay: save_map: wrote"), std::string::npos) << rep.substr(rep.size() > 3000 ? rep.size() - 3000 : 0);
+  EXPECT_EQ(rep.find("did not reach the bag's end"), std::string::npos) << "the replay waited for a topic it does not play";
   ASSERT_TRUE(fs::exists(bt));
   // The replayed exploration did not finish within 12 s of flight: the recorder wrote what it had when the
   // launch ended with the bag (it used to write nothing).
