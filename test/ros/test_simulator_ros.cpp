@@ -403,6 +403,21 @@ TEST_F(SimulatorTest, OdometryTfSendsOnlyOdometryInTheWorldFrame) {
     return spinUntil([&] { return heard("odometry's body z axis lies 90"); }, 0.3);
   }, 20.0)) << "no word of a body on its side";
   EXPECT_TRUE(spinUntil([&] { return buffer.canTransform("world", "probe_body", ros::Time(t)); }, 10.0));
+  // A body rolled 75 degrees and heading 0.7 rad: said too (the tilt is any rotation of the z axis away from
+  // up, roll as well as pitch), and sent whole, its rotation the odometry's.
+  const Eigen::Quaterniond rolled = Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ())) *
+                                    Eigen::Quaterniond(Eigen::AngleAxisd(75.0 * M_PI / 180.0, Eigen::Vector3d::UnitX()));
+  EXPECT_TRUE(spinUntil([&] {
+    nav_msgs::Odometry m = odometry("world", t += 0.05, Eigen::Vector3d(1.4, 0.0, 1.0));
+    m.pose.pose.orientation.w = rolled.w(), m.pose.pose.orientation.x = rolled.x();
+    m.pose.pose.orientation.y = rolled.y(), m.pose.pose.orientation.z = rolled.z();
+    odom_pub.publish(m);
+    return spinUntil([&] { return heard("odometry's body z axis lies 75"); }, 0.3);
+  }, 20.0)) << "no word of a body rolled 75 degrees";
+  ASSERT_TRUE(spinUntil([&] { return buffer.canTransform("world", "probe_body", ros::Time(t)); }, 10.0));
+  const auto& r = buffer.lookupTransform("world", "probe_body", ros::Time(t)).transform.rotation;
+  EXPECT_NEAR(std::abs(Eigen::Quaterniond(r.w, r.x, r.y, r.z).dot(rolled)), 1.0, 1e-9)
+      << "the TF's rotation is not the odometry's";
 }
 
 // The probe camera runs at 50 Hz: on odometry every 0.01 s it sends a frame with every other stamp. Its
