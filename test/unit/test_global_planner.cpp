@@ -346,6 +346,36 @@ TEST(PlanTour, HintOfIdsWarmStartsTheHeuristic) {
 // With a lower bound of the UAV distances (here the straight line, the fixture's UAV distances being
 // straight lines scaled up by a detour factor per frontier), the tour is the same as with every
 // distance asked for, and frontiers that cannot be among the n_max_tsp nearest are not asked about.
+// Distances from the UAV that say "unreachable" (NaN, negative: PathDistances' word for it) take no place among
+// the nearest found while the lower bound prunes: the candidates are those of the whole list. A -1 kept among
+// them ended the search early, and a NaN broke the heap's order.
+TEST(PlanTour, UnreachableDistancesDoNotEndTheLowerBoundsSearch) {
+  Fixture fx;
+  for (int n_max = 1; n_max <= 6; ++n_max)
+    for (const double bad : {-1.0, std::numeric_limits<double>::quiet_NaN()}) {
+      GlobalPlannerConfig c;
+      c.s_near = 100.0;
+      c.n_min_tsp = 1;
+      c.n_max_tsp = n_max;
+      c.lambda = 0.4;
+      c.omission = omissionConfig();
+      PathDistances full = fx.distances();
+      std::size_t nearest = 0;  // the active frontier nearest the UAV: unreachable here
+      for (std::size_t j = 0; j < fx.frontiers.size(); ++j)
+        if (fx.frontiers[j].active && (fx.frontiers[j].average - fx.uav).norm() <
+                                          (fx.frontiers[nearest].average - fx.uav).norm())
+          nearest = j;
+      full.from_uav = [&](std::size_t j) { return j == nearest ? bad : (fx.frontiers[j].average - fx.uav).norm(); };
+      const auto want = planTour(fx.frontiers, full, c);
+      PathDistances bounded = full;
+      bounded.from_uav_lower_bound = [&](std::size_t j) { return (fx.frontiers[j].average - fx.uav).norm(); };
+      const auto got = planTour(fx.frontiers, bounded, c);
+      ASSERT_EQ(want.ok(), got.ok()) << "n_max " << n_max << " bad " << bad;
+      if (!want.ok()) continue;
+      EXPECT_EQ(got->indices, want->indices) << "n_max " << n_max << " bad " << bad;
+    }
+}
+
 TEST(PlanTour, LowerBoundSkipsFrontiersThatCannotBeCandidates) {
   Fixture fx;
   const double detour[] = {1.0, 1.6, 1.1, 1.0, 1.3, 2.0, 1.0};
