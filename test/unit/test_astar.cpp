@@ -1304,6 +1304,31 @@ TEST(TourPlanner, TheSameIdsElsewhereAreSearchedAgain) {
   EXPECT_NEAR(tour->cost, want / config.v_max, 1e-9);
 }
 
+// Reuse cells are floors of the coordinates over reuse_cell, negative ones too: points 0.2 m apart either
+// side of 0 lie in two cells (truncated, the cell round 0 was twice as wide, and a length was reused
+// 0.8 m off). The pillar and office scenes straddle 0.
+TEST(TourPlanner, ReuseCellsEitherSideOfZeroAreTwo) {
+  World world(Index3(60, 40, 10));
+  world.fill(VoxelState::kFree);
+  const Astar astar(world.occupancy(), world.esdf(), astarConfig(0.2, true));
+  go_feap::planning::GlobalPlannerConfig config;
+  config.s_near = 100.0;
+  config.reuse_cell = 0.4;
+  config.reuse_time = 10.0;
+  go_feap::planning::TourPlanner planner(config, astar);
+  const Vec3 uav(1.0, 1.0, 0.5);
+  std::vector<go_feap::planning::FrontierSummary> one(1);
+  one[0].id = 1, one[0].average = Vec3(-0.1, 1.0, 0.5), one[0].cell_count = 100;
+  ASSERT_TRUE(planner.plan(one, uav, 0.0));
+  const std::size_t searched = planner.searches();
+  one[0].id = 2, one[0].average = Vec3(0.1, 1.0, 0.5);  // the next cell
+  ASSERT_TRUE(planner.plan(one, uav, 0.1));
+  EXPECT_EQ(planner.searches(), searched + 1);
+  one[0].id = 3, one[0].average = Vec3(0.3, 1.0, 0.5);  // the same cell as 0.1
+  ASSERT_TRUE(planner.plan(one, uav, 0.2));
+  EXPECT_EQ(planner.searches(), searched + 1);
+}
+
 // Beyond the n_max_tsp nearest by straight line (a lower bound of the path), no frontier's path from the UAV
 // is searched: 30 frontiers in open space, all within s_near, cost about the cap's searches from the UAV,
 // not 30.
