@@ -146,10 +146,7 @@ class LocalPlanner : public nodelet::Nodelet {
     note.changed_max = ros_conv::toVec3(msg->changed_max);
     const std::uint64_t last = last_update_;
     last_update_ = msg->sequence;
-    if (!shared_) {  // nothing sampled on a map yet; after a gap, nothing kept
-      if (last != 0 && note.sequence != last + 1) cache_.retain({});
-      return;
-    }
+    if (!shared_) return;  // no map yet: nothing sampled, nothing cached
     std::shared_lock<std::shared_mutex> map_lock(shared_->mutex);
     cache_.forgetFor(note, last, shared_->sequence, shared_->map->occupancy().geometry(), shared_->last_changed);
   }
