@@ -398,18 +398,19 @@ void FrontierFinder::refreshNeighbourCounts() {
   }
 }
 
+UpdatePath updatePath(const MapUpdateNote& note, std::uint64_t last_sequence, std::uint64_t map_sequence) {
+  if (last_sequence != 0 && note.sequence != last_sequence + 1) return UpdatePath::kRecomputed;
+  if (note.changed_voxels == 0) return UpdatePath::kUnchanged;
+  return map_sequence == note.sequence ? UpdatePath::kListed : UpdatePath::kBoxed;
+}
+
 UpdatePath applyMapUpdate(FrontierFinder& finder, const map::OccupancyMap& map, std::uint64_t map_sequence,
                           const std::vector<std::size_t>& map_changed, std::uint64_t last_sequence,
                           const MapUpdateNote& note, double now) {
-  if (note.sequence != last_sequence + 1) {
-    finder.recomputeAll(map, now);
-    return UpdatePath::kRecomputed;
-  }
-  if (note.changed_voxels == 0) return UpdatePath::kUnchanged;
-  if (map_sequence == note.sequence) {
-    finder.update(map, map_changed, now);
-    return UpdatePath::kListed;
-  }
+  const UpdatePath path = updatePath(note, last_sequence, map_sequence);
+  if (path == UpdatePath::kRecomputed) finder.recomputeAll(map, now);
+  if (path == UpdatePath::kListed) finder.update(map, map_changed, now);
+  if (path != UpdatePath::kBoxed) return path;
   // The box's cubes to their centres, clamped to the map first: a box reaching far outside it would not fit
   // a voxel index.
   const auto& geo = map.geometry();
@@ -418,7 +419,7 @@ UpdatePath applyMapUpdate(FrontierFinder& finder, const map::OccupancyMap& map, 
   const Vec3 lo = (note.changed_min + h).cwiseMax(bounds.min).cwiseMin(bounds.max);
   const Vec3 hi = (note.changed_max - h).cwiseMax(bounds.min).cwiseMin(bounds.max);
   finder.update(map, geo.coordToIndex(lo), geo.coordToIndex(hi), now);
-  return UpdatePath::kBoxed;
+  return path;
 }
 
 }  // namespace go_feap::frontier

@@ -119,13 +119,8 @@ class FrontierFinder : public nodelet::Nodelet {
         finder_->setActiveBand(band_.first, band_.second);
         finder_->recomputeAll(occupancy, now);
       } else {
-        frontier::MapUpdateNote note;
-        note.sequence = msg->sequence;
-        note.changed_voxels = msg->changed_voxels;
-        note.changed_min = ros_conv::toVec3(msg->changed_min);
-        note.changed_max = ros_conv::toVec3(msg->changed_max);
         if (frontier::applyMapUpdate(*finder_, occupancy, shared_->sequence, shared_->last_changed, last_sequence_,
-                                     note, now) == frontier::UpdatePath::kRecomputed)
+                                     ros_conv::mapUpdateNote(*msg), now) == frontier::UpdatePath::kRecomputed)
           NODELET_WARN_STREAM(getName() << ": map updates " << last_sequence_ + 1 << ".." << msg->sequence - 1
                                         << " missed; recomputing all frontiers");
       }

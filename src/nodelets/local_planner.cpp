@@ -139,16 +139,11 @@ class LocalPlanner : public nodelet::Nodelet {
       return;
     }
     std::lock_guard<std::mutex> lock(mutex_);
-    frontier::MapUpdateNote note;
-    note.sequence = msg->sequence;
-    note.changed_voxels = msg->changed_voxels;
-    note.changed_min = ros_conv::toVec3(msg->changed_min);
-    note.changed_max = ros_conv::toVec3(msg->changed_max);
     const std::uint64_t last = last_update_;
     last_update_ = msg->sequence;
     if (!shared_) return;  // no map yet: nothing sampled, nothing cached
     std::shared_lock<std::shared_mutex> map_lock(shared_->mutex);
-    cache_.forgetFor(note, last, shared_->sequence, shared_->map->occupancy().geometry(), shared_->last_changed);
+    cache_.forgetFor(ros_conv::mapUpdateNote(*msg), last, shared_->sequence, shared_->map->occupancy().geometry(), shared_->last_changed);
   }
 
   void onOdom(const nav_msgs::Odometry::ConstPtr& msg) {

@@ -247,11 +247,14 @@ class MetricsRecorder : public nodelet::Nodelet {
       pose.header.frame_id = world_frame_;
       pose.pose.position.x = position_->x(), pose.pose.position.y = position_->y(), pose.pose.position.z = position_->z();
       pose.pose.orientation.w = 1.0;
-      // Sent whole at every sample: at most kMaxPathPoses poses, evenly over the run, ending at the latest.
+      // Sent whole at every sample, to a subscriber: at most kMaxPathPoses poses, evenly over the run, ending
+      // at the latest (copied into the message only when it is sent).
       trail_.add(pose);
-      path_.poses = trail_.items();
-      path_.header.stamp = pose.header.stamp;
-      if (path_pub_.getNumSubscribers() > 0) path_pub_.publish(path_);
+      if (path_pub_.getNumSubscribers() > 0) {
+        path_.poses = trail_.items();
+        path_.header.stamp = pose.header.stamp;
+        path_pub_.publish(path_);
+      }
     }
     std_msgs::Float64 c;
     c.data = last_sample_.coverage;

@@ -437,15 +437,12 @@ TargetStep stepTarget(const CurrentTarget* current, const frontier::Viewpoint& p
 void ViewpointCache::forgetFor(const frontier::MapUpdateNote& note, std::uint64_t last_sequence,
                                std::uint64_t map_sequence, const common::GridGeometry& geometry,
                                const std::vector<std::size_t>& map_changed) {
-  if (last_sequence != 0 && note.sequence != last_sequence + 1) {
-    entries_.clear();
-    return;
+  switch (frontier::updatePath(note, last_sequence, map_sequence)) {
+    case frontier::UpdatePath::kRecomputed: entries_.clear(); break;
+    case frontier::UpdatePath::kListed: forgetChanged(geometry, map_changed); break;
+    case frontier::UpdatePath::kBoxed: forgetChanged(common::Aabb{note.changed_min, note.changed_max}); break;
+    case frontier::UpdatePath::kUnchanged: break;
   }
-  if (note.changed_voxels == 0) return;
-  if (map_sequence == note.sequence)
-    forgetChanged(geometry, map_changed);
-  else
-    forgetChanged(common::Aabb{note.changed_min, note.changed_max});
 }
 
 void ViewpointCache::retain(const std::vector<std::uint32_t>& ids) {

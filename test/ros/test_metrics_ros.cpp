@@ -42,6 +42,7 @@
 #include "go_feap/MapUpdate.h"
 #include "go_feap/PositionCommand.h"
 #include "go_feap/ViewpointPath.h"
+#include "go_feap/ros/conversions.h"
 #include "../command_util.h"
 #include "flight_util.h"
 #include "ros_test_util.h"
@@ -936,7 +937,7 @@ TEST(TrajectoryServer, DropsItsTrajectoryWhenTheClockGoesBack) {
     return cmd_sub.getNumPublishers() > 0 && clock_pub.getNumSubscribers() > 0 && odom_pub.getNumSubscribers() > 0 &&
            bspline_pub.getNumSubscribers() > 0;
   }, 30.0)) << "the probe trajectory server is not connected";
-  auto positionOf = [](const go_feap::PositionCommand& c) { return Vec3(c.position.x, c.position.y, c.position.z); };
+  auto positionOf = [](const go_feap::PositionCommand& c) { return go_feap::ros_conv::toVec3(c.position); };
   // The odometry on the reference (where a controller keeps the vehicle), at the start before any.
   Vec3 vehicle(0.0, 0.0, 1.0);
   auto run = [&](double& now, double seconds) {

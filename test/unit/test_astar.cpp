@@ -1128,6 +1128,22 @@ void cutOffByWall(World& world) {
   world.set(Index3(30, 0, 0), Index3(31, 39, 9), VoxelState::kOccupied);
 }
 
+// Free space everywhere.
+void openWorld(World& world) { world.fill(VoxelState::kFree); }
+
+// The TourPlanner tests' world, 6 x 4 x 1 m shaped by `shape`, its distance search, and a config that prices
+// every frontier's leg from the UAV by path (s_near 100 m); each test sets what else it varies.
+struct TourWorld {
+  explicit TourWorld(void (*shape)(World&)) { shape(world); }
+  World world{Index3(60, 40, 10)};
+  const Astar astar{world.occupancy(), world.esdf(), astarConfig(0.2, true)};
+  go_feap::planning::GlobalPlannerConfig config = [] {
+    go_feap::planning::GlobalPlannerConfig c;
+    c.s_near = 100.0;
+    return c;
+  }();
+};
+
 // Two frontiers either side of cutOffByWall's wall: id 1 beyond it, id 2 on the UAV's side.
 std::vector<go_feap::planning::FrontierSummary> acrossTheWall() {
   std::vector<go_feap::planning::FrontierSummary> frontiers(2);
@@ -1140,12 +1156,9 @@ std::vector<go_feap::planning::FrontierSummary> acrossTheWall() {
 }  // namespace
 
 TEST(TourPlanner, SearchesEachPairOnceAndFindsTheShortestOpenTour) {
-  World world(Index3(60, 40, 10));
-  splitByWallWithGap(world);
-  const Astar astar(world.occupancy(), world.esdf(), astarConfig(0.2, true));
-  go_feap::planning::GlobalPlannerConfig config;
+  TourWorld tour_world(splitByWallWithGap);
+  auto& [world, astar, config] = tour_world;
   config.lambda = 0.0;  // travel time only: the brute force below is the whole objective
-  config.s_near = 100.0;
   go_feap::planning::TourPlanner planner(config, astar);
   std::vector<go_feap::planning::FrontierSummary> frontiers;
   const std::vector<Vec3> at{Vec3(1.0, 1.0, 0.5), Vec3(5.0, 0.8, 0.5), Vec3(2.5, 3.5, 0.5), Vec3(4.0, 2.5, 0.5),
@@ -1190,11 +1203,8 @@ TEST(TourPlanner, SearchesEachPairOnceAndFindsTheShortestOpenTour) {
 // Distances that fell back to a straight line are counted once each: the tour solver asks for a pair
 // both ways round and again when pricing rests, and each ask used to count.
 TEST(TourPlanner, CountsEachEuclideanFallbackOnce) {
-  World world(Index3(60, 40, 10));
-  cutOffByWall(world);
-  const Astar astar(world.occupancy(), world.esdf(), astarConfig(0.2, true));
-  go_feap::planning::GlobalPlannerConfig config;
-  config.s_near = 100.0;
+  TourWorld tour_world(cutOffByWall);
+  auto& [world, astar, config] = tour_world;
   go_feap::planning::TourPlanner planner(config, astar);
   std::vector<go_feap::planning::FrontierSummary> frontiers;
   const std::vector<Vec3> at{Vec3(1.0, 1.0, 0.5), Vec3(2.5, 3.0, 0.5), Vec3(5.0, 2.0, 0.5)};  // the last cut off
@@ -1217,12 +1227,9 @@ TEST(TourPlanner, CountsEachEuclideanFallbackOnce) {
 // only, then searched again: once a way has opened, the pair is priced by it. Kept for the pair's life, the
 // straight line (3 m across the wall) stood for a way round of about 6 m as long as both frontiers lived.
 TEST(TourPlanner, SearchesAFallenBackLengthAgainAfterReuseTime) {
-  World world(Index3(60, 40, 10));
-  cutOffByWall(world);
-  const Astar astar(world.occupancy(), world.esdf(), astarConfig(0.2, true));
-  go_feap::planning::GlobalPlannerConfig config;
+  TourWorld tour_world(cutOffByWall);
+  auto& [world, astar, config] = tour_world;
   config.lambda = 0.0;  // travel time only
-  config.s_near = 100.0;
   config.reuse_cell = 0.0;  // no reuse between cells: every search is one for the pair
   config.reuse_time = 1.0;
   go_feap::planning::TourPlanner planner(config, astar);
@@ -1260,11 +1267,8 @@ TEST(TourPlanner, SearchesAFallenBackLengthAgainAfterReuseTime) {
 // A fallen-back length from a later clock (a bag played again with the planner kept) is searched again at
 // once: its age is unknown. Kept, the straight line across the wall priced a way round that had opened.
 TEST(TourPlanner, AFallenBackLengthFromALaterClockIsSearchedAgain) {
-  World world(Index3(60, 40, 10));
-  cutOffByWall(world);
-  const Astar astar(world.occupancy(), world.esdf(), astarConfig(0.2, true));
-  go_feap::planning::GlobalPlannerConfig config;
-  config.s_near = 100.0;
+  TourWorld tour_world(cutOffByWall);
+  auto& [world, astar, config] = tour_world;
   config.reuse_cell = 0.0;
   config.reuse_time = 1.0;
   go_feap::planning::TourPlanner planner(config, astar);
@@ -1281,12 +1285,9 @@ TEST(TourPlanner, AFallenBackLengthFromALaterClockIsSearchedAgain) {
 // Lengths are cached by id pair, and checked against the averages they were searched between: the same ids
 // at other places (a frontier list from a bag or a tool, whose ids mean other frontiers) are searched again.
 TEST(TourPlanner, TheSameIdsElsewhereAreSearchedAgain) {
-  World world(Index3(60, 40, 10));
-  splitByWallWithGap(world);
-  const Astar astar(world.occupancy(), world.esdf(), astarConfig(0.2, true));
-  go_feap::planning::GlobalPlannerConfig config;
+  TourWorld tour_world(splitByWallWithGap);
+  auto& [world, astar, config] = tour_world;
   config.lambda = 0.0;
-  config.s_near = 100.0;
   config.reuse_cell = 0.0;
   go_feap::planning::TourPlanner planner(config, astar);
   std::vector<go_feap::planning::FrontierSummary> frontiers(2);
@@ -1308,11 +1309,8 @@ TEST(TourPlanner, TheSameIdsElsewhereAreSearchedAgain) {
 // side of 0 lie in two cells (truncated, the cell round 0 was twice as wide, and a length was reused
 // 0.8 m off). The pillar and office scenes straddle 0.
 TEST(TourPlanner, ReuseCellsEitherSideOfZeroAreTwo) {
-  World world(Index3(60, 40, 10));
-  world.fill(VoxelState::kFree);
-  const Astar astar(world.occupancy(), world.esdf(), astarConfig(0.2, true));
-  go_feap::planning::GlobalPlannerConfig config;
-  config.s_near = 100.0;
+  TourWorld tour_world(openWorld);
+  auto& [world, astar, config] = tour_world;
   config.reuse_cell = 0.4;
   config.reuse_time = 10.0;
   go_feap::planning::TourPlanner planner(config, astar);
@@ -1333,11 +1331,8 @@ TEST(TourPlanner, ReuseCellsEitherSideOfZeroAreTwo) {
 // is searched: 30 frontiers in open space, all within s_near, cost about the cap's searches from the UAV,
 // not 30.
 TEST(TourPlanner, FrontiersThatCannotBeCandidatesAreNotSearchedFromTheUav) {
-  World world(Index3(60, 40, 10));
-  world.fill(VoxelState::kFree);
-  const Astar astar(world.occupancy(), world.esdf(), astarConfig(0.2, true));
-  go_feap::planning::GlobalPlannerConfig config;
-  config.s_near = 100.0;
+  TourWorld tour_world(openWorld);
+  auto& [world, astar, config] = tour_world;
   config.reuse_cell = 0.0;
   go_feap::planning::TourPlanner planner(config, astar);
   std::vector<go_feap::planning::FrontierSummary> frontiers;
@@ -1358,10 +1353,8 @@ TEST(TourPlanner, FrontiersThatCannotBeCandidatesAreNotSearchedFromTheUav) {
 // UAV are priced by path: a frontier 2 m away behind the wall (about 6 m by path through the gap) used to
 // be priced at 2 m and visited first, ahead of one 2.9 m away on the UAV's side.
 TEST(TourPlanner, CandidatesBeyondSNearArePricedByPathFromTheUav) {
-  World world(Index3(60, 40, 10));
-  splitByWallWithGap(world);
-  const Astar astar(world.occupancy(), world.esdf(), astarConfig(0.2, true));
-  go_feap::planning::GlobalPlannerConfig config;
+  TourWorld tour_world(splitByWallWithGap);
+  auto& [world, astar, config] = tour_world;
   config.lambda = 0.0;  // travel time only: the brute force below is the whole objective
   config.s_near = 1.0;  // both beyond: topped up (n_min_tsp 2)
   config.n_min_tsp = 2;
@@ -1410,11 +1403,8 @@ TEST(TourPlanner, SummarizeKeepsWhatTheOmissionTermsWeigh) {
 // searched between the same reuse_cell cells for reuse_time s, either way round; after that, or with
 // reuse_cell 0, they are searched again.
 TEST(TourPlanner, ReusesLengthsBetweenTheSameCellsForReuseTime) {
-  World world(Index3(60, 40, 10));
-  splitByWallWithGap(world);
-  const Astar astar(world.occupancy(), world.esdf(), astarConfig(0.2, true));
-  go_feap::planning::GlobalPlannerConfig config;
-  config.s_near = 100.0;  // every frontier's length from the UAV is searched
+  TourWorld tour_world(splitByWallWithGap);
+  auto& [world, astar, config] = tour_world;
   config.reuse_cell = 0.4;
   config.reuse_time = 1.0;
   // Cell centres (0.4 m cells from the origin), so that a 0.1 m move stays in the cell.

@@ -169,16 +169,18 @@ struct MapUpdateNote {
   Vec3 changed_min = Vec3::Zero(), changed_max = Vec3::Zero();
 };
 
-/// How applyMapUpdate() brought a finder up to the map.
+/// How a map user catches up with the map for an update (applyMapUpdate(), ViewpointCache::forgetFor()).
 enum class UpdatePath { kRecomputed, kListed, kBoxed, kUnchanged };
 
-/// Brings `finder`, which has taken every update up to `last_sequence`, up to the map for `note`. The map is at
-/// frame `map_sequence`, whose changed voxels are `map_changed`:
-/// - a gap in the sequence (updates missed or refused): recomputeAll(), the incremental path needs every change;
-/// - the map still at the note's frame: that frame's exact list of changed voxels (cheap);
-/// - the map already past it (the note handled after a later frame was integrated): the note's box, clamped to
-///   the map; the list is the later frame's, which would lose this frame's changes;
-/// - nothing changed: nothing.
+/// The way for `note`, after the updates up to `last_sequence` (0: none yet) with the map now at frame
+/// `map_sequence`: everything again after a gap in the sequence (updates missed or refused); nothing when no
+/// voxel changed; the frame's exact list of changed voxels while the map is still at it; the note's box once
+/// the map has moved past it (the list is then a later frame's).
+UpdatePath updatePath(const MapUpdateNote& note, std::uint64_t last_sequence, std::uint64_t map_sequence);
+
+/// Brings `finder`, which has taken every update up to `last_sequence`, up to the map for `note` (the map at
+/// frame `map_sequence`, whose changed voxels are `map_changed`) the updatePath() way: recomputeAll() after a
+/// gap (the incremental path needs every change), update() by the list or by the box clamped to the map.
 UpdatePath applyMapUpdate(FrontierFinder& finder, const map::OccupancyMap& map, std::uint64_t map_sequence,
                           const std::vector<std::size_t>& map_changed, std::uint64_t last_sequence,
                           const MapUpdateNote& note, double now);

@@ -310,9 +310,8 @@ class ViewpointCache {
   /// As above for a change known only by its bounding box (m).
   void forgetChanged(const common::Aabb& changed);
   /// Forgets what the mapper's update `note` may have changed, after the updates up to `last_sequence`
-  /// (0: none yet) with the map now at frame `map_sequence`, whose changed voxels are `map_changed`: every
-  /// entry after a gap in the sequence (updates missed or refused); by the frame's changed voxels while the
-  /// map is still at it; by the note's box once the map has moved past it (the list is a later frame's).
+  /// (0: none yet) with the map now at frame `map_sequence`, whose changed voxels are `map_changed`, the
+  /// frontier::updatePath() way: every entry after a gap, else by the frame's list or the note's box.
   void forgetFor(const frontier::MapUpdateNote& note, std::uint64_t last_sequence, std::uint64_t map_sequence,
                  const common::GridGeometry& geometry, const std::vector<std::size_t>& map_changed);
   std::size_t size() const { return entries_.size(); }

@@ -18,7 +18,9 @@
 #include <sstream>
 #include <string>
 
+#include "go_feap/MapUpdate.h"
 #include "go_feap/common/grid.h"
+#include "go_feap/frontier/frontier_finder.h"
 #include "go_feap/map/occupancy_map.h"
 
 namespace go_feap::ros_conv {
@@ -32,6 +34,16 @@ inline geometry_msgs::Point toPoint(const common::Vec3& v) {
 }
 
 inline common::Vec3 toVec3(const geometry_msgs::Point& p) { return common::Vec3(p.x, p.y, p.z); }
+
+/// What the frontier finder and the local planner take of a map_update (its sequence, change count and box).
+inline frontier::MapUpdateNote mapUpdateNote(const MapUpdate& msg) {
+  frontier::MapUpdateNote note;
+  note.sequence = msg.sequence;
+  note.changed_voxels = msg.changed_voxels;
+  note.changed_min = toVec3(msg.changed_min);
+  note.changed_max = toVec3(msg.changed_max);
+  return note;
+}
 
 /// The pinhole intrinsics of the rectified image a camera_info describes: P's fx, fy, cx, cy (P[0], P[5],
 /// P[2], P[6]), which sensor_msgs/CameraInfo gives for rectified images (a depth camera's image_rect_raw, as
