@@ -1467,3 +1467,51 @@ TEST(TourPlanner, ReusesLengthsBetweenTheSameCellsForReuseTime) {
     EXPECT_NE(c.validate().message().find("reuse_time"), std::string::npos);
   }
 }
+
+// The last tour warm-starts the next: frontiers on a line, a planner that first planned from the left end
+// (so its tour runs left to right) and one that planned from the right end, then both plan from the
+// middle, where going either way first costs the same. Each gets what planTour() gives with its own last
+// tour as the hint, and the two differ, so a planner that dropped its hint or kept another's would give
+// one of them the other's tour; a planner without a last tour gets the cold tour. (A coarse lattice
+// answers pairs in plain sight by the straight line, and the positions are binary fractions, so the ties
+// are exact: the solver keeps a warm start that nothing beats strictly.)
+TEST(TourPlanner, TheLastTourWarmStartsTheNext) {
+  TourWorld tour_world(openWorld);
+  auto& [world, fine_astar, config] = tour_world;
+  AstarConfig coarse = fine_astar.config();
+  coarse.stride = 2;
+  const Astar astar(world.occupancy(), world.esdf(), coarse);
+  config.lambda = 0.0;
+  config.max_exact = 0;  // heuristic: exact solving ignores hints
+  std::vector<go_feap::planning::FrontierSummary> frontiers;
+  for (unsigned k = 0; k < 8; ++k) {
+    go_feap::planning::FrontierSummary f;
+    f.id = 20 - 2 * k;  // ids against the order along the line
+    f.average = Vec3(0.5 * (k < 4 ? k + 1 : k + 3), 2.0, 0.5);
+    f.cell_count = 100;
+    frontiers.push_back(f);
+  }
+  const Vec3 middle(2.75, 2.0, 0.5);
+  go_feap::planning::PathDistances d;  // the lengths TourPlanner searches, from the middle
+  d.from_uav = [&](std::size_t j) { return pathDistance(astar, middle, frontiers[j].average).metres; };
+  d.between = [&](std::size_t i, std::size_t j) {
+    return pathDistance(astar, frontiers[i].average, frontiers[j].average).metres;
+  };
+  std::vector<std::vector<unsigned>> expected;
+  for (const Vec3& start : {Vec3(0.25, 2.0, 0.5), Vec3(5.25, 2.0, 0.5)}) {
+    go_feap::planning::TourPlanner planner(config, astar);
+    const auto first = planner.plan(frontiers, start, 0.0);
+    ASSERT_TRUE(first) << first.message();
+    const auto hinted = go_feap::planning::planTour(frontiers, d, config, first->frontier_ids);
+    ASSERT_TRUE(hinted.ok()) << hinted.message();
+    const auto again = planner.plan(frontiers, middle, 1.0);
+    ASSERT_TRUE(again) << again.message();
+    EXPECT_EQ(again->frontier_ids, hinted->frontier_ids);
+    expected.push_back(hinted->frontier_ids);
+  }
+  ASSERT_NE(expected[0], expected[1]);  // else the hint would not show
+  go_feap::planning::TourPlanner cold(config, astar);
+  const auto tour = cold.plan(frontiers, middle, 0.0);
+  ASSERT_TRUE(tour) << tour.message();
+  EXPECT_EQ(tour->frontier_ids, go_feap::planning::planTour(frontiers, d, config)->frontier_ids);
+}
