@@ -350,7 +350,20 @@ class EsdfMapper : public nodelet::Nodelet {
                                                            << msg->header.stamp.toSec() << " s (all "
                                                            << info->frame.pixels_invalid
                                                            << " sampled were 0, NaN or nearer than min_range): nothing mapped");
-    else if (info->frame.pixels_invalid > 0)
+    else if (info->frame.rays == 0) {  // every ray misses the map: odometry in another frame, or far off
+      const common::Aabb bounds = shared_->map->geometry().bounds();  // fixed at construction
+      auto point = [](const common::Vec3& v) {
+        std::ostringstream s;
+        s << "(" << v.x() << ", " << v.y() << ", " << v.z() << ")";
+        return s.str();
+      };
+      GO_FEAP_NODELET_THROTTLE(WARN, warn_period_, getName() << ": the camera at " << point(T_W_C.translation())
+                                                           << " m sees nothing of the map, which spans "
+                                                           << point(bounds.min) << " to " << point(bounds.max)
+                                                           << " m in '" << world_frame_
+                                                           << "' (exploration_box and occupancy/margin): nothing "
+                                                              "mapped. Is the camera pose in the map's frame?");
+    } else if (info->frame.pixels_invalid > 0)
       GO_FEAP_NODELET_THROTTLE(DEBUG, warn_period_, getName() << ": " << info->frame.pixels_invalid
                                                             << " invalid depth pixels in the latest frame");
 

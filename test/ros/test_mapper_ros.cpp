@@ -466,6 +466,51 @@ TEST_F(MapperTest, ACameraInfoWithLensDistortionIsSaid) {
   EXPECT_TRUE(spinUntil(warned, 10.0)) << "no word of the distortion";
 }
 
+// A frame that maps nothing is integrated and said: one with no usable depth pixel (all 0: a covered lens,
+// an emitter off), and one whose camera lies so far off the map that every ray misses it (a camera pose
+// in another frame than the map's). The next real frame is integrated as before.
+TEST_F(MapperTest, AFrameThatMapsNothingIsSaid) {
+  Probe probe;
+  ASSERT_TRUE(probe.connect());
+  std::vector<std::string> warnings;
+  ros::Subscriber log_sub = nh_.subscribe<rosgraph_msgs::Log>("/rosout", 100, [&](const rosgraph_msgs::Log::ConstPtr& m) {
+    if (m->level == rosgraph_msgs::Log::WARN && m->msg.find("/probe_mapper: ") != std::string::npos)
+      warnings.push_back(m->msg);
+  });
+  ASSERT_TRUE(spinUntil([&] { return log_sub.getNumPublishers() > 0; }, 30.0));
+  auto warned = [&](const std::string& what) {
+    return std::any_of(warnings.begin(), warnings.end(),
+                       [&](const std::string& w) { return w.find(what) != std::string::npos; });
+  };
+  const std::string blind = "no usable depth pixel in the frame stamped";
+  const std::string outside = "sees nothing of the map, which spans (-10.5, -5.5, -0.5) to (10.5, 5.5, 3.5) m";
+  probe.info_pub.publish(*probe.info);
+  ASSERT_TRUE(probe.sendRealUntilIntegrated());
+  spinUntil([] { return false; }, 1.0);
+  EXPECT_FALSE(warned(blind) || warned(outside)) << "warned of a real frame";
+
+  sensor_msgs::Image zeros = *probe.depth;
+  std::fill(zeros.data.begin(), zeros.data.end(), 0);
+  std::size_t before = probe.updates;
+  probe.send(zeros, *probe.pose);
+  EXPECT_TRUE(spinUntil([&] { return probe.updates > before; }, 10.0)) << "the frame of zeros was not integrated";
+  EXPECT_TRUE(spinUntil([&] { return warned(blind); }, 10.0)) << "no word of a frame without a usable pixel";
+  EXPECT_FALSE(warned(outside));
+
+  const geometry_msgs::PoseStamped far = movedPose(*probe.pose, 100.0, 0.0);
+  before = probe.updates;
+  probe.send(*probe.depth, far);  // a jump of 100 m: skipped, its pose the reference
+  probe.send(*probe.depth, far);
+  EXPECT_TRUE(spinUntil([&] { return probe.updates > before; }, 10.0)) << "the frame far off was not integrated";
+  EXPECT_EQ(probe.last_update->changed_voxels, 0u);
+  EXPECT_TRUE(spinUntil([&] { return warned(outside); }, 10.0)) << "no word of a camera outside the map";
+
+  before = probe.updates;
+  probe.sendReal();  // back: a jump again
+  probe.sendReal();
+  EXPECT_TRUE(spinUntil([&] { return probe.updates > before; }, 10.0)) << "the next real frame was not integrated";
+}
+
 // Frames that would put wrong data in the map, or read past an image's buffer, are skipped and the mapper
 // takes the next real frame: a camera_pose whose orientation is unset (all zero, which tf2 reads as no
 // rotation) or given in another frame than the map's, and an image whose 480 rows of 8947852 bytes wrap
