@@ -339,6 +339,12 @@ TEST(OccupancyMap, BadFramesAreRefusedAndChangeNothing) {
   auto b = m.integrate(small, K, T);
   ASSERT_FALSE(b);
   EXPECT_NE(b.message().find("camera_info"), std::string::npos) << b.message();
+  // One side right, the other not (a D435i's 640x360 depth beside the 640x480 camera_info of another mode).
+  for (const cv::Size& size : {cv::Size(cam.width, cam.height / 2), cv::Size(cam.width / 2, cam.height)}) {
+    auto one_side = m.integrate(cv::Mat(size, CV_32FC1, cv::Scalar(1.0f)), K, T);
+    ASSERT_FALSE(one_side) << size;
+    EXPECT_NE(one_side.message().find("but camera_info says"), std::string::npos) << one_side.message();
+  }
   Eigen::Isometry3d bad = T;
   bad.translation().x() = std::nan("");
   cv::Mat ok(cam.height, cam.width, CV_32FC1, cv::Scalar(2.0f));
