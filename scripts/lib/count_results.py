@@ -8,7 +8,8 @@ when it failed (its test node crashed, timed out or wrote no result): passed, it
 cases are counted from their own result, and counting it too added one pass per rostest.
 An optional second argument is ctest's exit status, and a third the file ctest lists its failed tests in
 (Testing/Temporary/LastTestsFailed.log, lines 'N:name'). A gtest binary ctest saw fail whose result file
-shows no failure exited non-zero after writing it (a crash on exit, in a destructor or at shutdown): one
+(or catkin's MISSING-gtest-<name>.xml, written for a binary that wrote none) shows no failure exited
+non-zero after writing it (a crash on exit, in a destructor or at shutdown): one
 failure more, by name; catkin's run_tests ignored exit statuses, so such a crash passed. Any other test ctest
 saw fail counts one more only when no result file shows a failure at all (its kind's result names no
 failure either way, and the run must not pass). A non-zero status with no test listed failed (ctest
@@ -68,7 +69,8 @@ def main(root: Path, status: int = 0, failed_listing: Path = None) -> int:
     for test in exited:  # catkin names them _ctest_<package>_<kind>_<name>; a gtest's result is gtest-<name>.xml
         kind, sep, rest = test.partition("_gtest_")
         if sep and kind.startswith("_ctest_"):
-            if bad_in.get(f"gtest-{rest}.xml", 0) == 0:
+            # catkin writes MISSING-gtest-<name>.xml, one failure, for a binary that wrote no result
+            if bad_in.get(f"gtest-{rest}.xml", 0) + bad_in.get(f"MISSING-gtest-{rest}.xml", 0) == 0:
                 failed += 1
                 failures.append(f"{test}: exited non-zero, and its result gtest-{rest}.xml shows no failure "
                                 f"(a crash after writing it, on exit?)")

@@ -431,6 +431,23 @@ TEST(Bench, TheTestCountCountsEveryOutcome) {
     EXPECT_EQ(rc, 1) << out;
     EXPECT_EQ(lastLine(out), "1 passed, 5 failed") << out;  // the 4 before and D.bad, nothing more
   }
+  // A binary that crashed before writing its result: catkin writes MISSING-gtest-e.xml with one failure, and
+  // ctest lists it as failed; that is one failure, not two.
+  fs::create_directories(dir / "crashed");
+  std::ofstream(dir / "crashed" / "MISSING-gtest-e.xml")
+      << "<testsuite tests=\"1\" failures=\"1\" time=\"1\" errors=\"0\" name=\"gtest-e.xml\"><testcase "
+         "name=\"test_ran\" status=\"run\" time=\"1\" classname=\"Results\"><failure message=\"Unable to find "
+         "test results for gtest-e.xml, test did not run.\" type=\"\"/></testcase></testsuite>\n";
+  std::ofstream(dir / "crashed" / "b.xml") << "<testsuites><testsuite name=\"S\"><testcase classname=\"S\" name=\"ok\" "
+                                              "status=\"run\"/></testsuite></testsuites>\n";
+  std::ofstream(dir / "failed.log") << "6:_ctest_go_feap_gtest_e\n";
+  {
+    const auto [rc, out] = runCommand(count + (dir / "crashed").string() + " 8 " + (dir / "failed.log").string());
+    EXPECT_EQ(rc, 1) << out;
+    EXPECT_EQ(lastLine(out), "1 passed, 1 failed") << out;
+    EXPECT_NE(out.find("FAILED Results.test_ran: Unable to find test results for gtest-e.xml"), std::string::npos)
+        << out;
+  }
   std::ofstream(dir / "failed.log") << "5:_ctest_go_feap_rostest_test_ros_z.test\n";
   {  // a rostest that exited non-zero with every result passed
     const auto [rc, out] = runCommand(count + (dir / "good").string() + " 8 " + (dir / "failed.log").string());
