@@ -262,6 +262,8 @@ TEST_F(Replay, TheScriptsRefuseBadArgumentsBeforeInstallingOrBuilding) {
   for (const auto& [call, says] : std::vector<std::pair<std::string, std::string>>{
            {"run --rate-factor 0", "--rate-factor must be a number in [0.01, 1000]"},
            {"run --rate-factor 0.001", "--rate-factor must be a number in [0.01, 1000]"},
+           {"run --time-limit 0", "--time-limit must be a number of simulated seconds in (0, 1e6]"},
+           {"run --time-limit nan", "--time-limit must be a number of simulated seconds in (0, 1e6]"},
            {"run --planner warp", "unknown planner 'warp'"},
            {"run --seed -1", "--seed must be a whole number"},
            {"run --seed", "--seed needs a value"},
@@ -333,6 +335,24 @@ TEST_F(Replay, ScriptsRunExploresTheSmallMazeAndLeavesItsResults) {
   EXPECT_GT(rows, 10) << "metrics.csv:\n" << header;
   const std::string png = readText(out / "coverage.png");
   EXPECT_EQ(png.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8)) << "coverage.png is no PNG";
+}
+
+// scripts/run with --time-limit: the exploration ends at the limit, its results are written, and the
+// script exits 3 (finished, not complete), not 0 as for a box explored to the end.
+TEST_F(Replay, ScriptsRunEndsWithStatus3WhenTheTimeLimitEndsTheExploration) {
+  const fs::path out = data_ / "limited", log = dir_ / "limited.log";
+  const int status = std::system(("GO_FEAP_BUILD=" + inQuotes(GO_FEAP_BUILD_DIR) + " timeout --kill-after=30 300 " +
+                                  GO_FEAP_SOURCE_DIR "/scripts/run " GO_FEAP_SOURCE_DIR
+                                  "/config/scenes/maze_small.yaml --no-build --rate-factor 2 --time-limit 4 --out " +
+                                  inQuotes(out) + " > " + log.string() + " 2>&1 < /dev/null").c_str());
+  const std::string text = readText(log);
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 3) << "status " << status << "\n" << text;
+  EXPECT_NE(text.find("finished without exploring the whole box"), std::string::npos) << text;
+  ASSERT_TRUE(fs::is_regular_file(out / "summary.json")) << text;
+  const YAML::Node summary = YAML::LoadFile((out / "summary.json").string());
+  EXPECT_EQ(summary["finish_reason"].as<std::string>(), "time_limit");
+  EXPECT_NEAR(summary["exploration_time_s"].as<double>(), 4.0, 0.5);
+  EXPECT_LT(summary["coverage"].as<double>(), 0.9);
 }
 
 // scripts/record_flight records a short simulated flight (with the suite's own build), and replay.launch
