@@ -45,6 +45,9 @@ using go_feap::test::readText;
 using go_feap::test::replaceOnce;
 using go_feap::test::runCommand;
 
+// A path as a roslaunch argument's value on the bash command line the tests run (it may hold spaces).
+std::string inQuotes(const fs::path& path) { return "\"" + path.string() + "\""; }
+
 class Replay : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -70,6 +73,14 @@ class Replay : public ::testing::Test {
     const int status = std::system(command.c_str());
     return readText(out) + (status == 0 ? "" : "\n(launch exit status " + std::to_string(status) + ")");
   }
+  // scripts/run on the small maze with the suite's own build at twice real time, `args` after it, its output
+  // to `log` (a file, not a pipe: a leftover of a killed run would hold a pipe open); its exit status.
+  int scriptsRunSmallMaze(const std::string& args, const fs::path& log) {
+    return std::system(("GO_FEAP_BUILD=" + inQuotes(GO_FEAP_BUILD_DIR) + " timeout --kill-after=30 900 " +
+                        GO_FEAP_SOURCE_DIR "/scripts/run " GO_FEAP_SOURCE_DIR
+                        "/config/scenes/maze_small.yaml --no-build --rate-factor 2 " + args + " > " + log.string() +
+                        " 2>&1 < /dev/null").c_str());
+  }
   // The parameters a launch would set, as YAML (roslaunch --dump-params: no master, no node started).
   std::string dumpParams(const std::string& args) {
     // roslaunch's warnings go to a file of their own (runCommand merges the shell's stderr into the YAML).
@@ -80,9 +91,6 @@ class Replay : public ::testing::Test {
   }
   fs::path dir_, data_;
 };
-
-// A path as a roslaunch argument's value on the bash command line the tests run (it may hold spaces).
-std::string inQuotes(const fs::path& path) { return "\"" + path.string() + "\""; }
 
 // The simulated camera's depth encoding decides what its 0 means: in 32FC1 nothing in range is +inf
 // (REP 117) and 0/NaN is no measurement, skipped; in 16UC1 (record_flight.launch, as a D435i) 0 is also
@@ -295,14 +303,10 @@ TEST_F(Replay, TheScriptsRefuseBadArgumentsBeforeInstallingOrBuilding) {
 
 // scripts/run, the main command, on the small maze with the suite's own build (--no-build): it explores
 // through the ROS chain to the end, exits 0, prints progress lines and a summary whose figures are
-// summary.json's, and leaves the results folder the README lists. Its output goes to a file, not a pipe (a
-// leftover of a killed run would hold a pipe open).
+// summary.json's, and leaves the results folder the README lists.
 TEST_F(Replay, ScriptsRunExploresTheSmallMazeAndLeavesItsResults) {
   const fs::path out = data_ / "run results", log = dir_ / "run.log";
-  const int status = std::system(("GO_FEAP_BUILD=" + inQuotes(GO_FEAP_BUILD_DIR) + " timeout --kill-after=30 900 " +
-                                  GO_FEAP_SOURCE_DIR "/scripts/run " GO_FEAP_SOURCE_DIR
-                                  "/config/scenes/maze_small.yaml --no-build --rate-factor 2 --out " +
-                                  inQuotes(out) + " > " + log.string() + " 2>&1 < /dev/null").c_str());
+  const int status = scriptsRunSmallMaze("--out " + inQuotes(out), log);
   const std::string text = readText(log);
   ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "status " << status << "\n" << text;
   EXPECT_NE(text.find("--no-build: using the build in"), std::string::npos) << text;
@@ -341,10 +345,7 @@ TEST_F(Replay, ScriptsRunExploresTheSmallMazeAndLeavesItsResults) {
 // script exits 3 (finished, not complete), not 0 as for a box explored to the end.
 TEST_F(Replay, ScriptsRunEndsWithStatus3WhenTheTimeLimitEndsTheExploration) {
   const fs::path out = data_ / "limited", log = dir_ / "limited.log";
-  const int status = std::system(("GO_FEAP_BUILD=" + inQuotes(GO_FEAP_BUILD_DIR) + " timeout --kill-after=30 300 " +
-                                  GO_FEAP_SOURCE_DIR "/scripts/run " GO_FEAP_SOURCE_DIR
-                                  "/config/scenes/maze_small.yaml --no-build --rate-factor 2 --time-limit 4 --out " +
-                                  inQuotes(out) + " > " + log.string() + " 2>&1 < /dev/null").c_str());
+  const int status = scriptsRunSmallMaze("--time-limit 4 --out " + inQuotes(out), log);
   const std::string text = readText(log);
   ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 3) << "status " << status << "\n" << text;
   EXPECT_NE(text.find("finished without exploring the whole box"), std::string::npos) << text;
