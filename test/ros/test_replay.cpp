@@ -258,8 +258,9 @@ TEST_F(Replay, EveryNodeletOfEveryLaunchIsRequired) {
 
 // The user scripts refuse bad arguments by name, exit 2, before the install and the build (minutes on a
 // fresh machine): their build folder is pointed at one that must stay unmade, and a refusal that did not
-// come is cut short by the timeout; --no-build is refused there, as there is no build to use. --help is no
-// error.
+// come is cut short by the timeout; --no-build is refused there, as there is no build to use (after
+// record_flight has named its bag: a folder for --out gets a bag named by the time in it, where `DIR/` made
+// the hidden DIR/.bag). --help is no error.
 TEST_F(Replay, TheScriptsRefuseBadArgumentsBeforeInstallingOrBuilding) {
   const fs::path unmade = dir_ / "unmade build";
   const fs::path done = dir_ / "done";
@@ -284,6 +285,8 @@ TEST_F(Replay, TheScriptsRefuseBadArgumentsBeforeInstallingOrBuilding) {
            {"paper_tables --no-build", "--no-build: there is no build in"},
            {"record_flight --duration 0", "--duration must be a whole number of seconds"},
            {"record_flight --out " + inQuotes(done / "flight.bag"), "already exists"},
+           {"record_flight --no-build --out " + inQuotes(done), "the bag: " + done.string() + "/flight-"},
+           {"record_flight --no-build --out " + inQuotes(dir_ / "new") + "/", "the bag: " + (dir_ / "new").string() + "/flight-"},
            {"record_flight --seed x", "--seed must be a whole number"},
            {"paper_tables --runs 0", "--runs must be a whole number from 1 to 100000"},
            {"paper_tables --jobs 0", "--jobs must be a whole number from 1 to 256"},
