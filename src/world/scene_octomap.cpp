@@ -58,8 +58,10 @@ std::string nestingProblem(const std::string& bytes, std::size_t data_start) {
 // 'size N' or 'res R' (R > 0), and last a line 'data'. OctoMap reads the header word by word ('id' takes
 // the next word, on the next line if need be), so a header outside these lines could make it start the
 // data elsewhere than this check walked: 'id' alone on its line took the 'data' below as its value.
-// Sets `problem` and returns npos on a line that is none of these.
-std::size_t treeDataStart(const std::string& bytes, std::string& problem) {
+// Sets `problem` and returns npos on a line that is none of these. `empty` tells whether the header said
+// 'size 0': OctoMap writes no tree data for an empty tree.
+std::size_t treeDataStart(const std::string& bytes, std::string& problem, bool& empty) {
+  empty = false;
   std::size_t at = bytes.find('\n');  // the first line was checked
   for (int number = 2; at != std::string::npos; ++number) {
     const std::size_t begin = at + 1;
@@ -82,6 +84,7 @@ std::size_t treeDataStart(const std::string& bytes, std::string& problem) {
         return std::string::npos;
       }
     }
+    if (keyed && w[0] == "size") empty = w[1] == "0";
     if (!keyed) {
       problem = "header line " + std::to_string(number) + " '" + line.substr(0, 40) +
                 "' is none of a comment, 'id X', 'size N', 'res R' or 'data'";
@@ -107,8 +110,11 @@ common::Result<std::vector<OccupiedCube>> loadOctomap(const std::string& path) {
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   if (in.bad()) return R::Error(path + ": read error");
   std::string header_problem;
-  const std::size_t data_start = treeDataStart(bytes, header_problem);
+  bool empty = false;
+  const std::size_t data_start = treeDataStart(bytes, header_problem, empty);
   if (data_start == std::string::npos) return R::Error(path + ": corrupt OctoMap file (" + header_problem + ")");
+  // An empty tree (a map saved before its first scan) has no data to walk.
+  if (empty && data_start == bytes.size()) return R::Error(path + ": the OctoMap holds no occupied voxels (it is empty)");
   if (const std::string e = nestingProblem(bytes, data_start); !e.empty())
     return R::Error(path + ": corrupt OctoMap file (" + e + ")");
   // OctoMap's reader reports problems on std::cerr and returns false; read into a tree

@@ -479,6 +479,21 @@ TEST(Octomap, LoadsOccupiedLeavesIncludingPrunedOnes) {
   auto none = loadOctomap(d.file("free.bt"));
   ASSERT_FALSE(none);
   expectErrorMentions(none.message(), {"free.bt", "no occupied voxels"});
+  // So is an empty tree (a map saved before its first scan), whose file has no tree data at all (it was
+  // called truncated); one that says it has nodes and has no data is.
+  ASSERT_TRUE(octomap::OcTree(0.1).writeBinary(d.file("empty.bt")));
+  auto empty = loadOctomap(d.file("empty.bt"));
+  ASSERT_FALSE(empty);
+  expectErrorMentions(empty.message(), {"empty.bt", "no occupied voxels"});
+  std::ifstream in(d.file("empty.bt"), std::ios::binary);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::size_t size_at = text.find("\nsize 0\n");
+  ASSERT_NE(size_at, std::string::npos) << text;
+  std::ofstream(d.file("claims.bt"), std::ios::binary) << text.substr(0, size_at) << "\nsize 9\n"
+                                                        << text.substr(size_at + 8);
+  auto claims = loadOctomap(d.file("claims.bt"));
+  ASSERT_FALSE(claims);
+  expectErrorMentions(claims.message(), {"claims.bt", "truncated"});
 }
 
 // T_world_file turns and moves points (PCD, PLY) and triangles (STL) alike: a quarter turn round z and a
