@@ -149,7 +149,8 @@ ExplorationRun::ExplorationRun(const world::Scene& scene, const ExplorationConfi
       noise_rng_(scene.seed),
       window_(config.local),
       collisions_(scene, config.loop.collision_distance) {
-  for (const common::Status& st : {config.validate(), world::validateScene(scene)})
+  for (const common::Status& st : {config.validate(), world::validateScene(scene),
+                                   metrics::checkStartClearance(scene, config.loop.collision_distance)})
     if (!st.ok()) throw std::invalid_argument(st.message());
   if (!positiveFinite(max_sim_time)) throw std::invalid_argument("max_sim_time must be finite and > 0");
   intrinsics_ = depthIntrinsics(config.camera);

@@ -37,6 +37,17 @@ double obstacleDistance(const world::Scene& scene, const common::Vec3& p, double
   return best;
 }
 
+common::Status checkStartClearance(const world::Scene& scene, double collision_distance) {
+  const common::Vec3& p = scene.start.position;
+  const double clearance = obstacleDistance(scene, p, collision_distance);
+  if (clearance >= collision_distance) return common::Status::Ok();
+  std::ostringstream why;
+  why << "scene '" << scene.name << "': the start (" << p.x() << ", " << p.y() << ", " << p.z() << ") lies "
+      << clearance << " m from an obstacle, under metrics/collision_distance (" << collision_distance
+      << " m): every run would begin with a collision (move the start into the open)";
+  return common::Status::Error(why.str());
+}
+
 bool CollisionMonitor::update(const common::Vec3& p) {
   last_ = obstacleDistance(scene_, p, kHorizon);
   closest_ = std::min(closest_, last_);

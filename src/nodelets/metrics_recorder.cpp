@@ -90,6 +90,8 @@ class MetricsRecorder : public nodelet::Nodelet {
     s.coverage = -1.0;
     if (!scene_spec.empty()) {
       scene_ = std::make_unique<world::Scene>(ros_params::loadScene(pnh, getName()));
+      const common::Status start = metrics::checkStartClearance(*scene_, collision_distance_);
+      ros_params::requireOrThrow(start.ok(), getName(), start.message());
       s.scene = scene_->name;
       s.seed = scene_->seed;
       s.min_obstacle_distance_m = metrics::CollisionMonitor::kHorizon;

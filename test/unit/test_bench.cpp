@@ -21,6 +21,7 @@
 #include "../../src/tools/camera_path.h"
 #include "../../src/tools/cli_args.h"
 #include "go_feap/bench/exploration_run.h"
+#include "go_feap/metrics/metrics.h"
 #include "go_feap/world/scene_files.h"
 
 #ifndef GO_FEAP_CONFIG_DIR
@@ -803,6 +804,18 @@ TEST(Bench, EveryRateAndTheTimeLimitAreCheckedNamingTheKey) {
   ASSERT_TRUE(scene) << scene.message();
   for (const double bad : {0.0, -1.0, std::numeric_limits<double>::infinity(), std::numeric_limits<double>::quiet_NaN()})
     EXPECT_THROW(bench::ExplorationRun(*scene, base, "go_feap", bad), std::invalid_argument) << bad;
+  // A start in free space but nearer a wall than metrics/collision_distance: a collision before the first step.
+  go_feap::world::Scene near_wall = *scene;
+  while (go_feap::metrics::obstacleDistance(near_wall, near_wall.start.position, 0.5) >= 0.05)
+    near_wall.start.position.x() -= 0.01;
+  ASSERT_FALSE(near_wall.isOccupied(near_wall.start.position));
+  try {
+    bench::ExplorationRun run(near_wall, base, "go_feap", 10.0);
+    ADD_FAILURE() << "a start " << go_feap::metrics::obstacleDistance(near_wall, near_wall.start.position, 0.5)
+                  << " m from a wall was taken";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("under metrics/collision_distance"), std::string::npos) << e.what();
+  }
 }
 
 // A mistyped value in any of the five files is refused naming the file and the key: a group whose reader's

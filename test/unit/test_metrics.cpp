@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <sstream>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
@@ -374,6 +375,32 @@ TEST(Metrics, ObstacleDistanceMatchesBruteForceOverVoxelCubes) {
   for (const Vec3& far : {Vec3(214748353.75, 0.0, 1.0), Vec3(-2.2e9, 0.0, 1.0), Vec3(0.0, 1e30, -1e30),
                           Vec3(corner + Vec3::Constant(0.7)), Vec3(std::nan(""), 0.0, 1.0)})
     EXPECT_EQ(metrics::obstacleDistance(*scene, far, 0.6), 0.6) << far.transpose();
+}
+
+// A start nearer an obstacle than collision_distance (in free space, so validateScene() takes it) is refused
+// naming the start, its clearance and the key: every run from there began with a collision.
+TEST(Metrics, AStartNearerAnObstacleThanTheCollisionDistanceIsRefused) {
+  auto scene = smallMaze(3);
+  ASSERT_TRUE(scene) << scene.message();
+  EXPECT_TRUE(metrics::checkStartClearance(*scene, 0.1).ok()) << metrics::checkStartClearance(*scene, 0.1).message();
+  // Walk from the start until the clearance drops under 0.08 m.
+  Vec3 p = scene->start.position;
+  double clearance = metrics::obstacleDistance(*scene, p, 0.5);
+  for (int k = 0; k < 1000 && clearance >= 0.08; ++k) {
+    p.x() += 0.01;
+    clearance = metrics::obstacleDistance(*scene, p, 0.5);
+  }
+  ASSERT_GT(clearance, 0.01);
+  ASSERT_LT(clearance, 0.08);
+  scene->start.position = p;
+  ASSERT_TRUE(go_feap::world::validateScene(*scene).ok());
+  const auto refused = metrics::checkStartClearance(*scene, 0.1);
+  ASSERT_FALSE(refused.ok());
+  std::ostringstream says;
+  says << "the start (" << p.x() << ", " << p.y() << ", " << p.z() << ") lies " << clearance
+       << " m from an obstacle, under metrics/collision_distance (0.1 m)";
+  EXPECT_NE(refused.message().find(says.str()), std::string::npos) << refused.message() << "\n" << says.str();
+  EXPECT_TRUE(metrics::checkStartClearance(*scene, 0.99 * clearance).ok());
 }
 
 TEST(Metrics, CollisionMonitorCountsEachEntryAndKeepsTheClosestApproach) {

@@ -55,6 +55,11 @@ class BoundedTrail {
 /// `radius` (m): `radius` when none is that close; 0 inside an obstacle.
 double obstacleDistance(const world::Scene& scene, const common::Vec3& p, double radius);
 
+/// Whether a run can start at the scene's start: an error naming the start and its clearance when that is
+/// under `collision_distance` (m; validDistance()), as every run from there would begin with a collision
+/// (validateScene() refuses only a start inside an obstacle's voxel).
+common::Status checkStartClearance(const world::Scene& scene, double collision_distance);
+
 /// Collisions and the closest approach along a flown path (DESIGN §3.9: a collision is the UAV centre
 /// closer than collision_distance to a ground-truth obstacle; one collision per entry into that zone).
 class CollisionMonitor {
