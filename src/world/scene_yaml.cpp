@@ -170,8 +170,10 @@ common::Result<SceneFileSpec> parseSceneYaml(const std::string& yaml_path) {
     const YAML::Node file = require(s, "file", "scene.");
     if (!file.IsScalar() || file.Scalar().empty()) throw KeyError{"key 'scene.file' must be a file name"};
     fs::path fp(file.Scalar());
+    // Joined, not normalised: '..' after a symlinked folder is the link target's parent, as the system
+    // resolves it (lexically_normal() dropped the link: a checkout linked into a workspace lost its scenes).
     if (fp.is_relative()) fp = fs::path(yaml_path).parent_path() / fp;
-    spec.file = fp.lexically_normal().string();
+    spec.file = fp.string();
 
     const auto t = numbers(require(s, "T_world_file", "scene."), "scene.T_world_file", 16);
     for (int r = 0; r < 4; ++r)

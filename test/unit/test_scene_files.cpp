@@ -699,6 +699,23 @@ TEST(SceneYaml, GroundPlaneFillsTheBoxFloorLayer) {
   EXPECT_TRUE(s->isOccupied(Vec3(0.55, 0.55, 1.05)));
 }
 
+// A relative file is found as the system finds it from the YAML's folder: through a symlinked folder, '..'
+// is the link target's parent (a checkout linked into a catkin workspace, ../../shared/... from its config).
+TEST(SceneYaml, ARelativeFileIsFoundThroughASymlinkedFolder) {
+  TempDir d;
+  fs::create_directories(d.file("real/data"));
+  fs::create_directories(d.file("real/cfg"));
+  fs::create_directories(d.file("ws"));
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  cloud.push_back(pcl::PointXYZ(0.5f, 0.5f, 1.0f));
+  pcl::io::savePCDFileBinary(d.file("real/data/p.pcd"), cloud);
+  writeText(d.file("real/cfg/p.yaml"), sceneYaml("../data/p.pcd"));
+  fs::create_directory_symlink(d.file("real/cfg"), d.file("ws/cfg"));
+  auto s = loadSceneYaml(d.file("ws/cfg/p.yaml"));
+  ASSERT_TRUE(s) << s.message();
+  EXPECT_TRUE(s->isOccupied(Vec3(0.55, 0.55, 1.05)));
+}
+
 // ---- Real scenes from other projects ---------------------------------------------------
 
 namespace {

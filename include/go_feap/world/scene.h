@@ -55,8 +55,8 @@ Scene makeEmptyScene(const std::string& name, const Aabb& box, double resolution
 /// Marks the voxel containing `p` occupied. Returns false when `p` lies outside the grid.
 bool markOccupied(Scene& scene, const Vec3& p);
 
-/// Checks a scene before use: valid box and resolution, start inside the box and not in
-/// (or touching) an obstacle. The message names what is wrong.
+/// Checks a scene before use: valid box and resolution, start inside the box and outside every
+/// obstacle's voxel (its clearance is metrics::checkStartClearance()'s). The message names what is wrong.
 common::Status validateScene(const Scene& scene);
 
 /// Coverage reference (DESIGN §3.1): free voxels inside the box reachable from the start
