@@ -62,14 +62,16 @@ class StlWords {
     return true;
   }
   /// Skips a solid's name: the rest of the current line, up to a word `stop` on it (some writers put the
-  /// first 'facet' on the 'solid' line, or the next 'solid' after an 'endsolid'), which is read next.
-  void skipName(const char* stop) {
+  /// first 'facet' on the 'solid' line, or the next 'solid' after an 'endsolid'), which is read next; true
+  /// when it met `stop`.
+  bool skipName(const char* stop) {
     std::string word;
     while (words_ >> word)
       if (lowered(word) == stop) {
         pending_ = stop;
-        return;  // the rest of the line follows it
+        return true;  // the rest of the line follows it
       }
+    return false;
   }
   std::size_t line() const { return line_; }
 
@@ -106,11 +108,23 @@ R parseAscii(const std::string& path, const std::string& text) {
   };
   auto is = [&](const std::string& keyword) { return lowered(word) == keyword; };  // SOLID as solid
   auto got = [&](const std::string& want) { return "expected " + want + ", got '" + word + "'"; };
+  bool on_endsolid_line = false;  // this 'solid' followed an 'endsolid' on its line
   while (words.next(word)) {
     if (!is("solid")) return corrupt(got(mesh.vertices.empty() ? "'solid'" : "'solid' or the end of the file"));
     words.skipName("facet");
+    const std::size_t first_facet = mesh.triangleCount();
     while (true) {
-      if (!words.next(word)) return truncated();
+      if (!words.next(word)) {
+        // The file ends with the line of the last 'endsolid': its 'solid' was part of a name
+        // ("endsolid Solid Body 1", as some CAD tools write), not a solid of its own.
+        if (on_endsolid_line && mesh.triangleCount() == first_facet) return mesh;
+        return truncated();
+      }
+      if (on_endsolid_line && mesh.triangleCount() == first_facet && is("solid")) {  // so was that one
+        on_endsolid_line = false;
+        words.skipName("facet");
+        continue;
+      }
       if (is("endsolid")) break;
       if (!is("facet")) return corrupt(got("'facet' or 'endsolid'"));
       const std::size_t facet = mesh.triangleCount();
@@ -146,7 +160,7 @@ R parseAscii(const std::string& path, const std::string& text) {
         if (!is(want)) return corrupt(got("'" + std::string(want) + "'"));
       }
     }
-    words.skipName("solid");
+    on_endsolid_line = words.skipName("solid");
   }
   return mesh;
 }

@@ -15,6 +15,7 @@
 #include <regex>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 #include "go_feap/world/generators.h"
 #include "go_feap/world/scene_files.h"
@@ -1578,9 +1579,20 @@ TEST(BadInput, AsciiStlSolidsAndMalformedLines) {
     EXPECT_EQ(r->triangleCount(), name == "flat.stl" ? 2u : 1u) << name;
     EXPECT_EQ(r->vertices[1], Vec3(1.5, 1, 0.5)) << name;
   }
+  // A name holding the word 'solid' after 'endsolid' (some CAD tools write "endsolid Solid Body 1"), at the
+  // end of the file or before the next solid: a name, not a solid (it was called truncated or corrupt).
+  for (const auto& [name, text, count] :
+       {std::tuple<std::string, std::string, std::size_t>{"cad.stl", "solid Part\n" + a + "endsolid Solid Body 1\n", 1},
+        {"cad2.stl", "solid A\n" + a + "endsolid Solid A\nsolid B\n" + b + "endsolid Solid B\n", 2}}) {
+    writeText(d.file(name), text);
+    auto r = loadStl(d.file(name));
+    ASSERT_TRUE(r) << name << ": " << r.message();
+    EXPECT_EQ(r->triangleCount(), count) << name;
+  }
   auto refused = [&](const std::string& name, const std::string& text, const std::vector<std::string>& words) {
     expectStlRefused(d.file(name), text, words);
   };
+  refused("cut.stl", "solid A\n" + a + "endsolid Solid A\nsolid B\n facet normal 0 0 1\n", {"truncated"});
   std::string four = "solid x\n" + a + "endsolid x\n";
   four.replace(four.find("1 1.5 0.5"), 9, "1 1.5 0.5 7");
   refused("four.stl", four, {"line 6", "'7'"});
