@@ -1567,8 +1567,8 @@ TEST(BadInput, AsciiStlSolidsAndMalformedLines) {
   auto line = loadStl(d.file("line.stl"));
   ASSERT_TRUE(line) << line.message();
   EXPECT_EQ(line->triangleCount(), 1u);
-  // The first facet on the solid's line, and a whole file of two solids on one line (a name cannot hold
-  // the word 'facet' or, after 'endsolid', 'solid').
+  // The first facet on the solid's line, and a whole file of two solids on one line (a name there cannot
+  // hold the word 'facet' or, after 'endsolid', 'solid').
   std::string flat = "solid a " + a + "endsolid a solid b " + b + "endsolid b";
   std::replace(flat.begin(), flat.end(), '\n', ' ');
   for (const auto& [name, text] : {std::pair<std::string, std::string>{"sameline.stl", "solid my part " + a + "endsolid my part\n"},
