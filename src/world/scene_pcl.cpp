@@ -549,9 +549,19 @@ common::Result<PointCloudFile> loadPointCloudFile(const std::string& path) {
       const std::uint8_t* point = blob.data.data() + r * blob.row_step + c * blob.point_step;
       Vec3 p;
       for (int a = 0; a < 3; ++a) p[a] = readNumber(point + xyz[a]->offset, xyz[a]->datatype);
-      if (!p.allFinite()) return R::Error(path + ": point " + std::to_string(points.size()) + " is NaN or Inf");
+      // x, y and z all NaN is PCL's "no point" (an organised cloud's pixel without a return): skipped,
+      // where no face can name it. Anything else not finite is corrupt.
+      if (p.array().isNaN().all() && faces.empty()) {
+        ++out.skipped_points;
+        continue;
+      }
+      if (!p.allFinite())
+        return R::Error(path + ": point " + std::to_string(points.size() + out.skipped_points) + " is NaN or Inf");
       points.push_back(p);
     }
+  if (points.empty())
+    return R::Error(path + ": the cloud has no point (all " + std::to_string(out.skipped_points) +
+                    " are NaN, PCL's mark of no point)");
   // Each face as triangles: a fan round its first vertex where that covers it (a convex face), else by ear
   // clipping in its plane (a concave one: a fan would fill in a doorway cut into a wall face).
   for (std::size_t f = 0; f < faces.size(); ++f) {

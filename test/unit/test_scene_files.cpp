@@ -179,6 +179,22 @@ TEST(PointCloud, OrganisedPcdIsReadRowAfterRow) {
     for (std::size_t i = 0; i < 6; ++i)
       EXPECT_LT(((*pts)[i] - Vec3(1.0 + i, 0.5 * i, 2.0)).norm(), 1e-6) << f << " point " << i;
   }
+  // A pixel without a return is a point of NaN x, y and z (PCL's "no point", is_dense false): skipped, the
+  // rest read (the whole cloud was refused); a cloud of nothing else has no point.
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  cloud[2] = pcl::PointXYZ(nan, nan, nan);
+  cloud.is_dense = false;
+  pcl::io::savePCDFileBinary(d.file("holes.pcd"), cloud);
+  auto file = loadPointCloudFile(d.file("holes.pcd"));
+  ASSERT_TRUE(file) << file.message();
+  EXPECT_EQ(file->skipped_points, 1u);
+  ASSERT_EQ(file->points.size(), 5u);
+  EXPECT_LT((file->points[2] - Vec3(4.0, 1.5, 2.0)).norm(), 1e-6);
+  for (auto& p : cloud) p = pcl::PointXYZ(nan, nan, nan);
+  pcl::io::savePCDFileBinary(d.file("blind.pcd"), cloud);
+  auto blind = loadPointCloudFile(d.file("blind.pcd"));
+  ASSERT_FALSE(blind);
+  expectErrorMentions(blind.message(), {"blind.pcd", "no point (all 6 are NaN"});
 }
 
 TEST(Stl, BinaryStartingWithSolidAndAsciiGiveTheSameWatertightShell) {
@@ -265,6 +281,10 @@ TEST(PlyMesh, FacesMarkTheVoxelsTheyOverlapAsAnStlDoes) {
   refused("edge.ply", head + "2 0 1\n", {"face 0 has 2 vertices"});
   refused("beyond.ply", head + "3 0 1 3\n", {"face 0 names vertex 3", "has 3 vertices"});
   refused("negative.ply", head + "3 0 -1 2\n", {"face 0 names vertex -1"});
+  // A vertex of NaN x, y and z (PCL's "no point", skipped in a cloud) is corrupt in a mesh, whose faces name it.
+  std::string nan_vertex = head + "3 0 1 2\n";
+  nan_vertex.replace(nan_vertex.find("\n1 0 0\n"), 7, "\nnan nan nan\n");
+  refused("nanvertex.ply", nan_vertex, {"point 1 is NaN or Inf"});
   refused("short.ply", head + "3 0 1\n", {"PLY"});
   refused("long.ply", head + "3 0 1 2 1\n", {"PLY"});
   const std::string binary = fileBytes(d.file("triangles.ply"));

@@ -31,13 +31,15 @@ std::string lowerExtension(const std::string& path);
 /// A point cloud file's points and, for a PLY mesh, its faces as triangles of point indices.
 struct PointCloudFile {
   std::vector<Vec3> points;
+  std::size_t skipped_points = 0;  ///< points with x, y and z all NaN (PCL's "no point"), not in `points`
   std::vector<std::array<std::uint32_t, 3>> triangles;  ///< a convex face fanned round its first vertex, a concave one ear-clipped
 };
 
 /// Reads x, y, z of every point of a .pcd or .ply file (PCL readers), each in its own type (float32, float64
-/// or an integer type, COUNT 1), and a PLY's faces (`vertex_indices` or `vertex_index` lists). Fails on
-/// missing, truncated or corrupt files, NaN/Inf points, empty clouds, and faces of fewer than 3 vertices or
-/// naming a vertex the file does not have.
+/// or an integer type, COUNT 1), and a PLY's faces (`vertex_indices` or `vertex_index` lists). A point whose
+/// x, y and z are all NaN (PCL's "no point", as in an organised cloud from a depth camera) is skipped in a
+/// file without faces. Fails on missing, truncated or corrupt files, other NaN/Inf points, clouds without a
+/// point, and faces of fewer than 3 vertices or naming a vertex the file does not have.
 common::Result<PointCloudFile> loadPointCloudFile(const std::string& path);
 
 /// loadPointCloudFile's points.
