@@ -150,17 +150,34 @@ TEST(PointCloud, PcdBinaryAndAsciiAndPly) {
   for (int i = 0; i < 50; ++i) cloud.push_back(pcl::PointXYZ(0.1f * i, -0.05f * i, 1.0f));
   pcl::io::savePCDFileBinary(d.file("a.pcd"), cloud);
   pcl::io::savePCDFileASCII(d.file("b.pcd"), cloud);
+  pcl::io::savePCDFileBinaryCompressed(d.file("z.pcd"), cloud);  // PCL's own choice for large clouds
   std::ostringstream ply;
   ply << "ply\nformat ascii 1.0\nelement vertex " << cloud.size()
       << "\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
   for (const auto& p : cloud) ply << p.x << " " << p.y << " " << p.z << "\n";
   writeText(d.file("c.ply"), ply.str());
-  for (const char* f : {"a.pcd", "b.pcd", "c.ply"}) {
+  for (const char* f : {"a.pcd", "b.pcd", "z.pcd", "c.ply"}) {
     auto pts = loadPointCloud(d.file(f));
     ASSERT_TRUE(pts) << pts.message();
     ASSERT_EQ(pts->size(), cloud.size()) << f;
     for (std::size_t i = 0; i < cloud.size(); ++i)
       EXPECT_LT(((*pts)[i] - Vec3(cloud[i].x, cloud[i].y, cloud[i].z)).norm(), 1e-5) << f;
+  }
+  // A compressed file cut short, or whose uncompressed size is not the header's points, is refused.
+  const std::string compressed = fileBytes(d.file("z.pcd"));
+  writeText(d.file("z_cut.pcd"), compressed.substr(0, compressed.size() - 10));
+  std::string resized = compressed;
+  const std::size_t data = resized.find("DATA binary_compressed\n") + 23;
+  std::uint32_t raw = 0;
+  std::memcpy(&raw, resized.data() + data + 4, 4);
+  ASSERT_EQ(raw, cloud.size() * 12u);  // x y z, 12 bytes a point
+  raw += 12;
+  std::memcpy(resized.data() + data + 4, &raw, 4);
+  writeText(d.file("z_size.pcd"), resized);
+  for (const char* f : {"z_cut.pcd", "z_size.pcd"}) {
+    auto r = loadPointCloud(d.file(f));
+    ASSERT_FALSE(r) << f;
+    expectErrorMentions(r.message(), {f, "truncated or corrupt compressed PCD file"});
   }
 }
 
