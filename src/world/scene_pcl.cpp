@@ -461,6 +461,19 @@ void triangulateFace(const std::vector<Vec3>& points, const std::vector<std::uin
   for (std::size_t k = 1; k + 1 < rest.size(); ++k) triangles.push_back({rest[0], rest[k], rest[k + 1]});
 }
 
+// PCL's verbosity is the process's: quiet while a file is read or written here (its diagnostics become one
+// message of ours), then back to what it was, for the other users of PCL in a nodelet manager.
+class QuietPcl {
+ public:
+  QuietPcl() : level_(pcl::console::getVerbosityLevel()) { pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS); }
+  ~QuietPcl() { pcl::console::setVerbosityLevel(level_); }
+  QuietPcl(const QuietPcl&) = delete;
+  QuietPcl& operator=(const QuietPcl&) = delete;
+
+ private:
+  pcl::console::VERBOSITY_LEVEL level_;
+};
+
 }  // namespace
 
 common::Result<PointCloudFile> loadPointCloudFile(const std::string& path) {
@@ -468,8 +481,7 @@ common::Result<PointCloudFile> loadPointCloudFile(const std::string& path) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) return R::Error(path + ": file not found");
   const std::string ext = lowerExtension(path);
-  // PCL prints its own diagnostics; we return one message instead.
-  pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
+  const QuietPcl quiet;
   pcl::PCLPointCloud2 blob;
   std::vector<pcl::Vertices> faces;  // PLY
   CloudHeader header;
@@ -594,7 +606,7 @@ common::Status saveScenePcd(const Scene& scene, const std::string& path) {
     cloud.push_back(pcl::PointXYZ(static_cast<float>(c.x()), static_cast<float>(c.y()), static_cast<float>(c.z())));
   }
   if (cloud.empty()) return common::Status::Error(path + ": scene '" + scene.name + "' has no occupied voxels to write");
-  pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
+  const QuietPcl quiet;
   pcl::PCDWriter writer;
   if (writer.writeBinary(path, cloud) < 0) return common::Status::Error(path + ": cannot write PCD file");
   return common::Status::Ok();

@@ -2,6 +2,7 @@
 // scenes in ../shared/scenes, and every kind of bad input.
 #include <gtest/gtest.h>
 #include <octomap/OcTree.h>
+#include <pcl/console/print.h>
 #include <pcl/io/pcd_io.h>
 #include <pcl/io/ply_io.h>
 #include <pcl/point_types.h>
@@ -156,8 +157,10 @@ TEST(PointCloud, PcdBinaryAndAsciiAndPly) {
       << "\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
   for (const auto& p : cloud) ply << p.x << " " << p.y << " " << p.z << "\n";
   writeText(d.file("c.ply"), ply.str());
+  pcl::console::setVerbosityLevel(pcl::console::L_WARN);
   for (const char* f : {"a.pcd", "b.pcd", "z.pcd", "c.ply"}) {
     auto pts = loadPointCloud(d.file(f));
+    EXPECT_EQ(pcl::console::getVerbosityLevel(), pcl::console::L_WARN) << "PCL's verbosity, the process's, changed";
     ASSERT_TRUE(pts) << pts.message();
     ASSERT_EQ(pts->size(), cloud.size()) << f;
     for (std::size_t i = 0; i < cloud.size(); ++i)
