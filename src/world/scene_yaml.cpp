@@ -335,6 +335,8 @@ common::Result<Scene> makeScene(const std::string& spec, std::uint64_t seed) {
   if (spec == "powerplant") return generatePowerplant(PowerplantConfig(), seed);
   const std::string ext = lowerExtension(spec);
   if (ext == ".yaml" || ext == ".yml") {
+    std::error_code ec;
+    if (!fs::is_regular_file(spec, ec)) return common::Result<Scene>::Error(spec + ": file not found");
     YAML::Node root;
     try {
       root = YAML::LoadFile(spec);

@@ -868,6 +868,10 @@ TEST(BadInput, MissingFileAndUnknownExtension) {
   auto e = makeScene("city", 0);
   ASSERT_FALSE(e);
   expectErrorMentions(e.message(), {"city"});
+  // A scene YAML that is not there is said to be missing (it was "cannot be read as YAML (bad file)").
+  auto missing = makeScene(d.file("mistyped.yaml"), 0);
+  ASSERT_FALSE(missing);
+  expectErrorMentions(missing.message(), {"mistyped.yaml: file not found"});
 }
 
 TEST(BadInput, TruncatedAndCorruptStl) {
@@ -1447,6 +1451,10 @@ TEST(BadInput, GeneratedMazeYamlUnknownRepeatedOrWronglyTypedKeys) {
   auto m = makeScene(d.file("maze.yaml"), 0);
   ASSERT_TRUE(m) << m.message();
   EXPECT_EQ(m->name, "m");
+  writeText(d.file("maze.YML"), maze);  // .yml, in any case, is YAML too
+  auto yml = makeScene(d.file("maze.YML"), 0);
+  ASSERT_TRUE(yml) << yml.message();
+  EXPECT_EQ(yml->occupied.size(), m->occupied.size());
   const std::vector<std::array<std::string, 3>> cases = {  // replace what, by what, expected message
       {"height: 3", "hieght: 30", "unknown key 'scene.maze.hieght' ('scene.maze' takes size_x, size_y, height, cell_size)"},
       {"size_y: 6", "size_x: 12", "key 'scene.maze.size_x' is given more than once"},
