@@ -9,15 +9,17 @@
 
 namespace go_feap::map {
 
-common::Status VoxelMap::saveBt(const std::string& path) const {
-  const auto& geo = occupancy_.geometry();
+common::Status VoxelMap::saveBt(const std::string& path) const { return map::saveBt(occupancy_.snapshot(), path); }
+
+common::Status saveBt(const OccupancySnapshot& map, const std::string& path) {
+  const auto& geo = map.geometry;
   octomap::OcTree tree(geo.resolution());
   const float occ = tree.getClampingThresMaxLog(), fre = tree.getClampingThresMinLog();
   for (int z = 0; z < geo.dims().z(); ++z) {
     for (int y = 0; y < geo.dims().y(); ++y)
       for (int x = 0; x < geo.dims().x(); ++x) {
         const Index3 idx(x, y, z);
-        const VoxelState s = occupancy_.state(idx);
+        const VoxelState s = map.states[geo.linear(idx)];
         if (s == VoxelState::kUnknown) continue;
         const Vec3 c = geo.indexToCoord(idx);
         // OctoMap's keys reach 2^15 voxels either side of the origin (3.3 km at 0.1 m): a voxel beyond was

@@ -328,6 +328,12 @@ bool OccupancyMap::isLineFree(const Vec3& a, const Vec3& b, bool unknown_blocks)
          }) == common::Walk::kCompleted;
 }
 
+OccupancySnapshot OccupancyMap::snapshot() const {
+  OccupancySnapshot s{geo_, std::vector<VoxelState>(logodds_.size())};
+  for (std::size_t l = 0; l < logodds_.size(); ++l) s.states[l] = stateOf(logodds_[l]);
+  return s;
+}
+
 std::size_t OccupancyMap::memoryBytes() const {
   return logodds_.capacity() + 8 * (marks_.capacity() + end_bits_.capacity()) +
          sizeof(std::size_t) * touched_.capacity() + sizeof(double) * behind_.capacity();

@@ -102,7 +102,9 @@ class EsdfMapper : public nodelet::Nodelet {
     handle_pub_ = nh.advertise<ros_map::MapHandle>("map_handle", 1, /*latch=*/true);
     cloud_pub_ = nh.advertise<sensor_msgs::PointCloud2>("occupied_cloud", 1);
     slice_pub_ = nh.advertise<sensor_msgs::PointCloud2>("esdf_slice", 1);
-    save_srv_ = ros_guard::service(nh, getName(), "save_map", &EsdfMapper::onSave, this);
+    // On the manager's worker threads, not the queue that integrates depth: a save of a large map takes
+    // seconds, and frames went on arriving (and were dropped) while the vehicle flew on a frozen map.
+    save_srv_ = ros_guard::service(getMTNodeHandle(), getName(), "save_map", &EsdfMapper::onSave, this);
     info_sub_ = ros_guard::subscribe(nh, getName(), "camera_info", 1, &EsdfMapper::onInfo, this);
     depth_sub_.subscribe(nh, "depth", 5);
     if (sync_mode_ == "tf") {
@@ -457,11 +459,13 @@ class EsdfMapper : public nodelet::Nodelet {
       res.message = "path is empty";
       return true;
     }
-    common::Status st = common::Status::Ok();
+    std::lock_guard<std::mutex> one_at_a_time(save_mutex_);  // two at once would share a .part file
+    map::OccupancySnapshot snapshot;
     {
-      std::shared_lock<std::shared_mutex> lock(shared_->mutex);
-      st = shared_->map->saveBt(req.path);
+      std::shared_lock<std::shared_mutex> lock(shared_->mutex);  // a copy, a byte a voxel: mapping waits a moment
+      snapshot = shared_->map->occupancy().snapshot();
     }
+    const common::Status st = map::saveBt(snapshot, req.path);
     res.success = st.ok();
     res.message = st.ok() ? "wrote " + req.path : st.message();
     NODELET_INFO_STREAM(getName() << ": save_map: " << res.message);
@@ -492,6 +496,7 @@ class EsdfMapper : public nodelet::Nodelet {
   static constexpr int kSyncQueue = 20;  // frames the synchroniser keeps waiting for their pair
   int unpaired_ = 0;                     // depth images since the last pair
   std::mutex input_mutex_;
+  std::mutex save_mutex_;  ///< save_map calls, one at a time
   std::optional<map::DepthIntrinsics> intrinsics_;
   std::string intrinsics_frame_;  // frame_id of the camera_info intrinsics_ came from
   std::map<std::string, std::size_t> skipped_;

@@ -14,12 +14,19 @@
 #include <tf2_ros/transform_broadcaster.h>
 #include <Eigen/Geometry>
 
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <atomic>
 #include <map>
 #include <cstdint>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <limits>
+#include <sstream>
+#include <thread>
 #include <tuple>
 #include <vector>
 
@@ -509,6 +516,50 @@ TEST_F(MapperTest, AFrameThatMapsNothingIsSaid) {
   probe.sendReal();  // back: a jump again
   probe.sendReal();
   EXPECT_TRUE(spinUntil([&] { return probe.updates > before; }, 10.0)) << "the next real frame was not integrated";
+}
+
+// A save_map in progress does not stop mapping: the save is held in the middle (the file it writes, beside its
+// path, is a FIFO nobody reads yet, so its open waits) while a frame is sent, and that frame is integrated;
+// then the FIFO is read, and what the save wrote is a whole OctoMap file. (On the queue that integrates
+// depth, the save held every frame until it ended: a large map's save froze mapping for seconds.)
+TEST_F(MapperTest, MappingGoesOnWhileAMapIsSaved) {
+  Probe probe;
+  ASSERT_TRUE(probe.connect());
+  probe.info_pub.publish(*probe.info);
+  ASSERT_TRUE(probe.sendRealUntilIntegrated());
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("go_feap_mapper_fifo_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "held.bt").string();
+  ASSERT_EQ(::mkfifo((path + ".part").c_str(), 0600), 0);
+  ros::ServiceClient save = nh_.serviceClient<go_feap::SaveMap>("probe/save_map");
+  ASSERT_TRUE(save.waitForExistence(ros::Duration(10.0)));
+  go_feap::SaveMap srv;
+  srv.request.path = path;
+  std::atomic<bool> answered{false}, called{false};
+  std::thread caller([&] {
+    called = save.call(srv);
+    answered = true;
+  });
+  spinUntil([] { return false; }, 1.0);  // the save is waiting for a reader of its FIFO
+  EXPECT_FALSE(answered) << "the save did not wait for its FIFO: " << srv.response.message;
+  const std::size_t before = probe.updates;
+  probe.sendReal();
+  EXPECT_TRUE(spinUntil([&] { return probe.updates > before; }, 10.0)) << "no frame integrated during the save";
+  std::string bytes;
+  {
+    std::ifstream fifo(path + ".part", std::ios::binary);  // lets the save go on
+    bytes.assign(std::istreambuf_iterator<char>(fifo), std::istreambuf_iterator<char>());
+  }
+  caller.join();
+  EXPECT_TRUE(called);
+  EXPECT_TRUE(srv.response.success) << srv.response.message;
+  EXPECT_EQ(bytes.rfind("# Octomap OcTree binary file", 0), 0u) << bytes.substr(0, 80);
+  std::istringstream in(bytes);
+  octomap::OcTree tree(0.1);
+  EXPECT_TRUE(tree.readBinary(in));
+  EXPECT_GT(tree.getNumLeafNodes(), 100u);
+  std::filesystem::remove_all(dir);
 }
 
 // Frames that would put wrong data in the map, or read past an image's buffer, are skipped and the mapper

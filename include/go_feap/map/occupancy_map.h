@@ -64,6 +64,13 @@ struct FrameChange {
   std::vector<std::size_t> stopped_occupied; ///< linear indices
 };
 
+/// The voxels' states at one moment, one byte each: what a slow reader (a .bt export) copies under the
+/// map's lock, to work on without holding it.
+struct OccupancySnapshot {
+  common::GridGeometry geometry;
+  std::vector<VoxelState> states;  ///< by linear index
+};
+
 class OccupancyMap {
  public:
   /// Map covering `box` expanded by config.margin. The config must pass validate().
@@ -80,6 +87,7 @@ class OccupancyMap {
   /// Of the voxel holding `p`: unknown outside the grid, for any point (NaN, 1e30: clampedIndex()).
   VoxelState state(const Vec3& p) const { return state(geo_.clampedIndex(p)); }
   VoxelState stateAt(std::size_t linear) const { return stateOf(logodds_[linear]); }
+  OccupancySnapshot snapshot() const;
   /// Occupancy probability of a known voxel; 0.5 for unknown.
   double probability(const Index3& idx) const;
 

@@ -24,6 +24,10 @@ struct MapUpdateInfo {
   Aabb changed_box;              ///< world box of the voxels whose state changed (valid when frame.any_change)
 };
 
+/// Writes the known voxels (occupied and free) of `map` as an OctoMap .bt at its resolution, written beside
+/// and renamed over `path`; fails, writing nothing, on a voxel beyond OctoMap's reach.
+common::Status saveBt(const OccupancySnapshot& map, const std::string& path);
+
 class VoxelMap {
  public:
   /// Map sized from the exploration box (plus the occupancy margin). Config must validate.
@@ -38,7 +42,8 @@ class VoxelMap {
   const common::GridGeometry& geometry() const { return occupancy_.geometry(); }
   const MapConfig& config() const { return config_; }
 
-  /// Writes known voxels (occupied and free) as an OctoMap .bt at the map resolution.
+  /// Writes known voxels (occupied and free) as an OctoMap .bt at the map resolution (map::saveBt() of a
+  /// snapshot).
   common::Status saveBt(const std::string& path) const;
   /// Reads an OctoMap .bt into this map (voxels outside it are dropped; voxels the file
   /// does not mention stay as they are) and brings the ESDF up to date.
