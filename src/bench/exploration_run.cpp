@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "go_feap/common/config_groups.h"
+#include "go_feap/common/machine.h"
 #include "go_feap/common/transform.h"
 #include "go_feap/common/yaml_reader.h"
 
@@ -154,6 +155,8 @@ ExplorationRun::ExplorationRun(const world::Scene& scene, const ExplorationConfi
     if (!st.ok()) throw std::invalid_argument(st.message());
   if (!positiveFinite(max_sim_time)) throw std::invalid_argument("max_sim_time must be finite and > 0");
   intrinsics_ = depthIntrinsics(config.camera);
+  if (const common::Status fits = config.map.checkFits(scene.box, common::physicalMemoryBytes()); !fits.ok())
+    throw std::invalid_argument(fits.message());
   map_ = std::make_unique<map::VoxelMap>(config.map, scene.box);
   finder_ = std::make_unique<frontier::FrontierFinder>(config.frontier, map_->geometry(), scene.box);
   distance_astar_ = std::make_unique<planning::Astar>(map_->occupancy(), map_->esdf(), config.distance_astar);

@@ -30,6 +30,22 @@ common::Status MapConfig::validate(const Aabb& box) const {
   return common::Status::Ok();
 }
 
+double MapConfig::estimatedBytes(const Aabb& box) const {
+  return kBytesPerVoxel * common::GridGeometry::coveringCount(box.expanded(occupancy.margin), occupancy.resolution);
+}
+
+common::Status MapConfig::checkFits(const Aabb& box, double memory_bytes) const {
+  const double bytes = estimatedBytes(box);
+  if (bytes <= memory_bytes) return common::Status::Ok();
+  constexpr double kGiB = 1024.0 * 1024.0 * 1024.0;
+  std::ostringstream why;
+  why << std::setprecision(3) << "exploration_box with occupancy/resolution " << occupancy.resolution
+      << " m and margin " << occupancy.margin << " m needs a map of about " << bytes / kGiB
+      << " GiB, more than this machine's " << memory_bytes / kGiB
+      << " GiB of memory (a coarser resolution or a smaller box)";
+  return common::Status::Error(why.str());
+}
+
 VoxelMap::VoxelMap(const MapConfig& config, const Aabb& box)
     : config_(config), occupancy_(config.occupancy, box), esdf_(occupancy_.geometry(), config.esdf) {}
 

@@ -37,6 +37,7 @@
 #include "go_feap/MapUpdate.h"
 #include "go_feap/SaveMap.h"
 #include "go_feap/common/config_groups.h"
+#include "go_feap/common/machine.h"
 #include "go_feap/ros/compute_time.h"
 #include "go_feap/ros/conversions.h"
 #include "go_feap/ros/guarded.h"
@@ -92,6 +93,13 @@ class EsdfMapper : public nodelet::Nodelet {
     ros_params::requireOrThrow(std::isfinite(slice_height_), me,
                                "parameter '" + p.fullName("mapper/esdf_slice_height") + "' must be finite");
 
+    // Said, and checked against the machine, before it is allocated: too large a map ended in the OOM killer
+    // taking the whole nodelet manager.
+    const double estimate = c.estimatedBytes(box);
+    NODELET_INFO_STREAM(me << ": allocating a map of about " << static_cast<long long>(estimate / (1024 * 1024))
+                           << " MiB");
+    const common::Status fits = c.checkFits(box, common::physicalMemoryBytes());
+    ros_params::requireOrThrow(fits.ok(), me, fits.message());
     shared_ = std::make_shared<ros_map::SharedMap>(std::make_unique<map::VoxelMap>(c, box));
     // Said before the first subscription: a frame integrated beside onInit would grow what this reads.
     const auto& geo = shared_->map->geometry();

@@ -706,6 +706,21 @@ TEST(OccupancyMap, MapSizeAndInfiniteValuesAreRefusedBeforeAllocating) {
   const Aabb large{Vec3(0, 0, 0), Vec3(300, 300, 30)};
   ASSERT_TRUE(c.validate(large)) << c.validate(large).message();
   EXPECT_TRUE(c.esdf.validate(common::GridGeometry::covering(large.expanded(c.occupancy.margin), c.occupancy.resolution)));
+  // Its size, known before it is allocated, is what a map takes (here one of the maze's box), and a machine
+  // with less memory refuses it by its keys (an 8 GB onboard computer and that box's 11.8 GiB).
+  const Aabb maze{Vec3(-20, -10, 0), Vec3(20, 10, 3)};
+  const map::VoxelMap built(c, maze);
+  // (Within 4 %, and not below: the ESDF's bit a voxel comes with its first update.)
+  EXPECT_GE(c.estimatedBytes(maze), static_cast<double>(built.memoryBytes()));
+  EXPECT_NEAR(c.estimatedBytes(maze), static_cast<double>(built.memoryBytes()), 0.04 * built.memoryBytes());
+  constexpr double kGiB = 1024.0 * 1024.0 * 1024.0;
+  EXPECT_TRUE(c.checkFits(large, 16 * kGiB));
+  const common::Status too_large = c.checkFits(large, 8 * kGiB);
+  ASSERT_FALSE(too_large);
+  EXPECT_NE(too_large.message().find("exploration_box with occupancy/resolution 0.1 m and margin 0.5 m needs a map "
+                                     "of about 11.8 GiB, more than this machine's 8 GiB"),
+            std::string::npos)
+      << too_large.message();
 }
 
 TEST(OccupancyMap, LineVisibility) {

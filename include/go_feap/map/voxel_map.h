@@ -15,6 +15,13 @@ struct MapConfig {
   /// validate(), and a box that is finite with min < max whose map (box and margin at the resolution)
   /// has at most 2^32 - 1 voxels (the ESDF indexes them in 32 bits).
   common::Status validate(const Aabb& box) const;
+  /// Bytes the map of `box` (and margin) takes, about: kBytesPerVoxel a voxel (the occupancy's byte and
+  /// frame bits, the ESDF's 3-byte offset and its bit). Known before it is allocated.
+  double estimatedBytes(const Aabb& box) const;
+  static constexpr double kBytesPerVoxel = 1.0 + 0.25 + 0.125 + 3.0 + 0.125;
+  /// Error naming the keys when estimatedBytes(box) exceeds `memory_bytes` (the machine's: allocating it
+  /// would end in the OOM killer taking the whole process, without a word of why).
+  common::Status checkFits(const Aabb& box, double memory_bytes) const;
 };
 
 /// What one integrated frame changed, in world terms.
