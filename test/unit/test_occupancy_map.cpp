@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <functional>
 #include <limits>
 #include <set>
@@ -420,6 +421,20 @@ TEST(OccupancyMap, OctomapRoundTripKeepsStates) {
   const std::string path = (std::filesystem::temp_directory_path() / ("go_feap_map_" + std::to_string(::getpid()) + ".bt")).string();
   ASSERT_TRUE(m.saveBt(path));
   map::VoxelMap back(mapConfig(), f.scene.box);
+  // The file's header and then bytes that make every child a node with children: refused as the scene
+  // loader refuses them (OctoMap's own reader, which loadBt called, recursed until the stack overflowed).
+  std::string bytes;
+  {
+    std::ifstream in(path, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  const std::string deep = path + ".deep.bt";
+  std::ofstream(deep, std::ios::binary) << bytes.substr(0, bytes.find("\ndata\n") + 6) << std::string(200000, '\xff');
+  const common::Status refused = back.loadBt(deep);
+  std::filesystem::remove(deep);
+  ASSERT_FALSE(refused);
+  EXPECT_NE(refused.message().find("deeper than 16 levels"), std::string::npos) << refused.message();
+  EXPECT_EQ(back.occupancy().knownCount(), 0u);
   ASSERT_TRUE(back.loadBt(path));
   std::filesystem::remove(path);
   std::size_t known = 0;
