@@ -21,6 +21,7 @@
 #include "go_feap/ros/log_throttle.h"
 #include "go_feap/ros/message_checks.h"
 #include "go_feap/ros/params.h"
+#include "go_feap/sim/pacer.h"
 #include "go_feap/sim/vehicle.h"
 #include "go_feap/world/scene.h"
 
@@ -140,6 +141,11 @@ class QuadrotorSim : public nodelet::Nodelet {
     const double period = 1.0 / odom_rate_;
     const ros::Time origin = publish_clock_ ? ros::Time(1.0) : ros::Time::now();
     const auto wall_start = std::chrono::steady_clock::now();
+    auto wall_at = [&](double wall) {
+      return wall_start +
+             std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(wall));
+    };
+    sim::WallPacer pacer(rate_factor_, kMaxLag);
     double t = 0.0, report_t = 0.0;
     auto report_wall = wall_start;
     publishClock(origin);
@@ -148,7 +154,7 @@ class QuadrotorSim : public nodelet::Nodelet {
       if (diverged) {  // the clock only: every timeout of the chain runs on it
         t += period;
         publishClock(origin + ros::Duration(t));
-        waitUntil(wall_start + std::chrono::duration<double>(t / rate_factor_));
+        waitUntil(wall_at(pacer.due(t)));
         continue;
       }
       sim::PositionReference ref;
@@ -186,8 +192,12 @@ class QuadrotorSim : public nodelet::Nodelet {
       publishClock(stamp);
       publishState(stamp);
 
-      waitUntil(wall_start + std::chrono::duration<double>(t / rate_factor_));
+      waitUntil(wall_at(pacer.due(t)));
       const auto now = std::chrono::steady_clock::now();
+      if (const double dropped = pacer.settle(t, std::chrono::duration<double>(now - wall_start).count()); dropped > 0.0)
+        GO_FEAP_NODELET_THROTTLE(WARN, 10.0, getName() << ": the simulation fell " << dropped << " s behind wall time"
+                                                       << " at " << t << " s (a loaded machine); going on from there"
+                                                       << " at the rate factor, not faster to catch up");
       const double wall = std::chrono::duration<double>(now - report_wall).count();
       if (wall >= 10.0) {
         NODELET_INFO_STREAM(getName() << ": achieved real-time factor " << (t - report_t) / wall << " (wanted "
@@ -200,6 +210,10 @@ class QuadrotorSim : public nodelet::Nodelet {
 
   // Sleeps until `target` in slices, so that unloading (running_ false) or shutdown never waits out a long
   // step (a rate factor of 1e-3 made each 0.01 s step 10 s of wall time).
+  // s of wall time the simulation may fall behind before the lag is dropped rather than caught up (a fifth of
+  // a second: planners compute on wall time, and the commands time out after simulation/command_timeout).
+  static constexpr double kMaxLag = 0.2;
+
   template <typename TimePoint>
   void waitUntil(TimePoint target) const {
     constexpr auto kSlice = std::chrono::milliseconds(50);

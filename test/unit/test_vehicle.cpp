@@ -9,6 +9,7 @@
 #include <string>
 #include <utility>
 
+#include "go_feap/sim/pacer.h"
 #include "go_feap/sim/vehicle.h"
 
 using namespace go_feap::sim;
@@ -496,4 +497,20 @@ TEST(Config, ValuesThatCannotFlyAreRefusedByName) {
   const Flight r = fly(v, 5.0, [&](double) { return ref; });
   for (const Eigen::Vector3d& x : r.p) ASSERT_TRUE(x.allFinite());
   EXPECT_LT((r.p.back() - ref.position).norm(), 0.49) << "no headway against the drag (about 4 cm in 5 s)";
+}
+
+// Simulated time is paced at the rate factor against wall time; after a stall longer than max_lag it goes on
+// from where the wall clock is, at the rate factor, instead of running the stalled time without a pause
+// (planners computing on wall time could not answer, their commands timed out). A lag within max_lag is
+// caught up.
+TEST(WallPacer, DropsALagOverMaxLagAndCatchesUpASmallerOne) {
+  go_feap::sim::WallPacer pacer(2.0, 0.2);
+  EXPECT_DOUBLE_EQ(pacer.due(1.0), 0.5);
+  EXPECT_DOUBLE_EQ(pacer.settle(1.0, 0.6), 0.0);  // 0.1 s late: caught up
+  EXPECT_DOUBLE_EQ(pacer.due(1.2), 0.6);
+  // A 3 s stall after simulated 1.2 s: the wall clock says 3.6 s. Dropped, and paced from there.
+  EXPECT_DOUBLE_EQ(pacer.settle(1.2, 3.6), 3.0);
+  EXPECT_DOUBLE_EQ(pacer.due(1.2), 3.6);
+  EXPECT_DOUBLE_EQ(pacer.due(3.2), 4.6);  // 2 simulated s later, 1 wall s (rate factor 2)
+  EXPECT_DOUBLE_EQ(pacer.settle(3.2, 4.6), 0.0);
 }
