@@ -283,6 +283,37 @@ TEST(LayerManager, TimeLimitAndStuckTerminate) {
   EXPECT_NE(out.transitions.back().why.find("no map progress"), std::string::npos);
 }
 
+// The time limit and stuck detection hold in the final pass too: a frontier left in the box but in no band
+// keeps the pass from settling, and the run ends time_limit after the trigger, or stuck_timeout after the
+// map last changed.
+TEST(LayerManager, TimeLimitAndStuckTerminateInTheFinalPass) {
+  for (const FinishReason expected : {FinishReason::kTimeLimit, FinishReason::kStuck}) {
+    LayerManagerConfig c = config();
+    c.time_limit = expected == FinishReason::kTimeLimit ? 30.0 : 1000.0;
+    c.stuck_timeout = 5.0;
+    LayerManager m(c, kBox, 2.3);
+    m.step(triggerInput(), 0.0);
+    lookRound(m, 0.0);
+    double t = 0.0;
+    std::uint64_t progress = 0;
+    LayerOutputs out;
+    for (int guard = 0; guard < 100 && out.state != ExplorationState::kFinalPass; ++guard)
+      out = m.step(frontiers({}, {7}, ++progress), t += 0.5);  // every band empties, frontier 7 stays
+    ASSERT_EQ(out.state, ExplorationState::kFinalPass);
+    ASSERT_LT(t, 20.0);
+    const bool growing = expected == FinishReason::kTimeLimit;
+    const double last_progress = t;
+    double ended = -1.0;
+    for (int guard = 0; guard < 200 && out.state == ExplorationState::kFinalPass; ++guard) {
+      out = m.step(frontiers({}, {7}, growing ? ++progress : progress), t += 0.5);
+      ended = t;
+    }
+    ASSERT_EQ(out.state, ExplorationState::kFinished) << "the final pass never ended";
+    EXPECT_EQ(out.reason, expected);
+    EXPECT_DOUBLE_EQ(ended, growing ? 30.0 : last_progress + 5.0);
+  }
+}
+
 // A flight counts as progress (a long transit through mapped space changes no voxel, and ended a run
 // "stuck" with frontiers left at its end): 20 s at 1 m/s with the map unchanged is not stuck; jitter
 // within progress_travel is, stuck_timeout after the flight; with progress_travel 0 the flight counts
