@@ -292,7 +292,6 @@ FrontierDelta FrontierFinder::regrow(std::unordered_set<std::uint32_t> affected,
       f.active = f.average.z() >= band_min_ && f.average.z() <= band_max_;
       if (same != 0) {
         unchanged.insert(same);
-        f.viewpoints = find(same)->viewpoints;
       } else {
         delta.added.push_back(f.id);
       }

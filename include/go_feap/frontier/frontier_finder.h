@@ -25,7 +25,8 @@ struct FrontierConfig {
   double s_near = 5.0;              ///< m: radius for N_near (other frontiers' average positions)
   /// cells: an update regrows the whole connected regions of the clusters it touches while it has
   /// visited fewer cells than this (the result then equals recomputeAll()); beyond it, the clusters it
-  /// did not touch are kept and the fill goes around them (bounded cost in large scenes; 0 = always)
+  /// did not touch are kept and the fill goes around them (bounded cost in large scenes; 0: untouched
+  /// clusters are always kept and no region is regrown whole, the fuel mode's setting)
   int max_regrow_cells = 20000;
   /// Hysteresis on min_cluster_cells (1 = none): a region of a cluster that fell below
   /// min_cluster_cells is retired, and a region that is mostly (half or more) retired cells counts
