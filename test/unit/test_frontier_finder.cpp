@@ -357,18 +357,24 @@ frontier::FrontierFinder noRegrowFinder(map::OccupancyMap& m, const Vec3& lo, co
   return found(m, noRegrowConfig(extent));
 }
 
-// With max_regrow_cells 0 (the fuel mode) the box form of update() still rebuilds every cluster with a cell
-// within 2 voxels of the change: a voxel inside the block turned unknown makes 6 frontier cells, the nearest
+// With max_regrow_cells 0 (the fuel mode) either form of update() still rebuilds every cluster with a cell
+// within reach of the change (the box form: 2 voxels; the list form: 26-adjacent to the changed voxel or a
+// face neighbour of it): a voxel inside the block turned unknown makes 6 frontier cells, the nearest
 // 26-adjacent to the ring 2 voxels away, so ring and newcomers are one region, as the oracle clusters them.
-TEST(FrontierFinder, TheBoxUpdateRebuildsClustersTwoVoxelsFromTheChange) {
-  map::OccupancyMap m(mapConfig(), kBox);
-  frontier::FrontierFinder f = noRegrowFinder(m, Vec3(1.0, 0.5, 0.0), Vec3(2.0, 1.5, 1.0), 100.0);
-  ASSERT_EQ(f.frontiers().size(), 1u);
-  const Index3 v = m.geometry().coordToIndex(Vec3(1.75, 1.05, 0.55));
-  m.setState(v, VoxelState::kUnknown);
-  f.update(m, v, v, 1.0);
-  EXPECT_EQ(clusterSets(f, m.geometry()), oracleClusters(m, noRegrowConfig(100.0).min_cluster_cells));
-  EXPECT_EQ(f.frontiers().size(), 1u);
+TEST(FrontierFinder, EitherUpdateRebuildsTheClustersWithinReachOfTheChange) {
+  for (const bool list : {false, true}) {
+    map::OccupancyMap m(mapConfig(), kBox);
+    frontier::FrontierFinder f = noRegrowFinder(m, Vec3(1.0, 0.5, 0.0), Vec3(2.0, 1.5, 1.0), 100.0);
+    ASSERT_EQ(f.frontiers().size(), 1u);
+    const Index3 v = m.geometry().coordToIndex(Vec3(1.75, 1.05, 0.55));
+    m.setState(v, VoxelState::kUnknown);
+    if (list)
+      f.update(m, std::vector<std::size_t>{m.geometry().linear(v)}, 1.0);
+    else
+      f.update(m, v, v, 1.0);
+    EXPECT_EQ(clusterSets(f, m.geometry()), oracleClusters(m, noRegrowConfig(100.0).min_cluster_cells)) << list;
+    EXPECT_EQ(f.frontiers().size(), 1u) << list;
+  }
 }
 
 // With max_regrow_cells = 0 every update keeps the clusters it does not touch.
