@@ -20,6 +20,7 @@
 #include "go_feap/ros/log_throttle.h"
 #include "go_feap/ros/message_checks.h"
 #include "go_feap/common/config_groups.h"
+#include "go_feap/common/monotonic_clock.h"
 #include "go_feap/ros/compute_time.h"
 #include "go_feap/ros/guarded.h"
 #include "go_feap/ros/params.h"
@@ -92,7 +93,7 @@ class FrontierFinder : public nodelet::Nodelet {
     finder_->setActiveBand(msg->z_min, msg->z_max);
     // The planners see the new band's active flags now, not at the next map update. The frontiers are those
     // of the last update, sent with its stamp (the layer manager sends the same band again while it looks round).
-    if (changed) publish(last_stamp_, last_stamp_.toSec());
+    if (changed) publish(last_stamp_, last_now_);
   }
 
   void onUpdate(const MapUpdate::ConstPtr& msg) {
@@ -108,7 +109,12 @@ class FrontierFinder : public nodelet::Nodelet {
       return;
     }
     const auto t_compute = ros_conv::WallClock::now();
-    const double now = msg->header.stamp.toSec();
+    // The frontiers' ages on a clock that never goes back: a ROS clock that did (a bag played again) made
+    // every frontier's age 0 and dated a grown one before its neighbours for as long.
+    const double now = clock_.at(msg->header.stamp.toSec());
+    if (clock_.wentBack() > 0.0)
+      NODELET_WARN_STREAM(getName() << ": the clock went back " << clock_.wentBack()
+                                    << " s: the frontiers' ages pause for as long");
     reserveIds();  // before the ids are handed out, and outside the map lock (it asks the ROS master)
     {
       std::shared_lock<std::shared_mutex> map_lock(shared_->mutex);
@@ -128,6 +134,7 @@ class FrontierFinder : public nodelet::Nodelet {
     ros_conv::publishComputeTime(compute_pub_, "frontier", t_compute);
     last_sequence_ = msg->sequence;
     last_stamp_ = msg->header.stamp;
+    last_now_ = now;
     publish(msg->header.stamp, now);
     reserveIds();  // an update that used more than the margin (a recomputation of a huge map) is covered now
   }
@@ -229,6 +236,8 @@ class FrontierFinder : public nodelet::Nodelet {
   std::pair<double, double> band_{-1e18, 1e18};
   std::uint64_t last_sequence_ = 0;
   ros::Time last_stamp_;  ///< of the last map update the frontiers come from
+  double last_now_ = 0.0;  ///< clock_ at that update
+  common::MonotonicClock clock_;  ///< the frontiers' clock, from the map updates' stamps
   std::uint32_t first_id_ = 1;     ///< the first id this finder hands out (~id_reserved when it started)
   std::uint32_t id_reserved_ = 1;  ///< ids below it are handed out or reserved (~id_reserved)
   ros::Publisher compute_pub_;

@@ -28,6 +28,7 @@
 #include "go_feap/MapUpdate.h"
 #include "go_feap/planning/layer_manager.h"
 #include "go_feap/common/config_groups.h"
+#include "go_feap/common/monotonic_clock.h"
 #include "go_feap/ros/conversions.h"
 #include "go_feap/ros/log_throttle.h"
 #include "go_feap/ros/message_checks.h"
@@ -200,14 +201,11 @@ class LayerManager : public nodelet::Nodelet {
   // elapsed time, count from times before the jump: read against the clock itself they went negative
   // (a finished band could not settle, stuck detection was off and the time limit moved back for as long).
   double coreTime(const ros::Time& now) {
-    const double t = now.toSec();
-    if (last_clock_ && t < *last_clock_) {
-      NODELET_WARN_STREAM(getName() << ": the clock went back " << *last_clock_ - t
+    const double t = clock_.at(now.toSec());
+    if (clock_.wentBack() > 0.0)
+      NODELET_WARN_STREAM(getName() << ": the clock went back " << clock_.wentBack()
                                     << " s: the exploration's timers pause for as long");
-      clock_offset_ += *last_clock_ - t;
-    }
-    last_clock_ = t;
-    return t + clock_offset_;
+    return t;
   }
 
   // `t` is coreTime(now).
@@ -302,8 +300,7 @@ class LayerManager : public nodelet::Nodelet {
   std::uint64_t progress_ = 0;
   bool pending_trigger_ = false, pending_stop_ = false, published_ = false;
   std::optional<double> t_start_;     ///< coreTime() when the exploration started
-  std::optional<double> last_clock_;  ///< s, the ROS clock at the last step
-  double clock_offset_ = 0.0;         ///< s the ROS clock went back in all
+  common::MonotonicClock clock_;     ///< the exploration's clock, from the ROS clock at each step
   std::optional<common::Vec3> last_position_;
   bool relocalised_ = false;  ///< the odometry jumped since the last step (LayerInputs::relocalised)
   std::optional<double> yaw_;

@@ -701,6 +701,43 @@ TEST(LayerManager, BlacklistFollowsTheFrontiersListed) {
   }
 }
 
+// A frontier finder (probe/ff/... in metrics.test) on the probe mapper's updates: the frontiers' ages go on
+// growing when the clock goes back 80 s (a bag played again), paused for as long; they read 0 for 80 s.
+TEST(FrontierFinder, AgesGoOnFromWhereTheyWereWhenTheClockGoesBack) {
+  ros::NodeHandle nh;
+  std::vector<go_feap::FrontierArray> heard;
+  auto sub = nh.subscribe<go_feap::FrontierArray>(
+      "probe/ff/frontiers", 50, [&](const go_feap::FrontierArray::ConstPtr& m) { heard.push_back(*m); });
+  ASSERT_TRUE(spinUntil([&] { return sub.getNumPublishers() > 0; }, 30.0)) << "the probe frontier finder is not up";
+  // The durations of the frontiers sent for the frame stamped `stamp` (within the 10 ms of its attempts).
+  auto durationsAt = [&](double stamp) {
+    std::map<std::uint32_t, double> out;
+    spinUntil([&] {
+      return std::any_of(heard.begin(), heard.end(),
+                         [&](const go_feap::FrontierArray& a) { return std::abs(a.header.stamp.toSec() - stamp) < 0.1; });
+    }, 5.0);
+    for (const go_feap::FrontierArray& a : heard)
+      if (std::abs(a.header.stamp.toSec() - stamp) < 0.1)
+        for (const go_feap::Frontier& f : a.frontiers) out[f.id] = f.duration;
+    return out;
+  };
+  ASSERT_TRUE(feedProbeMapper(nh, 300.0));
+  ASSERT_TRUE(feedProbeMapper(nh, 305.0));
+  const auto before = durationsAt(305.0);
+  ASSERT_FALSE(before.empty()) << "no frontiers from the probe mapper's frame";
+  ASSERT_TRUE(feedProbeMapper(nh, 225.0));  // back 80 s
+  ASSERT_TRUE(feedProbeMapper(nh, 227.0));
+  const auto after = durationsAt(227.0);
+  std::size_t kept = 0;
+  for (const auto& [id, duration] : before) {
+    const auto it = after.find(id);
+    if (it == after.end()) continue;
+    ++kept;
+    EXPECT_NEAR(it->second, duration + 2.0, 0.1) << "frontier " << id;
+  }
+  EXPECT_GT(kept, 0u) << "no frontier of before the jump is left to compare";
+}
+
 // A latched EXPLORE status on `topic`: the probe planners act only while the exploration is under way.
 ros::Publisher exploring(ros::NodeHandle& nh, const std::string& topic) {
   ros::Publisher pub = nh.advertise<go_feap::ExplorationStatus>(topic, 1, /*latch=*/true);

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "go_feap/common/grid.h"
+#include "go_feap/common/monotonic_clock.h"
 #include "go_feap/common/raycast.h"
 
 using go_feap::common::Aabb;
@@ -210,4 +211,21 @@ TEST(Traverse, InGridWalkGivesTheSameVoxelsAsLinearIndicesOrRefusesSegmentsLeavi
                                             [&](std::size_t) { return ++visits < 4; }),
             Walk::kStopped);
   EXPECT_EQ(visits, 4);
+}
+
+// A source clock that goes back (a bag played again) pauses the monotonic clock for as long; it then goes
+// on at the source's pace, and says each time by how much the source went back.
+TEST(MonotonicClock, PausesForAsLongAsTheSourceWentBack) {
+  go_feap::common::MonotonicClock clock;
+  EXPECT_DOUBLE_EQ(clock.at(100.0), 100.0);
+  EXPECT_DOUBLE_EQ(clock.wentBack(), 0.0);
+  EXPECT_DOUBLE_EQ(clock.at(105.0), 105.0);
+  EXPECT_DOUBLE_EQ(clock.at(25.0), 105.0);  // back 80 s
+  EXPECT_DOUBLE_EQ(clock.wentBack(), 80.0);
+  EXPECT_DOUBLE_EQ(clock.at(27.0), 107.0);
+  EXPECT_DOUBLE_EQ(clock.wentBack(), 0.0);
+  EXPECT_DOUBLE_EQ(clock.at(27.0), 107.0);  // standing still is not going back
+  EXPECT_DOUBLE_EQ(clock.at(20.0), 107.0);  // back again: 7 s
+  EXPECT_DOUBLE_EQ(clock.wentBack(), 7.0);
+  EXPECT_DOUBLE_EQ(clock.at(21.5), 108.5);
 }
