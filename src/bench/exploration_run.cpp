@@ -183,10 +183,7 @@ ExplorationRun::ExplorationRun(const world::Scene& scene, const ExplorationConfi
 
 ExplorationRun::~ExplorationRun() = default;
 
-double ExplorationRun::yaw() const {
-  const Eigen::Matrix3d R = vehicle_.state().attitude.toRotationMatrix();
-  return std::atan2(R(1, 0), R(0, 0));
-}
+double ExplorationRun::yaw() const { return vehicle_.state().heading(); }
 
 void ExplorationRun::log(const std::string& what) {
   std::ostringstream line;

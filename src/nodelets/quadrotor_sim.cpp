@@ -164,8 +164,7 @@ class QuadrotorSim : public nodelet::Nodelet {
           timed_out_ = true;
           hold_ = sim::PositionReference();
           hold_.position = vehicle_->state().position;
-          const Eigen::Vector3d x = vehicle_->state().attitude * Eigen::Vector3d::UnitX();
-          hold_.yaw = std::atan2(x.y(), x.x());
+          hold_.yaw = vehicle_->state().heading();
           NODELET_WARN_STREAM(getName() << ": no position_cmd for " << command_timeout_
                                         << " s; hovering in place until one arrives");
         }

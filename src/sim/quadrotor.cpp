@@ -130,7 +130,6 @@ Wrench Quadrotor::step(const Wrench& wanted, double dt) {
   sum.dw = (k1.dw + 2 * k2.dw + 2 * k3.dw + k4.dw) / 6.0;
   state_ = advance(state_, sum, dt);
   state_.attitude.normalize();
-  state_.acceleration = sum.dv;
   return w;
 }
 

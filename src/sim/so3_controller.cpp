@@ -39,7 +39,7 @@ Wrench So3Controller::compute(const QuadrotorState& s, const PositionReference& 
   // The heading aimed at is at most a quarter turn from the present one: the attitude error's size is the
   // sine of the angle, so a heading reference half a turn round (an error of pi) gave no yaw moment at all
   // and the vehicle never turned; nearer pi it turned slowly. Within a quarter turn this is the reference.
-  const double yaw_now = std::atan2(R(1, 0), R(0, 0));
+  const double yaw_now = s.heading();
   const double yaw_error = std::remainder(ref.yaw - yaw_now, 2.0 * M_PI);
   const double yaw_aim = std::abs(yaw_error) > 0.5 * M_PI ? yaw_now + std::copysign(0.5 * M_PI, yaw_error) : ref.yaw;
   const Eigen::Vector3d b1c(std::cos(yaw_aim), std::sin(yaw_aim), 0.0);

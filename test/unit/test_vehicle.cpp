@@ -514,3 +514,13 @@ TEST(WallPacer, DropsALagOverMaxLagAndCatchesUpASmallerOne) {
   EXPECT_DOUBLE_EQ(pacer.due(3.2), 4.6);  // 2 simulated s later, 1 wall s (rate factor 2)
   EXPECT_DOUBLE_EQ(pacer.settle(3.2, 4.6), 0.0);
 }
+
+// The heading is the yaw of a Z-Y-X (yaw, pitch, roll) attitude, whatever the tilt, on (-pi, pi].
+TEST(QuadrotorState, HeadingIsTheYawOfTheAttitude) {
+  go_feap::sim::QuadrotorState s;
+  for (const double yaw : {0.0, 1.0, 2.5, -3.0, M_PI}) {
+    s.attitude = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY()) *
+                 Eigen::AngleAxisd(-0.2, Eigen::Vector3d::UnitX());
+    EXPECT_NEAR(s.heading(), yaw, 1e-12) << yaw;
+  }
+}

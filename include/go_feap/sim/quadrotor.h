@@ -4,6 +4,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include <cmath>
+
 #include "go_feap/common/result.h"
 
 namespace go_feap::sim {
@@ -29,7 +31,11 @@ struct QuadrotorState {
   Eigen::Vector3d velocity = Eigen::Vector3d::Zero();          ///< m/s, world
   Eigen::Quaterniond attitude = Eigen::Quaterniond::Identity();  ///< body -> world
   Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();  ///< rad/s, body
-  Eigen::Vector3d acceleration = Eigen::Vector3d::Zero();      ///< m/s^2, world (last step)
+  /// Heading (rad, in (-pi, pi]): the body x axis's direction about world z.
+  double heading() const {
+    const Eigen::Matrix3d R = attitude.toRotationMatrix();
+    return std::atan2(R(1, 0), R(0, 0));
+  }
   /// False once the dynamics diverged (a stiff configuration: gains too high for the inertia at
   /// dynamics_rate); nothing should be measured or published from such a state.
   bool finite() const {
