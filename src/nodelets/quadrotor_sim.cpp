@@ -136,9 +136,12 @@ class QuadrotorSim : public nodelet::Nodelet {
     timed_out_ = false;
   }
 
-  // Simulation thread: advances in odom periods, then waits for wall time to catch up.
+  // Simulation thread: advances in odom periods, then waits for wall time to catch up (driving /clock), or
+  // for the ROS clock (without publish_clock: wall time, or another simulator's /clock).
   void loop() {
     const double period = 1.0 / odom_rate_;
+    if (!publish_clock_)  // under use_sim_time the clock reads 0 until its first /clock
+      while (ros::Time::now().isZero() && running_ && ros::ok()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
     const ros::Time origin = publish_clock_ ? ros::Time(1.0) : ros::Time::now();
     const auto wall_start = std::chrono::steady_clock::now();
     auto wall_at = [&](double wall) {
@@ -154,7 +157,7 @@ class QuadrotorSim : public nodelet::Nodelet {
       if (diverged) {  // the clock only: every timeout of the chain runs on it
         t += period;
         publishClock(origin + ros::Duration(t));
-        waitUntil(wall_at(pacer.due(t)));
+        waitFor(origin + ros::Duration(t), wall_at(pacer.due(t)));
         continue;
       }
       sim::PositionReference ref;
@@ -191,9 +194,10 @@ class QuadrotorSim : public nodelet::Nodelet {
       publishClock(stamp);
       publishState(stamp);
 
-      waitUntil(wall_at(pacer.due(t)));
+      waitFor(stamp, wall_at(pacer.due(t)));
       const auto now = std::chrono::steady_clock::now();
-      if (const double dropped = pacer.settle(t, std::chrono::duration<double>(now - wall_start).count()); dropped > 0.0)
+      if (const double dropped = pacer.settle(t, std::chrono::duration<double>(now - wall_start).count());
+          publish_clock_ && dropped > 0.0)
         GO_FEAP_NODELET_THROTTLE(WARN, 10.0, getName() << ": the simulation fell " << dropped << " s behind wall time"
                                                        << " at " << t << " s (a loaded machine); going on from there"
                                                        << " at the rate factor, not faster to catch up");
@@ -212,6 +216,14 @@ class QuadrotorSim : public nodelet::Nodelet {
   // s of wall time the simulation may fall behind before the lag is dropped rather than caught up (a fifth of
   // a second: planners compute on wall time, and the commands time out after simulation/command_timeout).
   static constexpr double kMaxLag = 0.2;
+
+  // Until the simulation's next step is due: at `wall` when this simulator drives the clock, else when the ROS
+  // clock reaches `stamp` (stamps from a wall-paced origin drifted off another simulator's /clock: at its rate
+  // factor 2, half as fast).
+  void waitFor(const ros::Time& stamp, std::chrono::steady_clock::time_point wall) const {
+    if (publish_clock_) return waitUntil(wall);
+    while (ros::Time::now() < stamp && running_ && ros::ok()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
 
   template <typename TimePoint>
   void waitUntil(TimePoint target) const {

@@ -527,10 +527,13 @@ TEST_F(SimulatorTest, NoiseAndDropoutsEachApplyAlone) {
 // rest well short of it; followed to the end, it would stand on it.
 // A simulator given a start of its own (use_scene_start false: simulator.launch's start_x/y/z and
 // start_yaw; start_sim/... in simulator.test, on the first one's clock) starts there, not at the scene's.
+// Without publish_clock it follows the ROS clock, here the first one's at twice real time: its odometry is
+// stamped with that clock (paced by the wall clock, its stamps fell behind by half of the time run).
 TEST_F(SimulatorTest, AStartOfItsOwnIsWhereTheVehicleStarts) {
-  nav_msgs::Odometry::ConstPtr first;
+  nav_msgs::Odometry::ConstPtr first, last;
   ros::Subscriber sub = nh_.subscribe<nav_msgs::Odometry>("start_sim/odom", 10, [&](const nav_msgs::Odometry::ConstPtr& m) {
     if (!first) first = m;
+    last = m;
   });
   ASSERT_TRUE(spinUntil([&] { return first != nullptr; }, 60.0)) << "no odometry from start_sim";
   std::vector<double> start;
@@ -541,6 +544,13 @@ TEST_F(SimulatorTest, AStartOfItsOwnIsWhereTheVehicleStarts) {
   EXPECT_LT((Eigen::Vector3d(p.x, p.y, p.z) - Eigen::Vector3d(start[0], start[1], start[2])).norm(), 0.05)
       << "starts at " << p.x << ", " << p.y << ", " << p.z;
   EXPECT_NEAR(go_feap::ros_conv::yawOf(first->pose.pose.orientation), yaw, 0.02);
+  double rate_factor = 0.0;
+  ASSERT_TRUE(ros::param::get("quadrotor_sim/simulation/rate_factor", rate_factor));
+  ASSERT_GT(rate_factor, 1.5);
+  spinSim(4.0);
+  ASSERT_TRUE(last);
+  EXPECT_LT(std::abs((last->header.stamp - ros::Time::now()).toSec()), 0.2)
+      << "start_sim's odometry is stamped " << last->header.stamp << " on a clock at " << ros::Time::now();
 }
 
 TEST_F(SimulatorTest, WithoutCommandsTheVehicleHoversWhereItIs) {
