@@ -285,6 +285,46 @@ TEST_F(SimulatorTest, CommandMovesOdomCameraStampsMatchNanIsIgnored) {
 // The probe camera (probe/... in simulator.test) gets odometry whose stamp stands still: one frame, and
 // then a warning naming the stamp, where it used to say nothing. Once the stamps advance, frames follow
 // and it says so.
+// The TF the simulator sends (world -> body from the odometry, body -> camera from the camera's T_B_C) gives
+// the camera_pose of each frame at its stamp: what a mapper in sync_mode tf (a replayed record_flight bag)
+// looks up instead of camera_pose. The vehicle turns meanwhile, so a transform inverted or its frames
+// swapped would not agree.
+TEST_F(SimulatorTest, TheTfAtAFramesStampIsItsCameraPose) {
+  tf2_ros::Buffer buffer;
+  tf2_ros::TransformListener listener(buffer);
+  ASSERT_TRUE(spinUntil([&] { return last_odom_ != nullptr; }, 60.0)) << "no odom";
+  const Eigen::Vector3d centre = position();
+  const ros::Time t0 = ros::Time::now();
+  depths_.clear();
+  poses_.clear();
+  spinUntil([&] {
+    cmd_pub_.publish(go_feap::test::holdCommand(centre, 0.8 * (ros::Time::now() - t0).toSec(), 0.8));
+    return (ros::Time::now() - t0).toSec() > 1.5;
+  }, 30.0);
+  ASSERT_GE(poses_.size(), 10u);
+  ASSERT_FALSE(depths_.empty());
+  const std::string camera = depths_.back()->header.frame_id;
+  std::size_t checked = 0;
+  for (std::size_t i = 2; i + 2 < poses_.size(); ++i) {  // stamps the TF has on both sides
+    const geometry_msgs::PoseStamped& p = *poses_[i];
+    geometry_msgs::TransformStamped tf;
+    try {
+      tf = buffer.lookupTransform(p.header.frame_id, camera, p.header.stamp);
+    } catch (const tf2::TransformException& e) {
+      ADD_FAILURE() << "no TF " << p.header.frame_id << " -> " << camera << " at " << p.header.stamp << ": " << e.what();
+      continue;
+    }
+    const auto& q = tf.transform.rotation;
+    const auto& o = p.pose.orientation;
+    EXPECT_NEAR(tf.transform.translation.x, p.pose.position.x, 1e-4);
+    EXPECT_NEAR(tf.transform.translation.y, p.pose.position.y, 1e-4);
+    EXPECT_NEAR(tf.transform.translation.z, p.pose.position.z, 1e-4);
+    EXPECT_NEAR(std::abs(q.w * o.w + q.x * o.x + q.y * o.y + q.z * o.z), 1.0, 1e-6) << "at " << p.header.stamp;
+    ++checked;
+  }
+  EXPECT_GE(checked, 5u);
+}
+
 TEST_F(SimulatorTest, OdometryWhoseStampStandsStillIsReported) {
   ASSERT_TRUE(spinUntil([&] { return last_odom_ != nullptr; }, 60.0)) << "no odom";
   ros::Publisher odom_pub = nh_.advertise<nav_msgs::Odometry>("probe/odom", 10);
