@@ -236,11 +236,7 @@ void ExplorationRun::layerStep() {
   in.map_progress = map_progress_;
   in.yaw = yaw();
   in.position = vehicle_.state().position;
-  for (const frontier::Frontier& f : finder_->frontiers()) {
-    in.all_frontiers.push_back(f.id);
-    if (f.average.z() >= layer_out_.band.z_min && f.average.z() <= layer_out_.band.z_max)
-      in.band_frontiers.push_back(f.id);
-  }
+  for (const frontier::Frontier& f : finder_->frontiers()) in.listFrontier(f.id, f.average.z(), layer_out_.band);
   const planning::Band before = layer_out_.band;
   layer_out_ = layers_->step(in, t_);
   for (const planning::Transition& tr : layer_out_.transitions)

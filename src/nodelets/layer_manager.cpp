@@ -181,10 +181,7 @@ class LayerManager : public nodelet::Nodelet {
       GO_FEAP_NODELET_THROTTLE(WARN, 5.0, getName() << ": no frontiers yet (from the frontier finder): no band counts as "
                                                      "explored until they come");
     if (frontiers_) {
-      for (const auto& f : frontiers_->frontiers) {
-        in.all_frontiers.push_back(f.id);
-        if (f.average.z >= band.z_min && f.average.z <= band.z_max) in.band_frontiers.push_back(f.id);
-      }
+      for (const auto& f : frontiers_->frontiers) in.listFrontier(f.id, f.average.z, band);
     }
     step(in);
   }

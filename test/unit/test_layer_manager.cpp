@@ -617,3 +617,19 @@ TEST(LayerManager, AStopRequestFinishesAsAbortedFromAnyState) {
     EXPECT_TRUE(out.transitions.empty());
   }
 }
+
+// What the nodelet and the bench hand the manager: every frontier in all_frontiers, those whose average lies
+// in the band (bounds included) in band_frontiers too.
+TEST(LayerManager, AFrontierIsListedInTheBandThatHoldsItsAverage) {
+  Band band;
+  band.z_min = 1.0;
+  band.z_max = 2.0;
+  LayerInputs in;
+  in.listFrontier(1, 0.99, band);
+  in.listFrontier(2, 1.0, band);
+  in.listFrontier(3, 1.5, band);
+  in.listFrontier(4, 2.0, band);
+  in.listFrontier(5, 2.01, band);
+  EXPECT_EQ(in.all_frontiers, (std::vector<std::uint32_t>{1, 2, 3, 4, 5}));
+  EXPECT_EQ(in.band_frontiers, (std::vector<std::uint32_t>{2, 3, 4}));
+}

@@ -38,6 +38,8 @@ struct Band {
   int count = 0;
   double z_min = 0.0, z_max = 0.0;
   bool final_pass = false;  ///< the whole box, during the final pass
+  /// A frontier whose average lies at height `z` is in the band (bounds included).
+  bool contains(double z) const { return z >= z_min && z <= z_max; }
 };
 
 /// What the chain reports at a step.
@@ -58,6 +60,12 @@ struct LayerInputs {
   /// landed is where progress is measured from, not progress itself (a VIO that kept relocalising held the
   /// stuck check off for good).
   bool relocalised = false;
+  /// Lists frontier `id`, its average at height `z`: in all_frontiers, and in band_frontiers if `band`
+  /// holds it.
+  void listFrontier(std::uint32_t id, double z, const Band& band) {
+    all_frontiers.push_back(id);
+    if (band.contains(z)) band_frontiers.push_back(id);
+  }
 };
 
 struct Transition {
