@@ -76,9 +76,7 @@ std::string pclDataKind(const std::string& word) {
 // A DATA word that is none of PCL's three (ascii in any case, binary, binary_compressed): PCL would read
 // "foo" or "Binary" data as ASCII text and "binary_lzf" as binary. "" for a known word.
 std::string pcdDataWordProblem(const std::string& path, const CloudHeader& h) {
-  std::string lower = h.data_word;
-  for (auto& ch : lower) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
-  if (lower == "ascii" || h.data_word == "binary" || h.data_word == "binary_compressed") return "";
+  if (asciiLower(h.data_word) == "ascii" || h.data_word == "binary" || h.data_word == "binary_compressed") return "";
   return path + ": corrupt PCD file (DATA '" + h.data_word + "': expected ascii, binary or binary_compressed)";
 }
 

@@ -143,11 +143,13 @@ bool anyOccupied(const Scene& scene, const Index3& lo, const Index3& hi) {
 
 }  // namespace
 
-std::string lowerExtension(const std::string& path) {
-  std::string ext = fs::path(path).extension().string();
-  for (auto& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
-  return ext;
+std::string asciiLower(std::string text) {
+  for (char& c : text)
+    if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
+  return text;
 }
+
+std::string lowerExtension(const std::string& path) { return asciiLower(fs::path(path).extension().string()); }
 
 common::Result<SceneFileSpec> parseSceneYaml(const std::string& yaml_path) {
   using R = common::Result<SceneFileSpec>;

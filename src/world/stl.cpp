@@ -33,13 +33,6 @@ R parseBinary(const std::string& path, const std::string& bytes, std::uint32_t c
   return mesh;
 }
 
-// `word` in lower case (ASCII letters only).
-std::string lowered(std::string word) {
-  for (char& c : word)
-    if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
-  return word;
-}
-
 // The words of an ASCII STL, each with the number of the line it stands on. STL separates its
 // words by any white space, so a facet may span lines or share one; some writers put its keywords in upper
 // case (SOLID, FACET NORMAL): keywords are compared in lower case.
@@ -67,7 +60,7 @@ class StlWords {
   bool skipName(const char* stop) {
     std::string word;
     while (words_ >> word)
-      if (lowered(word) == stop) {
+      if (asciiLower(word) == stop) {
         pending_ = stop;
         return true;  // the rest of the line follows it
       }
@@ -106,7 +99,7 @@ R parseAscii(const std::string& path, const std::string& text) {
     return R::Error(path + ": truncated ASCII STL (it ends inside facet " + std::to_string(mesh.triangleCount()) +
                     " or before 'endsolid')");
   };
-  auto is = [&](const std::string& keyword) { return lowered(word) == keyword; };  // SOLID as solid
+  auto is = [&](const std::string& keyword) { return asciiLower(word) == keyword; };  // SOLID as solid
   auto got = [&](const std::string& want) { return "expected " + want + ", got '" + word + "'"; };
   bool on_endsolid_line = false;  // this 'solid' followed an 'endsolid' on its line
   while (words.next(word)) {
@@ -194,7 +187,7 @@ common::Result<TriangleMesh> loadStl(const std::string& path) {
     const auto b = static_cast<unsigned char>(c);
     return (b < 0x20 && !std::isspace(b)) || b == 0x7f;
   });
-  if (first != std::string::npos && lowered(bytes.substr(first, 5)) == "solid" && text) {
+  if (first != std::string::npos && asciiLower(bytes.substr(first, 5)) == "solid" && text) {
     result = parseAscii(path, bytes.substr(0, text_end));
   } else if (bytes.size() >= 84) {
     std::uint32_t count = 0;

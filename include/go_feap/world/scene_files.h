@@ -27,6 +27,8 @@ struct OccupiedCube {
 
 /// The extension of `path` in lower case (".pcd" for "UP.PCD"): every loader matches extensions this way.
 std::string lowerExtension(const std::string& path);
+/// `text` with its ASCII letters in lower case (file keywords compared in any case: SOLID, ASCII).
+std::string asciiLower(std::string text);
 
 /// A point cloud file's points and, for a PLY mesh, its faces as triangles of point indices.
 struct PointCloudFile {
