@@ -62,6 +62,7 @@ class LocalPlanner : public nodelet::Nodelet {
     config::readViewpoints(p, v);
     config::readLocal(p, l);
     p.get("frontier/max_cluster_extent", frontier_extent_).get("local/max_input_speed", max_input_speed_);
+    p.get("local/odom_timeout", odom_timeout_);
     config::readAstar(p, astar_config_, "distance_astar");
     p.getFrame("world_frame", world_frame_);
     ros_params::requireOrThrow(p.ok(), getName(), p.error());
@@ -72,6 +73,8 @@ class LocalPlanner : public nodelet::Nodelet {
     ros_params::requireOrThrow(std::isfinite(max_input_speed_) && max_input_speed_ > 0.0, getName(),
                                "parameter '" + p.fullName("local/max_input_speed") + "' must be > 0");
     speed_limit_name_ = p.fullName("local/max_input_speed");
+    ros_params::requireOrThrow(std::isfinite(odom_timeout_) && odom_timeout_ > 0.0, getName(),
+                               "parameter '" + p.fullName("local/odom_timeout") + "' must be finite and > 0");
     window_ = std::make_unique<planning::ObstacleWindow>(l.window_size, l.clutter_threshold);
 
     compute_pub_ = nh.advertise<ComputeTime>("compute_time", 20);
@@ -164,6 +167,17 @@ class LocalPlanner : public nodelet::Nodelet {
     tilt_ = planning::tiltOf(Eigen::Quaterniond(q.w, q.x, q.y, q.z));
     velocity_ = v_world;
     speed_ = velocity_.norm();
+    odom_arrival_ = ros::Time::now();
+  }
+  // The odometry is current: it came within local/odom_timeout (a clock that went back counts as current).
+  // A pose frozen by a VIO dropout would be taken for the vehicle at rest where it stopped: a target there
+  // judged reached and settled at every tour, in vain, and its frontier blacklisted.
+  bool odometryCurrent() {
+    const double age = (ros::Time::now() - odom_arrival_).toSec();
+    if (age <= odom_timeout_) return true;
+    GO_FEAP_NODELET_THROTTLE(WARN, 2.0, getName() << ": no odometry for " << age << " s (local/odom_timeout "
+                                                  << odom_timeout_ << " s): nothing planned nor judged until it comes");
+    return false;
   }
   void onDepth(const sensor_msgs::Image::ConstPtr& msg) {
     const std::string bad = ros_check::depthImageProblem(*msg);
@@ -215,7 +229,7 @@ class LocalPlanner : public nodelet::Nodelet {
     // place, unless already flying somewhere or turning. The target in hand is repeated, with its number:
     // no tour comes while nothing is a frontier, and a target published before the trajectory planner
     // had subscribed (a start under load) was otherwise lost, and the vehicle never turned.
-    if (!msg->look_around || !position_ || !gate_.open()) return;
+    if (!msg->look_around || !position_ || !gate_.open() || !odometryCurrent()) return;
     if (idle()) {
       GO_FEAP_NODELET_THROTTLE(INFO, 2.0, getName() << ": no frontier in view before a look round: turning in place");
       turnInPlace(msg->header.stamp);
@@ -290,7 +304,7 @@ class LocalPlanner : public nodelet::Nodelet {
       return;
     }
     std::lock_guard<std::mutex> lock(mutex_);
-    if (!gate_.open() || !shared_ || !position_ || !frontiers_) return;
+    if (!gate_.open() || !shared_ || !position_ || !frontiers_ || !odometryCurrent()) return;
     const std::string outside = ros_check::frontierOutside(*frontiers_, shared_->map->geometry().bounds());
     if (!outside.empty()) {
       GO_FEAP_NODELET_THROTTLE(WARN, 2.0, getName() << ": frontiers refused: " << outside);
@@ -471,7 +485,8 @@ class LocalPlanner : public nodelet::Nodelet {
   std::uint32_t target_seq_ = 0;  ///< ViewpointPath::target_seq of the last new target
   bool target_quicker_ = false;  ///< the target won on cost (planning::CurrentTarget::quicker)
   ros_check::ExplorationGate gate_{"choosing targets", "no targets sent"};  ///< from the status
-  double committed_at_ = 0.0, speed_ = 0.0, frontier_extent_ = 2.0, max_input_speed_ = 20.0;
+  double committed_at_ = 0.0, speed_ = 0.0, frontier_extent_ = 2.0, max_input_speed_ = 20.0, odom_timeout_ = 0.5;
+  ros::Time odom_arrival_;  ///< when the last accepted odometry came (ROS clock)
   std::string speed_limit_name_;  ///< local/max_input_speed's full name, for the messages
   double last_plan_ = -1e9;  ///< s (ROS time), when a tour was last planned against (planning::planDue())
   ros::Subscriber handle_sub_, odom_sub_, depth_sub_, info_sub_, layer_sub_, frontier_sub_, tour_sub_, failed_sub_,

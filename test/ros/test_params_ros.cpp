@@ -65,6 +65,7 @@ TEST(Parameters, ANodeletWithAnInvalidOrMissingParameterDoesNotStartAndNamesIt) 
       {"bad_map_size", "go_feap/EsdfMapper", "exploration_box"},                // 1e6 m long: 2.9e10 voxels
       {"bad_cluster_extent", "go_feap/LocalPlanner", "frontier/max_cluster_extent"},  // NaN
       {"bad_local_input_speed", "go_feap/LocalPlanner", "local/max_input_speed"},  // NaN: every odometry refused
+      {"bad_local_odom_timeout", "go_feap/LocalPlanner", "local/odom_timeout"},  // 0: every odometry stale at once
       {"bad_global_rate", "go_feap/GlobalPlanner", "global/rate"},              // 0: no tour after the first, in silence
       {"bad_sample_rate", "go_feap/MetricsRecorder", "metrics/sample_rate"},    // 0 Hz: a timer of infinite period
       {"bad_progress_period", "go_feap/MetricsRecorder", "metrics/progress_period"},  // NaN
