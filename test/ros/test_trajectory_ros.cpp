@@ -579,7 +579,7 @@ class ProbeServer {
 // the pilot then took off by hand back down once the bridge took the commands. A refused first trajectory
 // starts the commands, holding where the vehicle is then (the planner learns of the refusal from the
 // hold's EMPTY flag; with no command it never did). The next is followed; after its end, and through an
-// odometry gap, the server holds as before.
+// odometry gap, the server holds as before, at the trajectory's end and heading.
 TEST(TrajectoryServerFirstCommand, NothingIsSentBeforeTheFirstTrajectoryThenItIsFollowedAndHeld) {
   ProbeServer quiet("quiet/");
   quiet.vehicle = Vec3(0.5, 0.5, 0.1);  // on the ground
@@ -594,7 +594,8 @@ TEST(TrajectoryServerFirstCommand, NothingIsSentBeforeTheFirstTrajectoryThenItIs
   EXPECT_EQ(quiet.command->trajectory_flag, go_feap::PositionCommand::TRAJECTORY_STATUS_EMPTY);
   EXPECT_LT((quiet.commanded() - quiet.vehicle).norm(), 1e-9) << "not held where the vehicle is";
   const Vec3 end = quiet.vehicle + Vec3(1.0, 0.0, 0.0);
-  quiet.fly(quiet.vehicle, end, 77, ros::Time::now());
+  const double heading = 0.8;  // the odometry's is 0: the hold keeps the trajectory's, not the odometry's
+  quiet.fly(quiet.vehicle, end, 77, ros::Time::now(), heading);
   ASSERT_TRUE(spinUntil([&] { return quiet.hover(0.05) && quiet.command->trajectory_id == 77u; }, 20.0))
       << "the first trajectory was not followed";
   EXPECT_GT(quiet.command->position.z, 1.0) << "it started from the ground";
@@ -603,11 +604,14 @@ TEST(TrajectoryServerFirstCommand, NothingIsSentBeforeTheFirstTrajectoryThenItIs
   EXPECT_EQ(quiet.command->trajectory_flag, go_feap::PositionCommand::TRAJECTORY_STATUS_COMPLETED);
   const Vec3 held = quiet.commanded();  // its end (fly()'s spline ends short of `end` by a few cm)
   EXPECT_LT((held - end).norm(), 0.1) << "not held at the trajectory's end";
+  EXPECT_NEAR(quiet.command->yaw, heading, 1e-6);
   double odom_timeout = 0.0;
   ASSERT_TRUE(ros::param::get("/quiet_trajectory_server/server/odom_timeout", odom_timeout));
   quiet.hover(2.0 * odom_timeout, true);
   EXPECT_EQ(quiet.command->trajectory_flag, go_feap::PositionCommand::TRAJECTORY_STATUS_ABORT);
   EXPECT_LT((quiet.commanded() - held).norm(), 1e-9) << "not holding through the odometry gap";
+  EXPECT_NEAR(quiet.command->yaw, heading, 1e-6) << "the hold through the gap turned the vehicle";
+  EXPECT_EQ(quiet.command->yaw_dot, 0.0);
 }
 
 // Each test below starts with the probe server connected and holding the vehicle's pose.
