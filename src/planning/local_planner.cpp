@@ -341,7 +341,8 @@ const std::vector<frontier::Viewpoint>& ViewpointCache::get(const frontier::Fron
                                                             const map::OccupancyMap& map, const map::Esdf& esdf,
                                                             double z_min, double z_max, const ViewpointConfig& config) {
   auto it = entries_.find(frontier.id);
-  if (it != entries_.end() && it->second.z_min == z_min && it->second.z_max == z_max) {
+  if (it != entries_.end() && it->second.z_min == z_min && it->second.z_max == z_max &&
+      it->second.average == frontier.average) {
     ++hits_;
     auto& vps = it->second.viewpoints;
     vps.erase(std::remove_if(vps.begin(), vps.end(),
@@ -356,6 +357,7 @@ const std::vector<frontier::Viewpoint>& ViewpointCache::get(const frontier::Fron
   Entry& e = entries_[frontier.id];
   e.z_min = z_min;
   e.z_max = z_max;
+  e.average = frontier.average;
   // Sampling reads the map at the ring positions (up to the farthest radius and height offset from the
   // frontier's average, which lies among its cells; heights clamped into the band), their clearance round
   // them, and the lines from them to the cells. The cells' own bounds, not frontier.box: a frontier built

@@ -627,6 +627,14 @@ TEST(Viewpoints, CacheGivesTheSampledViewpointsAndDropsThoseTheMapHasFilled) {
   EXPECT_EQ(cache.size(), 0u);
   cache.get(f, w.map(), w.esdf(), z_min, z_max, cfg);
   EXPECT_EQ(cache.misses(), 4u);
+  // The same id at another place (ids from a bag or a tool, not the finder's): sampled there, not the
+  // viewpoints of the first place.
+  Frontier moved = f;
+  moved.average += Vec3(0.3, 0.0, 0.0);
+  for (Index3& c : moved.cells) c += Index3(3, 0, 0);
+  const std::vector<Viewpoint> there = cache.get(moved, w.map(), w.esdf(), z_min, z_max, cfg);
+  EXPECT_EQ(cache.misses(), 5u);
+  EXPECT_TRUE(same(there, sampleViewpoints(moved, w.map(), w.esdf(), z_min, z_max, cfg)));
 }
 
 // A frontier keeps its id while its cells stay the same, however the map round it changes: its cached

@@ -321,6 +321,7 @@ class ViewpointCache {
  private:
   struct Entry {
     double z_min, z_max;
+    common::Vec3 average;  ///< of the frontier sampled: the same id elsewhere (a bag, a tool) is sampled again
     common::Aabb reach;  ///< where a change of the map could alter the viewpoints
     std::vector<frontier::Viewpoint> viewpoints;
   };
