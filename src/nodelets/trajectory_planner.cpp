@@ -201,7 +201,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
       if (current_ && odom_position_) {
         trajectory::PlanRequest stop;
         const ros::Time start_time = startState(ros::Time::now(), stop);
-        publish(ros::Time::now(), start_time, trajectory::stopTrajectory(stop.start, stop.velocity, stop.yaw, optimizer_));
+        publish(ros::Time::now(), start_time, trajectory::stopTrajectory(stop.start, stop.velocity, stop.yaw, optimizer_, stop.yaw_rate));
         NODELET_WARN_STREAM(getName() << ": exploration stopped: braking to rest from " << stop.velocity.norm()
                                       << " m/s");
       }
@@ -282,7 +282,7 @@ class TrajectoryPlanner : public nodelet::Nodelet {
       try {
         trajectory::PlanRequest stop;
         const ros::Time start_time = startState(now, stop);
-        publish(now, start_time, trajectory::stopTrajectory(stop.start, stop.velocity, stop.yaw, optimizer_));
+        publish(now, start_time, trajectory::stopTrajectory(stop.start, stop.velocity, stop.yaw, optimizer_, stop.yaw_rate));
       } catch (const std::exception& e2) {
         GO_FEAP_NODELET_THROTTLE(ERROR, 1.0, getName() << ": no stop trajectory either: " << e2.what());
       }

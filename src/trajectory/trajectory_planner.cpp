@@ -583,11 +583,16 @@ bool scoutedTooOften(const PlanReport& report, const TrajectoryPlannerConfig& co
   return config.max_scouts > 0 && *scouts > config.max_scouts;
 }
 
-Trajectory stopTrajectory(const Vec3& p, const Vec3& v, double yaw, const OptimizerConfig& optimizer) {
+Trajectory stopTrajectory(const Vec3& p, const Vec3& v, double yaw, const OptimizerConfig& optimizer,
+                          double yaw_rate) {
   Trajectory out;
   out.position = safeStop(p, v, optimizer.a_max);
   out.goal = out.position.position(out.position.duration());
-  auto y = yawTurn(yaw, yaw, out.position.duration(), optimizer);
+  // yawTurn's rate profile from w0 over a turn of w0 times its shortest span: w0, w0, then 0 (within
+  // yaw_acc_max, as that span reaches yaw_rate_max at it). Not spread over the brake: a longer span would
+  // ask for a longer turn, up to half a turn and more for a long brake.
+  const double w0 = std::isfinite(yaw_rate) ? std::clamp(yaw_rate, -optimizer.yaw_rate_max, optimizer.yaw_rate_max) : 0.0;
+  auto y = yawTurn(yaw, yaw + w0 * optimizer.yaw_rate_max / optimizer.yaw_acc_max, 0.0, optimizer, w0);
   // yawTurn fails only on a non-finite yaw or an invalid config: keep a valid spline even then.
   out.yaw = y ? std::move(y).value() : UniformBspline(Eigen::MatrixXd::Constant(1, 4, yaw), 3, 0.1);
   return out;
@@ -639,7 +644,7 @@ RecoveryPlan recoverFromFailedPlan(const PlanRequest& request, const PlanReport&
     }
   }
   out.kind = Recovery::kFail;
-  out.trajectory = stopTrajectory(request.start, request.velocity, request.yaw, optimizer);
+  out.trajectory = stopTrajectory(request.start, request.velocity, request.yaw, optimizer, request.yaw_rate);
   return out;
 }
 
@@ -653,7 +658,7 @@ FlightStep planForTarget(const PlanRequest& request, TargetAttempts* attempts, c
   auto planned = planTrajectory(asked, astar, esdf, optimizer, config, &out.report, memory, scout, coarse);
   if (planned && scoutedTooOften(out.report, config, &attempts->scouts)) {
     out.outcome = FlightOutcome::kScoutedTooOften;
-    out.trajectory = stopTrajectory(asked.start, asked.velocity, asked.yaw, optimizer);
+    out.trajectory = stopTrajectory(asked.start, asked.velocity, asked.yaw, optimizer, asked.yaw_rate);
     return out;
   }
   if (planned) {

@@ -2746,6 +2746,26 @@ TEST(TrajectoryPlanner, FailedPlanRecoveryLooksAroundThenAtUnseenSpaceOnceThenFa
   r = traj::recoverFromFailedPlan(request, other, planner, optimizer, resolution, &fresh);
   EXPECT_EQ(r.kind, traj::Recovery::kFail);
   EXPECT_FALSE(fresh);
+
+  // A stop from a reference turning at 0.8 rad/s goes on at that rate and brings it to rest without turning
+  // back, within yaw_acc_max (the heading held where the stop began stepped the rate to 0 at once).
+  traj::PlanRequest turning = request;
+  turning.yaw_rate = 0.8;
+  r = traj::recoverFromFailedPlan(turning, other, planner, optimizer, resolution, &fresh);
+  ASSERT_EQ(r.kind, traj::Recovery::kFail);
+  EXPECT_NEAR(traj::sampleTrajectory(r.trajectory, 0.0).yaw_dot, 0.8, 1e-9);
+  EXPECT_NEAR(traj::sampleTrajectory(r.trajectory, 0.0).yaw, turning.yaw, 1e-9);
+  const double end = std::max(r.trajectory.duration(), r.trajectory.yaw.duration());
+  double last = turning.yaw;
+  for (double t = 0.0; t <= end + 0.2; t += 0.01) {
+    const traj::TrajectorySample s = traj::sampleTrajectory(r.trajectory, t);
+    EXPECT_GE(s.yaw_dot, -1e-9) << "turning back at " << t << " s";
+    EXPECT_GE(std::remainder(s.yaw - last, 2 * kPi), -1e-9) << "at " << t << " s";
+    last = s.yaw;
+  }
+  EXPECT_EQ(traj::sampleTrajectory(r.trajectory, end + 0.2).yaw_dot, 0.0);
+  EXPECT_LE(r.trajectory.yaw.maxDerivativeNorm(2), optimizer.yaw_acc_max * (1.0 + 1e-9));
+  EXPECT_LE(r.trajectory.yaw.maxDerivativeNorm(1), optimizer.yaw_rate_max * (1.0 + 1e-9));
 }
 
 }  // namespace

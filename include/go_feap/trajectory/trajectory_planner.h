@@ -278,9 +278,11 @@ common::Result<Trajectory> planTrajectory(const PlanRequest& request, const plan
 /// checked in steps of half a voxel: the path's vertices up to the last such point, and that point.
 std::vector<Vec3> flyablePrefix(const std::vector<Vec3>& path, const planning::Astar& astar);
 
-/// A trajectory that brakes from (p, v) at a_max to a stop and holds yaw: what is flown when
-/// planning fails.
-Trajectory stopTrajectory(const Vec3& p, const Vec3& v, double yaw, const OptimizerConfig& optimizer);
+/// A trajectory that brakes from (p, v) at a_max to a stop and brings the heading from `yaw`, turning at
+/// `yaw_rate`, to rest within yaw_acc_max (the rate falls to 0 over one span, without turning back): what is
+/// flown when planning fails. (The heading held where the stop began stepped the commanded yaw rate to 0.)
+Trajectory stopTrajectory(const Vec3& p, const Vec3& v, double yaw, const OptimizerConfig& optimizer,
+                          double yaw_rate = 0.0);
 
 /// True when a failed plan is the vehicle's predicament, not its target's fault: the search could not
 /// start (start blocked), or found no path after expanding fewer voxels than the ball of snap_radius
