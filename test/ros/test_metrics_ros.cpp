@@ -825,7 +825,8 @@ TEST(GlobalPlanner, PlansAgainAtOnceWhenTheClockGoesBack) {
 // as its target and then, while it holds it, plans again only every replan_period (1.5 s, past
 // commit_time), not at each tour. The clock then goes back 80 s (a bag played again): it plans again
 // within commit_time and replan_period, where it used to wait until the clock had caught up with its
-// last plan and its commitment.
+// last plan and its commitment. Then (below) a target reached in vain, nothing from a stale odometry, and
+// nothing from frontiers with a cell far outside the map.
 TEST(LocalPlanner, PlansAgainWhenTheClockGoesBackAndNothingFromAStaleOdometry) {
   ros::NodeHandle nh;
   auto clock_pub = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
@@ -905,6 +906,18 @@ TEST(LocalPlanner, PlansAgainWhenTheClockGoesBackAndNothingFromAStaleOdometry) {
   run(6.0);
   ASSERT_FALSE(failed.empty()) << "the target, reached and proposed again, was not reported failed";
   EXPECT_EQ(failed.front(), 7u) << "the failure went to the target's first id, gone since";
+
+  // Frontiers with a cell far outside the map (y = 1e300: finite, so the message checks pass): refused whole
+  // before any index is taken from them (the float-to-int cast is undefined there), nothing planned; the
+  // next sound frontiers are planned from again.
+  const go_feap::FrontierArray sound = frontiers;
+  frontiers.frontiers[0].cells.back().y = 1e300;
+  plans = 0;
+  run(2.0);
+  EXPECT_EQ(plans, 0u) << "planned from frontiers with a cell 1e300 m away";
+  frontiers = sound;
+  run(3.0);
+  EXPECT_GE(plans, 1u) << "no plan from sound frontiers after the refused ones";
 }
 
 // A trajectory planner (probe/tp/... in metrics.test) flies the vehicle, held still by the test at 1 m up,
